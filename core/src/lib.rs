@@ -1,0 +1,22 @@
+//! specula-core: lane math and material models, with no I/O.
+//!
+//! Every term is written once, generic over [`Real`] (f32, f64, f32x8); see
+//! `real.rs`. Conventions: shading frame normal +Z, tangent +X, bitangent +Y;
+//! directions point away from the surface, `wi` toward the light, `wo` toward
+//! the viewer. Citation keys such as `[Walter07]` resolve in docs/REFERENCES.md.
+
+pub mod albedo_tables;
+pub mod brdf;
+pub mod diffuse;
+pub mod fresnel;
+pub mod light;
+pub mod masking;
+pub mod models;
+pub mod ndf;
+pub mod real;
+pub mod vec3;
+
+pub use brdf::{Brdf, BrdfVisitor, Material, Model};
+pub use real::{Mask, Real};
+pub use vec3::{Rgb, V3};
+pub use wide::f32x8;

@@ -1,0 +1,92 @@
+//! glTF 2.0 core metallic-roughness model (the everyday model of OBJ/MTL and
+//! glTF assets):
+//!
+//! f = D_GGX(α) · V_SmithGGXCorrelated(α) · F_Schlick(F0)
+//!   + (1 − F_Schlick(F0)) (1 − metallic) base_color / π
+//!
+//! with α = roughness², F0 = mix(0.04, base_color, metallic).   [glTF2, Appendix B]
+
+use crate::albedo_tables::AlbedoTables;
+use crate::brdf::{Brdf, ALPHA_MIN};
+use crate::diffuse::f_lambert;
+use crate::fresnel::f_schlick;
+use crate::masking::v_smith_ggx_correlated;
+use crate::ndf::d_ggx;
+use crate::real::Real;
+use crate::vec3::{Rgb, V3};
+
+/// Parameters as the user gives them; see the module docs for the formula.
+#[derive(Clone, Debug, PartialEq)]
+pub struct MetallicRoughness {
+    pub base_color: [f32; 3],
+    /// Perceptual roughness in [0, 1]; α = roughness².
+    pub roughness: f32,
+    /// 0 = dielectric, 1 = metal.
+    pub metallic: f32,
+}
+
+/// Reflectance at normal incidence of the dielectric end (IOR 1.5).
+const F0_DIELECTRIC: f32 = 0.04;
+
+impl MetallicRoughness {
+    /// α = roughness², floored at [`ALPHA_MIN`] (α = 0 would make D a delta and
+    /// the formula 0/0 at the peak).
+    pub fn alpha(&self) -> f32 {
+        (self.roughness * self.roughness).max(ALPHA_MIN)
+    }
+
+    /// F0 = mix(0.04, base_color, metallic).
+    pub fn f0(&self) -> [f32; 3] {
+        self.base_color
+            .map(|c| F0_DIELECTRIC + (c - F0_DIELECTRIC) * self.metallic)
+    }
+
+    /// Albedo of the diffuse lobe: (1 − metallic) base_color.
+    pub fn diffuse_color(&self) -> [f32; 3] {
+        self.base_color.map(|c| c * (1.0 - self.metallic))
+    }
+}
+
+impl Brdf for MetallicRoughness {
+    #[inline(always)]
+    fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
+        let alpha = R::splat(self.alpha() as f64);
+        let f0 = Rgb::from_f32(self.f0());
+        let diffuse = Rgb::from_f32(self.diffuse_color());
+
+        let cos_i = n.dot(wi);
+        let cos_o = n.dot(wo);
+        let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
+        // Lanes below the horizon are zeroed by the final select; flooring
+        // the cosines only keeps their intermediate values finite.
+        let tiny = R::splat(1e-7);
+        let (cos_i, cos_o) = (cos_i.max(tiny), cos_o.max(tiny));
+        // wi + wo is zero only for opposite directions, which `above` excludes.
+        let h = (wi + wo).normalize_or(n);
+        let cos_h = n.dot(h).max(R::ZERO);
+        let cos_d = wi.dot(h);
+
+        let f = f_schlick(f0, cos_d);
+        let dv = d_ggx(alpha, cos_h) * v_smith_ggx_correlated(alpha, cos_i, cos_o);
+        let specular = f * dv;
+        let diffuse = (Rgb::splat(R::ONE) - f).mul_elem(f_lambert(diffuse));
+        Rgb::select(above, specular + diffuse, Rgb::zero())
+    }
+
+    #[inline(always)]
+    fn albedo<R: Real>(&self, n: V3<R>, wo: V3<R>) -> Rgb<R> {
+        let cos_o = n.dot(wo);
+        let t = AlbedoTables::get().ggx_schlick(self.alpha(), cos_o.max(R::ZERO));
+        // Split sum: E_spec = F0·A + B, E_diff = (1 − F0)(1 − C)·ρd   (see albedo_tables)
+        let f0: Rgb<R> = Rgb::from_f32(self.f0());
+        let diffuse: Rgb<R> = Rgb::from_f32(self.diffuse_color());
+        let spec = Rgb::new(
+            f0.x.mul_add(t.a, t.b),
+            f0.y.mul_add(t.a, t.b),
+            f0.z.mul_add(t.a, t.b),
+        );
+        let one = Rgb::splat(R::ONE);
+        let diff = (one - f0).mul_elem(diffuse) * (R::ONE - t.c);
+        Rgb::select(cos_o.gt(R::ZERO), spec + diff, Rgb::zero())
+    }
+}

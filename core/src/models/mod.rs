@@ -1,0 +1,8 @@
+//! Whole material models: compositions of the term functions in `fresnel`,
+//! `ndf`, `masking` and `diffuse`. A model adds no formula of its own.
+
+pub mod lambert;
+pub mod metallic_roughness;
+
+pub use lambert::Lambert;
+pub use metallic_roughness::MetallicRoughness;

@@ -1,0 +1,117 @@
+//! Resolve: from visibility-buffer ids back to surface attributes at pixel
+//! centres, R::LANES horizontally adjacent pixels at a time.
+
+use crate::camera::View;
+use crate::scene::SceneData;
+use crate::setup::TriPlanes;
+use crate::target::MISS;
+use specula_core::{Real, V3};
+
+/// Per-lane surface data the shading pass needs.
+#[derive(Clone, Copy, Debug)]
+pub struct Fragment<R: Real> {
+    /// World position.
+    pub p: V3<R>,
+    /// Unit shading normal (flipped toward the viewer on back faces of
+    /// double-sided materials).
+    pub n: V3<R>,
+    /// Unit direction toward the eye.
+    pub wo: V3<R>,
+    /// View depth w (distance along the camera's forward axis).
+    pub w: R,
+    /// Perspective-correct barycentrics of vertices 1 and 2 (b0 = 1 − b1 − b2).
+    pub b1: R,
+    pub b2: R,
+}
+
+/// Everything resolve and shading read, shared by all tiles.
+pub struct ResolveContext<'a> {
+    pub scene: &'a SceneData,
+    pub planes: &'a [TriPlanes],
+    pub view: &'a View,
+}
+
+/// Gathered per-triangle values: origin (2), k1, k2, ks (9), facing (1),
+/// vertex normals (9).
+const GATHER: usize = 21;
+
+impl ResolveContext<'_> {
+    fn gather_one(&self, id: u32, out: &mut [f32; GATHER]) {
+        let p = &self.planes[id as usize];
+        let tri = self.scene.triangles[id as usize];
+        out[0..2].copy_from_slice(&p.origin);
+        out[2..5].copy_from_slice(&p.k1);
+        out[5..8].copy_from_slice(&p.k2);
+        out[8..11].copy_from_slice(&p.ks);
+        out[11] = p.facing;
+        for (v, &i) in tri.iter().enumerate() {
+            out[12 + 3 * v..15 + 3 * v].copy_from_slice(&self.scene.normals[i as usize].to_array());
+        }
+    }
+
+    /// Rebuilds the fragments of pixels (x + lane, y) whose ids are `ids`
+    /// (R::LANES entries, at least one not MISS). MISS lanes get a copy of a
+    /// covered lane's triangle so every lane stays finite; callers mask them.
+    #[inline(always)]
+    pub fn resolve<R: Real>(&self, x: u32, y: u32, ids: &[u32]) -> Fragment<R> {
+        let fallback = ids[..R::LANES]
+            .iter()
+            .copied()
+            .find(|&i| i != MISS)
+            .unwrap_or(MISS);
+        debug_assert!(fallback != MISS);
+        let mut lanes = [[0.0f32; 8]; GATHER];
+        let mut cur = [0.0f32; GATHER];
+        let mut prev = MISS;
+        for lane in 0..R::LANES {
+            let id = if ids[lane] == MISS {
+                fallback
+            } else {
+                ids[lane]
+            };
+            if id != prev {
+                self.gather_one(id, &mut cur);
+                prev = id;
+            }
+            for (l, c) in lanes.iter_mut().zip(cur) {
+                l[lane] = c;
+            }
+        }
+        let g = |k: usize| R::load(&lanes[k]);
+
+        let px = R::splat(x as f64 + 0.5) + R::lane_index();
+        let py = R::splat(y as f64 + 0.5);
+        let dx = px - g(0);
+        let dy = py - g(1);
+        let plane = |k: usize| g(k).mul_add(dx, g(k + 1).mul_add(dy, g(k + 2)));
+        let (k1, k2, ks) = (plane(2), plane(5), plane(8));
+        let w = R::ONE / ks;
+        let b1 = k1 * w;
+        let b2 = k2 * w;
+        let b0 = R::ONE - b1 - b2;
+        let vn = |k: usize| V3::new(g(k), g(k + 1), g(k + 2));
+        let n_interp = vn(12) * b0 + vn(15) * b1 + vn(18) * b2;
+        // Interpolated normals can cancel (opposite vertex normals); fall back
+        // to vertex 0's normal rather than produce NaN.
+        let n = n_interp.normalize_or(vn(12)) * g(11);
+
+        // The primary ray through the pixel centre (camera.rs); its point at
+        // view depth w is the surface point.
+        let v = self.view;
+        let nx = px * R::splat(2.0 / v.width as f64) - R::ONE;
+        let ny = R::ONE - py * R::splat(2.0 / v.height as f64);
+        let ray = V3::from_f32(v.forward.to_array())
+            + V3::from_f32(v.right.to_array()) * (nx * R::splat(v.tan_x as f64))
+            + V3::from_f32(v.up.to_array()) * (ny * R::splat(v.tan_y as f64));
+        let p = ray.mul_add(w, V3::from_f32(v.eye.to_array()));
+        let wo = -ray.normalize();
+        Fragment {
+            p,
+            n,
+            wo,
+            w,
+            b1,
+            b2,
+        }
+    }
+}

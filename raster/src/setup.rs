@@ -1,0 +1,308 @@
+//! Triangle setup: culling, clipping, snapping, edge functions (top-left
+//! rule) and the per-triangle planes that depth testing and shading evaluate.
+
+use crate::clip::{ClipVertex, GuardBand};
+use crate::fixed::{pixel_centre, snap, SUBPIXEL_HALF, SUBPIXEL_ONE};
+
+/// An edge function E(X, Y) = A·X + B·Y + C over fixed-point coordinates,
+/// positive inside. `c` already holds the fill-rule bias, so a pixel centre is
+/// covered iff E ≥ 0 for all three edges.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Edge {
+    pub a: i64,
+    pub b: i64,
+    pub c: i64,
+}
+
+/// A screen-space triangle ready for scan conversion (a clipped triangle
+/// becomes several, all with the id of the triangle they came from).
+#[derive(Clone, Copy, Debug)]
+pub struct RasterTri {
+    pub edges: [Edge; 3],
+    /// Covered pixel range candidates [x0, x1) × [y0, y1), inside the image.
+    pub bbox: [i32; 4],
+    /// Id of the source triangle (its index in the scene).
+    pub tri: u32,
+}
+
+/// Screen-space affine functions of one source triangle, each evaluated as
+/// p[0]·(x − ox) + p[1]·(y − oy) + p[2] at pixel-centre coordinates (x, y) in
+/// pixels. Relative to a nearby origin so f32 keeps the small values of
+/// small triangles accurate.
+///
+/// With k = M⁻¹(nx, ny, 1), M the matrix whose columns are the clip-space
+/// (x, y, w) of the vertices [Olano97]: b_i = k_i / Σk are the
+/// perspective-correct barycentrics, Σk = 1/w, and Σ k_i z_i = z/w (NDC depth).
+/// All are affine in screen space, and the same for every clipped piece.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct TriPlanes {
+    pub origin: [f32; 2],
+    pub k1: [f32; 3],
+    pub k2: [f32; 3],
+    /// Σk = 1/w (w = view depth).
+    pub ks: [f32; 3],
+    /// NDC depth z/w.
+    pub z: [f32; 3],
+    /// +1 front-facing, −1 back-facing (drawn only when double-sided).
+    pub facing: f32,
+}
+
+impl TriPlanes {
+    #[inline]
+    pub fn eval(p: &[f32; 3], origin: [f32; 2], x: f32, y: f32) -> f32 {
+        p[0].mul_add(x - origin[0], p[1].mul_add(y - origin[1], p[2]))
+    }
+}
+
+/// What happened to triangles in setup; sums over chunks.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct SetupCounts {
+    pub triangles: u64,
+    pub culled_backface: u64,
+    pub culled_outside: u64,
+    pub skipped_nonfinite: u64,
+    pub skipped_degenerate: u64,
+    pub clipped: u64,
+    /// Reached the rasterizer with at least one candidate pixel.
+    pub drawn: u64,
+    /// Visible but too small to contain any pixel centre.
+    pub no_samples: u64,
+}
+
+impl SetupCounts {
+    pub fn add(&mut self, o: &SetupCounts) {
+        self.triangles += o.triangles;
+        self.culled_backface += o.culled_backface;
+        self.culled_outside += o.culled_outside;
+        self.skipped_nonfinite += o.skipped_nonfinite;
+        self.skipped_degenerate += o.skipped_degenerate;
+        self.clipped += o.clipped;
+        self.drawn += o.drawn;
+        self.no_samples += o.no_samples;
+    }
+}
+
+/// Everything setup needs to know about the image.
+#[derive(Clone, Copy, Debug)]
+pub struct SetupContext {
+    pub width: u32,
+    pub height: u32,
+    pub guard: GuardBand,
+}
+
+/// ⌊n / d⌋ for d > 0.
+#[inline]
+fn floor_div(n: i64, d: i64) -> i64 {
+    n.div_euclid(d)
+}
+
+/// ⌈n / d⌉ for d > 0.
+#[inline]
+fn ceil_div(n: i64, d: i64) -> i64 {
+    -(-n).div_euclid(d)
+}
+
+/// Frustum outcode: one bit per plane the vertex is outside of.
+fn outcode(v: &ClipVertex) -> u8 {
+    let [x, y, z, w] = *v;
+    (x < -w) as u8
+        | ((x > w) as u8) << 1
+        | ((y < -w) as u8) << 2
+        | ((y > w) as u8) << 3
+        | ((z < 0.0) as u8) << 4
+        | ((z > w) as u8) << 5
+}
+
+fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+impl SetupContext {
+    /// Sets up source triangle `tri` (clip-space vertices `v`). Pushes its
+    /// screen triangles to `out` and returns its planes, or `None` if it
+    /// draws nothing; `counts` says why.
+    pub fn setup(
+        &self,
+        tri: u32,
+        v: [[f32; 4]; 3],
+        double_sided: bool,
+        out: &mut Vec<RasterTri>,
+        counts: &mut SetupCounts,
+    ) -> Option<TriPlanes> {
+        counts.triangles += 1;
+        let v: [ClipVertex; 3] = v.map(|p| p.map(|c| c as f64));
+        if v.iter().flatten().any(|c| !c.is_finite()) {
+            counts.skipped_nonfinite += 1;
+            return None;
+        }
+        if outcode(&v[0]) & outcode(&v[1]) & outcode(&v[2]) != 0 {
+            counts.culled_outside += 1;
+            return None;
+        }
+        // Orientation from the 2D-homogeneous determinant: det > 0 is
+        // counter-clockwise in NDC (y up), i.e. front-facing, and its sign
+        // is right even for vertices behind the eye [Olano97].
+        let cols = v.map(|p| [p[0], p[1], p[3]]);
+        let adj = [
+            cross3(cols[1], cols[2]),
+            cross3(cols[2], cols[0]),
+            cross3(cols[0], cols[1]),
+        ];
+        let det = dot3(cols[0], adj[0]);
+        if det == 0.0 || !det.is_finite() {
+            counts.skipped_degenerate += 1;
+            return None;
+        }
+        if det < 0.0 && !double_sided {
+            counts.culled_backface += 1;
+            return None;
+        }
+
+        let poly = if self.guard.needs_clip(&v) {
+            counts.clipped += 1;
+            self.guard.clip(&v)
+        } else {
+            let mut p = crate::clip::Polygon {
+                v: [[0.0; 4]; crate::clip::MAX_CLIPPED],
+                len: 3,
+            };
+            p.v[..3].copy_from_slice(&v);
+            p
+        };
+        if poly.len < 3 {
+            counts.culled_outside += 1;
+            return None;
+        }
+
+        let (w, h) = (self.width as f64, self.height as f64);
+        let mut screen = [[0i64; 2]; crate::clip::MAX_CLIPPED];
+        let (mut min_x, mut min_y) = (f64::INFINITY, f64::INFINITY);
+        for (s, p) in screen.iter_mut().zip(&poly.v[..poly.len]) {
+            let sx = (p[0] / p[3] + 1.0) * 0.5 * w;
+            let sy = (1.0 - p[1] / p[3]) * 0.5 * h;
+            min_x = min_x.min(sx);
+            min_y = min_y.min(sy);
+            *s = [snap(sx), snap(sy)];
+        }
+
+        let before = out.len();
+        for i in 1..poly.len - 1 {
+            if let Some(rt) = self.edges(tri, screen[0], screen[i], screen[i + 1]) {
+                out.push(rt);
+            }
+        }
+        if out.len() == before {
+            counts.no_samples += 1;
+            return None;
+        }
+        counts.drawn += 1;
+
+        // Planes: rows of M⁻¹ = adj / det, composed with pixel → NDC
+        // (nx = 2x/W − 1, ny = 1 − 2y/H) and moved to the origin.
+        let ox = min_x.clamp(0.0, w);
+        let oy = min_y.clamp(0.0, h);
+        let plane = |r: [f64; 3]| -> [f64; 3] {
+            let (a, b) = (r[0] * 2.0 / w, -r[1] * 2.0 / h);
+            let c = -r[0] + r[1] + r[2];
+            [a, b, a * ox + b * oy + c]
+        };
+        let k = adj.map(|r| plane(r.map(|x| x / det)));
+        let ks: [f32; 3] = std::array::from_fn(|c| (k[0][c] + k[1][c] + k[2][c]) as f32);
+        let z: [f32; 3] = std::array::from_fn(|c| {
+            (k[0][c] * v[0][2] + k[1][c] * v[1][2] + k[2][c] * v[2][2]) as f32
+        });
+        Some(TriPlanes {
+            origin: [ox as f32, oy as f32],
+            k1: k[1].map(|x| x as f32),
+            k2: k[2].map(|x| x as f32),
+            ks,
+            z,
+            facing: if det > 0.0 { 1.0 } else { -1.0 },
+        })
+    }
+
+    /// Edge functions and pixel bounds of one snapped screen triangle, or
+    /// `None` if it has zero area or contains no pixel centre candidate.
+    pub fn edges(
+        &self,
+        tri: u32,
+        p0: [i64; 2],
+        mut p1: [i64; 2],
+        mut p2: [i64; 2],
+    ) -> Option<RasterTri> {
+        let area2 = (p1[0] - p0[0]) * (p2[1] - p0[1]) - (p1[1] - p0[1]) * (p2[0] - p0[0]);
+        if area2 == 0 {
+            return None;
+        }
+        if area2 < 0 {
+            std::mem::swap(&mut p1, &mut p2);
+        }
+        let edge = |pa: [i64; 2], pb: [i64; 2]| {
+            let a = pa[1] - pb[1];
+            let b = pb[0] - pa[0];
+            // Top-left rule (y down): a left edge has the interior to its
+            // right (A > 0), a top edge is horizontal with the interior below
+            // (A = 0, B > 0). Centres exactly on other edges are not covered:
+            // E > 0 there, i.e. E − 1 ≥ 0 in integers.
+            let top_left = a > 0 || (a == 0 && b > 0);
+            let c = -(a * pa[0] + b * pa[1]) - if top_left { 0 } else { 1 };
+            Edge { a, b, c }
+        };
+        let xs = [p0[0], p1[0], p2[0]];
+        let ys = [p0[1], p1[1], p2[1]];
+        let bound = |lo: i64, hi: i64, n: u32| {
+            let first = ceil_div(lo - SUBPIXEL_HALF, SUBPIXEL_ONE).max(0);
+            let end = (floor_div(hi - SUBPIXEL_HALF, SUBPIXEL_ONE) + 1).min(n as i64);
+            (first, end)
+        };
+        let (x0, x1) = bound(*xs.iter().min()?, *xs.iter().max()?, self.width);
+        let (y0, y1) = bound(*ys.iter().min()?, *ys.iter().max()?, self.height);
+        if x0 >= x1 || y0 >= y1 {
+            return None;
+        }
+        Some(RasterTri {
+            edges: [edge(p0, p1), edge(p1, p2), edge(p2, p0)],
+            bbox: [x0 as i32, y0 as i32, x1 as i32, y1 as i32],
+            tri,
+        })
+    }
+}
+
+impl RasterTri {
+    /// The covered pixels [x_first, x_end) of row `y`, not yet clipped to the
+    /// bounding box (may be empty: x_first ≥ x_end).
+    #[inline]
+    pub fn span(&self, y: i32) -> (i64, i64) {
+        let yc = pixel_centre(y as i64);
+        let (mut lo, mut hi) = (i64::MIN, i64::MAX);
+        for e in &self.edges {
+            // E at the centre of pixel x is A·(256x + 128) + B·Yc + C
+            // = 256·A·x + r; covered iff that is ≥ 0.
+            let r = e.a * SUBPIXEL_HALF + e.b * yc + e.c;
+            let step = e.a * SUBPIXEL_ONE;
+            if e.a > 0 {
+                lo = lo.max(ceil_div(-r, step));
+            } else if e.a < 0 {
+                hi = hi.min(floor_div(r, -step) + 1);
+            } else if r < 0 {
+                return (0, 0);
+            }
+        }
+        (lo, hi)
+    }
+
+    /// True if the centre of pixel (x, y) is covered: the direct test that
+    /// [`RasterTri::span`] solves for a whole row (tests compare the two).
+    pub fn covers(&self, x: i32, y: i32) -> bool {
+        let (px, py) = (pixel_centre(x as i64), pixel_centre(y as i64));
+        self.edges.iter().all(|e| e.a * px + e.b * py + e.c >= 0)
+    }
+}

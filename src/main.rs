@@ -1,0 +1,211 @@
+//! The `specula` command line.
+
+use clap::{Parser, Subcommand};
+use specula::render::{depth_aov, normal_aov, render_scene, RenderSettings};
+use specula::scene::{load_scene, LoadedScene};
+use specula::{demo, output};
+use specula_raster::frame::ShadePath;
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::time::Instant;
+
+#[derive(Parser)]
+#[command(
+    name = "specula",
+    version,
+    about = "CPU software rasterizer with a packed-SIMD physically based shading core.\n\nWith no command, renders the built-in demo to specula-demo.png."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene file to PNG (and optionally EXR and AOVs).
+    Render(RenderArgs),
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// Scene file (TOML).
+    scene: PathBuf,
+    /// Output image: PNG, or OpenEXR (linear HDR) if it ends in .exr.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Image width in pixels (overrides the scene).
+    #[arg(long)]
+    width: Option<u32>,
+    /// Image height in pixels (overrides the scene).
+    #[arg(long)]
+    height: Option<u32>,
+    /// Supersampling: N×N samples per pixel, box filtered (overrides the scene).
+    #[arg(long)]
+    ssaa: Option<u32>,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    threads: Option<usize>,
+    /// Also write linear HDR colour to this OpenEXR file.
+    #[arg(long, value_name = "PATH")]
+    exr: Option<PathBuf>,
+    /// Arbitrary output variables at the supersampled size: depth=PATH (EXR,
+    /// view depth, +inf on miss), normal=PATH (EXR, world normal), id=PATH
+    /// (raw u32 triangle ids, see README).
+    #[arg(long, value_name = "NAME=PATH")]
+    aov: Vec<String>,
+    /// Print per-pass times and triangle counts.
+    #[arg(long)]
+    stats: bool,
+    /// Write the statistics as JSON to this file.
+    #[arg(long, value_name = "PATH")]
+    stats_json: Option<PathBuf>,
+    /// Shade one pixel at a time in f32 instead of 8 at a time in f32x8.
+    #[arg(long)]
+    scalar: bool,
+    /// Render the loaded scene N times, timing each frame (load and encode excluded).
+    #[arg(long, default_value_t = 1)]
+    repeat: u32,
+}
+
+enum Aov {
+    Depth(PathBuf),
+    Normal(PathBuf),
+    Id(PathBuf),
+}
+
+fn parse_aov(s: &str) -> Result<Aov, String> {
+    let (name, path) = s
+        .split_once('=')
+        .ok_or_else(|| format!("--aov {s}: expected NAME=PATH"))?;
+    let path = PathBuf::from(path);
+    match name {
+        "depth" => Ok(Aov::Depth(path)),
+        "normal" => Ok(Aov::Normal(path)),
+        "id" => Ok(Aov::Id(path)),
+        _ => Err(format!(
+            "--aov {s}: unknown AOV {name:?} (depth, normal, id)"
+        )),
+    }
+}
+
+/// Refuses outputs that would overwrite one of the scene's input files.
+fn check_not_input(out: &Path, scene: &LoadedScene) -> Result<(), String> {
+    let canon = |p: &Path| std::fs::canonicalize(p).ok();
+    if let Some(o) = canon(out) {
+        if scene.inputs.iter().any(|i| canon(i).as_ref() == Some(&o)) {
+            return Err(format!(
+                "{}: is an input of the scene; refusing to overwrite it",
+                out.display()
+            ));
+        }
+    }
+    Ok(())
+}
+
+fn is_exr(p: &Path) -> bool {
+    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+}
+
+fn run_render(a: RenderArgs) -> Result<(), String> {
+    let aovs: Vec<Aov> = a
+        .aov
+        .iter()
+        .map(|s| parse_aov(s))
+        .collect::<Result<_, _>>()?;
+    let t = Instant::now();
+    let scene = load_scene(&a.scene).map_err(|e| e.to_string())?;
+    let load_ms = t.elapsed().as_secs_f64() * 1e3;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    let mut settings = RenderSettings::from_scene(&scene);
+    settings.width = a.width.unwrap_or(settings.width);
+    settings.height = a.height.unwrap_or(settings.height);
+    settings.ssaa = a.ssaa.unwrap_or(settings.ssaa);
+    settings.threads = a.threads;
+    settings.repeat = a.repeat;
+    settings.path = if a.scalar {
+        ShadePath::Scalar
+    } else {
+        ShadePath::Simd
+    };
+    settings.target()?;
+    let mut outs: Vec<&Path> = vec![&a.output];
+    outs.extend(a.exr.as_deref());
+    outs.extend(aovs.iter().map(|v| match v {
+        Aov::Depth(p) | Aov::Normal(p) | Aov::Id(p) => p.as_path(),
+    }));
+    outs.extend(a.stats_json.as_deref());
+    for o in &outs {
+        check_not_input(o, &scene)?;
+    }
+
+    let mut r = render_scene(&scene, &settings, load_ms)?;
+    let t = Instant::now();
+    if is_exr(&a.output) {
+        output::write_exr(&a.output, r.width, r.height, &r.hdr)?;
+    } else {
+        output::write_png(&a.output, r.width, r.height, std::mem::take(&mut r.ldr))?;
+    }
+    if let Some(p) = &a.exr {
+        output::write_exr(p, r.width, r.height, &r.hdr)?;
+    }
+    let (tw, th) = (r.frame.target.width, r.frame.target.height);
+    for aov in &aovs {
+        match aov {
+            Aov::Depth(p) => {
+                let d: Vec<[f32; 3]> = depth_aov(&r.frame).into_iter().map(|v| [v; 3]).collect();
+                output::write_exr(p, tw, th, &d)?
+            }
+            Aov::Normal(p) => output::write_exr(p, tw, th, &normal_aov(&scene, &r.frame))?,
+            Aov::Id(p) => output::write_ids(
+                p,
+                tw,
+                th,
+                &r.frame.target.to_row_major(&r.frame.visibility.vis.id),
+            )?,
+        }
+    }
+    r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
+    if a.stats {
+        print!("{}", r.stats.report());
+    }
+    if let Some(p) = &a.stats_json {
+        let json = serde_json::to_string_pretty(&r.stats).map_err(|e| e.to_string())?;
+        output::write_atomic(p, |tmp| {
+            std::fs::write(tmp, json.as_bytes()).map_err(|e| e.to_string())
+        })?;
+    }
+    Ok(())
+}
+
+fn run_demo() -> Result<(), String> {
+    let t = Instant::now();
+    let scene = demo::demo_scene().map_err(|e| e.to_string())?;
+    let load_ms = t.elapsed().as_secs_f64() * 1e3;
+    let settings = RenderSettings::from_scene(&scene);
+    let mut r = render_scene(&scene, &settings, load_ms)?;
+    let out = PathBuf::from("specula-demo.png");
+    let t = Instant::now();
+    output::write_png(&out, r.width, r.height, std::mem::take(&mut r.ldr))?;
+    r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
+    print!("{}", r.stats.report());
+    let shown = std::fs::canonicalize(&out).unwrap_or(out);
+    println!("wrote {}", shown.display());
+    Ok(())
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        None => run_demo(),
+        Some(Command::Render(a)) => run_render(a),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,367 @@
+//! Meshes in object space: procedural shapes and OBJ/MTL files (through tobj).
+
+use glam::{Vec2, Vec3};
+use std::path::Path;
+
+/// One mesh in object space. `tri_material` indexes `material_names`.
+#[derive(Clone, Debug, Default)]
+pub struct MeshData {
+    pub positions: Vec<Vec3>,
+    /// Unit normals, one per position.
+    pub normals: Vec<Vec3>,
+    /// One per position, or empty.
+    pub uvs: Vec<Vec2>,
+    pub triangles: Vec<[u32; 3]>,
+    pub tri_material: Vec<u32>,
+    /// Names of the materials the triangles use (`None`: none assigned).
+    pub material_names: Vec<Option<String>>,
+    /// Materials defined by the mesh's MTL files.
+    pub mtl: Vec<tobj::Material>,
+}
+
+impl MeshData {
+    fn single_material(mut self) -> Self {
+        self.tri_material = vec![0; self.triangles.len()];
+        self.material_names = vec![None];
+        self
+    }
+
+    /// Appends a (nu × nv)-cell grid of points `origin + du·s + dv·t`,
+    /// s, t ∈ [0, 1], with triangles facing du × dv.
+    fn grid(&mut self, origin: Vec3, du: Vec3, dv: Vec3, nu: u32, nv: u32) {
+        let base = self.positions.len() as u32;
+        let normal = du.cross(dv).normalize();
+        for j in 0..=nv {
+            for i in 0..=nu {
+                let (s, t) = (i as f32 / nu as f32, j as f32 / nv as f32);
+                self.positions.push(origin + du * s + dv * t);
+                self.normals.push(normal);
+                self.uvs.push(Vec2::new(s, t));
+            }
+        }
+        let at = |i: u32, j: u32| base + j * (nu + 1) + i;
+        for j in 0..nv {
+            for i in 0..nu {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                self.triangles.push([a, b, c]);
+                self.triangles.push([a, c, d]);
+            }
+        }
+    }
+}
+
+/// UV sphere around the origin with its poles on ±Y: `segments` around,
+/// `rings` from pole to pole; uv = (longitude, latitude) in [0, 1].
+pub fn sphere(radius: f32, segments: u32, rings: u32) -> MeshData {
+    let mut m = MeshData::default();
+    for r in 0..=rings {
+        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        for s in 0..=segments {
+            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
+            let n = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+            m.positions.push(n * radius);
+            m.normals.push(n);
+            m.uvs.push(Vec2::new(
+                s as f32 / segments as f32,
+                r as f32 / rings as f32,
+            ));
+        }
+    }
+    let at = |s: u32, r: u32| r * (segments + 1) + s;
+    for r in 0..rings {
+        for s in 0..segments {
+            let (a, b, c, d) = (at(s, r), at(s + 1, r), at(s + 1, r + 1), at(s, r + 1));
+            // ∂p/∂φ × ∂p/∂θ points outward, so (a, b, c) is counter-clockwise
+            // seen from outside. The pole rows would give zero-area triangles.
+            if r != 0 {
+                m.triangles.push([a, b, c]);
+            }
+            if r != rings - 1 {
+                m.triangles.push([a, c, d]);
+            }
+        }
+    }
+    m.single_material()
+}
+
+/// Plane in XZ through the origin facing +Y, `size` = (x extent, z extent).
+pub fn plane(size: [f32; 2], segments: [u32; 2]) -> MeshData {
+    let mut m = MeshData::default();
+    let (sx, sz) = (size[0], size[1]);
+    // du = +Z, dv = +X: Z × X = +Y.
+    m.grid(
+        Vec3::new(-sx / 2.0, 0.0, -sz / 2.0),
+        Vec3::Z * sz,
+        Vec3::X * sx,
+        segments[1],
+        segments[0],
+    );
+    m.single_material()
+}
+
+/// Axis-aligned cube centred at the origin, each face a `segments²` grid.
+pub fn cube(size: f32, segments: u32) -> MeshData {
+    let mut m = MeshData::default();
+    let h = size / 2.0;
+    // (normal, du, dv) with du × dv = normal.
+    let faces = [
+        (Vec3::X, Vec3::Y, Vec3::Z),
+        (-Vec3::X, Vec3::Z, Vec3::Y),
+        (Vec3::Y, Vec3::Z, Vec3::X),
+        (-Vec3::Y, Vec3::X, Vec3::Z),
+        (Vec3::Z, Vec3::X, Vec3::Y),
+        (-Vec3::Z, Vec3::Y, Vec3::X),
+    ];
+    for (n, du, dv) in faces {
+        m.grid((n - du - dv) * h, du * size, dv * size, segments, segments);
+    }
+    m.single_material()
+}
+
+/// Area-weighted vertex normals, for meshes that come without any.
+fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
+    let mut n = vec![Vec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| positions[i as usize]);
+        let face = (b - a).cross(c - a); // length = 2·area: area weighting
+        for &i in t {
+            n[i as usize] += face;
+        }
+    }
+    n.into_iter()
+        .map(|v| v.try_normalize().unwrap_or(Vec3::Z))
+        .collect()
+}
+
+/// Finds the line a tobj error most likely refers to, for the message: the
+/// first line of the kind the error names that does not parse.
+fn locate_obj_error(text: &str, err: tobj::LoadError) -> Option<usize> {
+    use tobj::LoadError as E;
+    let floats = |rest: &str, n: usize| {
+        let v: Vec<_> = rest.split_whitespace().collect();
+        v.len() >= n && v.iter().all(|s| s.parse::<f32>().is_ok())
+    };
+    let mut counts = [0i64; 3]; // v, vt, vn seen so far
+    for (i, line) in text.lines().enumerate() {
+        let line = line.trim();
+        let (key, rest) = line.split_once(char::is_whitespace).unwrap_or((line, ""));
+        let bad = match key {
+            "v" => {
+                counts[0] += 1;
+                matches!(err, E::PositionParseError) && !floats(rest, 3)
+            }
+            "vt" => {
+                counts[1] += 1;
+                matches!(err, E::TexcoordParseError) && !floats(rest, 1)
+            }
+            "vn" => {
+                counts[2] += 1;
+                matches!(err, E::NormalParseError) && !floats(rest, 3)
+            }
+            "f" => {
+                let corners: Vec<_> = rest.split_whitespace().collect();
+                let index_ok = |s: &str, k: usize| {
+                    s.is_empty()
+                        || s.parse::<i64>()
+                            .is_ok_and(|x| x != 0 && (x.abs() <= counts[k]))
+                };
+                let bad_corner = corners.iter().any(|c| {
+                    let mut parts = c.split('/');
+                    let v = parts.next().unwrap_or("");
+                    let t = parts.next().unwrap_or("");
+                    let n = parts.next().unwrap_or("");
+                    v.is_empty() || !index_ok(v, 0) || !index_ok(t, 1) || !index_ok(n, 2)
+                });
+                matches!(
+                    err,
+                    E::FaceParseError
+                        | E::InvalidPolygon
+                        | E::FaceVertexOutOfBounds
+                        | E::FaceNormalOutOfBounds
+                        | E::FaceTexCoordOutOfBounds
+                ) && (corners.len() < 3 || bad_corner)
+            }
+            _ => false,
+        };
+        if bad {
+            return Some(i + 1);
+        }
+    }
+    None
+}
+
+/// Loads an OBJ (and the MTL files it names, through `read`) from its bytes.
+/// `path` is used for messages and to resolve `mtllib` names.
+pub fn load_obj(
+    path: &Path,
+    bytes: &[u8],
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<MeshData, String> {
+    let text = std::str::from_utf8(bytes)
+        .map_err(|e| format!("{}: not UTF-8 text: {e}", path.display()))?;
+    let opts = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ignore_points: true,
+        ignore_lines: true,
+    };
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let mtl_errors = std::cell::RefCell::new(Vec::new());
+    let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |mtl: &Path| {
+        let p = dir.join(mtl);
+        match read(&p) {
+            Ok(b) => tobj::load_mtl_buf(&mut std::io::Cursor::new(b)),
+            Err(e) => {
+                mtl_errors
+                    .borrow_mut()
+                    .push(format!("{}: {e}", p.display()));
+                Err(tobj::LoadError::OpenFileFailed)
+            }
+        }
+    });
+    let (models, materials) = match loaded {
+        Ok(r) => r,
+        Err(e) => {
+            let at = locate_obj_error(text, e)
+                .map(|l| format!(" at line {l}"))
+                .unwrap_or_default();
+            return Err(format!("{}{at}: {e}", path.display()));
+        }
+    };
+    let materials = match materials {
+        Ok(m) => m,
+        Err(e) => {
+            let why = mtl_errors.borrow().join("; ");
+            return Err(format!(
+                "{}: material library: {}",
+                path.display(),
+                if why.is_empty() { e.to_string() } else { why }
+            ));
+        }
+    };
+
+    let mut m = MeshData {
+        material_names: materials.iter().map(|mt| Some(mt.name.clone())).collect(),
+        mtl: materials,
+        ..Default::default()
+    };
+    let no_material = m.material_names.len() as u32;
+    m.material_names.push(None);
+    let mut any_uv = false;
+    let mut all_normals = true;
+    for model in &models {
+        let mesh = &model.mesh;
+        let nv = mesh.positions.len() / 3;
+        any_uv |= !mesh.texcoords.is_empty();
+        all_normals &= mesh.normals.len() == mesh.positions.len();
+        let base = m.positions.len() as u32;
+        m.positions.extend(
+            mesh.positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
+        if mesh.normals.len() == mesh.positions.len() {
+            m.normals.extend(
+                mesh.normals
+                    .chunks_exact(3)
+                    .map(|p| Vec3::new(p[0], p[1], p[2])),
+            );
+        } else {
+            m.normals.extend(std::iter::repeat_n(Vec3::ZERO, nv));
+        }
+        if mesh.texcoords.len() / 2 == nv {
+            m.uvs.extend(
+                mesh.texcoords
+                    .chunks_exact(2)
+                    .map(|t| Vec2::new(t[0], t[1])),
+            );
+        } else {
+            m.uvs.extend(std::iter::repeat_n(Vec2::ZERO, nv));
+        }
+        let mat = mesh.material_id.map(|i| i as u32).unwrap_or(no_material);
+        for t in mesh.indices.chunks_exact(3) {
+            m.triangles.push([base + t[0], base + t[1], base + t[2]]);
+            m.tri_material.push(mat);
+        }
+    }
+    if !any_uv {
+        m.uvs.clear();
+    }
+    if !all_normals {
+        m.normals = smooth_normals(&m.positions, &m.triangles);
+    } else {
+        for n in &mut m.normals {
+            *n = n.try_normalize().unwrap_or(Vec3::Z);
+        }
+    }
+    Ok(m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Sum over triangles of (signed area × outward direction) = 0 for a
+    /// closed surface, and the triangles must face outward: check with the
+    /// divergence theorem, Σ (a × b)·c / 6 = volume > 0.
+    fn signed_volume(m: &MeshData) -> f32 {
+        m.triangles
+            .iter()
+            .map(|t| {
+                let [a, b, c] = t.map(|i| m.positions[i as usize]);
+                a.cross(b).dot(c) / 6.0
+            })
+            .sum()
+    }
+
+    #[test]
+    fn procedural_solids_are_closed_and_face_outward() {
+        let s = sphere(1.0, 64, 32);
+        let v = signed_volume(&s);
+        let want = 4.0 / 3.0 * std::f32::consts::PI;
+        assert!(
+            (v - want).abs() / want < 0.01,
+            "sphere volume {v} vs {want}"
+        );
+        let c = cube(2.0, 3);
+        assert!((signed_volume(&c) - 8.0).abs() < 1e-4);
+        for t in &c.triangles {
+            let [a, b, cc] = t.map(|i| c.positions[i as usize]);
+            let n = (b - a).cross(cc - a);
+            assert!(
+                n.dot(c.normals[t[0] as usize]) > 0.0,
+                "cube face winding disagrees with its normal"
+            );
+        }
+    }
+
+    #[test]
+    fn plane_faces_up() {
+        let p = plane([2.0, 4.0], [2, 3]);
+        assert_eq!(p.triangles.len(), 12);
+        for t in &p.triangles {
+            let [a, b, c] = t.map(|i| p.positions[i as usize]);
+            assert!((b - a).cross(c - a).y > 0.0);
+        }
+    }
+
+    #[test]
+    fn obj_errors_name_the_line() {
+        let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\nf 1 2 9\n";
+        let err = load_obj(Path::new("bad.obj"), obj, &|_| {
+            Err(std::io::ErrorKind::NotFound.into())
+        })
+        .unwrap_err();
+        assert!(err.contains("bad.obj") && err.contains("line 5"), "{err}");
+        let obj = b"v 0 0 0\nv 1 zero 0\n";
+        let err = load_obj(Path::new("bad.obj"), obj, &|_| {
+            Err(std::io::ErrorKind::NotFound.into())
+        })
+        .unwrap_err();
+        assert!(err.contains("line 2"), "{err}");
+    }
+}

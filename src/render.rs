@@ -1,0 +1,332 @@
+//! Rendering a loaded scene: thread pool, repeats, supersampling, tone
+//! mapping, AOVs and the statistics `--stats` prints.
+
+use crate::scene::LoadedScene;
+use serde::Serialize;
+use specula_raster::frame::{render, Frame, FrameStats, ShadePath};
+use specula_raster::post::{downsample, encode_ldr, Tonemap};
+use specula_raster::resolve::ResolveContext;
+use specula_raster::{Target, MISS};
+use std::time::Instant;
+
+#[derive(Clone, Debug)]
+pub struct RenderSettings {
+    pub width: u32,
+    pub height: u32,
+    pub ssaa: u32,
+    pub tonemap: Tonemap,
+    pub exposure: f32,
+    pub path: ShadePath,
+    /// Worker threads; `None`: one per core.
+    pub threads: Option<usize>,
+    /// Frames to render (timed separately); the last one is kept.
+    pub repeat: u32,
+}
+
+impl RenderSettings {
+    /// The scene's own output settings.
+    pub fn from_scene(s: &LoadedScene) -> RenderSettings {
+        RenderSettings {
+            width: s.output.width,
+            height: s.output.height,
+            ssaa: s.output.ssaa,
+            tonemap: s.output.tonemap.into(),
+            exposure: s.output.exposure,
+            path: ShadePath::Simd,
+            threads: None,
+            repeat: 1,
+        }
+    }
+
+    /// The supersampled render target; checks sizes before anything is
+    /// allocated.
+    pub fn target(&self) -> Result<Target, String> {
+        if self.ssaa == 0 || self.ssaa > 16 {
+            return Err(format!(
+                "ssaa {} is out of range: it must be 1..=16",
+                self.ssaa
+            ));
+        }
+        let w = self.width.checked_mul(self.ssaa);
+        let h = self.height.checked_mul(self.ssaa);
+        match (w, h) {
+            (Some(w), Some(h)) if self.width > 0 && self.height > 0 => Target::new(w, h).map_err(|e| e.to_string()),
+            _ => Err(format!(
+                "image size {}×{} with ssaa {} is out of range: width and height must be ≥ 1 and at most {} after supersampling",
+                self.width,
+                self.height,
+                self.ssaa,
+                specula_raster::target::MAX_DIM
+            )),
+        }
+    }
+}
+
+/// Per-frame timings (ms) as `--stats` and `--stats-json` report them.
+#[derive(Clone, Debug, Serialize)]
+pub struct FrameTimes {
+    pub vertex: f64,
+    pub setup: f64,
+    pub bin: f64,
+    pub raster: f64,
+    pub shade: f64,
+    /// Supersampling resolve + tone mapping + sRGB encode (in memory).
+    pub post: f64,
+    /// The whole frame: vertex through post.
+    pub frame: f64,
+}
+
+#[derive(Clone, Debug, Serialize)]
+pub struct RunStats {
+    pub width: u32,
+    pub height: u32,
+    pub ssaa: u32,
+    pub threads: usize,
+    pub shading: &'static str,
+    pub triangles_in: u64,
+    pub culled_backface: u64,
+    pub culled_outside: u64,
+    pub skipped_nonfinite: u64,
+    pub skipped_degenerate: u64,
+    pub clipped: u64,
+    pub drawn: u64,
+    pub no_samples: u64,
+    pub raster_triangles: u64,
+    pub pixels_shaded: u64,
+    /// One entry per repeat.
+    pub frame_ms: Vec<f64>,
+    pub frames: Vec<FrameTimes>,
+    /// Median frame's pixels (samples) per second, in millions.
+    pub mpixels_per_s: f64,
+    pub load_ms: f64,
+    /// Writing files (PNG/EXR/AOVs); filled in by the caller.
+    pub encode_ms: f64,
+}
+
+pub struct Rendered {
+    pub width: u32,
+    pub height: u32,
+    /// Linear HDR, row-major, after the supersampling resolve.
+    pub hdr: Vec<[f32; 3]>,
+    /// Tone-mapped sRGB, 8-bit RGB row-major.
+    pub ldr: Vec<u8>,
+    pub frame: Frame,
+    pub stats: RunStats,
+}
+
+/// Median of a non-empty list.
+pub fn median(v: &[f64]) -> f64 {
+    let mut s = v.to_vec();
+    s.sort_by(f64::total_cmp);
+    s[s.len() / 2]
+}
+
+/// Renders `settings.repeat` frames of the scene and keeps the last.
+pub fn render_scene(
+    scene: &LoadedScene,
+    settings: &RenderSettings,
+    load_ms: f64,
+) -> Result<Rendered, String> {
+    let target = settings.target()?;
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = settings.threads {
+        if n == 0 {
+            return Err("--threads must be at least 1".into());
+        }
+        pool = pool.num_threads(n);
+    }
+    let pool = pool
+        .build()
+        .map_err(|e| format!("cannot start worker threads: {e}"))?;
+    let repeat = settings.repeat.max(1);
+    pool.install(|| {
+        let mut frames = Vec::new();
+        let mut last = None;
+        for _ in 0..repeat {
+            let t0 = Instant::now();
+            let frame = render(&scene.data, target, settings.path);
+            let tp = Instant::now();
+            let (w, h, hdr) = downsample(&frame.target, &frame.color, settings.ssaa);
+            let ldr = encode_ldr(&hdr, settings.tonemap, settings.exposure);
+            let post = tp.elapsed().as_secs_f64() * 1e3;
+            let total = t0.elapsed().as_secs_f64() * 1e3;
+            let t = frame.stats.times;
+            frames.push(FrameTimes {
+                vertex: t.vertex,
+                setup: t.setup,
+                bin: t.bin,
+                raster: t.raster,
+                shade: t.shade,
+                post,
+                frame: total,
+            });
+            last = Some((w, h, hdr, ldr, frame));
+        }
+        let (width, height, hdr, ldr, frame) = last.expect("at least one frame");
+        let frame_ms: Vec<f64> = frames.iter().map(|f| f.frame).collect();
+        let stats = run_stats(
+            &frame.stats,
+            settings,
+            rayon::current_num_threads(),
+            frame_ms,
+            frames,
+            load_ms,
+            target,
+        );
+        Ok(Rendered {
+            width,
+            height,
+            hdr,
+            ldr,
+            frame,
+            stats,
+        })
+    })
+}
+
+fn run_stats(
+    s: &FrameStats,
+    settings: &RenderSettings,
+    threads: usize,
+    frame_ms: Vec<f64>,
+    frames: Vec<FrameTimes>,
+    load_ms: f64,
+    target: Target,
+) -> RunStats {
+    let c = s.counts;
+    RunStats {
+        width: settings.width,
+        height: settings.height,
+        ssaa: settings.ssaa,
+        threads,
+        shading: match settings.path {
+            ShadePath::Simd => "simd",
+            ShadePath::Scalar => "scalar",
+        },
+        triangles_in: c.triangles,
+        culled_backface: c.culled_backface,
+        culled_outside: c.culled_outside,
+        skipped_nonfinite: c.skipped_nonfinite,
+        skipped_degenerate: c.skipped_degenerate,
+        clipped: c.clipped,
+        drawn: c.drawn,
+        no_samples: c.no_samples,
+        raster_triangles: s.raster_triangles,
+        pixels_shaded: s.pixels_shaded,
+        mpixels_per_s: target.pixel_count() as f64 / (median(&frame_ms) * 1e3),
+        frame_ms,
+        frames,
+        load_ms,
+        encode_ms: 0.0,
+    }
+}
+
+impl RunStats {
+    /// The human-readable report of `--stats`.
+    pub fn report(&self) -> String {
+        let mut s = String::new();
+        let f = |v: &[f64]| median(v);
+        let col =
+            |pick: fn(&FrameTimes) -> f64| f(&self.frames.iter().map(pick).collect::<Vec<_>>());
+        s += &format!(
+            "{}×{} (ssaa {}), {} thread(s), {} shading, {} frame(s)\n",
+            self.width,
+            self.height,
+            self.ssaa,
+            self.threads,
+            self.shading,
+            self.frames.len()
+        );
+        s += &format!(
+            "triangles: {} in, {} back-face culled, {} outside, {} non-finite, {} degenerate, {} clipped, {} drawn ({} screen triangles), {} between pixel centres\n",
+            self.triangles_in,
+            self.culled_backface,
+            self.culled_outside,
+            self.skipped_nonfinite,
+            self.skipped_degenerate,
+            self.clipped,
+            self.drawn,
+            self.raster_triangles,
+            self.no_samples
+        );
+        s += &format!("pixels shaded: {}\n", self.pixels_shaded);
+        s += "pass times (ms, median over frames):\n";
+        for (name, v) in [
+            ("vertex", col(|t| t.vertex)),
+            ("clip+setup", col(|t| t.setup)),
+            ("bin", col(|t| t.bin)),
+            ("raster", col(|t| t.raster)),
+            ("shade", col(|t| t.shade)),
+            ("post", col(|t| t.post)),
+        ] {
+            s += &format!("  {name:<11}{v:9.2}\n");
+        }
+        s += &format!("  {:<11}{:9.2}\n", "encode", self.encode_ms);
+        s += &format!(
+            "  {:<11}{:9.2}   ({:.1} Mpixel/s)\n",
+            "frame",
+            col(|t| t.frame),
+            self.mpixels_per_s
+        );
+        s += &format!("  {:<11}{:9.2}\n", "load", self.load_ms);
+        if self.frames.len() > 1 {
+            let list: Vec<String> = self.frame_ms.iter().map(|v| format!("{v:.2}")).collect();
+            s += &format!("frame times (ms): {}\n", list.join(" "));
+        }
+        s
+    }
+}
+
+/// Linear view depth per sample (+inf where nothing is hit), row-major at
+/// the supersampled size.
+pub fn depth_aov(frame: &Frame) -> Vec<f32> {
+    let t = &frame.target;
+    let v = &frame.visibility;
+    let tiled: Vec<f32> = (0..t.buffer_len())
+        .map(|i| {
+            let id = v.vis.id[i];
+            if id == MISS {
+                return f32::INFINITY;
+            }
+            let tile = i / specula_raster::target::TILE_PIXELS;
+            let (tx, ty) = t.tile_origin(tile);
+            let local = i % specula_raster::target::TILE_PIXELS;
+            let (x, y) = (
+                tx + (local % specula_raster::TILE) as u32,
+                ty + (local / specula_raster::TILE) as u32,
+            );
+            let p = &v.planes[id as usize];
+            let ks = specula_raster::setup::TriPlanes::eval(
+                &p.ks,
+                p.origin,
+                x as f32 + 0.5,
+                y as f32 + 0.5,
+            );
+            1.0 / ks
+        })
+        .collect();
+    t.to_row_major(&tiled)
+}
+
+/// World-space shading normal per sample (0 where nothing is hit).
+pub fn normal_aov(scene: &LoadedScene, frame: &Frame) -> Vec<[f32; 3]> {
+    let t = &frame.target;
+    let v = &frame.visibility;
+    let ctx = ResolveContext {
+        scene: &scene.data,
+        planes: &v.planes,
+        view: &v.view,
+    };
+    let ids = t.to_row_major(&v.vis.id);
+    ids.iter()
+        .enumerate()
+        .map(|(i, &id)| {
+            if id == MISS {
+                return [0.0; 3];
+            }
+            let (x, y) = (i as u32 % t.width, i as u32 / t.width);
+            let f = ctx.resolve::<f32>(x, y, &[id]);
+            [f.n.x, f.n.y, f.n.z]
+        })
+        .collect()
+}
