@@ -431,10 +431,15 @@ pub fn load_scene_str(
             inputs.push(p.clone());
             let m =
                 mesh::load_obj(p, &bytes, read).map_err(|e| err(format!("{field}.obj: {e}")))?;
-            let bad = m.positions.iter().filter(|v| !v.is_finite()).count();
+            let limit = specula_raster::setup::MAX_CLIP_COORD as f32;
+            let bad = m
+                .positions
+                .iter()
+                .filter(|v| !(v.abs().max_element() <= limit))
+                .count();
             if bad > 0 {
                 warnings.push(format!(
-                    "{}: {bad} vertices are not finite; triangles using them are skipped",
+                    "{}: {bad} vertices are not finite or beyond ±{limit:e}; triangles using them are skipped",
                     p.display()
                 ));
             }

@@ -35,9 +35,16 @@ fn benches(c: &mut Criterion) {
         let p = pool(threads);
         let vis = p.install(|| visibility(&scene.data, &target, &mut FrameStats::default()));
         for (name, path) in [("simd", ShadePath::Simd), ("scalar", ShadePath::Scalar)] {
-            g.bench_function(BenchmarkId::new(format!("metallic_roughness/{name}"), threads), |b| {
-                b.iter(|| p.install(|| shade(&scene.data, &target, &vis, path, &mut FrameStats::default())))
-            });
+            g.bench_function(
+                BenchmarkId::new(format!("metallic_roughness/{name}"), threads),
+                |b| {
+                    b.iter(|| {
+                        p.install(|| {
+                            shade(&scene.data, &target, &vis, path, &mut FrameStats::default())
+                        })
+                    })
+                },
+            );
         }
     }
     g.finish();

@@ -17,5 +17,8 @@ pub fn benchmark_scene() -> LoadedScene {
 
 /// A rayon pool of exactly `n` threads.
 pub fn pool(n: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new().num_threads(n).build().expect("thread pool")
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(n)
+        .build()
+        .expect("thread pool")
 }

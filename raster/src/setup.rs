@@ -54,13 +54,20 @@ impl TriPlanes {
     }
 }
 
+/// Largest clip-space coordinate magnitude accepted (2⁵⁰ ≈ 1.1e15). Beyond
+/// it an f32 position's spacing exceeds 1e8 units: such a vertex (1e30, say)
+/// carries no usable position, so its triangle is skipped and counted like a
+/// NaN one instead of being clipped into a meaningless sliver.
+pub const MAX_CLIP_COORD: f64 = (1u64 << 50) as f64;
+
 /// What happened to triangles in setup; sums over chunks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SetupCounts {
     pub triangles: u64,
     pub culled_backface: u64,
     pub culled_outside: u64,
-    pub skipped_nonfinite: u64,
+    /// A vertex is NaN, infinite or beyond `MAX_CLIP_COORD`.
+    pub skipped_invalid: u64,
     pub skipped_degenerate: u64,
     pub clipped: u64,
     /// Reached the rasterizer with at least one candidate pixel.
@@ -74,7 +81,7 @@ impl SetupCounts {
         self.triangles += o.triangles;
         self.culled_backface += o.culled_backface;
         self.culled_outside += o.culled_outside;
-        self.skipped_nonfinite += o.skipped_nonfinite;
+        self.skipped_invalid += o.skipped_invalid;
         self.skipped_degenerate += o.skipped_degenerate;
         self.clipped += o.clipped;
         self.drawn += o.drawn;
@@ -139,8 +146,8 @@ impl SetupContext {
     ) -> Option<TriPlanes> {
         counts.triangles += 1;
         let v: [ClipVertex; 3] = v.map(|p| p.map(|c| c as f64));
-        if v.iter().flatten().any(|c| !c.is_finite()) {
-            counts.skipped_nonfinite += 1;
+        if v.iter().flatten().any(|c| c.is_nan() || c.abs() > MAX_CLIP_COORD) {
+            counts.skipped_invalid += 1;
             return None;
         }
         if outcode(&v[0]) & outcode(&v[1]) & outcode(&v[2]) != 0 {

@@ -64,10 +64,11 @@ impl Brdf for MetallicRoughness {
         // wi + wo is zero only for opposite directions, which `above` excludes.
         let h = (wi + wo).normalize_or(n);
         let cos_h = n.dot(h).max(R::ZERO);
+        let sin2_h = n.cross(h).length_squared();
         let cos_d = wi.dot(h);
 
         let f = f_schlick(f0, cos_d);
-        let dv = d_ggx(alpha, cos_h) * v_smith_ggx_correlated(alpha, cos_i, cos_o);
+        let dv = d_ggx(alpha, cos_h, sin2_h) * v_smith_ggx_correlated(alpha, cos_i, cos_o);
         let specular = f * dv;
         let diffuse = (Rgb::splat(R::ONE) - f).mul_elem(f_lambert(diffuse));
         Rgb::select(above, specular + diffuse, Rgb::zero())

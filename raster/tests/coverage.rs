@@ -1,0 +1,348 @@
+//! Watertightness and fill rule: every pixel centre inside a mesh's
+//! silhouette is covered exactly once, none twice, none outside; shared
+//! edges through pixel centres go to exactly one side.
+
+use glam::{Mat3, Vec3};
+use rand::{Rng, SeedableRng};
+use specula_raster::clip::GuardBand;
+use specula_raster::fixed::{pixel_centre, SUBPIXEL_ONE};
+use specula_raster::setup::{RasterTri, SetupContext, SetupCounts};
+
+const W: u32 = 96;
+const H: u32 = 80;
+
+fn ctx() -> SetupContext {
+    SetupContext {
+        width: W,
+        height: H,
+        guard: GuardBand::for_image(W, H),
+    }
+}
+
+/// Per-pixel write counts of a list of screen triangles, walking spans the
+/// way the scan pass does (span ∩ bounding box).
+fn write_counts(tris: &[RasterTri]) -> Vec<u32> {
+    let mut c = vec![0u32; (W * H) as usize];
+    for t in tris {
+        let [x0, y0, x1, y1] = t.bbox;
+        for y in y0..y1 {
+            let (s0, s1) = t.span(y);
+            for x in s0.max(x0 as i64)..s1.min(x1 as i64) {
+                assert!(
+                    t.covers(x as i32, y),
+                    "span and direct edge test disagree at ({x}, {y})"
+                );
+                c[(y as u32 * W + x as u32) as usize] += 1;
+            }
+            // And nothing the span left out is covered.
+            for x in x0..x1 {
+                let in_span = (x as i64) >= s0 && (x as i64) < s1;
+                assert_eq!(t.covers(x, y), in_span, "span misses ({x}, {y})");
+            }
+        }
+    }
+    c
+}
+
+/// Clip-space vertex for a screen point (pixels) at depth z with w = 1.
+fn clip_of(sx: f64, sy: f64, z: f32) -> [f32; 4] {
+    [
+        (2.0 * sx / W as f64 - 1.0) as f32,
+        (1.0 - 2.0 * sy / H as f64) as f32,
+        z,
+        1.0,
+    ]
+}
+
+/// Fixed-point screen position setup will snap a clip vertex to.
+fn snapped(v: [f32; 4]) -> [i64; 2] {
+    let (x, y, w) = (v[0] as f64, v[1] as f64, v[3] as f64);
+    let sx = (x / w + 1.0) * 0.5 * W as f64;
+    let sy = (1.0 - y / w) * 0.5 * H as f64;
+    [
+        specula_raster::fixed::snap(sx),
+        specula_raster::fixed::snap(sy),
+    ]
+}
+
+/// Signed distance (fixed units, scaled) of point p from the line a→b.
+fn side(a: [i64; 2], b: [i64; 2], p: [i64; 2]) -> i128 {
+    (b[0] - a[0]) as i128 * (p[1] - a[1]) as i128 - (b[1] - a[1]) as i128 * (p[0] - a[0]) as i128
+}
+
+/// Is pixel centre p strictly inside the convex polygon (any winding), at
+/// least `margin` fixed units from every edge? Returns None when it is
+/// within the margin of the boundary (ambiguous by the fill rule).
+fn inside_convex(poly: &[[i64; 2]], p: [i64; 2], margin: f64) -> Option<bool> {
+    let n = poly.len();
+    let mut sign = 0i32;
+    let mut near = false;
+    for i in 0..n {
+        let (a, b) = (poly[i], poly[(i + 1) % n]);
+        let s = side(a, b, p);
+        let len = (((b[0] - a[0]) as f64).powi(2) + ((b[1] - a[1]) as f64).powi(2)).sqrt();
+        if (s as f64).abs() / len.max(1.0) <= margin {
+            near = true;
+            continue;
+        }
+        let sg = if s > 0 { 1 } else { -1 };
+        if sign == 0 {
+            sign = sg;
+        } else if sg != sign {
+            return Some(false);
+        }
+    }
+    if near {
+        None
+    } else {
+        Some(true)
+    }
+}
+
+/// Convex hull (monotone chain) of fixed-point points.
+fn hull(mut pts: Vec<[i64; 2]>) -> Vec<[i64; 2]> {
+    pts.sort();
+    pts.dedup();
+    let mut lower: Vec<[i64; 2]> = Vec::new();
+    for &p in &pts {
+        while lower.len() >= 2 && side(lower[lower.len() - 2], lower[lower.len() - 1], p) <= 0 {
+            lower.pop();
+        }
+        lower.push(p);
+    }
+    let mut upper: Vec<[i64; 2]> = Vec::new();
+    for &p in pts.iter().rev() {
+        while upper.len() >= 2 && side(upper[upper.len() - 2], upper[upper.len() - 1], p) <= 0 {
+            upper.pop();
+        }
+        upper.push(p);
+    }
+    lower.pop();
+    upper.pop();
+    lower.extend(upper);
+    lower
+}
+
+#[test]
+fn triangle_fans_are_watertight_at_random_offsets_and_rotations() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+    let ctx = ctx();
+    for trial in 0..300 {
+        let n = rng.random_range(3..24);
+        let cx = 48.0 + rng.random_range(-0.5..0.5);
+        let cy = 40.0 + rng.random_range(-0.5..0.5);
+        let r = rng.random_range(5.0..38.0);
+        let rot = rng.random_range(0.0..std::f64::consts::TAU);
+        // A fan around the centre; front-facing (counter-clockwise in NDC,
+        // i.e. clockwise on screen with y down).
+        let rim: Vec<[f32; 4]> = (0..n)
+            .map(|k| {
+                let a = rot - std::f64::consts::TAU * k as f64 / n as f64;
+                clip_of(cx + r * a.cos(), cy + r * a.sin(), 0.5)
+            })
+            .collect();
+        let centre = clip_of(cx, cy, 0.5);
+        let mut tris = Vec::new();
+        let mut counts = SetupCounts::default();
+        for k in 0..n {
+            let v = [centre, rim[k], rim[(k + 1) % n]];
+            ctx.setup(k as u32, v, false, &mut tris, &mut counts);
+        }
+        assert_eq!(
+            counts.culled_backface, 0,
+            "trial {trial}: fan should be front-facing"
+        );
+        let c = write_counts(&tris);
+        let poly: Vec<[i64; 2]> = rim.iter().map(|v| snapped(*v)).collect();
+        for y in 0..H {
+            for x in 0..W {
+                let p = [pixel_centre(x as i64), pixel_centre(y as i64)];
+                let got = c[(y * W + x) as usize];
+                assert!(
+                    got <= 1,
+                    "trial {trial}: pixel ({x}, {y}) written {got} times"
+                );
+                match inside_convex(&poly, p, 0.5) {
+                    Some(true) => assert_eq!(
+                        got, 1,
+                        "trial {trial}: pixel ({x}, {y}) inside the fan was missed"
+                    ),
+                    Some(false) => assert_eq!(
+                        got, 0,
+                        "trial {trial}: pixel ({x}, {y}) outside the fan was written"
+                    ),
+                    None => {}
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn closed_convex_mesh_covers_its_silhouette_exactly_once() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+    let ctx = ctx();
+    // An icosphere-like closed convex mesh: a UV sphere without degenerate
+    // pole triangles.
+    let (seg, rings) = (14u32, 9u32);
+    let mut pos = Vec::new();
+    for r in 0..=rings {
+        let th = std::f64::consts::PI * r as f64 / rings as f64;
+        for s in 0..seg {
+            let ph = std::f64::consts::TAU * s as f64 / seg as f64;
+            pos.push(Vec3::new(
+                (th.sin() * ph.cos()) as f32,
+                th.cos() as f32,
+                (th.sin() * ph.sin()) as f32,
+            ));
+        }
+    }
+    let at = |s: u32, r: u32| (r * seg + s % seg) as usize;
+    let mut faces = Vec::new();
+    for r in 0..rings {
+        for s in 0..seg {
+            let (a, b, c, d) = (at(s, r), at(s + 1, r), at(s + 1, r + 1), at(s, r + 1));
+            if r != 0 {
+                faces.push([a, b, c]);
+            }
+            if r != rings - 1 {
+                faces.push([a, c, d]);
+            }
+        }
+    }
+    for trial in 0..100 {
+        let rot = Mat3::from_euler(
+            glam::EulerRot::XYZ,
+            rng.random_range(0.0..6.3),
+            rng.random_range(0.0..6.3),
+            rng.random_range(0.0..6.3),
+        );
+        let (cx, cy) = (
+            48.0 + rng.random_range(-1.0..1.0),
+            40.0 + rng.random_range(-1.0..1.0),
+        );
+        let radius = rng.random_range(8.0..35.0);
+        // Orthographic-style projection: screen = centre + radius·(x, −y),
+        // depth from z; mesh seen from +z.
+        let clip: Vec<[f32; 4]> = pos
+            .iter()
+            .map(|p| {
+                let q = rot * *p;
+                clip_of(
+                    cx + radius * q.x as f64,
+                    cy - radius * q.y as f64,
+                    0.5 - 0.25 * q.z,
+                )
+            })
+            .collect();
+        for double_sided in [false, true] {
+            let mut tris = Vec::new();
+            let mut counts = SetupCounts::default();
+            for (i, f) in faces.iter().enumerate() {
+                ctx.setup(
+                    i as u32,
+                    f.map(|k| clip[k]),
+                    double_sided,
+                    &mut tris,
+                    &mut counts,
+                );
+            }
+            let c = write_counts(&tris);
+            let h = hull(clip.iter().map(|v| snapped(*v)).collect());
+            let layers = if double_sided { 2 } else { 1 };
+            for y in 0..H {
+                for x in 0..W {
+                    let p = [pixel_centre(x as i64), pixel_centre(y as i64)];
+                    let got = c[(y * W + x) as usize];
+                    match inside_convex(&h, p, 1.0) {
+                        Some(true) => assert_eq!(got, layers, "trial {trial} ds={double_sided}: ({x}, {y}) inside written {got} times"),
+                        Some(false) => assert_eq!(got, 0, "trial {trial}: ({x}, {y}) outside written"),
+                        None => assert!(got <= layers),
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// Screen triangle straight from fixed-point pixel coordinates.
+fn tri(ctx: &SetupContext, p: [[f64; 2]; 3]) -> Option<RasterTri> {
+    let f = |q: [f64; 2]| {
+        [
+            (q[0] * SUBPIXEL_ONE as f64) as i64,
+            (q[1] * SUBPIXEL_ONE as f64) as i64,
+        ]
+    };
+    ctx.edges(0, f(p[0]), f(p[1]), f(p[2]))
+}
+
+fn covered(t: &Option<RasterTri>, x: i32, y: i32) -> bool {
+    t.as_ref().is_some_and(|t| {
+        let [x0, y0, x1, y1] = t.bbox;
+        (x0..x1).contains(&x) && (y0..y1).contains(&y) && t.covers(x, y)
+    })
+}
+
+#[test]
+fn fill_rule_on_edges_through_pixel_centres() {
+    let ctx = ctx();
+    // Square [10.5, 20.5]² (edges through pixel centres) split along its
+    // diagonal, which also passes through centres.
+    let a = tri(&ctx, [[10.5, 10.5], [20.5, 10.5], [20.5, 20.5]]);
+    let b = tri(&ctx, [[10.5, 10.5], [20.5, 20.5], [10.5, 20.5]]);
+    for y in 5..25 {
+        for x in 5..25 {
+            let n = covered(&a, x, y) as u32 + covered(&b, x, y) as u32;
+            // Left and top edges (x = 10, y = 10) belong to the square,
+            // right and bottom (x = 20, y = 20) do not.
+            let inside = (10..20).contains(&x) && (10..20).contains(&y);
+            assert_eq!(n, inside as u32, "pixel ({x}, {y}) covered {n} times");
+        }
+    }
+    // A horizontal top edge through centres is drawn, a bottom one is not.
+    let top = tri(&ctx, [[30.5, 30.5], [40.5, 30.5], [35.5, 36.0]]);
+    assert!(
+        covered(&top, 35, 30),
+        "top edge through a centre must be covered"
+    );
+    let bottom = tri(&ctx, [[35.5, 30.0], [40.5, 36.5], [30.5, 36.5]]);
+    assert!(
+        !covered(&bottom, 35, 36),
+        "bottom edge through a centre must not be covered"
+    );
+    assert!(covered(&bottom, 35, 35));
+    // Shared vertical edge x = 50.5 through centres: the pixel column goes to
+    // the triangle on its right (where the edge is a left edge).
+    let left = tri(&ctx, [[45.0, 40.0], [50.5, 40.0], [50.5, 50.0]]);
+    let right = tri(&ctx, [[50.5, 40.0], [56.0, 45.0], [50.5, 50.0]]);
+    for y in 41..49 {
+        assert!(
+            !covered(&left, 50, y),
+            "left triangle must not own its right edge at y={y}"
+        );
+        assert!(
+            covered(&right, 50, y),
+            "right triangle must own its left edge at y={y}"
+        );
+    }
+}
+
+#[test]
+fn zero_area_triangles_are_skipped() {
+    let ctx = ctx();
+    assert!(tri(&ctx, [[1.0, 1.0], [5.0, 5.0], [9.0, 9.0]]).is_none());
+    let mut out = Vec::new();
+    let mut counts = SetupCounts::default();
+    let v = clip_of(10.0, 10.0, 0.5);
+    assert!(ctx
+        .setup(
+            0,
+            [v, v, clip_of(20.0, 10.0, 0.5)],
+            false,
+            &mut out,
+            &mut counts
+        )
+        .is_none());
+    assert_eq!(counts.skipped_degenerate, 1);
+    assert!(out.is_empty());
+}
