@@ -19,10 +19,10 @@ pub enum Tonemap {
 impl Tonemap {
     #[inline]
     pub fn apply(self, x: f32) -> f32 {
-        // f32::max turns NaN into 0, so no NaN reaches the encoder; every
+        // NaN and negatives become 0, so no NaN reaches the encoder; every
         // curve is within 1e-18 of 1 past 1e18, and capping there keeps x²
         // (ACES) and 1 + x (Reinhard) finite for +inf.
-        let x = x.max(0.0).min(1e18);
+        let x = if x > 0.0 { x.min(1e18) } else { 0.0 };
         match self {
             Tonemap::Clamp => x.min(1.0),
             Tonemap::Reinhard => x / (1.0 + x),
