@@ -435,7 +435,7 @@ pub fn load_scene_str(
             let bad = m
                 .positions
                 .iter()
-                .filter(|v| !(v.abs().max_element() <= limit))
+                .filter(|v| v.is_nan() || v.abs().max_element() > limit)
                 .count();
             if bad > 0 {
                 warnings.push(format!(
