@@ -151,7 +151,7 @@ fn nan_and_huge_vertices_are_skipped_and_counted_and_leave_no_nan_pixel() {
         .chain(&f.color.g)
         .chain(&f.color.b)
         .all(|v| v.is_finite()));
-    assert!(f.visibility.vis.id.iter().any(|&i| i == 0));
+    assert!(f.visibility.vis.id.contains(&0));
 }
 
 #[test]

@@ -3,6 +3,9 @@
 //! the textbook G = 1/(1 + Λi + Λo) form), numeric integration for the NDF
 //! and the directional albedo, reciprocity, and f32x8 vs f64 lane agreement.
 
+// The oracle is written plainly, channel by channel, on purpose.
+#![allow(clippy::needless_range_loop)]
+
 use rand::{Rng, SeedableRng};
 use specula_core::albedo_tables::AlbedoTables;
 use specula_core::models::{Lambert, MetallicRoughness};

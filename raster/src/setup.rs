@@ -146,7 +146,10 @@ impl SetupContext {
     ) -> Option<TriPlanes> {
         counts.triangles += 1;
         let v: [ClipVertex; 3] = v.map(|p| p.map(|c| c as f64));
-        if v.iter().flatten().any(|c| c.is_nan() || c.abs() > MAX_CLIP_COORD) {
+        if v.iter()
+            .flatten()
+            .any(|c| c.is_nan() || c.abs() > MAX_CLIP_COORD)
+        {
             counts.skipped_invalid += 1;
             return None;
         }
