@@ -143,12 +143,12 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     let mut r = render_scene(&scene, &settings, load_ms)?;
     let t = Instant::now();
     if is_exr(&a.output) {
-        output::write_exr(&a.output, r.width, r.height, &r.hdr)?;
+        output::write_exr(&a.output, r.width, r.height, &r.hdr())?;
     } else {
         output::write_png(&a.output, r.width, r.height, std::mem::take(&mut r.ldr))?;
     }
     if let Some(p) = &a.exr {
-        output::write_exr(p, r.width, r.height, &r.hdr)?;
+        output::write_exr(p, r.width, r.height, &r.hdr())?;
     }
     let (tw, th) = (r.frame.target.width, r.frame.target.height);
     for aov in &aovs {

@@ -3,8 +3,8 @@
 
 use crate::scene::LoadedScene;
 use serde::Serialize;
-use specula_raster::frame::{render, Frame, FrameStats, ShadePath};
-use specula_raster::post::{downsample, encode_ldr, Tonemap};
+use specula_raster::frame::{render, render_into, Frame, FrameStats, ShadePath};
+use specula_raster::post::{downsample, resolve_ldr, Tonemap};
 use specula_raster::resolve::ResolveContext;
 use specula_raster::{Target, MISS};
 use std::time::Instant;
@@ -106,12 +106,18 @@ pub struct RunStats {
 pub struct Rendered {
     pub width: u32,
     pub height: u32,
-    /// Linear HDR, row-major, after the supersampling resolve.
-    pub hdr: Vec<[f32; 3]>,
+    pub ssaa: u32,
     /// Tone-mapped sRGB, 8-bit RGB row-major.
     pub ldr: Vec<u8>,
     pub frame: Frame,
     pub stats: RunStats,
+}
+
+impl Rendered {
+    /// Linear HDR, row-major, after the supersampling resolve (for EXR).
+    pub fn hdr(&self) -> Vec<[f32; 3]> {
+        downsample(&self.frame.target, &self.frame.color, self.ssaa).2
+    }
 }
 
 /// Median of a non-empty list.
@@ -141,13 +147,26 @@ pub fn render_scene(
     let repeat = settings.repeat.max(1);
     pool.install(|| {
         let mut frames = Vec::new();
-        let mut last = None;
+        let mut last: Option<(Vec<u8>, Frame)> = None;
         for _ in 0..repeat {
             let t0 = Instant::now();
-            let frame = render(&scene.data, target, settings.path);
+            // Later frames reuse the previous frame's buffers, as a renderer
+            // drawing frame after frame would.
+            let frame = match last.take() {
+                Some((_, mut f)) => {
+                    render_into(&scene.data, &mut f, settings.path);
+                    f
+                }
+                None => render(&scene.data, target, settings.path),
+            };
             let tp = Instant::now();
-            let (w, h, hdr) = downsample(&frame.target, &frame.color, settings.ssaa);
-            let ldr = encode_ldr(&hdr, settings.tonemap, settings.exposure);
+            let ldr = resolve_ldr(
+                &frame.target,
+                &frame.color,
+                settings.ssaa,
+                settings.tonemap,
+                settings.exposure,
+            );
             let post = tp.elapsed().as_secs_f64() * 1e3;
             let total = t0.elapsed().as_secs_f64() * 1e3;
             let t = frame.stats.times;
@@ -160,9 +179,9 @@ pub fn render_scene(
                 post,
                 frame: total,
             });
-            last = Some((w, h, hdr, ldr, frame));
+            last = Some((ldr, frame));
         }
-        let (width, height, hdr, ldr, frame) = last.expect("at least one frame");
+        let (ldr, frame) = last.expect("at least one frame");
         let frame_ms: Vec<f64> = frames.iter().map(|f| f.frame).collect();
         let stats = run_stats(
             &frame.stats,
@@ -174,9 +193,9 @@ pub fn render_scene(
             target,
         );
         Ok(Rendered {
-            width,
-            height,
-            hdr,
+            width: settings.width,
+            height: settings.height,
+            ssaa: settings.ssaa,
             ldr,
             frame,
             stats,
@@ -325,7 +344,7 @@ pub fn normal_aov(scene: &LoadedScene, frame: &Frame) -> Vec<[f32; 3]> {
                 return [0.0; 3];
             }
             let (x, y) = (i as u32 % t.width, i as u32 / t.width);
-            let f = ctx.resolve::<f32>(x, y, &[id]);
+            let f = ctx.resolve::<f32>(x, y, &specula_raster::resolve::PacketTris::new(&[id], 1));
             [f.n.x, f.n.y, f.n.z]
         })
         .collect()

@@ -204,7 +204,8 @@ base_color = [1.0, 1.0, 1.0]
             let p = eye + d * (-eye.y / d.y);
             // mesh::plane: s along +z, t along +x, both from −100.
             let want = [(p.z + 100.0) / 200.0, (p.x + 100.0) / 200.0];
-            let frag = ctx.resolve::<f32>(px, py, &[id]);
+            let frag =
+                ctx.resolve::<f32>(px, py, &specula_raster::resolve::PacketTris::new(&[id], 1));
             let tri = s.data.triangles[id as usize];
             let uv = |k: usize| s.data.uvs[tri[k] as usize].as_dvec2();
             let (b1, b2) = (frag.b1 as f64, frag.b2 as f64);

@@ -63,7 +63,7 @@ fn benchmark_scene_bytes_do_not_depend_on_the_thread_count() {
         let png = dir.join(format!("t{threads}.png"));
         let exr = dir.join(format!("t{threads}.exr"));
         output::write_png(&png, r.width, r.height, r.ldr.clone()).expect("png");
-        output::write_exr(&exr, r.width, r.height, &r.hdr).expect("exr");
+        output::write_exr(&exr, r.width, r.height, &r.hdr()).expect("exr");
         files.push((std::fs::read(png).unwrap(), std::fs::read(exr).unwrap()));
     }
     for (i, f) in files.iter().enumerate().skip(1) {

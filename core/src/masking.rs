@@ -25,7 +25,10 @@ pub fn lambda_ggx<R: Real>(alpha: R, cos_theta: R) -> R {
 pub fn v_smith_ggx_correlated<R: Real>(alpha: R, cos_i: R, cos_o: R) -> R {
     let a2 = alpha * alpha;
     let one_minus_a2 = R::ONE - a2;
-    let s_i = (cos_i * cos_i).mul_add(one_minus_a2, a2).sqrt();
-    let s_o = (cos_o * cos_o).mul_add(one_minus_a2, a2).sqrt();
-    R::HALF / cos_o.mul_add(s_i, cos_i * s_o)
+    // Both radicands are ≥ α² > 0, so √x = x·rsqrt(x) is safe.
+    let r_i = (cos_i * cos_i).mul_add(one_minus_a2, a2);
+    let r_o = (cos_o * cos_o).mul_add(one_minus_a2, a2);
+    let s_i = r_i * r_i.rsqrt();
+    let s_o = r_o * r_o.rsqrt();
+    R::HALF * cos_o.mul_add(s_i, cos_i * s_o).rcp()
 }

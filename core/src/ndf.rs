@@ -14,5 +14,6 @@ use crate::real::Real;
 pub fn d_ggx<R: Real>(alpha: R, cos_theta_m: R, sin2_theta_m: R) -> R {
     let a2 = alpha * alpha;
     let t = (cos_theta_m * cos_theta_m).mul_add(a2, sin2_theta_m);
-    a2 / (R::PI * t * t)
+    // t ≥ α² cos²θm + sin²θm ≥ α⁴-ish > 0: `rcp` sees a normal number.
+    a2 * (R::PI * t * t).rcp()
 }

@@ -57,18 +57,20 @@ impl<R: Real> V3<R> {
     pub fn length(self) -> R {
         self.dot(self).sqrt()
     }
-    /// Unit vector. A zero vector gives NaN lanes; callers that can see one
+    /// Unit vector (through [`Real::rsqrt`]: within 4e-7 of unit length).
+    /// A zero or tiny vector gives NaN lanes; callers that can see one
     /// (interpolated normals that cancel) use [`V3::normalize_or`].
     #[inline(always)]
     pub fn normalize(self) -> Self {
-        self * (R::ONE / self.length())
+        self * self.length_squared().rsqrt()
     }
-    /// Unit vector, or `fallback` in lanes whose length is zero or not finite.
+    /// Unit vector, or `fallback` in lanes whose squared length is not a
+    /// finite normal number above 1e-30 (where `rsqrt` would not be).
     #[inline(always)]
     pub fn normalize_or(self, fallback: Self) -> Self {
         let len2 = self.length_squared();
-        let ok = len2.gt(R::ZERO) & len2.is_finite();
-        let n = self * (R::ONE / len2.sqrt());
+        let ok = len2.gt(R::splat(1e-30)) & len2.is_finite();
+        let n = self * len2.rsqrt();
         Self::select(ok, n, fallback)
     }
     /// Component-wise product (colour times colour).

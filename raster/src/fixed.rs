@@ -16,11 +16,12 @@ pub const SUBPIXEL_HALF: i64 = SUBPIXEL_ONE / 2;
 /// Half-width of the guard band in pixels, measured from the image origin.
 pub const GUARD_BAND_PX: f64 = (1u64 << 20) as f64;
 
-/// Snaps a screen coordinate (pixels) to fixed point, rounding to nearest.
+/// Snaps a screen coordinate (pixels) to fixed point, rounding to nearest
+/// (ties to even: one `roundsd`, where `round`'s ties-away is a libm call).
 /// The caller guarantees |v| ≤ GUARD_BAND_PX (clipping does).
 #[inline]
 pub fn snap(v: f64) -> i64 {
-    (v * SUBPIXEL_ONE as f64).round() as i64
+    (v * SUBPIXEL_ONE as f64).round_ties_even() as i64
 }
 
 /// Fixed-point coordinate of the centre of pixel `i`.

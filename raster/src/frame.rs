@@ -11,7 +11,7 @@ use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
 use crate::setup::{SetupContext, SetupCounts, TriPlanes};
 use crate::shade::{shade_tile, ColorBuffer};
-use crate::target::{Target, VisBuffer, TILE_PIXELS};
+use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use glam::Vec4;
 use rayon::prelude::*;
 use specula_core::f32x8;
@@ -37,12 +37,16 @@ pub struct FrameStats {
     pub pixels_shaded: u64,
 }
 
-/// The visibility pass's output.
+/// The visibility pass's output, reusable from frame to frame: passing the
+/// previous frame's `Visibility` to [`visibility_into`] overwrites it without
+/// allocating (no page faults in steady state).
 pub struct Visibility {
     pub vis: VisBuffer,
-    /// Per source triangle; meaningful for triangles that were drawn.
+    /// Per source triangle; meaningful for triangles drawn this frame (the
+    /// only ones the visibility buffer can name).
     pub planes: Vec<TriPlanes>,
     pub view: View,
+    clip: Vec<[f32; 4]>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -51,16 +55,40 @@ fn ms_since(t: Instant) -> f64 {
 
 /// Vertex through visibility buffer, in the calling rayon pool.
 pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) -> Visibility {
-    let view = scene.camera.view(target.width, target.height);
+    let mut v = Visibility {
+        vis: VisBuffer::new(target),
+        planes: Vec::new(),
+        view: scene.camera.view(target.width, target.height),
+        clip: Vec::new(),
+    };
+    visibility_into(scene, target, &mut v, stats);
+    v
+}
+
+/// [`visibility`] into the buffers of an earlier frame of the same target.
+pub fn visibility_into(
+    scene: &SceneData,
+    target: &Target,
+    out: &mut Visibility,
+    stats: &mut FrameStats,
+) {
+    assert_eq!(
+        out.vis.id.len(),
+        target.buffer_len(),
+        "visibility buffers are for another target"
+    );
+    out.view = scene.camera.view(target.width, target.height);
 
     let t = Instant::now();
-    let m = view.view_proj;
-    let clip: Vec<[f32; 4]> = scene
+    let m = out.view.view_proj;
+    out.clip.clear();
+    scene
         .positions
         .par_iter()
         .with_min_len(4096)
         .map(|p| (m * Vec4::from((*p, 1.0))).to_array())
-        .collect();
+        .collect_into_vec(&mut out.clip);
+    let clip = &out.clip;
     stats.times.vertex = ms_since(t);
 
     let t = Instant::now();
@@ -69,25 +97,26 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         height: target.height,
         guard: GuardBand::for_image(target.width, target.height),
     };
-    let mut planes = vec![TriPlanes::default(); scene.triangles.len()];
+    out.planes
+        .resize(scene.triangles.len(), TriPlanes::default());
     let set_up: Vec<(Vec<crate::setup::RasterTri>, SetupCounts)> = scene
         .triangles
         .par_chunks(CHUNK)
-        .zip(planes.par_chunks_mut(CHUNK))
+        .zip(out.planes.par_chunks_mut(CHUNK))
         .enumerate()
         .map(|(c, (tris, planes))| {
-            let mut out = Vec::with_capacity(tris.len());
+            let mut raster = Vec::with_capacity(tris.len());
             let mut counts = SetupCounts::default();
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate() {
                 let id = (c * CHUNK + i) as u32;
                 let v = tri.map(|k| clip[k as usize]);
                 let double_sided =
                     scene.materials[scene.tri_material[id as usize] as usize].double_sided;
-                if let Some(p) = ctx.setup(id, v, double_sided, &mut out, &mut counts) {
+                if let Some(p) = ctx.setup(id, v, double_sided, &mut raster, &mut counts) {
                     *plane = p;
                 }
             }
-            (out, counts)
+            (raster, counts)
         })
         .collect();
     stats.times.setup = ms_since(t);
@@ -104,17 +133,19 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
     stats.times.bin = ms_since(t);
 
     let t = Instant::now();
-    let mut vis = VisBuffer::new(target);
-    vis.depth
+    let planes = &out.planes;
+    out.vis
+        .depth
         .par_chunks_mut(TILE_PIXELS)
-        .zip(vis.id.par_chunks_mut(TILE_PIXELS))
+        .zip(out.vis.id.par_chunks_mut(TILE_PIXELS))
         .enumerate()
         .for_each(|(tile, (depth, ids))| {
-            rasterize_tile(target, tile, &chunks, &planes, depth, ids)
+            // Cleared here, while the tile is about to be in cache anyway.
+            depth.fill(1.0);
+            ids.fill(MISS);
+            rasterize_tile(target, tile, &chunks, planes, depth, ids)
         });
     stats.times.raster = ms_since(t);
-
-    Visibility { vis, planes, view }
 }
 
 /// Lane width of the shading pass.
@@ -127,6 +158,17 @@ pub enum ShadePath {
     Scalar,
 }
 
+impl ColorBuffer {
+    pub fn new(target: &Target) -> ColorBuffer {
+        let n = target.buffer_len();
+        ColorBuffer {
+            r: vec![0.0; n],
+            g: vec![0.0; n],
+            b: vec![0.0; n],
+        }
+    }
+}
+
 /// Resolve + shade every tile, in the calling rayon pool.
 pub fn shade(
     scene: &SceneData,
@@ -135,17 +177,25 @@ pub fn shade(
     path: ShadePath,
     stats: &mut FrameStats,
 ) -> ColorBuffer {
+    let mut color = ColorBuffer::new(target);
+    shade_into(scene, target, v, path, &mut color, stats);
+    color
+}
+
+/// [`shade`] into the colour buffer of an earlier frame of the same target.
+pub fn shade_into(
+    scene: &SceneData,
+    target: &Target,
+    v: &Visibility,
+    path: ShadePath,
+    color: &mut ColorBuffer,
+    stats: &mut FrameStats,
+) {
     let t = Instant::now();
     let ctx = ResolveContext {
         scene,
         planes: &v.planes,
         view: &v.view,
-    };
-    let n = target.buffer_len();
-    let mut color = ColorBuffer {
-        r: vec![0.0; n],
-        g: vec![0.0; n],
-        b: vec![0.0; n],
     };
     let covered: u64 = color
         .r
@@ -161,7 +211,6 @@ pub fn shade(
         .sum();
     stats.pixels_shaded = covered;
     stats.times.shade = ms_since(t);
-    color
 }
 
 /// A rendered frame: the visibility buffer and HDR colour at target size.
@@ -183,4 +232,19 @@ pub fn render(scene: &SceneData, target: Target, path: ShadePath) -> Frame {
         color,
         stats,
     }
+}
+
+/// Renders the scene again into `frame`'s buffers (same target).
+pub fn render_into(scene: &SceneData, frame: &mut Frame, path: ShadePath) {
+    let mut stats = FrameStats::default();
+    visibility_into(scene, &frame.target, &mut frame.visibility, &mut stats);
+    shade_into(
+        scene,
+        &frame.target,
+        &frame.visibility,
+        path,
+        &mut frame.color,
+        &mut stats,
+    );
+    frame.stats = stats;
 }

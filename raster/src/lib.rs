@@ -21,6 +21,9 @@ pub mod shade;
 pub mod target;
 
 pub use camera::{Camera, View};
-pub use frame::{render, shade, visibility, Frame, FrameStats, PassTimes, ShadePath, Visibility};
+pub use frame::{
+    render, render_into, shade, shade_into, visibility, visibility_into, Frame, FrameStats,
+    PassTimes, ShadePath, Visibility,
+};
 pub use scene::SceneData;
 pub use target::{Target, MISS, TILE};

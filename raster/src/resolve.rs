@@ -31,11 +31,49 @@ pub struct ResolveContext<'a> {
     pub view: &'a View,
 }
 
+/// The distinct triangles of one packet and the lanes each covers.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct PacketTris {
+    pub n: usize,
+    pub id: [u32; 8],
+    /// Bit i set: lane i shows triangle `id[t]`.
+    pub lanes: [u32; 8],
+    /// Lanes covered by any triangle.
+    pub covered: u32,
+}
+
+impl PacketTris {
+    /// Groups the first `lanes` ids (MISS lanes belong to no group).
+    #[inline(always)]
+    pub fn new(ids: &[u32], lanes: usize) -> PacketTris {
+        let mut p = PacketTris::default();
+        for (i, &id) in ids[..lanes].iter().enumerate() {
+            if id == MISS {
+                continue;
+            }
+            p.covered |= 1 << i;
+            // Neighbouring pixels usually share a triangle: try the last one first.
+            let t = if p.n > 0 && p.id[p.n - 1] == id {
+                p.n - 1
+            } else if let Some(t) = p.id[..p.n].iter().position(|&x| x == id) {
+                t
+            } else {
+                p.id[p.n] = id;
+                p.n += 1;
+                p.n - 1
+            };
+            p.lanes[t] |= 1 << i;
+        }
+        p
+    }
+}
+
 /// Gathered per-triangle values: origin (2), k1, k2, ks (9), facing (1),
 /// vertex normals (9).
 const GATHER: usize = 21;
 
 impl ResolveContext<'_> {
+    #[inline(always)]
     fn gather_one(&self, id: u32, out: &mut [f32; GATHER]) {
         let p = &self.planes[id as usize];
         let tri = self.scene.triangles[id as usize];
@@ -49,35 +87,31 @@ impl ResolveContext<'_> {
         }
     }
 
-    /// Rebuilds the fragments of pixels (x + lane, y) whose ids are `ids`
-    /// (R::LANES entries, at least one not MISS). MISS lanes get a copy of a
-    /// covered lane's triangle so every lane stays finite; callers mask them.
+    /// Rebuilds the fragments of pixels (x + lane, y) covered by the
+    /// triangles of `tris` (at least one). Each triangle's data is read once
+    /// and broadcast into the lanes it covers: packets hold 1–3 triangles
+    /// typically, and a per-lane gather through memory (8 scalar stores, then
+    /// a vector load) stalls on store forwarding. Lanes no triangle covers
+    /// carry the first triangle's data, so they stay finite; callers mask them.
     #[inline(always)]
-    pub fn resolve<R: Real>(&self, x: u32, y: u32, ids: &[u32]) -> Fragment<R> {
-        let fallback = ids[..R::LANES]
-            .iter()
-            .copied()
-            .find(|&i| i != MISS)
-            .unwrap_or(MISS);
-        debug_assert!(fallback != MISS);
-        let mut lanes = [[0.0f32; 8]; GATHER];
+    pub fn resolve<R: Real>(&self, x: u32, y: u32, tris: &PacketTris) -> Fragment<R> {
+        debug_assert!(tris.n > 0);
+        let mut lanes = [R::ZERO; GATHER];
         let mut cur = [0.0f32; GATHER];
-        let mut prev = MISS;
-        for lane in 0..R::LANES {
-            let id = if ids[lane] == MISS {
-                fallback
+        for t in 0..tris.n {
+            self.gather_one(tris.id[t], &mut cur);
+            if t == 0 {
+                for (l, c) in lanes.iter_mut().zip(cur) {
+                    *l = R::splat(c as f64);
+                }
             } else {
-                ids[lane]
-            };
-            if id != prev {
-                self.gather_one(id, &mut cur);
-                prev = id;
-            }
-            for (l, c) in lanes.iter_mut().zip(cur) {
-                l[lane] = c;
+                let m = R::mask_from_bits(tris.lanes[t]);
+                for (l, c) in lanes.iter_mut().zip(cur) {
+                    *l = R::select(m, R::splat(c as f64), *l);
+                }
             }
         }
-        let g = |k: usize| R::load(&lanes[k]);
+        let g = |k: usize| lanes[k];
 
         let px = R::splat(x as f64 + 0.5) + R::lane_index();
         let py = R::splat(y as f64 + 0.5);
@@ -85,7 +119,8 @@ impl ResolveContext<'_> {
         let dy = py - g(1);
         let plane = |k: usize| g(k).mul_add(dx, g(k + 1).mul_add(dy, g(k + 2)));
         let (k1, k2, ks) = (plane(2), plane(5), plane(8));
-        let w = R::ONE / ks;
+        // ks = 1/w > 0 at every covered pixel centre.
+        let w = ks.rcp();
         let b1 = k1 * w;
         let b2 = k2 * w;
         let b0 = R::ONE - b1 - b2;

@@ -53,9 +53,7 @@ pub fn scan_triangle(
     let [ox, oy] = planes.origin;
     let id = u32x8::splat(rt.tri);
     for y in y_lo..y_hi {
-        let (s0, s1) = rt.span(y);
-        let x0 = s0.max(x_lo as i64) as i32;
-        let x1 = s1.min(x_hi as i64) as i32;
+        let (x0, x1) = rt.span(y, x_lo, x_hi);
         if x0 >= x1 {
             continue;
         }

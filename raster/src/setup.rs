@@ -2,7 +2,7 @@
 //! rule) and the per-triangle planes that depth testing and shading evaluate.
 
 use crate::clip::{ClipVertex, GuardBand};
-use crate::fixed::{pixel_centre, snap, SUBPIXEL_HALF, SUBPIXEL_ONE};
+use crate::fixed::{pixel_centre, snap, SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE};
 
 /// An edge function E(X, Y) = A·X + B·Y + C over fixed-point coordinates,
 /// positive inside. `c` already holds the fill-rule bias, so a pixel centre is
@@ -19,6 +19,8 @@ pub struct Edge {
 #[derive(Clone, Copy, Debug)]
 pub struct RasterTri {
     pub edges: [Edge; 3],
+    /// 1 / (256·|A|) per edge (0 where A = 0): see [`RasterTri::span`].
+    pub inv_step: [f64; 3],
     /// Covered pixel range candidates [x0, x1) × [y0, y1), inside the image.
     pub bbox: [i32; 4],
     /// Id of the source triangle (its index in the scene).
@@ -97,16 +99,16 @@ pub struct SetupContext {
     pub guard: GuardBand,
 }
 
-/// ⌊n / d⌋ for d > 0.
+/// ⌊n / 256⌋: the arithmetic shift rounds toward −∞.
 #[inline]
-fn floor_div(n: i64, d: i64) -> i64 {
-    n.div_euclid(d)
+fn floor_px(n: i64) -> i64 {
+    n >> SUBPIXEL_BITS
 }
 
-/// ⌈n / d⌉ for d > 0.
+/// ⌈n / 256⌉.
 #[inline]
-fn ceil_div(n: i64, d: i64) -> i64 {
-    -(-n).div_euclid(d)
+fn ceil_px(n: i64) -> i64 {
+    -((-n) >> SUBPIXEL_BITS)
 }
 
 /// Frustum outcode: one bit per plane the vertex is outside of.
@@ -176,35 +178,37 @@ impl SetupContext {
             return None;
         }
 
-        let poly = if self.guard.needs_clip(&v) {
-            counts.clipped += 1;
-            self.guard.clip(&v)
-        } else {
-            let mut p = crate::clip::Polygon {
-                v: [[0.0; 4]; crate::clip::MAX_CLIPPED],
-                len: 3,
-            };
-            p.v[..3].copy_from_slice(&v);
-            p
+        let (w, h) = (self.width as f64, self.height as f64);
+        let mut screen = [[0i64; 2]; crate::clip::MAX_CLIPPED];
+        let (mut min_x, mut min_y) = (f64::INFINITY, f64::INFINITY);
+        let mut project = |i: usize, p: &ClipVertex| {
+            let inv_w = 1.0 / p[3];
+            let sx = (p[0] * inv_w + 1.0) * 0.5 * w;
+            let sy = (1.0 - p[1] * inv_w) * 0.5 * h;
+            min_x = min_x.min(sx);
+            min_y = min_y.min(sy);
+            screen[i] = [snap(sx), snap(sy)];
         };
-        if poly.len < 3 {
+        let n = if self.guard.needs_clip(&v) {
+            counts.clipped += 1;
+            let poly = self.guard.clip(&v);
+            for (i, p) in poly.v[..poly.len].iter().enumerate() {
+                project(i, p);
+            }
+            poly.len
+        } else {
+            for (i, p) in v.iter().enumerate() {
+                project(i, p);
+            }
+            3
+        };
+        if n < 3 {
             counts.culled_outside += 1;
             return None;
         }
 
-        let (w, h) = (self.width as f64, self.height as f64);
-        let mut screen = [[0i64; 2]; crate::clip::MAX_CLIPPED];
-        let (mut min_x, mut min_y) = (f64::INFINITY, f64::INFINITY);
-        for (s, p) in screen.iter_mut().zip(&poly.v[..poly.len]) {
-            let sx = (p[0] / p[3] + 1.0) * 0.5 * w;
-            let sy = (1.0 - p[1] / p[3]) * 0.5 * h;
-            min_x = min_x.min(sx);
-            min_y = min_y.min(sy);
-            *s = [snap(sx), snap(sy)];
-        }
-
         let before = out.len();
-        for i in 1..poly.len - 1 {
+        for i in 1..n - 1 {
             if let Some(rt) = self.edges(tri, screen[0], screen[i], screen[i + 1]) {
                 out.push(rt);
             }
@@ -219,12 +223,14 @@ impl SetupContext {
         // (nx = 2x/W − 1, ny = 1 − 2y/H) and moved to the origin.
         let ox = min_x.clamp(0.0, w);
         let oy = min_y.clamp(0.0, h);
+        let (to_nx, to_ny) = (2.0 / w, -2.0 / h);
         let plane = |r: [f64; 3]| -> [f64; 3] {
-            let (a, b) = (r[0] * 2.0 / w, -r[1] * 2.0 / h);
+            let (a, b) = (r[0] * to_nx, r[1] * to_ny);
             let c = -r[0] + r[1] + r[2];
             [a, b, a * ox + b * oy + c]
         };
-        let k = adj.map(|r| plane(r.map(|x| x / det)));
+        let inv_det = 1.0 / det;
+        let k = adj.map(|r| plane(r.map(|x| x * inv_det)));
         let ks: [f32; 3] = std::array::from_fn(|c| (k[0][c] + k[1][c] + k[2][c]) as f32);
         let z: [f32; 3] = std::array::from_fn(|c| {
             (k[0][c] * v[0][2] + k[1][c] * v[1][2] + k[2][c] * v[2][2]) as f32
@@ -269,8 +275,8 @@ impl SetupContext {
         let xs = [p0[0], p1[0], p2[0]];
         let ys = [p0[1], p1[1], p2[1]];
         let bound = |lo: i64, hi: i64, n: u32| {
-            let first = ceil_div(lo - SUBPIXEL_HALF, SUBPIXEL_ONE).max(0);
-            let end = (floor_div(hi - SUBPIXEL_HALF, SUBPIXEL_ONE) + 1).min(n as i64);
+            let first = ceil_px(lo - SUBPIXEL_HALF).max(0);
+            let end = (floor_px(hi - SUBPIXEL_HALF) + 1).min(n as i64);
             (first, end)
         };
         let (x0, x1) = bound(*xs.iter().min()?, *xs.iter().max()?, self.width);
@@ -278,8 +284,16 @@ impl SetupContext {
         if x0 >= x1 || y0 >= y1 {
             return None;
         }
+        let edges = [edge(p0, p1), edge(p1, p2), edge(p2, p0)];
         Some(RasterTri {
-            edges: [edge(p0, p1), edge(p1, p2), edge(p2, p0)],
+            inv_step: edges.map(|e| {
+                if e.a == 0 {
+                    0.0
+                } else {
+                    1.0 / (e.a.abs() * SUBPIXEL_ONE) as f64
+                }
+            }),
+            edges,
             bbox: [x0 as i32, y0 as i32, x1 as i32, y1 as i32],
             tri,
         })
@@ -287,26 +301,53 @@ impl SetupContext {
 }
 
 impl RasterTri {
-    /// The covered pixels [x_first, x_end) of row `y`, not yet clipped to the
-    /// bounding box (may be empty: x_first ≥ x_end).
+    /// The covered pixels [x_first, x_end) of row `y` within [xa, xb)
+    /// (empty: x_first ≥ x_end).
+    ///
+    /// Each edge's boundary is the root of 256·A·x + r = 0. It is estimated
+    /// with one f64 multiply by the stored 1/(256|A|), clamped into [xa, xb),
+    /// and then made exact by stepping with the integer edge value (the
+    /// estimate is within one pixel, |r| < 2⁶⁰ having 53 good bits): exact
+    /// like an integer division, without the division's ~40 cycles per edge
+    /// and row.
     #[inline]
-    pub fn span(&self, y: i32) -> (i64, i64) {
+    pub fn span(&self, y: i32, xa: i32, xb: i32) -> (i32, i32) {
         let yc = pixel_centre(y as i64);
-        let (mut lo, mut hi) = (i64::MIN, i64::MAX);
-        for e in &self.edges {
+        let (mut lo, mut hi) = (xa as i64, xb as i64);
+        for (e, inv) in self.edges.iter().zip(self.inv_step) {
             // E at the centre of pixel x is A·(256x + 128) + B·Yc + C
             // = 256·A·x + r; covered iff that is ≥ 0.
             let r = e.a * SUBPIXEL_HALF + e.b * yc + e.c;
             let step = e.a * SUBPIXEL_ONE;
+            let f = |x: i64| step * x + r;
             if e.a > 0 {
-                lo = lo.max(ceil_div(-r, step));
+                // f increases: the first x with f(x) ≥ 0.
+                let mut q = ((-r) as f64 * inv).ceil().clamp(lo as f64, hi as f64) as i64;
+                while q < hi && f(q) < 0 {
+                    q += 1;
+                }
+                while q > lo && f(q - 1) >= 0 {
+                    q -= 1;
+                }
+                lo = q;
             } else if e.a < 0 {
-                hi = hi.min(floor_div(r, -step) + 1);
+                // f decreases: the first x with f(x) < 0.
+                let mut q = ((r as f64 * inv).floor() + 1.0).clamp(lo as f64, hi as f64) as i64;
+                while q > lo && f(q - 1) < 0 {
+                    q -= 1;
+                }
+                while q < hi && f(q) >= 0 {
+                    q += 1;
+                }
+                hi = q;
             } else if r < 0 {
                 return (0, 0);
             }
+            if lo >= hi {
+                return (0, 0);
+            }
         }
-        (lo, hi)
+        (lo as i32, hi as i32)
     }
 
     /// True if the centre of pixel (x, y) is covered: the direct test that

@@ -1,10 +1,10 @@
 //! The shading pass: per tile, R::LANES pixels per packet; per material
 //! present in the packet, the light loop under that material's lane mask.
 
-use crate::resolve::{Fragment, ResolveContext};
-use crate::target::{Target, MISS, TILE};
+use crate::resolve::{Fragment, PacketTris, ResolveContext};
+use crate::target::{Target, TILE};
 use specula_core::light::Light;
-use specula_core::{Brdf, BrdfVisitor, Mask, Real, Rgb, V3};
+use specula_core::{Brdf, BrdfVisitor, Real, Rgb, V3};
 
 /// HDR radiance per pixel, tile-major like the visibility buffer, one plane
 /// per channel.
@@ -40,7 +40,7 @@ impl<R: Real> BrdfVisitor for ShadeLights<'_, R> {
                 } => {
                     let to_light = V3::from_f32(*position) - f.p;
                     let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
-                    let inv_d = R::ONE / d2.sqrt();
+                    let inv_d = d2.rsqrt();
                     let wi = to_light * inv_d;
                     let f_cos = brdf.f_cos(f.n, wi, f.wo);
                     acc += f_cos.mul_elem(V3::from_f32(*intensity)) * (inv_d * inv_d);
@@ -80,22 +80,23 @@ pub fn shade_tile<R: Real>(
         let mut lx = 0;
         while lx < TILE.min((target.width - tx) as usize) {
             let at = row * TILE + lx;
-            let lane_ids = &ids[at..at + R::LANES];
-            let mut valid = 0u32;
-            for (i, &id) in lane_ids.iter().enumerate() {
-                valid |= ((id != MISS) as u32) << i;
-            }
+            let tris = PacketTris::new(&ids[at..], R::LANES);
             let mut color: Rgb<R> = Rgb::from_f32(background);
-            if valid != 0 {
-                covered += valid.count_ones() as u64;
-                let frag = ctx.resolve::<R>(tx + lx as u32, y, lane_ids);
-                let mut todo = valid;
-                while todo != 0 {
-                    let m = scene.tri_material[lane_ids[todo.trailing_zeros() as usize] as usize];
+            if tris.n > 0 {
+                covered += tris.covered.count_ones() as u64;
+                let frag = ctx.resolve::<R>(tx + lx as u32, y, &tris);
+                // Shade once per material present, under its lanes' mask.
+                let mut done = 0u32;
+                for t in 0..tris.n {
+                    if done & (1 << t) != 0 {
+                        continue;
+                    }
+                    let m = scene.tri_material[tris.id[t] as usize];
                     let mut group = 0u32;
-                    for (i, &id) in lane_ids.iter().enumerate() {
-                        if todo & (1 << i) != 0 && scene.tri_material[id as usize] == m {
-                            group |= 1 << i;
+                    for u in t..tris.n {
+                        if scene.tri_material[tris.id[u] as usize] == m {
+                            group |= tris.lanes[u];
+                            done |= 1 << u;
                         }
                     }
                     let rgb = scene.materials[m as usize].model.visit(ShadeLights {
@@ -104,9 +105,7 @@ pub fn shade_tile<R: Real>(
                         environment: scene.environment,
                     });
                     color = Rgb::select(R::mask_from_bits(group), rgb, color);
-                    todo &= !group;
                 }
-                debug_assert!(R::mask_from_bits(valid).any());
             }
             color.x.store(&mut out_r[at..]);
             color.y.store(&mut out_g[at..]);

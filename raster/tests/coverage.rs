@@ -26,17 +26,17 @@ fn write_counts(tris: &[RasterTri]) -> Vec<u32> {
     for t in tris {
         let [x0, y0, x1, y1] = t.bbox;
         for y in y0..y1 {
-            let (s0, s1) = t.span(y);
-            for x in s0.max(x0 as i64)..s1.min(x1 as i64) {
+            let (s0, s1) = t.span(y, x0, x1);
+            for x in s0..s1 {
                 assert!(
-                    t.covers(x as i32, y),
+                    t.covers(x, y),
                     "span and direct edge test disagree at ({x}, {y})"
                 );
                 c[(y as u32 * W + x as u32) as usize] += 1;
             }
             // And nothing the span left out is covered.
             for x in x0..x1 {
-                let in_span = (x as i64) >= s0 && (x as i64) < s1;
+                let in_span = x >= s0 && x < s1;
                 assert_eq!(t.covers(x, y), in_span, "span misses ({x}, {y})");
             }
         }

@@ -31,17 +31,20 @@ const F0_DIELECTRIC: f32 = 0.04;
 impl MetallicRoughness {
     /// α = roughness², floored at [`ALPHA_MIN`] (α = 0 would make D a delta and
     /// the formula 0/0 at the peak).
+    #[inline]
     pub fn alpha(&self) -> f32 {
         (self.roughness * self.roughness).max(ALPHA_MIN)
     }
 
     /// F0 = mix(0.04, base_color, metallic).
+    #[inline]
     pub fn f0(&self) -> [f32; 3] {
         self.base_color
             .map(|c| F0_DIELECTRIC + (c - F0_DIELECTRIC) * self.metallic)
     }
 
     /// Albedo of the diffuse lobe: (1 − metallic) base_color.
+    #[inline]
     pub fn diffuse_color(&self) -> [f32; 3] {
         self.base_color.map(|c| c * (1.0 - self.metallic))
     }
