@@ -6,6 +6,7 @@ use crate::scene::SceneData;
 use crate::setup::TriPlanes;
 use crate::target::MISS;
 use specula_core::{Real, V3};
+use wide::u32x8;
 
 /// Per-lane surface data the shading pass needs.
 #[derive(Clone, Copy, Debug)]
@@ -47,20 +48,33 @@ impl PacketTris {
     #[inline(always)]
     pub fn new(ids: &[u32], lanes: usize) -> PacketTris {
         let mut p = PacketTris::default();
+        if lanes == 8 {
+            // One vector compare per distinct triangle.
+            let v = u32x8::new(ids[..8].try_into().expect("8 ids"));
+            let mut todo = !v.simd_eq(u32x8::splat(MISS)).to_bitmask() & 0xFF;
+            p.covered = todo;
+            while todo != 0 {
+                let id = ids[todo.trailing_zeros() as usize];
+                let lanes = v.simd_eq(u32x8::splat(id)).to_bitmask();
+                p.id[p.n] = id;
+                p.lanes[p.n] = lanes;
+                p.n += 1;
+                todo &= !lanes;
+            }
+            return p;
+        }
         for (i, &id) in ids[..lanes].iter().enumerate() {
             if id == MISS {
                 continue;
             }
             p.covered |= 1 << i;
-            // Neighbouring pixels usually share a triangle: try the last one first.
-            let t = if p.n > 0 && p.id[p.n - 1] == id {
-                p.n - 1
-            } else if let Some(t) = p.id[..p.n].iter().position(|&x| x == id) {
-                t
-            } else {
-                p.id[p.n] = id;
-                p.n += 1;
-                p.n - 1
+            let t = match p.id[..p.n].iter().position(|&x| x == id) {
+                Some(t) => t,
+                None => {
+                    p.id[p.n] = id;
+                    p.n += 1;
+                    p.n - 1
+                }
             };
             p.lanes[t] |= 1 << i;
         }
@@ -147,6 +161,39 @@ impl ResolveContext<'_> {
             w,
             b1,
             b2,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn packet_grouping_is_the_same_for_8_lanes_and_one_at_a_time() {
+        let cases: [[u32; 8]; 4] = [
+            [5; 8],
+            [MISS, 1, 1, 2, MISS, 2, 3, 1],
+            [MISS; 8],
+            [0, 1, 2, 3, 4, 5, 6, 7],
+        ];
+        for ids in cases {
+            let p = PacketTris::new(&ids, 8);
+            let mut seen = 0u32;
+            for t in 0..p.n {
+                for lane in 0..8 {
+                    let mine = p.lanes[t] & (1 << lane) != 0;
+                    assert_eq!(mine, ids[lane] == p.id[t], "{ids:?}");
+                }
+                assert_eq!(seen & p.lanes[t], 0);
+                seen |= p.lanes[t];
+            }
+            assert_eq!(seen, p.covered);
+            let scalar_covered: u32 = (0..8)
+                .filter(|&i| PacketTris::new(&ids[i..], 1).n == 1)
+                .map(|i| 1 << i)
+                .sum();
+            assert_eq!(p.covered, scalar_covered, "{ids:?}");
         }
     }
 }

@@ -5,7 +5,7 @@ use crate::bin::BinnedChunk;
 use crate::setup::{RasterTri, TriPlanes};
 use crate::target::{Target, TILE};
 use specula_core::Real;
-use wide::{f32x8, u32x8};
+use wide::{f32x8, i32x8, u32x8};
 
 /// Rasterizes every triangle binned to tile `t`, in scene order, into the
 /// tile's slices of the depth and id buffers (`TILE_PIXELS` entries each).
@@ -33,8 +33,61 @@ pub fn rasterize_tile(
     }
 }
 
-/// Writes `rt` into one tile with origin (tx, ty): for each row, the covered
-/// span, depth-tested 8 pixels at a time (z < depth; ties keep the earlier
+/// Calls `emit(y, gx, mask)` for every row y in [y_lo, y_hi) and every
+/// 8-pixel group starting at gx (aligned to `align`, mod 8) that holds a
+/// covered pixel of [x_lo, x_hi); `mask` is the covered lanes. This is the
+/// coverage the scan writes; tests enumerate it too.
+///
+/// Small triangles (see `SmallEdges`): the three edge functions are
+/// evaluated for the 8 lanes of each group in i32x8 (three adds and compares
+/// per group). Larger ones: the row's exact span from `RasterTri::span`,
+/// then masks for its groups.
+#[inline(always)]
+pub fn covered_groups(
+    rt: &RasterTri,
+    [x_lo, x_hi, y_lo, y_hi]: [i32; 4],
+    align: i32,
+    mut emit: impl FnMut(i32, i32, u32),
+) {
+    let first_group = |x: i32| align + ((x - align) & !7);
+    if let Some(se) = &rt.small {
+        let [bx0, by0, ..] = rt.bbox;
+        let lanes = i32x8::new([0, 1, 2, 3, 4, 5, 6, 7]);
+        let lane_a = se.a.map(|a| lanes * i32x8::splat(a));
+        for y in y_lo..y_hi {
+            let row = [0, 1, 2].map(|k| se.e0[k] + se.b[k] * (y - by0));
+            let mut gx = first_group(x_lo);
+            while gx < x_hi {
+                let mut inside = i32x8::splat(-1);
+                for k in 0..3 {
+                    let e = i32x8::splat(row[k] + se.a[k] * (gx - bx0)) + lane_a[k];
+                    inside &= e.simd_gt(i32x8::splat(-1));
+                }
+                let x = i32x8::splat(gx) + lanes;
+                inside &= x.simd_gt(i32x8::splat(x_lo - 1)) & i32x8::splat(x_hi).simd_gt(x);
+                let mask = inside.to_bitmask();
+                if mask != 0 {
+                    emit(y, gx, mask);
+                }
+                gx += 8;
+            }
+        }
+    } else {
+        for y in y_lo..y_hi {
+            let (x0, x1) = rt.span(y, x_lo, x_hi);
+            let mut gx = first_group(x0);
+            while gx < x1 {
+                let lo = (x0 - gx).max(0);
+                let hi = (x1 - gx).min(8);
+                emit(y, gx, (0xFFu32 >> (8 - (hi - lo))) << lo);
+                gx += 8;
+            }
+        }
+    }
+}
+
+/// Writes `rt` into one tile with origin (tx, ty): the covered pixels of
+/// each row, depth-tested 8 at a time (z < depth; ties keep the earlier
 /// triangle).
 pub fn scan_triangle(
     rt: &RasterTri,
@@ -45,37 +98,29 @@ pub fn scan_triangle(
     ids: &mut [u32],
 ) {
     let [bx0, by0, bx1, by1] = rt.bbox;
-    let x_lo = bx0.max(tx);
-    let x_hi = bx1.min(tx + TILE as i32);
-    let y_lo = by0.max(ty);
-    let y_hi = by1.min(ty + TILE as i32);
+    let bounds = [
+        bx0.max(tx),
+        bx1.min(tx + TILE as i32),
+        by0.max(ty),
+        by1.min(ty + TILE as i32),
+    ];
     let [za, zb, zc] = planes.z;
     let [ox, oy] = planes.origin;
     let id = u32x8::splat(rt.tri);
-    for y in y_lo..y_hi {
-        let (x0, x1) = rt.span(y, x_lo, x_hi);
-        if x0 >= x1 {
-            continue;
-        }
+    let za8 = f32x8::splat(za);
+    let lane_x = f32x8::lane_index() + f32x8::splat(0.5 - ox);
+    // Groups are aligned to the tile, so loads never cross a row.
+    covered_groups(rt, bounds, tx, |y, gx, mask| {
         let row_z = zb.mul_add(y as f32 + 0.5 - oy, zc);
-        let row = (y - ty) as usize * TILE;
-        // Groups of 8 aligned to the tile, so loads never cross a row.
-        let mut gx = tx + ((x0 - tx) & !7);
-        while gx < x1 {
-            let lane_x = f32x8::splat(gx as f32) + f32x8::lane_index();
-            let inside = lane_x.ge(f32x8::splat(x0 as f32)) & lane_x.lt(f32x8::splat(x1 as f32));
-            let z =
-                (lane_x + f32x8::splat(0.5 - ox)).mul_add(f32x8::splat(za), f32x8::splat(row_z));
-            let at = row + (gx - tx) as usize;
-            let d_old = f32x8::load(&depth[at..at + 8]);
-            let pass = inside & z.lt(d_old);
-            if pass.any() {
-                pass.select(z, d_old).store(&mut depth[at..at + 8]);
-                let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");
-                let m: u32x8 = bytemuck::cast(pass);
-                ids[at..at + 8].copy_from_slice(&m.select(id, u32x8::new(old)).to_array());
-            }
-            gx += 8;
+        let z = (lane_x + f32x8::splat(gx as f32)).mul_add(za8, f32x8::splat(row_z));
+        let at = (y - ty) as usize * TILE + (gx - tx) as usize;
+        let d_old = f32x8::load(&depth[at..at + 8]);
+        let pass = f32x8::mask_from_bits(mask) & z.lt(d_old);
+        if pass.any() {
+            pass.select(z, d_old).store(&mut depth[at..at + 8]);
+            let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");
+            let m: u32x8 = bytemuck::cast(pass);
+            ids[at..at + 8].copy_from_slice(&m.select(id, u32x8::new(old)).to_array());
         }
-    }
+    });
 }

@@ -21,10 +21,30 @@ pub struct RasterTri {
     pub edges: [Edge; 3],
     /// 1 / (256·|A|) per edge (0 where A = 0): see [`RasterTri::span`].
     pub inv_step: [f64; 3],
+    /// For triangles whose vertices span at most `SMALL_PX` pixels each
+    /// way: the edge values at the centre of pixel (bbox x0, bbox y0) in
+    /// i32, the form the 8-wide coverage test of `scan` evaluates.
+    pub small: Option<SmallEdges>,
     /// Covered pixel range candidates [x0, x1) × [y0, y1), inside the image.
     pub bbox: [i32; 4],
     /// Id of the source triangle (its index in the scene).
     pub tri: u32,
+}
+
+/// Largest vertex extent (pixels, each axis) of a triangle whose edge
+/// values are evaluated in i32. Relative to a pixel centre inside the
+/// vertices' box, |A|, |B| ≤ (SMALL_PX + 1)·256 < 2¹⁴·¹ and offsets likewise,
+/// so E = A·dx + B·dy + E(origin) stays below 2³¹ (3 terms of < 2²⁹·²).
+pub const SMALL_PX: i64 = 64;
+
+/// i32 edge functions relative to the bounding box's first pixel centre:
+/// E_k(x, y) = e0[k] + a[k]·(x − x0) + b[k]·(y − y0), x, y in pixels
+/// (`a`, `b` already scaled by 256), bias included.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct SmallEdges {
+    pub e0: [i32; 3],
+    pub a: [i32; 3],
+    pub b: [i32; 3],
 }
 
 /// Screen-space affine functions of one source triangle, each evaluated as
@@ -285,7 +305,17 @@ impl SetupContext {
             return None;
         }
         let edges = [edge(p0, p1), edge(p1, p2), edge(p2, p0)];
+        let extent = (xs.iter().max()? - xs.iter().min()?).max(ys.iter().max()? - ys.iter().min()?);
+        let small = (extent <= SMALL_PX * SUBPIXEL_ONE).then(|| {
+            let (cx, cy) = (pixel_centre(x0), pixel_centre(y0));
+            SmallEdges {
+                e0: edges.map(|e| (e.a * cx + e.b * cy + e.c) as i32),
+                a: edges.map(|e| (e.a * SUBPIXEL_ONE) as i32),
+                b: edges.map(|e| (e.b * SUBPIXEL_ONE) as i32),
+            }
+        });
         Some(RasterTri {
+            small,
             inv_step: edges.map(|e| {
                 if e.a == 0 {
                     0.0

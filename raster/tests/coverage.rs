@@ -6,6 +6,7 @@ use glam::{Mat3, Vec3};
 use rand::{Rng, SeedableRng};
 use specula_raster::clip::GuardBand;
 use specula_raster::fixed::{pixel_centre, SUBPIXEL_ONE};
+use specula_raster::scan::covered_groups;
 use specula_raster::setup::{RasterTri, SetupContext, SetupCounts};
 
 const W: u32 = 96;
@@ -19,28 +20,46 @@ fn ctx() -> SetupContext {
     }
 }
 
-/// Per-pixel write counts of a list of screen triangles, walking spans the
-/// way the scan pass does (span ∩ bounding box).
+/// Per-pixel write counts of a list of screen triangles, enumerated by the
+/// scan pass's own coverage walk (`covered_groups`), each lane checked
+/// against the direct edge-function test, and nothing covered left out.
 fn write_counts(tris: &[RasterTri]) -> Vec<u32> {
     let mut c = vec![0u32; (W * H) as usize];
+    let (mut small, mut large) = (0, 0);
     for t in tris {
+        if t.small.is_some() {
+            small += 1;
+        } else {
+            large += 1;
+        }
         let [x0, y0, x1, y1] = t.bbox;
-        for y in y0..y1 {
-            let (s0, s1) = t.span(y, x0, x1);
-            for x in s0..s1 {
-                assert!(
-                    t.covers(x, y),
-                    "span and direct edge test disagree at ({x}, {y})"
-                );
-                c[(y as u32 * W + x as u32) as usize] += 1;
+        let mut mine = vec![0u32; (W * H) as usize];
+        covered_groups(t, [x0, x1, y0, y1], 0, |y, gx, mask| {
+            for lane in 0..8 {
+                if mask & (1 << lane) != 0 {
+                    let x = gx + lane;
+                    assert!(
+                        t.covers(x, y),
+                        "walk and direct edge test disagree at ({x}, {y})"
+                    );
+                    mine[(y as u32 * W + x as u32) as usize] += 1;
+                }
             }
-            // And nothing the span left out is covered.
+        });
+        for y in y0..y1 {
             for x in x0..x1 {
-                let in_span = x >= s0 && x < s1;
-                assert_eq!(t.covers(x, y), in_span, "span misses ({x}, {y})");
+                let i = (y as u32 * W + x as u32) as usize;
+                assert_eq!(
+                    mine[i],
+                    t.covers(x, y) as u32,
+                    "pixel ({x}, {y}) walked {} times",
+                    mine[i]
+                );
+                c[i] += mine[i];
             }
         }
     }
+    assert!(tris.is_empty() || small + large > 0);
     c
 }
 
