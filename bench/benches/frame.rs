@@ -1,5 +1,8 @@
 //! The benchmark scene at 1920×1080 with 1 and 2 threads:
 //! - `visibility/raster`: vertex through visibility buffer;
+//! - `visibility/embree_packet8`, `visibility/embree_single`: the same
+//!   frame's primary rays through Embree 3 (same ids; checked by
+//!   tests/embree_crosscheck.rs), 8-ray packets and single rays;
 //! - `shade/simd`, `shade/scalar`: resolve + shading of the same visibility
 //!   buffer, 8 pixels per packet vs one pixel at a time;
 //! - `frame/full`: the whole frame, tone mapping and PNG encode included.
@@ -8,8 +11,10 @@
 
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use specula::render::{render_scene, RenderSettings};
+use specula_bench::embree::EmbreeScene;
 use specula_bench::{benchmark_scene, pool};
-use specula_raster::frame::{shade, visibility, FrameStats, ShadePath};
+use specula_raster::frame::{shade_into, visibility, visibility_into, FrameStats, ShadePath};
+use specula_raster::shade::ColorBuffer;
 
 fn benches(c: &mut Criterion) {
     let scene = benchmark_scene();
@@ -20,10 +25,25 @@ fn benches(c: &mut Criterion) {
     let mut g = c.benchmark_group("visibility");
     g.throughput(Throughput::Elements(pixels));
     g.sample_size(20);
+    let cam = &scene.data.camera;
     for threads in [1, 2] {
         let p = pool(threads);
+        // Steady state: the buffers of the previous frame are reused.
+        let mut vis = p.install(|| visibility(&scene.data, &target, &mut FrameStats::default()));
         g.bench_function(BenchmarkId::new("raster", threads), |b| {
-            b.iter(|| p.install(|| visibility(&scene.data, &target, &mut FrameStats::default())))
+            b.iter(|| {
+                p.install(|| {
+                    visibility_into(&scene.data, &target, &mut vis, &mut FrameStats::default())
+                })
+            })
+        });
+        // Embree's BVH build uses as many threads as the benchmark.
+        let embree = EmbreeScene::new(&scene.data, threads).expect("Embree scene");
+        g.bench_function(BenchmarkId::new("embree_packet8", threads), |b| {
+            b.iter(|| p.install(|| embree.trace_packet8(&vis.view, cam.near, cam.far)))
+        });
+        g.bench_function(BenchmarkId::new("embree_single", threads), |b| {
+            b.iter(|| p.install(|| embree.trace_single(&vis.view, cam.near, cam.far)))
         });
     }
     g.finish();
@@ -34,17 +54,16 @@ fn benches(c: &mut Criterion) {
     for threads in [1, 2] {
         let p = pool(threads);
         let vis = p.install(|| visibility(&scene.data, &target, &mut FrameStats::default()));
+        // Steady state: the colour buffer is reused.
+        let mut color = ColorBuffer::new(&target);
         for (name, path) in [("simd", ShadePath::Simd), ("scalar", ShadePath::Scalar)] {
-            g.bench_function(
-                BenchmarkId::new(format!("metallic_roughness/{name}"), threads),
-                |b| {
-                    b.iter(|| {
-                        p.install(|| {
-                            shade(&scene.data, &target, &vis, path, &mut FrameStats::default())
-                        })
-                    })
-                },
-            );
+            let id = BenchmarkId::new(format!("metallic_roughness/{name}"), threads);
+            g.bench_function(id, |b| {
+                b.iter(|| {
+                    let mut st = FrameStats::default();
+                    p.install(|| shade_into(&scene.data, &target, &vis, path, &mut color, &mut st))
+                })
+            });
         }
     }
     g.finish();

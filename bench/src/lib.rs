@@ -22,3 +22,5 @@ pub fn pool(n: usize) -> rayon::ThreadPool {
         .build()
         .expect("thread pool")
 }
+
+pub mod embree;

@@ -82,6 +82,9 @@ impl PacketTris {
     }
 }
 
+/// Smallest n·wo the shading normal is allowed (see `resolve`).
+const MIN_COS_VIEW: f64 = 0.02;
+
 /// Gathered per-triangle values: origin (2), k1, k2, ks (9), facing (1),
 /// vertex normals (9).
 const GATHER: usize = 21;
@@ -154,6 +157,14 @@ impl ResolveContext<'_> {
             + V3::from_f32(v.up.to_array()) * (ny * R::splat(v.tan_y as f64));
         let p = ray.mul_add(w, V3::from_f32(v.eye.to_array()));
         let wo = -ray.normalize();
+        // Interpolated normals near a silhouette can face away from the eye,
+        // where every BRDF is zero: black speckles along smooth outlines.
+        // Bend such normals until n·wo = MIN_COS_VIEW (the usual
+        // shading-normal fix; geometry and the eval contract are untouched).
+        let cos_v = n.dot(wo);
+        let min_cos = R::splat(MIN_COS_VIEW);
+        let bent = (n - wo * (cos_v - min_cos)).normalize_or(wo);
+        let n = V3::select(cos_v.lt(min_cos), bent, n);
         Fragment {
             p,
             n,
