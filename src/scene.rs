@@ -402,6 +402,7 @@ pub fn load_scene_str(
         positions: Vec::new(),
         normals: Vec::new(),
         uvs: Vec::new(),
+        tangents: Vec::new(),
         triangles: Vec::new(),
         tri_material: Vec::new(),
         materials: Vec::new(),
@@ -527,6 +528,12 @@ pub fn load_scene_str(
     if !any_uvs {
         data.uvs.clear();
     }
+    data.tangents = specula_raster::scene::compute_tangents(
+        &data.positions,
+        &data.normals,
+        &data.uvs,
+        &data.triangles,
+    );
     if data.triangles.is_empty() {
         warnings.push("the scene has no triangles".into());
     }

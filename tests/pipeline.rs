@@ -192,6 +192,7 @@ base_color = [1.0, 1.0, 1.0]
     let tan = (50f64.to_radians() / 2.0).tan();
     let mut checked = 0;
     let mut worst = 0.0f64;
+    let mut worst_d = 0.0f64;
     for py in 0..h {
         for px in 0..w {
             let id = ids[(py * w + px) as usize];
@@ -204,12 +205,38 @@ base_color = [1.0, 1.0, 1.0]
             let p = eye + d * (-eye.y / d.y);
             // mesh::plane: s along +z, t along +x, both from −100.
             let want = [(p.z + 100.0) / 200.0, (p.x + 100.0) / 200.0];
-            let frag =
-                ctx.resolve::<f32>(px, py, &specula_raster::resolve::PacketTris::new(&[id], 1));
-            let tri = s.data.triangles[id as usize];
-            let uv = |k: usize| s.data.uvs[tri[k] as usize].as_dvec2();
-            let (b1, b2) = (frag.b1 as f64, frag.b2 as f64);
-            let got = uv(0) * (1.0 - b1 - b2) + uv(1) * b1 + uv(2) * b2;
+            let tris = specula_raster::resolve::PacketTris::new(&[id], 1);
+            let frag = ctx.resolve::<f32>(px, py, &tris);
+            let surf = ctx.surface::<f32>(&tris, &frag);
+            let got = glam::DVec2::new(surf.uv[0] as f64, surf.uv[1] as f64);
+            // Analytic derivatives against central differences of the
+            // analytic uv (a thousandth of a pixel each way, in f64).
+            let uv_at = |x: f64, y: f64| {
+                let sx = 2.0 * x / w as f64 - 1.0;
+                let sy = 1.0 - 2.0 * y / h as f64;
+                let d = f + r * (sx * tan * w as f64 / h as f64) + u * (sy * tan);
+                let p = eye + d * (-eye.y / d.y);
+                glam::DVec2::new((p.z + 100.0) / 200.0, (p.x + 100.0) / 200.0)
+            };
+            let (cx, cy) = (px as f64 + 0.5, py as f64 + 0.5);
+            let ddx = (uv_at(cx + 1e-3, cy) - uv_at(cx - 1e-3, cy)) * 500.0;
+            let ddy = (uv_at(cx, cy + 1e-3) - uv_at(cx, cy - 1e-3)) * 500.0;
+            for (g, want) in [(surf.duv_dx, ddx), (surf.duv_dy, ddy)] {
+                let scale = want.length().max(1e-6);
+                let e = ((g[0] as f64 - want.x).abs() + (g[1] as f64 - want.y).abs()) / scale;
+                worst_d = worst_d.max(e);
+                assert!(
+                    e < 1e-3,
+                    "pixel ({px}, {py}): duv {g:?}, finite differences {want:?}"
+                );
+            }
+            // The plane's tangent is +z (u grows along z), orthogonal to the
+            // shading normal, which at grazing pixels is bent toward the eye.
+            assert!(
+                surf.tangent.z > 0.999 && surf.tangent.dot(frag.n).abs() < 1e-5,
+                "tangent {:?}",
+                surf.tangent
+            );
             let err = (got.x - want[0]).abs().max((got.y - want[1]).abs());
             worst = worst.max(err);
             assert!(
@@ -223,5 +250,5 @@ base_color = [1.0, 1.0, 1.0]
         checked > (w * h / 3) as usize,
         "only {checked} pixels on the plane"
     );
-    eprintln!("worst uv error {worst:.2e} over {checked} pixels");
+    eprintln!("worst uv error {worst:.2e}, worst relative derivative error {worst_d:.2e}, over {checked} pixels");
 }

@@ -23,6 +23,25 @@ pub struct Fragment<R: Real> {
     /// Perspective-correct barycentrics of vertices 1 and 2 (b0 = 1 − b1 − b2).
     pub b1: R,
     pub b2: R,
+    /// Their screen-space derivatives [∂/∂x, ∂/∂y] (per pixel), analytic:
+    /// b = k / Σk with k, Σk affine, so ∂b/∂x = (∂k/∂x − b ∂Σk/∂x) · w.
+    pub db1: [R; 2],
+    pub db2: [R; 2],
+}
+
+/// Texture-space attributes of a fragment, for materials that sample
+/// textures (see [`ResolveContext::surface`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Surface<R: Real> {
+    pub uv: [R; 2],
+    /// [∂u/∂x, ∂v/∂x] and [∂u/∂y, ∂v/∂y] per pixel: what mip selection needs.
+    pub duv_dx: [R; 2],
+    pub duv_dy: [R; 2],
+    /// Unit tangent (direction of increasing u), orthogonal to the shading
+    /// normal; zero where the mesh has no uvs.
+    pub tangent: V3<R>,
+    /// ±1: bitangent = sign · n × tangent (mirrored uv layouts give −1).
+    pub bitangent_sign: R,
 }
 
 /// Everything resolve and shading read, shared by all tiles.
@@ -165,6 +184,8 @@ impl ResolveContext<'_> {
         let min_cos = R::splat(MIN_COS_VIEW);
         let bent = (n - wo * (cos_v - min_cos)).normalize_or(wo);
         let n = V3::select(cos_v.lt(min_cos), bent, n);
+        // ∂b/∂x = (∂k/∂x − b ∂Σk/∂x)·w, and likewise for y.
+        let db = |k: usize, b: R| [(g(k) - b * g(8)) * w, (g(k + 1) - b * g(9)) * w];
         Fragment {
             p,
             n,
@@ -172,6 +193,72 @@ impl ResolveContext<'_> {
             w,
             b1,
             b2,
+            db1: db(2, b1),
+            db2: db(5, b2),
+        }
+    }
+
+    /// Interpolated uv, its analytic screen derivatives and the tangent
+    /// frame of `frag` (which `resolve` built from the same `tris`). Only
+    /// materials that sample textures need these, so it is a separate step.
+    #[inline(always)]
+    pub fn surface<R: Real>(&self, tris: &PacketTris, frag: &Fragment<R>) -> Surface<R> {
+        let scene = self.scene;
+        if scene.uvs.is_empty() {
+            return Surface {
+                uv: [R::ZERO; 2],
+                duv_dx: [R::ZERO; 2],
+                duv_dy: [R::ZERO; 2],
+                tangent: V3::zero(),
+                bitangent_sign: R::ONE,
+            };
+        }
+        // Per triangle: uv0, uv1 − uv0, uv2 − uv0, three tangents (xyz) and
+        // vertex 0's handedness.
+        const N: usize = 6 + 9 + 1;
+        let mut lanes = [R::ZERO; N];
+        for t in 0..tris.n {
+            let tri = scene.triangles[tris.id[t] as usize];
+            let uv = tri.map(|i| scene.uvs[i as usize]);
+            let tg = tri.map(|i| scene.tangents[i as usize]);
+            let mut cur = [0.0f32; N];
+            cur[0..2].copy_from_slice(&uv[0].to_array());
+            cur[2..4].copy_from_slice(&(uv[1] - uv[0]).to_array());
+            cur[4..6].copy_from_slice(&(uv[2] - uv[0]).to_array());
+            for v in 0..3 {
+                cur[6 + 3 * v..9 + 3 * v].copy_from_slice(&tg[v].truncate().to_array());
+            }
+            cur[15] = tg[0].w;
+            let m = R::mask_from_bits(tris.lanes[t]);
+            for (l, c) in lanes.iter_mut().zip(cur) {
+                *l = if t == 0 {
+                    R::splat(c as f64)
+                } else {
+                    R::select(m, R::splat(c as f64), *l)
+                };
+            }
+        }
+        let g = |k: usize| lanes[k];
+        let (b1, b2) = (frag.b1, frag.b2);
+        let uv = [
+            g(2).mul_add(b1, g(4).mul_add(b2, g(0))),
+            g(3).mul_add(b1, g(5).mul_add(b2, g(1))),
+        ];
+        let d = |axis: usize| {
+            let (d1, d2) = (frag.db1[axis], frag.db2[axis]);
+            [g(2).mul_add(d1, g(4) * d2), g(3).mul_add(d1, g(5) * d2)]
+        };
+        let b0 = R::ONE - b1 - b2;
+        let vt = |k: usize| V3::new(g(k), g(k + 1), g(k + 2));
+        let t = vt(6) * b0 + vt(9) * b1 + vt(12) * b2;
+        // Gram–Schmidt against the shading normal.
+        let t = (t - frag.n * frag.n.dot(t)).normalize_or(V3::zero());
+        Surface {
+            uv,
+            duv_dx: d(0),
+            duv_dy: d(1),
+            tangent: t,
+            bitangent_sign: g(15),
         }
     }
 }

@@ -1,7 +1,7 @@
 //! A prepared scene: flat world-space arrays the passes read.
 
 use crate::camera::Camera;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
 use specula_core::Material;
 
@@ -13,6 +13,9 @@ pub struct SceneData {
     pub normals: Vec<Vec3>,
     /// Texture coordinates, one per position, or empty when no mesh has any.
     pub uvs: Vec<Vec2>,
+    /// Unit tangents (xyz, along increasing u, orthogonal to the normal) and
+    /// handedness (w = ±1), one per position; empty when `uvs` is.
+    pub tangents: Vec<Vec4>,
     /// Vertex indices; a triangle's id is its index here.
     pub triangles: Vec<[u32; 3]>,
     /// Index into `materials`, one per triangle.
@@ -38,6 +41,13 @@ impl SceneData {
         if !self.uvs.is_empty() && self.uvs.len() != nv {
             return Err(format!("{} uvs for {nv} positions", self.uvs.len()));
         }
+        if self.tangents.len() != self.uvs.len() {
+            return Err(format!(
+                "{} tangents for {} uvs",
+                self.tangents.len(),
+                self.uvs.len()
+            ));
+        }
         if self.tri_material.len() != self.triangles.len() {
             return Err("one material index per triangle is required".into());
         }
@@ -59,4 +69,50 @@ impl SceneData {
         }
         Ok(())
     }
+}
+
+/// Per-vertex tangent frames from uvs [Lengyel01]: each triangle's ∂p/∂u
+/// and ∂p/∂v, summed per vertex (area weighted), the tangent made
+/// orthogonal to the normal; w = ±1 says whether (n × t) or its opposite
+/// points along ∂p/∂v. Degenerate uv triangles contribute nothing; a vertex
+/// left without a tangent gets any unit vector orthogonal to its normal.
+pub fn compute_tangents(
+    positions: &[Vec3],
+    normals: &[Vec3],
+    uvs: &[Vec2],
+    triangles: &[[u32; 3]],
+) -> Vec<Vec4> {
+    if uvs.is_empty() {
+        return Vec::new();
+    }
+    let mut du = vec![Vec3::ZERO; positions.len()];
+    let mut dv = vec![Vec3::ZERO; positions.len()];
+    for t in triangles {
+        let [a, b, c] = t.map(|i| i as usize);
+        let (e1, e2) = (positions[b] - positions[a], positions[c] - positions[a]);
+        let (s1, s2) = (uvs[b] - uvs[a], uvs[c] - uvs[a]);
+        let det = s1.x * s2.y - s2.x * s1.y;
+        if det == 0.0 || !det.is_finite() {
+            continue;
+        }
+        // Solve [e1 e2] = [∂p/∂u ∂p/∂v] [s1 s2]; scaled by det (area weight).
+        let pu = e1 * s2.y - e2 * s1.y;
+        let pv = e2 * s1.x - e1 * s2.x;
+        let sign = det.signum();
+        for i in [a, b, c] {
+            du[i] += pu * sign;
+            dv[i] += pv * sign;
+        }
+    }
+    normals
+        .iter()
+        .zip(du.iter().zip(&dv))
+        .map(|(n, (pu, pv))| {
+            let t = (*pu - *n * n.dot(*pu))
+                .try_normalize()
+                .unwrap_or_else(|| n.any_orthonormal_vector());
+            let w = if n.cross(t).dot(*pv) < 0.0 { -1.0 } else { 1.0 };
+            t.extend(w)
+        })
+        .collect()
 }
