@@ -27,11 +27,23 @@ pub struct EmbreeScene {
 unsafe impl Send for EmbreeScene {}
 unsafe impl Sync for EmbreeScene {}
 
-/// Per-pixel results, row-major: triangle id (MISS where nothing is hit)
-/// and view depth w = t · (dir · forward) (inf on a miss).
+/// Per-pixel results, row-major: triangle id (MISS where nothing is hit),
+/// hit distance t along the unit ray, and view depth w = t · (dir · forward)
+/// (both inf on a miss).
 pub struct Hits {
     pub id: Vec<u32>,
+    pub t: Vec<f32>,
     pub w: Vec<f32>,
+}
+
+impl Hits {
+    fn new(n: usize) -> Hits {
+        Hits {
+            id: vec![MISS; n],
+            t: vec![f32::INFINITY; n],
+            w: vec![f32::INFINITY; n],
+        }
+    }
 }
 
 /// Embree asks for flush-to-zero and denormals-are-zero on tracing threads
@@ -111,10 +123,7 @@ impl EmbreeScene {
     /// One `rtcIntersect1` per pixel, rows in parallel in the calling pool.
     pub fn trace_single(&self, view: &View, near: f32, far: f32) -> Hits {
         let (w, h) = (view.width as usize, view.height as usize);
-        let mut hits = Hits {
-            id: vec![MISS; w * h],
-            w: vec![f32::INFINITY; w * h],
-        };
+        let mut hits = Hits::new(w * h);
         let o = view.eye.to_array();
         hits.id
             .par_chunks_mut(w)
@@ -170,10 +179,7 @@ impl EmbreeScene {
     /// `rtcIntersect8` on 8 horizontally adjacent pixels per packet.
     pub fn trace_packet8(&self, view: &View, near: f32, far: f32) -> Hits {
         let (w, h) = (view.width as usize, view.height as usize);
-        let mut hits = Hits {
-            id: vec![MISS; w * h],
-            w: vec![f32::INFINITY; w * h],
-        };
+        let mut hits = Hits::new(w * h);
         let o = view.eye.to_array();
         hits.id
             .par_chunks_mut(w)
