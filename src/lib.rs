@@ -5,6 +5,7 @@
 //! (`output`). The built-in demo lives in `demo`.
 
 pub mod demo;
+pub mod eval;
 pub mod material_desc;
 pub mod mesh;
 pub mod output;

@@ -24,6 +24,9 @@ struct Cli {
 enum Command {
     /// Render a scene file to PNG (and optionally EXR and AOVs).
     Render(RenderArgs),
+    /// Reference BRDF values: JSON Lines on stdin, one answer line per input
+    /// line on stdout (see the README, "Reference values").
+    Eval,
 }
 
 #[derive(clap::Args)]
@@ -200,6 +203,11 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => run_demo(),
         Some(Command::Render(a)) => run_render(a),
+        Some(Command::Eval) => {
+            let stdin = std::io::stdin().lock();
+            let stdout = std::io::BufWriter::new(std::io::stdout().lock());
+            specula::eval::run(stdin, stdout).map_err(|e| format!("eval: {e}"))
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -3,7 +3,10 @@
 //! contract (documented in the README).
 
 use serde::Deserialize;
-use specula_core::models::{Lambert, MetallicRoughness};
+use specula_core::models::microfacet::clamp_alpha;
+use specula_core::models::{
+    Fresnel, Lambert, MetallicRoughness, Microfacet, MicrofacetParams, Ndf, Smith,
+};
 use specula_core::{Material, Model};
 
 /// One material description; `model` selects the variant.
@@ -12,6 +15,68 @@ use specula_core::{Material, Model};
 pub enum MaterialDesc {
     Lambert(LambertDesc),
     MetallicRoughness(MetallicRoughnessDesc),
+    Microfacet(MicrofacetDesc),
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum NdfDesc {
+    Ggx,
+    Beckmann,
+    Gtr,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum SmithDesc {
+    Separable,
+    #[default]
+    HeightCorrelated,
+}
+
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
+pub enum FresnelDesc {
+    Schlick { f0: [f32; 3] },
+    Dielectric { ior: f32 },
+    Conductor { eta: [f32; 3], k: [f32; 3] },
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum KcColorDesc {
+    /// F_avg² E_avg / (1 − F_avg (1 − E_avg)) [Kulla17].
+    #[default]
+    KullaConty,
+    /// The course notes' F_avg E_avg / (1 − F_avg (1 − E_avg)).
+    Notes,
+}
+
+fn two() -> f32 {
+    2.0
+}
+
+/// The microfacet family (core::models::microfacet); field names are the
+/// `specula eval` contract.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MicrofacetDesc {
+    pub ndf: NdfDesc,
+    /// GTR exponent (ignored by the other NDFs).
+    #[serde(default = "two")]
+    pub gamma: f32,
+    pub alpha: f32,
+    #[serde(default)]
+    pub smith: SmithDesc,
+    pub fresnel: FresnelDesc,
+    #[serde(default)]
+    pub diffuse: [f32; 3],
+    #[serde(default)]
+    pub energy_compensation: bool,
+    #[serde(default)]
+    pub kc_color: KcColorDesc,
+    #[serde(default)]
+    pub double_sided: bool,
 }
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -51,10 +116,88 @@ fn check_unit(field: &str, v: f32) -> Result<(), String> {
     }
 }
 
+/// Whether to tabulate what uniform environment light needs (scenes) or
+/// not (`specula eval` evaluates f only, and builds many materials).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Tables {
+    Build,
+    Skip,
+}
+
+fn check_positive(field: &str, v: f32) -> Result<(), String> {
+    if v.is_finite() && v > 0.0 {
+        Ok(())
+    } else {
+        Err(format!("{field}: must be finite and > 0, got {v}"))
+    }
+}
+
+impl MicrofacetDesc {
+    fn params(&self, warnings: &mut Vec<String>) -> Result<MicrofacetParams, String> {
+        if !self.alpha.is_finite() {
+            return Err(format!("alpha: must be finite, got {}", self.alpha));
+        }
+        let (alpha, clamped) = clamp_alpha(self.alpha);
+        if clamped {
+            warnings.push(format!(
+                "alpha {} clamped to {alpha} (the valid range is [1e-3, 1])",
+                self.alpha
+            ));
+        }
+        check_positive("gamma", self.gamma)?;
+        check_color("diffuse", self.diffuse)?;
+        let fresnel = match &self.fresnel {
+            FresnelDesc::Schlick { f0 } => {
+                check_color("fresnel.f0", *f0)?;
+                if f0.iter().any(|c| *c > 1.0) {
+                    return Err(format!("fresnel.f0: components must be ≤ 1, got {f0:?}"));
+                }
+                Fresnel::Schlick { f0: *f0 }
+            }
+            FresnelDesc::Dielectric { ior } => {
+                check_positive("fresnel.ior", *ior)?;
+                Fresnel::Dielectric { ior: *ior }
+            }
+            FresnelDesc::Conductor { eta, k } => {
+                for (c, v) in eta.iter().enumerate() {
+                    check_positive(&format!("fresnel.eta[{c}]"), *v)?;
+                }
+                check_color("fresnel.k", *k)?;
+                Fresnel::Conductor { eta: *eta, k: *k }
+            }
+        };
+        if self.energy_compensation {
+            return Err(
+                "energy_compensation: Kulla-Conty compensation is not available yet".into(),
+            );
+        }
+        Ok(MicrofacetParams {
+            ndf: match self.ndf {
+                NdfDesc::Ggx => Ndf::Ggx,
+                NdfDesc::Beckmann => Ndf::Beckmann,
+                NdfDesc::Gtr => Ndf::Gtr { gamma: self.gamma },
+            },
+            alpha,
+            smith: match self.smith {
+                SmithDesc::Separable => Smith::Separable,
+                SmithDesc::HeightCorrelated => Smith::HeightCorrelated,
+            },
+            fresnel,
+            diffuse: self.diffuse,
+        })
+    }
+}
+
 impl MaterialDesc {
     /// Validates every field and builds the runtime material. Errors name the
-    /// field (the caller adds where the material came from).
-    pub fn build(&self, name: &str) -> Result<Material, String> {
+    /// field (the caller adds where the material came from); adjustments
+    /// such as a clamped alpha are pushed to `warnings`.
+    pub fn build(
+        &self,
+        name: &str,
+        tables: Tables,
+        warnings: &mut Vec<String>,
+    ) -> Result<Material, String> {
         let (model, double_sided) = match self {
             MaterialDesc::Lambert(d) => {
                 check_color("base_color", d.base_color)?;
@@ -77,6 +220,14 @@ impl MaterialDesc {
                     }),
                     d.double_sided,
                 )
+            }
+            MaterialDesc::Microfacet(d) => {
+                let params = d.params(warnings)?;
+                let m = match tables {
+                    Tables::Build => Microfacet::new(params),
+                    Tables::Skip => Microfacet::new_without_table(params),
+                };
+                (Model::Microfacet(m), d.double_sided)
             }
         };
         Ok(Material {

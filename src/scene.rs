@@ -390,9 +390,15 @@ pub fn load_scene_str(
     let mut materials = Vec::new();
     let mut by_name: HashMap<String, u32> = HashMap::new();
     for (name, m) in &desc.materials {
+        let mut notes = Vec::new();
         let built = m
-            .build(name)
+            .build(name, crate::material_desc::Tables::Build, &mut notes)
             .map_err(|e| err(format!("materials.{name}.{e}")))?;
+        warnings.extend(
+            notes
+                .into_iter()
+                .map(|n| format!("{}: materials.{name}.{n}", path.display())),
+        );
         by_name.insert(name.clone(), materials.len() as u32);
         materials.push(built);
     }

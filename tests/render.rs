@@ -77,3 +77,42 @@ fn benchmark_scene_bytes_do_not_depend_on_the_thread_count() {
         );
     }
 }
+
+#[test]
+fn simd_and_scalar_agree_on_every_microfacet_variant() {
+    let mut toml = String::from(
+        r#"
+[camera]
+eye = [0.0, 2.0, 7.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 50.0
+[output]
+width = 320
+height = 180
+[environment]
+uniform = [0.2, 0.25, 0.3]
+[[light]]
+type = "point"
+position = [3.0, 4.0, 5.0]
+intensity = [40.0, 40.0, 40.0]
+"#,
+    );
+    let variants = [
+        "ndf = \"ggx\"\nalpha = 0.2\nfresnel = { type = \"schlick\", f0 = [0.9, 0.6, 0.3] }",
+        "ndf = \"beckmann\"\nalpha = 0.4\nsmith = \"separable\"\ndiffuse = [0.3, 0.1, 0.1]\nfresnel = { type = \"dielectric\", ior = 1.5 }",
+        "ndf = \"gtr\"\ngamma = 1.0\nalpha = 0.3\nfresnel = { type = \"conductor\", eta = [0.18, 0.42, 1.37], k = [3.42, 2.35, 1.77] }",
+        "ndf = \"gtr\"\ngamma = 3.0\nalpha = 0.6\nfresnel = { type = \"dielectric\", ior = 1.33 }",
+    ];
+    for (i, v) in variants.iter().enumerate() {
+        let x = -3.0 + 2.0 * i as f32;
+        toml += &format!(
+            "[[mesh]]\nsphere = {{ radius = 0.8, segments = 32, rings = 16 }}\nmaterial = \"m{i}\"\ntranslate = [{x}, 0.0, 0.0]\n[materials.m{i}]\nmodel = \"microfacet\"\n{v}\n"
+        );
+    }
+    let scene = common::scene(&toml, &[]);
+    let (worst, shaded) = simd_vs_scalar(&scene);
+    assert!(shaded > 1000);
+    assert!(worst < 1e-5, "worst relative difference {worst:e}");
+}

@@ -1,7 +1,7 @@
 //! The interface every material model implements, and the dispatch from the
 //! runtime `Material` value to monomorphized kernels.
 
-use crate::models::{Lambert, MetallicRoughness};
+use crate::models::{Lambert, MetallicRoughness, Microfacet};
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
 
@@ -35,6 +35,7 @@ pub trait Brdf: Send + Sync {
 pub enum Model {
     Lambert(Lambert),
     MetallicRoughness(MetallicRoughness),
+    Microfacet(Microfacet),
 }
 
 /// A material: a model plus the properties the rasterizer needs.
@@ -61,6 +62,7 @@ impl Model {
         match self {
             Model::Lambert(m) => v.visit(m),
             Model::MetallicRoughness(m) => v.visit(m),
+            Model::Microfacet(m) => v.visit(m),
         }
     }
 

@@ -23,3 +23,56 @@ pub fn f_schlick<R: Real>(f0: Rgb<R>, cos_theta: R) -> Rgb<R> {
         (R::ONE - f0.z).mul_add(w, f0.z),
     )
 }
+
+/// R0 = ((η − 1) / (η + 1))²: normal-incidence reflectance of a dielectric
+/// with relative IOR η, for use with [`f_schlick`].
+pub fn r0_from_ior(eta: f64) -> f64 {
+    let r = (eta - 1.0) / (eta + 1.0);
+    r * r
+}
+
+/// Exact dielectric Fresnel reflectance for unpolarized light: the mean of
+/// the s- and p-polarized reflectances [BornWolf99, §1.5; Walter07, eq. 22],
+///
+/// R_s = ((cos θi − η cos θt) / (cos θi + η cos θt))²,
+/// R_p = ((η cos θi − cos θt) / (η cos θi + cos θt))², F = (R_s + R_p) / 2,
+///
+/// with η = n_t / n_i and sin²θt = (1 − cos²θi) / η² (Snell). Where
+/// sin²θt ≥ 1 the light is totally internally reflected: F = 1. `cos_i` is
+/// clamped to [0, 1] (reflection off the side the light arrives from).
+#[inline(always)]
+pub fn f_dielectric<R: Real>(cos_i: R, eta: R) -> R {
+    let cos_i = cos_i.clamp(R::ZERO, R::ONE);
+    let sin2_t = (R::ONE - cos_i * cos_i) / (eta * eta);
+    let tir = sin2_t.ge(R::ONE);
+    // Under TIR the radicand is negative; the select below discards it.
+    let cos_t = (R::ONE - sin2_t).max(R::ZERO).sqrt();
+    let r_s = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
+    let r_p = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
+    R::select(tir, R::ONE, (r_s * r_s + r_p * r_p) * R::HALF)
+}
+
+/// Exact conductor Fresnel reflectance for complex IOR η + iκ (one channel),
+/// unpolarized, in the real-arithmetic form of [PBRT3, §8.2.1]:
+///
+/// a² + b² = √((η² − κ² − sin²θ)² + 4η²κ²),  a = √((a² + b² + η² − κ² − sin²θ) / 2),
+/// R_s = (a² + b² + cos²θ − 2a cos θ) / (a² + b² + cos²θ + 2a cos θ),
+/// R_p = R_s (cos²θ (a² + b²) + sin⁴θ − 2a cos θ sin²θ) / (cos²θ (a² + b²) + sin⁴θ + 2a cos θ sin²θ),
+/// F = (R_s + R_p) / 2.
+#[inline(always)]
+pub fn f_conductor<R: Real>(cos_i: R, eta: R, k: R) -> R {
+    let c = cos_i.clamp(R::ZERO, R::ONE);
+    let c2 = c * c;
+    let s2 = R::ONE - c2;
+    let (eta2, k2) = (eta * eta, k * k);
+    let t0 = eta2 - k2 - s2;
+    let a2pb2 = (t0 * t0 + R::splat(4.0) * eta2 * k2).sqrt();
+    let a = ((a2pb2 + t0) * R::HALF).max(R::ZERO).sqrt();
+    let t1 = a2pb2 + c2;
+    let t2 = R::splat(2.0) * a * c;
+    let r_s = (t1 - t2) / (t1 + t2);
+    let t3 = c2 * a2pb2 + s2 * s2;
+    let t4 = t2 * s2;
+    let r_p = r_s * (t3 - t4) / (t3 + t4);
+    (r_s + r_p) * R::HALF
+}

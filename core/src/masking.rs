@@ -32,3 +32,53 @@ pub fn v_smith_ggx_correlated<R: Real>(alpha: R, cos_i: R, cos_o: R) -> R {
     let s_o = r_o * r_o.rsqrt();
     R::HALF * cos_o.mul_add(s_i, cos_i * s_o).rcp()
 }
+
+/// Smith Λ for Beckmann [Walter07, eq. 25; Heitz14, eq. 83]: with
+/// a = 1 / (α tan θ) = cos θ / (α sin θ),
+///
+/// Λ = (erf(a) − 1) / 2 + exp(−a²) / (2 a √π).
+///
+/// `cos_theta` in (0, 1]; at cos θ = 1, a = ∞ and Λ = 0 (the formula's
+/// terms are guarded so no inf·0 appears).
+#[inline(always)]
+pub fn lambda_beckmann<R: Real>(alpha: R, cos_theta: R) -> R {
+    let sin_theta = (R::ONE - cos_theta * cos_theta).max(R::ZERO).sqrt();
+    // a ≥ 1e-30 and finite: cap at 1e15, far past where Λ underflows to 0.
+    let a = (cos_theta / (alpha * sin_theta)).min(R::splat(1e15));
+    let inv_sqrt_pi = R::splat(0.564_189_583_547_756_3);
+    let lambda = (erf(a) - R::ONE) * R::HALF + (-(a * a)).exp() * inv_sqrt_pi * R::HALF / a;
+    lambda.max(R::ZERO)
+}
+
+/// The error function, Abramowitz & Stegun 7.1.26 (|error| ≤ 1.5e-7), odd
+/// extension for x < 0.   [AS64]
+#[inline(always)]
+pub fn erf<R: Real>(x: R) -> R {
+    let ax = x.abs();
+    let t = R::ONE / R::splat(0.327_591_1).mul_add(ax, R::ONE);
+    let poly = t * R::splat(1.061_405_429)
+        .mul_add(t, R::splat(-1.453_152_027))
+        .mul_add(t, R::splat(1.421_413_741))
+        .mul_add(t, R::splat(-0.284_496_736))
+        .mul_add(t, R::splat(0.254_829_592));
+    let y = R::ONE - poly * (-(ax * ax)).exp();
+    R::select(x.lt(R::ZERO), -y, y)
+}
+
+/// Smith G1 = 1 / (1 + Λ).   [Heitz14, eq. 43]
+#[inline(always)]
+pub fn g1_smith<R: Real>(lambda: R) -> R {
+    R::ONE / (R::ONE + lambda)
+}
+
+/// Separable (uncorrelated) Smith G2 = G1(i) G1(o).   [Heitz14, eq. 98]
+#[inline(always)]
+pub fn g2_separable<R: Real>(lambda_i: R, lambda_o: R) -> R {
+    g1_smith(lambda_i) * g1_smith(lambda_o)
+}
+
+/// Height-correlated Smith G2 = 1 / (1 + Λ(i) + Λ(o)).   [Heitz14, eq. 99]
+#[inline(always)]
+pub fn g2_height_correlated<R: Real>(lambda_i: R, lambda_o: R) -> R {
+    R::ONE / (R::ONE + lambda_i + lambda_o)
+}

@@ -113,6 +113,10 @@ pub trait Real:
     fn abs(self) -> Self;
     fn exp(self) -> Self;
     fn ln(self) -> Self;
+    /// eˣ − 1, accurate for small x.
+    fn exp_m1(self) -> Self;
+    /// ln(1 + x), accurate for small x.
+    fn ln_1p(self) -> Self;
 
     fn lt(self, o: Self) -> Self::Mask;
     fn le(self, o: Self) -> Self::Mask;
@@ -253,6 +257,14 @@ macro_rules! scalar_real {
                 <$t>::ln(self)
             }
             #[inline(always)]
+            fn exp_m1(self) -> Self {
+                <$t>::exp_m1(self)
+            }
+            #[inline(always)]
+            fn ln_1p(self) -> Self {
+                <$t>::ln_1p(self)
+            }
+            #[inline(always)]
             fn lt(self, o: Self) -> bool {
                 self < o
             }
@@ -373,6 +385,14 @@ impl Real for f32x8 {
     #[inline(always)]
     fn ln(self) -> Self {
         f32x8::ln(self)
+    }
+    #[inline(always)]
+    fn exp_m1(self) -> Self {
+        f32x8::exp_m1(self)
+    }
+    #[inline(always)]
+    fn ln_1p(self) -> Self {
+        f32x8::ln_1p(self)
     }
     #[inline(always)]
     fn lt(self, o: Self) -> Self {

@@ -155,7 +155,7 @@ fn ggx_ndf_is_normalized() {
             let theta = PI / 2.0 * t * t;
             let dtheta = PI * t / n as f64;
             let mu = theta.cos();
-            let d = specula_core::ndf::d_ggx(alpha, mu, 1.0 - mu * mu);
+            let d = specula_core::ndf::d_ggx(alpha, mu * mu, 1.0 - mu * mu);
             sum += d * mu * theta.sin() * dtheta * 2.0 * PI;
         }
         assert!((sum - 1.0).abs() < 1e-3, "alpha {alpha}: ∫ D cos = {sum}");

@@ -11,7 +11,7 @@ use crate::brdf::{Brdf, ALPHA_MIN};
 use crate::diffuse::f_lambert;
 use crate::fresnel::f_schlick;
 use crate::masking::v_smith_ggx_correlated;
-use crate::ndf::d_ggx;
+use crate::ndf::{d_ggx, half_vector_angles};
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
 
@@ -66,12 +66,11 @@ impl Brdf for MetallicRoughness {
         let (cos_i, cos_o) = (cos_i.max(tiny), cos_o.max(tiny));
         // wi + wo is zero only for opposite directions, which `above` excludes.
         let h = (wi + wo).normalize_or(n);
-        let cos_h = n.dot(h).max(R::ZERO);
-        let sin2_h = n.cross(h).length_squared();
+        let (cos2_h, sin2_h) = half_vector_angles(n, wi, wo);
         let cos_d = wi.dot(h);
 
         let f = f_schlick(f0, cos_d);
-        let dv = d_ggx(alpha, cos_h, sin2_h) * v_smith_ggx_correlated(alpha, cos_i, cos_o);
+        let dv = d_ggx(alpha, cos2_h, sin2_h) * v_smith_ggx_correlated(alpha, cos_i, cos_o);
         let specular = f * dv;
         let diffuse = (Rgb::splat(R::ONE) - f).mul_elem(f_lambert(diffuse));
         Rgb::select(above, specular + diffuse, Rgb::zero())

@@ -3,6 +3,8 @@
 
 pub mod lambert;
 pub mod metallic_roughness;
+pub mod microfacet;
 
 pub use lambert::Lambert;
 pub use metallic_roughness::MetallicRoughness;
+pub use microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
