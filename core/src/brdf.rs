@@ -10,6 +10,43 @@ use crate::vec3::{Rgb, V3};
 /// with a warning where the scene is read.)
 pub const ALPHA_MIN: f32 = 1e-3;
 
+/// The angles every microfacet model starts from, per lane.
+#[derive(Clone, Copy, Debug)]
+pub struct HalfAngles<R: Real> {
+    /// n·wi and n·wo, floored at 1e-7 (see `above`).
+    pub cos_i: R,
+    pub cos_o: R,
+    /// Both directions strictly above the horizon; other lanes must be
+    /// zeroed by the caller (the floors above only keep them finite).
+    pub above: R::Mask,
+    /// cos²θh and sin²θh of the half vector (ndf.rs explains the form).
+    pub cos2_h: R,
+    pub sin2_h: R,
+    /// cos θd = wi·h, the Fresnel angle.
+    pub cos_d: R,
+}
+
+impl<R: Real> HalfAngles<R> {
+    #[inline(always)]
+    pub fn new(n: V3<R>, wi: V3<R>, wo: V3<R>) -> HalfAngles<R> {
+        let cos_i = n.dot(wi);
+        let cos_o = n.dot(wo);
+        let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
+        let tiny = R::splat(1e-7);
+        // wi + wo is zero only for opposite directions, which `above` excludes.
+        let h = (wi + wo).normalize_or(n);
+        let (cos2_h, sin2_h) = crate::ndf::half_vector_angles(n, wi, wo);
+        HalfAngles {
+            cos_i: cos_i.max(tiny),
+            cos_o: cos_o.max(tiny),
+            above,
+            cos2_h,
+            sin2_h,
+            cos_d: wi.dot(h),
+        }
+    }
+}
+
 /// A BRDF in any frame: `n` the unit shading normal, `wi` toward the light,
 /// `wo` toward the viewer, both unit length and pointing away from the surface.
 pub trait Brdf: Send + Sync {

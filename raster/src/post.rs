@@ -126,6 +126,21 @@ pub fn srgb_encode(v: f32) -> u8 {
     SrgbEncoder::new().encode(v)
 }
 
+/// Sum of the ssaa² samples of output pixel (x, y), in sample order.
+#[inline]
+fn box_sum(target: &Target, color: &ColorBuffer, ssaa: u32, x: u32, y: u32) -> [f32; 3] {
+    let mut s = [0.0f32; 3];
+    for sy in 0..ssaa {
+        for sx in 0..ssaa {
+            let i = target.index(x * ssaa + sx, y * ssaa + sy);
+            s[0] += color.r[i];
+            s[1] += color.g[i];
+            s[2] += color.b[i];
+        }
+    }
+    s
+}
+
 /// Row-major linear HDR image of `width × height` (supersampled target size
 /// divided by `ssaa`), each output pixel the mean of its ssaa² samples.
 pub fn downsample(target: &Target, color: &ColorBuffer, ssaa: u32) -> (u32, u32, Vec<[f32; 3]>) {
@@ -150,16 +165,7 @@ pub fn downsample(target: &Target, color: &ColorBuffer, ssaa: u32) -> (u32, u32,
         .enumerate()
         .for_each(|(y, row)| {
             for (x, px) in row.iter_mut().enumerate() {
-                let mut s = [0.0f32; 3];
-                for sy in 0..ssaa {
-                    for sx in 0..ssaa {
-                        let i = target.index(x as u32 * ssaa + sx, y as u32 * ssaa + sy);
-                        s[0] += color.r[i];
-                        s[1] += color.g[i];
-                        s[2] += color.b[i];
-                    }
-                }
-                *px = s.map(|c| c * scale);
+                *px = box_sum(target, color, ssaa, x as u32, y as u32).map(|c| c * scale);
             }
         });
     (w, h, out)
@@ -223,16 +229,7 @@ fn resolve_ldr_with(
                 return;
             }
             for (x, px) in row.chunks_exact_mut(3).enumerate() {
-                let mut s = [0.0f32; 3];
-                for sy in 0..ssaa {
-                    for sx in 0..ssaa {
-                        let i = target.index(x as u32 * ssaa + sx, y as u32 * ssaa + sy);
-                        s[0] += color.r[i];
-                        s[1] += color.g[i];
-                        s[2] += color.b[i];
-                    }
-                }
-                encode(px, s);
+                encode(px, box_sum(target, color, ssaa, x as u32, y as u32));
             }
         });
     out

@@ -7,11 +7,11 @@
 //! with α = roughness², F0 = mix(0.04, base_color, metallic).   [glTF2, Appendix B]
 
 use crate::albedo_tables::AlbedoTables;
-use crate::brdf::{Brdf, ALPHA_MIN};
+use crate::brdf::{Brdf, HalfAngles, ALPHA_MIN};
 use crate::diffuse::f_lambert;
 use crate::fresnel::f_schlick;
 use crate::masking::v_smith_ggx_correlated;
-use crate::ndf::{d_ggx, half_vector_angles};
+use crate::ndf::d_ggx;
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
 
@@ -57,17 +57,14 @@ impl Brdf for MetallicRoughness {
         let f0 = Rgb::from_f32(self.f0());
         let diffuse = Rgb::from_f32(self.diffuse_color());
 
-        let cos_i = n.dot(wi);
-        let cos_o = n.dot(wo);
-        let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
-        // Lanes below the horizon are zeroed by the final select; flooring
-        // the cosines only keeps their intermediate values finite.
-        let tiny = R::splat(1e-7);
-        let (cos_i, cos_o) = (cos_i.max(tiny), cos_o.max(tiny));
-        // wi + wo is zero only for opposite directions, which `above` excludes.
-        let h = (wi + wo).normalize_or(n);
-        let (cos2_h, sin2_h) = half_vector_angles(n, wi, wo);
-        let cos_d = wi.dot(h);
+        let HalfAngles {
+            cos_i,
+            cos_o,
+            above,
+            cos2_h,
+            sin2_h,
+            cos_d,
+        } = HalfAngles::new(n, wi, wo);
 
         let f = f_schlick(f0, cos_d);
         let dv = d_ggx(alpha, cos2_h, sin2_h) * v_smith_ggx_correlated(alpha, cos_i, cos_o);

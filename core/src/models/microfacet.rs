@@ -11,10 +11,10 @@
 //! Uniform environment light needs the directional albedo E(μo): it is
 //! tabulated per material when the material is built (`AlbedoTable`).
 
-use crate::brdf::{Brdf, ALPHA_MIN};
+use crate::brdf::{Brdf, HalfAngles, ALPHA_MIN};
 use crate::fresnel::{f_conductor, f_dielectric, f_schlick};
 use crate::masking::{g2_height_correlated, g2_separable, lambda_beckmann, lambda_ggx};
-use crate::ndf::{d_beckmann, d_ggx, d_gtr, half_vector_angles};
+use crate::ndf::{d_beckmann, d_ggx, d_gtr};
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
 
@@ -131,15 +131,14 @@ impl MicrofacetParams {
     /// below either horizon.
     #[inline(always)]
     pub fn specular<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        let cos_i = n.dot(wi);
-        let cos_o = n.dot(wo);
-        let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
-        // Masked lanes only: keeps their arithmetic finite.
-        let tiny = R::splat(1e-7);
-        let (cos_i, cos_o) = (cos_i.max(tiny), cos_o.max(tiny));
-        let h = (wi + wo).normalize_or(n);
-        let (cos2_h, sin2_h) = half_vector_angles(n, wi, wo);
-        let cos_d = wi.dot(h);
+        let HalfAngles {
+            cos_i,
+            cos_o,
+            above,
+            cos2_h,
+            sin2_h,
+            cos_d,
+        } = HalfAngles::new(n, wi, wo);
         let dg = self.d(cos2_h, sin2_h) * self.g2(cos_i, cos_o) / (R::splat(4.0) * cos_i * cos_o);
         Rgb::select(above, self.f(cos_d) * dg, Rgb::zero())
     }
