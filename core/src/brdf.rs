@@ -19,7 +19,9 @@ pub struct HalfAngles<R: Real> {
     /// Both directions strictly above the horizon; other lanes must be
     /// zeroed by the caller (the floors above only keep them finite).
     pub above: R::Mask,
-    /// cos²θh and sin²θh of the half vector (ndf.rs explains the form).
+    /// cos²θh and sin²θh of the half vector, from the unnormalized sum
+    /// (ndf.rs explains why); both carry the same `rcp` rounding (≤ 4e-7),
+    /// so their ratio, which shapes D, is exact.
     pub cos2_h: R,
     pub sin2_h: R,
     /// cos θd = wi·h, the Fresnel angle.
@@ -33,16 +35,20 @@ impl<R: Real> HalfAngles<R> {
         let cos_o = n.dot(wo);
         let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
         let tiny = R::splat(1e-7);
-        // wi + wo is zero only for opposite directions, which `above` excludes.
-        let h = (wi + wo).normalize_or(n);
-        let (cos2_h, sin2_h) = crate::ndf::half_vector_angles(n, wi, wo);
+        // s = wi + wo is zero only for opposite directions, which `above`
+        // excludes. For unit wi, wo: |s|² = 2 (1 + wi·wo), so
+        // cos θd = wi·s / |s| = |s| / 2 — no normalized h needed.
+        let s = wi + wo;
+        let len2 = s.length_squared();
+        let inv_len2 = len2.rcp();
+        let c = n.dot(s);
         HalfAngles {
             cos_i: cos_i.max(tiny),
             cos_o: cos_o.max(tiny),
             above,
-            cos2_h,
-            sin2_h,
-            cos_d: wi.dot(h),
+            cos2_h: c * c * inv_len2,
+            sin2_h: n.cross(s).length_squared() * inv_len2,
+            cos_d: len2 * len2.rsqrt() * R::HALF,
         }
     }
 }

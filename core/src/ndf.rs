@@ -7,21 +7,9 @@
 //! keeps them, and both can be formed from an unnormalized half vector s as
 //! (n·s)²/|s|² and |n × s|²/|s|² with one exact division: the rounding of a
 //! normalization would otherwise be multiplied by the lobe's sharpness.
-//! Use [`half_vector_angles`].
-
-/// (cos²θh, sin²θh) of the half vector of `wi` and `wo` about `n`, from the
-/// unnormalized sum (see the module docs). Zero sums (opposite directions)
-/// give NaN; callers mask those lanes.
-#[inline(always)]
-pub fn half_vector_angles<R: Real>(n: V3<R>, wi: V3<R>, wo: V3<R>) -> (R, R) {
-    let s = wi + wo;
-    let inv_len2 = R::ONE / s.length_squared();
-    let c = n.dot(s);
-    (c * c * inv_len2, n.cross(s).length_squared() * inv_len2)
-}
+//! `brdf::HalfAngles` forms them that way.
 
 use crate::real::Real;
-use crate::vec3::V3;
 
 /// GGX / Trowbridge–Reitz NDF: D(m) = α² / (π ((n·m)²(α²−1) + 1)²)   [Walter07]
 ///
