@@ -3,8 +3,9 @@
 //! - `visibility/embree_packet8`, `visibility/embree_single`: the same
 //!   frame's primary rays through Embree 3 (same ids; checked by
 //!   tests/embree_crosscheck.rs), 8-ray packets and single rays;
-//! - `shade/simd`, `shade/scalar`: resolve + shading of the same visibility
-//!   buffer, 8 pixels per packet vs one pixel at a time;
+//! - `shade/<model>/simd`, `shade/<model>/scalar`: resolve + shading of the
+//!   same visibility buffer, 8 pixels per packet vs one pixel at a time, for
+//!   metallic_roughness (the scene's own) and microfacet (GGX + conductor);
 //! - `frame/full`: the whole frame, tone mapping and PNG encode included.
 //!
 //! Throughput is reported in pixels. Run: `cargo bench -p specula-bench`.
@@ -12,7 +13,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use specula::render::{render_scene, RenderSettings};
 use specula_bench::embree::EmbreeScene;
-use specula_bench::{benchmark_scene, pool};
+use specula_bench::{benchmark_scene, benchmark_scene_microfacet, pool};
 use specula_raster::frame::{shade_into, visibility, visibility_into, FrameStats, ShadePath};
 use specula_raster::shade::ColorBuffer;
 
@@ -51,19 +52,22 @@ fn benches(c: &mut Criterion) {
     let mut g = c.benchmark_group("shade");
     g.throughput(Throughput::Elements(pixels));
     g.sample_size(10);
+    let microfacet = benchmark_scene_microfacet();
     for threads in [1, 2] {
         let p = pool(threads);
         let vis = p.install(|| visibility(&scene.data, &target, &mut FrameStats::default()));
         // Steady state: the colour buffer is reused.
         let mut color = ColorBuffer::new(&target);
-        for (name, path) in [("simd", ShadePath::Simd), ("scalar", ShadePath::Scalar)] {
-            let id = BenchmarkId::new(format!("metallic_roughness/{name}"), threads);
-            g.bench_function(id, |b| {
-                b.iter(|| {
-                    let mut st = FrameStats::default();
-                    p.install(|| shade_into(&scene.data, &target, &vis, path, &mut color, &mut st))
-                })
-            });
+        for (model, sc) in [("metallic_roughness", &scene), ("microfacet", &microfacet)] {
+            for (name, path) in [("simd", ShadePath::Simd), ("scalar", ShadePath::Scalar)] {
+                let id = BenchmarkId::new(format!("{model}/{name}"), threads);
+                g.bench_function(id, |b| {
+                    b.iter(|| {
+                        let mut st = FrameStats::default();
+                        p.install(|| shade_into(&sc.data, &target, &vis, path, &mut color, &mut st))
+                    })
+                });
+            }
         }
     }
     g.finish();

@@ -15,6 +15,32 @@ pub fn benchmark_scene() -> LoadedScene {
     load_scene(&path).unwrap_or_else(|e| panic!("benchmark scene: {e}"))
 }
 
+/// The benchmark scene with every sphere's metallic-roughness material
+/// replaced by the microfacet model (GGX, height-correlated Smith, exact
+/// conductor Fresnel with gold's η and κ, roughness mapped α = r²): the
+/// same frame and lights, a heavier BRDF.
+pub fn benchmark_scene_microfacet() -> LoadedScene {
+    use specula_core::models::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
+    use specula_core::Model;
+    let mut s = benchmark_scene();
+    for m in &mut s.data.materials {
+        if let Model::MetallicRoughness(mr) = &m.model {
+            let params = MicrofacetParams {
+                ndf: Ndf::Ggx,
+                alpha: mr.alpha(),
+                smith: Smith::HeightCorrelated,
+                fresnel: Fresnel::Conductor {
+                    eta: [0.18, 0.42, 1.37],
+                    k: [3.42, 2.35, 1.77],
+                },
+                diffuse: mr.diffuse_color(),
+            };
+            m.model = Model::Microfacet(Microfacet::new(params));
+        }
+    }
+    s
+}
+
 /// A rayon pool of exactly `n` threads.
 pub fn pool(n: usize) -> rayon::ThreadPool {
     rayon::ThreadPoolBuilder::new()
