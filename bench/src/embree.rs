@@ -120,116 +120,124 @@ impl EmbreeScene {
         (d.to_array(), near / cos, far / cos)
     }
 
+    /// Runs `row(py, hits)` for every image row, in parallel in the calling
+    /// pool, with FTZ/DAZ set on the worker for the duration.
+    fn trace_rows(view: &View, row: impl Fn(usize, &mut RowHits) + Sync) -> Hits {
+        let w = view.width as usize;
+        let mut hits = Hits::new(w * view.height as usize);
+        let rows = hits
+            .id
+            .par_chunks_mut(w)
+            .zip(hits.t.par_chunks_mut(w))
+            .zip(hits.w.par_chunks_mut(w));
+        rows.enumerate()
+            .for_each(|(py, ((id, t), w))| with_ftz_daz(|| row(py, &mut RowHits { id, t, w })));
+        hits
+    }
+
     /// One `rtcIntersect1` per pixel, rows in parallel in the calling pool.
     pub fn trace_single(&self, view: &View, near: f32, far: f32) -> Hits {
-        let (w, h) = (view.width as usize, view.height as usize);
-        let mut hits = Hits::new(w * h);
         let o = view.eye.to_array();
-        hits.id
-            .par_chunks_mut(w)
-            .zip(hits.w.par_chunks_mut(w))
-            .enumerate()
-            .for_each(|(py, (ids, ws))| {
-                with_ftz_daz(|| {
-                    let mut ctx = embree::IntersectContext::coherent();
-                    for px in 0..w {
-                        let (d, tn, tf) = Self::ray(view, near, far, px as u32, py as u32);
-                        let mut rh = RTCRayHit {
-                            ray: RTCRay {
-                                org_x: o[0],
-                                org_y: o[1],
-                                org_z: o[2],
-                                tnear: tn,
-                                dir_x: d[0],
-                                dir_y: d[1],
-                                dir_z: d[2],
-                                time: 0.0,
-                                tfar: tf,
-                                mask: u32::MAX,
-                                id: 0,
-                                flags: 0,
-                            },
-                            hit: RTCHit {
-                                Ng_x: 0.0,
-                                Ng_y: 0.0,
-                                Ng_z: 0.0,
-                                u: 0.0,
-                                v: 0.0,
-                                primID: u32::MAX,
-                                geomID: u32::MAX,
-                                instID: [u32::MAX],
-                            },
-                        };
-                        // SAFETY: valid committed scene, context and ray.
-                        unsafe { rtcIntersect1(self.scene, &mut ctx, &mut rh) };
-                        if rh.hit.geomID != u32::MAX {
-                            ids[px] = rh.hit.primID;
-                            ws[px] = rh.ray.tfar
-                                * d[0].mul_add(
-                                    view.forward.x,
-                                    d[1].mul_add(view.forward.y, d[2] * view.forward.z),
-                                );
-                        }
-                    }
-                })
-            });
-        hits
+        Self::trace_rows(view, |py, hits| {
+            let mut ctx = embree::IntersectContext::coherent();
+            for px in 0..hits.id.len() {
+                let (d, tn, tf) = Self::ray(view, near, far, px as u32, py as u32);
+                let mut rh = RTCRayHit {
+                    ray: RTCRay {
+                        org_x: o[0],
+                        org_y: o[1],
+                        org_z: o[2],
+                        tnear: tn,
+                        dir_x: d[0],
+                        dir_y: d[1],
+                        dir_z: d[2],
+                        time: 0.0,
+                        tfar: tf,
+                        mask: u32::MAX,
+                        id: 0,
+                        flags: 0,
+                    },
+                    hit: RTCHit {
+                        Ng_x: 0.0,
+                        Ng_y: 0.0,
+                        Ng_z: 0.0,
+                        u: 0.0,
+                        v: 0.0,
+                        primID: u32::MAX,
+                        geomID: u32::MAX,
+                        instID: [u32::MAX],
+                    },
+                };
+                // SAFETY: valid committed scene, context and ray.
+                unsafe { rtcIntersect1(self.scene, &mut ctx, &mut rh) };
+                if rh.hit.geomID != u32::MAX {
+                    hits.set(px, rh.hit.primID, rh.ray.tfar, cos_to_forward(view, d));
+                }
+            }
+        })
     }
 
     /// `rtcIntersect8` on 8 horizontally adjacent pixels per packet.
     pub fn trace_packet8(&self, view: &View, near: f32, far: f32) -> Hits {
-        let (w, h) = (view.width as usize, view.height as usize);
-        let mut hits = Hits::new(w * h);
         let o = view.eye.to_array();
-        hits.id
-            .par_chunks_mut(w)
-            .zip(hits.w.par_chunks_mut(w))
-            .enumerate()
-            .for_each(|(py, (ids, ws))| {
-                with_ftz_daz(|| {
-                    let mut ctx = embree::IntersectContext::coherent();
-                    // SAFETY: all-zero is a valid bit pattern for these C structs.
-                    let mut rh: RTCRayHit8 = unsafe { std::mem::zeroed() };
-                    let mut cosines = [0.0f32; 8];
-                    for x0 in (0..w).step_by(8) {
-                        let mut valid = [0i32; 8];
-                        for l in 0..8 {
-                            let px = x0 + l;
-                            if px >= w {
-                                continue;
-                            }
-                            valid[l] = -1;
-                            let (d, tn, tf) = Self::ray(view, near, far, px as u32, py as u32);
-                            rh.ray.org_x[l] = o[0];
-                            rh.ray.org_y[l] = o[1];
-                            rh.ray.org_z[l] = o[2];
-                            rh.ray.dir_x[l] = d[0];
-                            rh.ray.dir_y[l] = d[1];
-                            rh.ray.dir_z[l] = d[2];
-                            rh.ray.tnear[l] = tn;
-                            rh.ray.tfar[l] = tf;
-                            rh.ray.mask[l] = u32::MAX;
-                            rh.ray.time[l] = 0.0;
-                            rh.ray.flags[l] = 0;
-                            rh.hit.geomID[l] = u32::MAX;
-                            cosines[l] = d[0].mul_add(
-                                view.forward.x,
-                                d[1].mul_add(view.forward.y, d[2] * view.forward.z),
-                            );
-                        }
-                        // SAFETY: valid committed scene; rh is 32-byte aligned by its type.
-                        unsafe { rtcIntersect8(valid.as_ptr(), self.scene, &mut ctx, &mut rh) };
-                        for l in 0..8 {
-                            if valid[l] != 0 && rh.hit.geomID[l] != u32::MAX {
-                                ids[x0 + l] = rh.hit.primID[l];
-                                ws[x0 + l] = rh.ray.tfar[l] * cosines[l];
-                            }
-                        }
+        Self::trace_rows(view, |py, hits| {
+            let w = hits.id.len();
+            let mut ctx = embree::IntersectContext::coherent();
+            // SAFETY: all-zero is a valid bit pattern for these C structs.
+            let mut rh: RTCRayHit8 = unsafe { std::mem::zeroed() };
+            let mut cosines = [0.0f32; 8];
+            for x0 in (0..w).step_by(8) {
+                let mut valid = [0i32; 8];
+                for l in 0..8.min(w - x0) {
+                    valid[l] = -1;
+                    let (d, tn, tf) = Self::ray(view, near, far, (x0 + l) as u32, py as u32);
+                    rh.ray.org_x[l] = o[0];
+                    rh.ray.org_y[l] = o[1];
+                    rh.ray.org_z[l] = o[2];
+                    rh.ray.dir_x[l] = d[0];
+                    rh.ray.dir_y[l] = d[1];
+                    rh.ray.dir_z[l] = d[2];
+                    rh.ray.tnear[l] = tn;
+                    rh.ray.tfar[l] = tf;
+                    rh.ray.mask[l] = u32::MAX;
+                    rh.ray.time[l] = 0.0;
+                    rh.ray.flags[l] = 0;
+                    rh.hit.geomID[l] = u32::MAX;
+                    cosines[l] = cos_to_forward(view, d);
+                }
+                // SAFETY: valid committed scene; rh is 32-byte aligned by its type.
+                unsafe { rtcIntersect8(valid.as_ptr(), self.scene, &mut ctx, &mut rh) };
+                for l in 0..8 {
+                    if valid[l] != 0 && rh.hit.geomID[l] != u32::MAX {
+                        hits.set(x0 + l, rh.hit.primID[l], rh.ray.tfar[l], cosines[l]);
                     }
-                })
-            });
-        hits
+                }
+            }
+        })
     }
+}
+
+/// One row's slices of [`Hits`].
+struct RowHits<'a> {
+    id: &'a mut [u32],
+    t: &'a mut [f32],
+    w: &'a mut [f32],
+}
+
+impl RowHits<'_> {
+    fn set(&mut self, px: usize, id: u32, t: f32, cos: f32) {
+        self.id[px] = id;
+        self.t[px] = t;
+        self.w[px] = t * cos;
+    }
+}
+
+/// dir · forward: converts a hit distance to view depth.
+fn cos_to_forward(view: &View, d: [f32; 3]) -> f32 {
+    d[0].mul_add(
+        view.forward.x,
+        d[1].mul_add(view.forward.y, d[2] * view.forward.z),
+    )
 }
 
 impl Drop for EmbreeScene {
