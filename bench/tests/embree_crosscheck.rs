@@ -50,6 +50,14 @@ fn crosscheck(name: &str, scene: &LoadedScene) {
     let embree = EmbreeScene::new(&scene.data, 2).expect("Embree scene");
     let hits = threads.install(|| embree.trace_packet8(&vis.view, cam.near, cam.far));
     let single = threads.install(|| embree.trace_single(&vis.view, cam.near, cam.far));
+    for (i, &id) in hits.id.iter().enumerate() {
+        let t = hits.t[i];
+        assert_eq!(
+            id != MISS,
+            t.is_finite() && t > 0.0,
+            "{name}: hit distance at pixel {i}"
+        );
+    }
     let same_kernels = hits
         .id
         .iter()
