@@ -3,6 +3,7 @@
 //! contract (documented in the README).
 
 use serde::Deserialize;
+use specula_core::kulla_conty::KcColor;
 use specula_core::models::microfacet::clamp_alpha;
 use specula_core::models::{
     Fresnel, Lambert, MetallicRoughness, Microfacet, MicrofacetParams, Ndf, Smith,
@@ -166,11 +167,6 @@ impl MicrofacetDesc {
                 Fresnel::Conductor { eta: *eta, k: *k }
             }
         };
-        if self.energy_compensation {
-            return Err(
-                "energy_compensation: Kulla-Conty compensation is not available yet".into(),
-            );
-        }
         Ok(MicrofacetParams {
             ndf: match self.ndf {
                 NdfDesc::Ggx => Ndf::Ggx,
@@ -223,9 +219,13 @@ impl MaterialDesc {
             }
             MaterialDesc::Microfacet(d) => {
                 let params = d.params(warnings)?;
+                let kc = d.energy_compensation.then_some(match d.kc_color {
+                    KcColorDesc::KullaConty => KcColor::KullaConty,
+                    KcColorDesc::Notes => KcColor::Notes,
+                });
                 let m = match tables {
-                    Tables::Build => Microfacet::new(params),
-                    Tables::Skip => Microfacet::new_without_table(params),
+                    Tables::Build => Microfacet::new(params, kc),
+                    Tables::Skip => Microfacet::new_without_table(params, kc),
                 };
                 (Model::Microfacet(m), d.double_sided)
             }

@@ -57,16 +57,19 @@ fn values_errors_and_order() {
         r#"{"material":{"model":"lambert","base_color":[1,1,1]},"wi":[0,0,0],"wo":[0,0,1]}"#,
         // 7: metallic-roughness at normal incidence, metal: F0 D V with V = 1/4.
         r#"{"material":{"model":"metallic_roughness","base_color":[1,0.5,0.2],"roughness":0.5,"metallic":1},"wi":[0,0,1],"wo":[0,0,1]}"#,
-        // 8: Kulla-Conty compensation is documented as not available yet.
-        r#"{"material":{"model":"microfacet","ndf":"ggx","alpha":0.3,"energy_compensation":true,"fresnel":{"type":"schlick","f0":[1,1,1]}},"wi":[0,0,1],"wo":[0,0,1]}"#,
+        // 8, 9: a rough lobe with and without Kulla-Conty compensation.
+        r#"{"material":{"model":"microfacet","ndf":"ggx","alpha":0.8,"energy_compensation":true,"fresnel":{"type":"schlick","f0":[1,1,1]}},"wi":[0.5,0,1],"wo":[0,0.3,1]}"#,
+        r#"{"material":{"model":"microfacet","ndf":"ggx","alpha":0.8,"fresnel":{"type":"schlick","f0":[1,1,1]}},"wi":[0.5,0,1],"wo":[0,0.3,1]}"#,
     ]
     .join("\n");
     let out = eval(&(input + "\n"));
-    assert_eq!(out.len(), 8, "{out:?}");
-    assert!(out[7]["error"]
-        .as_str()
-        .unwrap()
-        .contains("energy_compensation"));
+    assert_eq!(out.len(), 9, "{out:?}");
+    // Compensation only adds energy (F = 1: the lobe is ≥ 0).
+    let (with, without) = (f(&out[7]), f(&out[8]));
+    assert!(
+        with[0] > without[0] && with[0].is_finite(),
+        "{with:?} vs {without:?}"
+    );
 
     let l = f(&out[0]);
     for (g, rho) in l.iter().zip([0.2f32, 0.5, 0.8]) {

@@ -35,7 +35,7 @@ pub fn benchmark_scene_microfacet() -> LoadedScene {
                 },
                 diffuse: mr.diffuse_color(),
             };
-            m.model = Model::Microfacet(Microfacet::new(params));
+            m.model = Model::Microfacet(Microfacet::new(params, None));
         }
     }
     s

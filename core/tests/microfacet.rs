@@ -258,7 +258,7 @@ fn tabulated_albedo_matches_quadrature_and_energy_stays_below_one() {
         },
     ];
     for p in cases {
-        let m = Microfacet::new(p.clone());
+        let m = Microfacet::new(p.clone(), None);
         for mu in [0.2, 0.5, 0.8] {
             let want = albedo_quadrature(&m, mu);
             let got = m.albedo_at(mu as f32);
@@ -287,7 +287,7 @@ fn f32x8_lanes_agree_with_f64_over_a_million_evaluations() {
     let mut n = 0;
     while n < 1_000_000 {
         let p = random_params(&mut rng);
-        let m = Microfacet::new_without_table(p.clone());
+        let m = Microfacet::new_without_table(p.clone(), None);
         for _ in 0..16 {
             let dirs: Vec<([f64; 3], [f64; 3])> = (0..8)
                 .map(|_| {

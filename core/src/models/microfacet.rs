@@ -4,7 +4,8 @@
 //!
 //! D: GGX, Beckmann or GTR(γ); G2: separable or height-correlated Smith
 //! with the NDF's Λ (GTR with γ ≠ 2 uses the GGX Λ at the same α: GTR has
-//! no closed-form Λ); F: Schlick (F0), exact dielectric (IOR) or exact
+//! no closed-form Λ; the mismatch lets γ < 2 lobes reflect more than they
+//! receive at grazing angles, E(0.1) = 1.21 at γ = 1.5, α = 0.15); F: Schlick (F0), exact dielectric (IOR) or exact
 //! conductor (η, κ per channel); an optional Lambertian base ρd is added
 //! (not weighted: the notes' "microfacet + diffuse" sum).
 //!
@@ -13,6 +14,7 @@
 
 use crate::brdf::{Brdf, HalfAngles, ALPHA_MIN};
 use crate::fresnel::{f_conductor, f_dielectric, f_schlick};
+use crate::kulla_conty::{color_factor, f_avg, KcColor, KcSlice, KcTable};
 use crate::masking::{g2_height_correlated, g2_separable, lambda_beckmann, lambda_ggx};
 use crate::ndf::{d_beckmann, d_ggx, d_gtr};
 use crate::real::Real;
@@ -72,13 +74,81 @@ pub struct AlbedoTable {
 }
 
 const N_MU: usize = 64;
-/// Quadrature points per table entry (Hammersley, NDF importance sampling).
-const SAMPLES: u32 = 4096;
+/// Simpson intervals (even) over φ in `albedo_ring`.
+const N_PHI: usize = 32;
+
+fn simpson(a: f64, b: f64, fa: [f64; 3], fm: [f64; 3], fb: [f64; 3]) -> [f64; 3] {
+    [0, 1, 2].map(|c| (b - a) / 6.0 * (fa[c] + 4.0 * fm[c] + fb[c]))
+}
+
+/// Adaptive Simpson on a vector integrand (refines where any channel needs it).
+#[allow(clippy::too_many_arguments)]
+fn adaptive_simpson(
+    f: &dyn Fn(f64) -> [f64; 3],
+    a: f64,
+    b: f64,
+    fa: [f64; 3],
+    fm: [f64; 3],
+    fb: [f64; 3],
+    whole: [f64; 3],
+    tol: f64,
+    depth: u32,
+) -> [f64; 3] {
+    let m = 0.5 * (a + b);
+    let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
+    let (flm, frm) = (f(lm), f(rm));
+    let left = simpson(a, m, fa, flm, fm);
+    let right = simpson(m, b, fm, frm, fb);
+    let err = (0..3)
+        .map(|c| (left[c] + right[c] - whole[c]).abs())
+        .fold(0.0, f64::max);
+    if depth == 0 || err <= 15.0 * tol {
+        return [0, 1, 2].map(|c| left[c] + right[c] + (left[c] + right[c] - whole[c]) / 15.0);
+    }
+    let l = adaptive_simpson(f, a, m, fa, flm, fm, left, tol / 2.0, depth - 1);
+    let r = adaptive_simpson(f, m, b, fm, frm, fb, right, tol / 2.0, depth - 1);
+    [0, 1, 2].map(|c| l[c] + r[c])
+}
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Microfacet {
     pub params: MicrofacetParams,
     albedo: AlbedoTable,
+    /// Kulla–Conty compensation, when enabled.
+    kc: Option<Compensation>,
+}
+
+/// The compensation lobe of one material: E(μ) at its α, E_avg, and the
+/// colour factor per channel (kulla_conty.rs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Compensation {
+    pub slice: KcSlice,
+    pub factor: [f32; 3],
+}
+
+impl Compensation {
+    pub fn new(p: &MicrofacetParams, mode: KcColor) -> Compensation {
+        let slice = KcTable::get(p.ndf, p.smith).slice(p.alpha as f64);
+        let fa = f_avg(&p.fresnel);
+        let factor = fa.map(|f| color_factor(f, slice.e_avg, mode) as f32);
+        Compensation { slice, factor }
+    }
+
+    /// f_ms(μi, μo) · factor, per channel (no cosine); 0 unless both μ > 0.
+    /// E(μ) is a per-lane table lookup.
+    #[inline(always)]
+    pub fn f<R: Real>(&self, cos_i: R, cos_o: R) -> Rgb<R> {
+        let mut ei = [0.0f32; 8];
+        let mut eo = [0.0f32; 8];
+        for lane in 0..R::LANES {
+            ei[lane] = self.slice.e_at(cos_i.lane(lane)) as f32;
+            eo[lane] = self.slice.e_at(cos_o.lane(lane)) as f32;
+        }
+        let k = R::splat(1.0 / (std::f64::consts::PI * (1.0 - self.slice.e_avg).max(1e-6)));
+        let ms = (R::ONE - R::load(&ei)) * (R::ONE - R::load(&eo)) * k;
+        let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
+        Rgb::select(above, Rgb::from_f32(self.factor) * ms, Rgb::zero())
+    }
 }
 
 impl MicrofacetParams {
@@ -143,35 +213,76 @@ impl MicrofacetParams {
         Rgb::select(above, self.f(cos_d) * dg, Rgb::zero())
     }
 
-    /// E_spec(μo) (F included) by importance sampling h ∝ D(h)(n·h):
-    /// f cos θi / pdf(wi) = F G2 (o·h) / (μo (n·h)).
-    fn specular_albedo(&self, mu_o: f64) -> [f64; 3] {
-        let wo = V3::new((1.0 - mu_o * mu_o).max(0.0).sqrt(), 0.0, mu_o);
-        let mut s = [0.0f64; 3];
-        for i in 0..SAMPLES {
-            let (u1, u2) = (
-                (i as f64 + 0.5) / SAMPLES as f64,
-                i.reverse_bits() as f64 / 4294967296.0,
-            );
-            let cos_h = self.sample_cos_h(u1);
-            let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-            let phi = std::f64::consts::TAU * u2;
-            let h = V3::new(sin_h * phi.cos(), sin_h * phi.sin(), cos_h);
-            let o_h = wo.dot(h);
-            if o_h <= 0.0 || cos_h <= 0.0 {
-                continue;
-            }
-            let wi = h * (2.0 * o_h) - wo;
-            if wi.z <= 0.0 {
-                continue;
-            }
-            let w = self.g2(wi.z, mu_o) * o_h / (mu_o * cos_h);
-            let f = self.f(wi.dot(h));
-            s[0] += f.x * w;
-            s[1] += f.y * w;
-            s[2] += f.z * w;
+    /// E_spec(μo) = ∫ f cos θi dωi (F included), by deterministic
+    /// quadrature in half-vector space. With u the CDF of D(h)(n·h) over θh
+    /// (so D(h)(n·h) dωh = du dφ / 2π) and dωi = 4 (o·h) dωh:
+    ///
+    /// E = (1/2π) ∫₀¹ ring(u) du,  ring(u) = ∫ F G2 (o·h) / (μo cos θh) dφ
+    ///
+    /// over the φ where o·h > 0 and wi is above the horizon; for fixed θh
+    /// both read cos φ > c, so the φ range is [−φmax, φmax] in closed form and
+    /// the ring integrand is smooth: Simpson in φ. ring(u) has kinks where
+    /// that range opens, so u is integrated by adaptive Simpson (tolerance
+    /// 1e-5). Sampling h ∝ D(h)(n·h) instead was off by up to 6e-3 at grazing
+    /// μo, where the weight (o·h)/(μo cos θh) swings with φ.
+    pub fn specular_albedo(&self, mu_o: f64) -> [f64; 3] {
+        let mu_o = mu_o.clamp(1e-6, 1.0);
+        let ring = |u: f64| self.albedo_ring(mu_o, u);
+        let (a, b) = (1e-9, 1.0 - 1e-9);
+        let m = 0.5 * (a + b);
+        let (fa, fm, fb) = (ring(a), ring(m), ring(b));
+        let whole = simpson(a, b, fa, fm, fb);
+        let s = adaptive_simpson(&ring, a, b, fa, fm, fb, whole, 1e-5, 40);
+        s.map(|v| v / std::f64::consts::TAU)
+    }
+
+    /// ring(u) of [`MicrofacetParams::specular_albedo`], per channel.
+    fn albedo_ring(&self, mu_o: f64, u: f64) -> [f64; 3] {
+        let cos_h = self.sample_cos_h(u);
+        if cos_h <= 0.0 {
+            return [0.0; 3];
         }
-        s.map(|v| v / SAMPLES as f64)
+        let sin_o = (1.0 - mu_o * mu_o).max(0.0).sqrt();
+        let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
+        // o·h = sin_o sin_h cos φ + μo cos_h > 0 and
+        // wi.z = 2 (o·h) cos_h − μo > 0: both lower bounds on cos φ.
+        let a = sin_o * sin_h;
+        let c = if a > 1e-300 {
+            (-mu_o * cos_h / a).max(mu_o * (1.0 - 2.0 * cos_h * cos_h) / (2.0 * cos_h * a))
+        } else if 2.0 * cos_h * cos_h > 1.0 {
+            -1.0
+        } else {
+            1.0
+        };
+        if c >= 1.0 {
+            return [0.0; 3];
+        }
+        let phi_max = c.max(-1.0).acos();
+        let step = phi_max / N_PHI as f64;
+        let mut ring = [0.0f64; 3];
+        for k in 0..=N_PHI {
+            // Simpson weights 1, 4, 2, …, 4, 1 (N_PHI even).
+            let w = if k == 0 || k == N_PHI {
+                1.0
+            } else if k % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            let phi = k as f64 * step;
+            let o_h = (a * phi.cos() + mu_o * cos_h).max(0.0);
+            let wi_z = 2.0 * o_h * cos_h - mu_o;
+            if wi_z <= 0.0 {
+                continue;
+            }
+            let g = self.g2(wi_z, mu_o) * o_h / (mu_o * cos_h);
+            let f = self.f(o_h);
+            ring[0] += w * f.x * g;
+            ring[1] += w * f.y * g;
+            ring[2] += w * f.z * g;
+        }
+        // ∫ over [−φmax, φmax] = 2 × Simpson over [0, φmax].
+        ring.map(|r| 2.0 * r * step / 3.0)
     }
 
     /// Inverts the CDF of D(h)(n·h) over θh: cos θh for uniform u ∈ (0, 1).
@@ -197,31 +308,45 @@ impl MicrofacetParams {
 }
 
 impl Microfacet {
-    /// Validates α (clamped into [ALPHA_MIN, 1] by the caller, which warns)
-    /// and tabulates the directional albedo (~65k f64 evaluations).
-    pub fn new(params: MicrofacetParams) -> Microfacet {
+    /// Takes α already clamped into [ALPHA_MIN, 1] (the caller warns),
+    /// sets up compensation when asked (`kc`), and tabulates the directional
+    /// albedo: single scattering (quadrature, ~1 ms per entry), plus the
+    /// compensation lobe's exact factor · (1 − E(μo)), plus the diffuse ρd.
+    pub fn new(params: MicrofacetParams, kc: Option<KcColor>) -> Microfacet {
+        let kc = kc.map(|mode| Compensation::new(&params, mode));
         let e = (0..N_MU)
             .map(|j| {
                 let mu = (j as f64 + 0.5) / N_MU as f64;
                 let s = params.specular_albedo(mu);
-                [0, 1, 2].map(|c| (s[c] + params.diffuse[c] as f64) as f32)
+                let ms = kc.as_ref().map_or(0.0, |k| 1.0 - k.slice.e_at(mu));
+                [0, 1, 2].map(|c| {
+                    let f = kc.as_ref().map_or(0.0, |k| k.factor[c] as f64);
+                    (s[c] + f * ms + params.diffuse[c] as f64) as f32
+                })
             })
             .collect();
         Microfacet {
             params,
             albedo: AlbedoTable { e },
+            kc,
         }
     }
 
     /// The model without the albedo table (for evaluating f only; its
     /// `albedo` is then zero). Cheap to build.
-    pub fn new_without_table(params: MicrofacetParams) -> Microfacet {
+    pub fn new_without_table(params: MicrofacetParams, kc: Option<KcColor>) -> Microfacet {
         Microfacet {
+            kc: kc.map(|mode| Compensation::new(&params, mode)),
             params,
             albedo: AlbedoTable {
                 e: vec![[0.0; 3]; N_MU],
             },
         }
+    }
+
+    /// The compensation lobe, if enabled.
+    pub fn compensation(&self) -> Option<&Compensation> {
+        self.kc.as_ref()
     }
 
     /// Tabulated E(μo), one channel set (scalar twin of the lane lookup).
@@ -241,7 +366,11 @@ impl Brdf for Microfacet {
         let p = &self.params;
         let above = n.dot(wi).gt(R::ZERO) & n.dot(wo).gt(R::ZERO);
         let diffuse = Rgb::select(above, Rgb::from_f32(p.diffuse) * R::FRAC_1_PI, Rgb::zero());
-        p.specular(n, wi, wo) + diffuse
+        let single = p.specular(n, wi, wo) + diffuse;
+        match &self.kc {
+            Some(k) => single + k.f(n.dot(wi), n.dot(wo)),
+            None => single,
+        }
     }
 
     fn albedo<R: Real>(&self, n: V3<R>, wo: V3<R>) -> Rgb<R> {
