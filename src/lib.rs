@@ -6,6 +6,7 @@
 
 pub mod demo;
 pub mod eval;
+pub mod furnace;
 pub mod material_desc;
 pub mod mesh;
 pub mod output;

@@ -27,6 +27,26 @@ enum Command {
     /// Reference BRDF values: JSON Lines on stdin, one answer line per input
     /// line on stdout (see the README, "Reference values").
     Eval,
+    /// Directional albedo E(μo) of a microfacet material at several
+    /// roughnesses, without and with Kulla-Conty compensation.
+    Furnace(FurnaceArgs),
+}
+
+#[derive(clap::Args)]
+struct FurnaceArgs {
+    /// The material, as a JSON object with the scene/eval field names (its
+    /// alpha is replaced by each --alpha).
+    #[arg(
+        long,
+        default_value = r#"{"model": "microfacet", "ndf": "ggx", "alpha": 0.5, "fresnel": {"type": "schlick", "f0": [1, 1, 1]}}"#
+    )]
+    material: String,
+    /// Roughnesses (alpha) to tabulate, comma separated.
+    #[arg(long, value_delimiter = ',', default_values_t = [0.1f32, 0.25, 0.5, 0.75, 1.0])]
+    alpha: Vec<f32>,
+    /// Also plot the curves to this PNG.
+    #[arg(short, long)]
+    output: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -182,6 +202,20 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     Ok(())
 }
 
+fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
+    let curves = specula::furnace::furnace(&a.material, &a.alpha)?;
+    print!("{}", specula::furnace::table(&curves));
+    if let Some(p) = &a.output {
+        let png = specula::furnace::plot_png(&curves)?;
+        output::write_atomic(p, |tmp| {
+            std::fs::write(tmp, &png).map_err(|e| e.to_string())
+        })?;
+        eprint!("{}", specula::furnace::legend(&curves));
+        eprintln!("wrote {}", p.display());
+    }
+    Ok(())
+}
+
 fn run_demo() -> Result<(), String> {
     let t = Instant::now();
     let scene = demo::demo_scene().map_err(|e| e.to_string())?;
@@ -203,6 +237,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         None => run_demo(),
         Some(Command::Render(a)) => run_render(a),
+        Some(Command::Furnace(a)) => run_furnace(a),
         Some(Command::Eval) => {
             let stdin = std::io::stdin().lock();
             let stdout = std::io::BufWriter::new(std::io::stdout().lock());

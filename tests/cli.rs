@@ -246,3 +246,38 @@ fn refuses_to_overwrite_the_scene_file() {
         GOOD
     );
 }
+
+#[test]
+fn furnace_prints_compensated_albedo_near_one_and_plots() {
+    let dir = temp_dir("cli-furnace");
+    let out = specula(&["furnace", "--alpha", "0.2,0.6,1", "-o", "plot.png"], &dir);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    let rows: Vec<Vec<f64>> = text
+        .lines()
+        .skip(1)
+        .map(|l| l.split('\t').map(|v| v.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 3 * 40);
+    for r in &rows {
+        // alpha, mu, E rgb, E compensated rgb; F = 1 so E ≤ 1 and E_c ≈ 1.
+        assert!(r[2] <= 1.0 + 1e-3, "{r:?}");
+        assert!((r[5] - 1.0).abs() < 2e-3, "{r:?}");
+    }
+    let png = image::open(dir.join("plot.png")).unwrap();
+    assert_eq!((png.width(), png.height()), (900, 600));
+    let bad = specula(
+        &[
+            "furnace",
+            "--material",
+            r#"{"model": "lambert", "base_color": [1, 1, 1]}"#,
+        ],
+        &dir,
+    );
+    assert!(!bad.status.success());
+    assert!(String::from_utf8_lossy(&bad.stderr).contains("microfacet"));
+}

@@ -116,3 +116,45 @@ intensity = [40.0, 40.0, 40.0]
     assert!(shaded > 1000);
     assert!(worst < 1e-5, "worst relative difference {worst:e}");
 }
+
+/// fixtures/scenes/furnace.toml: under a uniform white environment the
+/// compensated spheres reflect what they receive (they vanish into the
+/// background); the single-scattering ones are visibly darker when rough.
+#[test]
+fn furnace_scene_compensated_spheres_vanish() {
+    let scene = load_scene(&fixtures().join("scenes/furnace.toml")).expect("furnace scene");
+    let mut s = RenderSettings::from_scene(&scene);
+    s.width = 500;
+    s.height = 220;
+    let r = render_scene(&scene, &s, 0.0).expect("render");
+    let t = &r.frame.target;
+    let ids = t.to_row_major(&r.frame.visibility.vis.id);
+    let hdr = r.hdr();
+    let mut worst = 0.0f32;
+    let (mut rough_sum, mut rough_n) = (0.0f64, 0usize);
+    for (i, &id) in ids.iter().enumerate() {
+        if id == specula_raster::MISS {
+            assert!(
+                (hdr[i][0] - 1.0).abs() < 1e-6,
+                "background is the environment"
+            );
+            continue;
+        }
+        let name = &scene.data.materials[scene.data.tri_material[id as usize] as usize].name;
+        if name.starts_with("comp_") {
+            worst = worst.max((hdr[i][0] - 1.0).abs());
+        } else if name == "single_4" {
+            rough_sum += hdr[i][0] as f64;
+            rough_n += 1;
+        }
+    }
+    eprintln!("worst |L − 1| on compensated spheres: {worst:.2e}");
+    assert!(
+        worst < 3e-3,
+        "compensated spheres differ from the environment by {worst}"
+    );
+    assert!(
+        rough_n > 100 && rough_sum / (rough_n as f64) < 0.8,
+        "the α = 1 single-scattering sphere should be darker"
+    );
+}

@@ -228,11 +228,21 @@ impl MicrofacetParams {
     pub fn specular_albedo(&self, mu_o: f64) -> [f64; 3] {
         let mu_o = mu_o.clamp(1e-6, 1.0);
         let ring = |u: f64| self.albedo_ring(mu_o, u);
-        let (a, b) = (1e-9, 1.0 - 1e-9);
-        let m = 0.5 * (a + b);
-        let (fa, fm, fb) = (ring(a), ring(m), ring(b));
-        let whole = simpson(a, b, fa, fm, fb);
-        let s = adaptive_simpson(&ring, a, b, fa, fm, fb, whole, 1e-5, 40);
+        // Adaptive Simpson can stop early on a panel whose five samples miss
+        // a kink; starting from 16 panels makes that unlikely.
+        const PANELS: usize = 16;
+        let mut s = [0.0f64; 3];
+        for p in 0..PANELS {
+            let a = (p as f64 / PANELS as f64).max(1e-9);
+            let b = ((p + 1) as f64 / PANELS as f64).min(1.0 - 1e-9);
+            let m = 0.5 * (a + b);
+            let (fa, fm, fb) = (ring(a), ring(m), ring(b));
+            let whole = simpson(a, b, fa, fm, fb);
+            let part = adaptive_simpson(&ring, a, b, fa, fm, fb, whole, 1e-5 / PANELS as f64, 40);
+            for c in 0..3 {
+                s[c] += part[c];
+            }
+        }
         s.map(|v| v / std::f64::consts::TAU)
     }
 
