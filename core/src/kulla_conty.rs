@@ -26,6 +26,7 @@
 
 use crate::brdf::ALPHA_MIN;
 use crate::models::microfacet::{Fresnel, MicrofacetParams, Ndf, Smith};
+use crate::real::Real;
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
 
@@ -161,6 +162,31 @@ impl KcSlice {
         let (a, b) = (mu_node(j0), mu_node(j1));
         let t = ((mu - a) / (b - a)).clamp(0.0, 1.0);
         self.e[j0] as f64 + (self.e[j1] as f64 - self.e[j0] as f64) * t
+    }
+}
+
+impl KcSlice {
+    /// [`KcSlice::e_at`] for every lane: the node index and weights in lane
+    /// arithmetic, then two table reads per lane (a gather).
+    #[inline(always)]
+    pub fn e_lanes<R: Real>(&self, mu: R) -> R {
+        let last = (N_MU - 1) as f64;
+        let mu = mu.clamp(R::ZERO, R::ONE);
+        let j0 = (mu.sqrt() * R::splat(last))
+            .floor()
+            .min(R::splat(last - 1.0));
+        let j1 = j0 + R::ONE;
+        let inv = R::splat(1.0 / last);
+        let (a, b) = ((j0 * inv).sqr(), (j1 * inv).sqr());
+        let t = ((mu - a) / (b - a)).clamp(R::ZERO, R::ONE);
+        let (mut e0, mut e1) = ([0.0f32; 8], [0.0f32; 8]);
+        for lane in 0..R::LANES {
+            let j = j0.lane(lane) as usize;
+            e0[lane] = self.e[j];
+            e1[lane] = self.e[j + 1];
+        }
+        let (e0, e1) = (R::load(&e0), R::load(&e1));
+        (e1 - e0).mul_add(t, e0)
     }
 }
 

@@ -111,6 +111,8 @@ pub trait Real:
     /// `self` if `self < o`, else `o` (a NaN `self` gives `o`).
     fn min(self, o: Self) -> Self;
     fn abs(self) -> Self;
+    /// Largest integer ≤ self.
+    fn floor(self) -> Self;
     fn exp(self) -> Self;
     fn ln(self) -> Self;
     /// eˣ − 1, accurate for small x.
@@ -249,6 +251,10 @@ macro_rules! scalar_real {
                 <$t>::abs(self)
             }
             #[inline(always)]
+            fn floor(self) -> Self {
+                <$t>::floor(self)
+            }
+            #[inline(always)]
             fn exp(self) -> Self {
                 <$t>::exp(self)
             }
@@ -377,6 +383,10 @@ impl Real for f32x8 {
     #[inline(always)]
     fn abs(self) -> Self {
         f32x8::abs(self)
+    }
+    #[inline(always)]
+    fn floor(self) -> Self {
+        f32x8::floor(self)
     }
     #[inline(always)]
     fn exp(self) -> Self {

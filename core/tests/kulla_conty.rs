@@ -146,3 +146,20 @@ fn coloured_lobe_adds_the_series_minus_single_scattering() {
     }
     eprintln!("worst |added − (series − F_avg E_avg)|: {worst:.2e}");
 }
+
+#[test]
+fn lane_lookup_matches_the_scalar_interpolant() {
+    use specula_core::{f32x8, Real};
+    let slice = KcTable::get(Ndf::Ggx, Smith::HeightCorrelated).slice(0.37);
+    for i in 0..=1000 {
+        let mu = i as f64 / 1000.0;
+        let want = slice.e_at(mu);
+        assert!((slice.e_lanes(mu) - want).abs() < 1e-12, "f64 at μ={mu}");
+        let lanes = slice.e_lanes(f32x8::splat(mu as f32));
+        assert!(
+            (lanes.lane(3) - want).abs() < 2e-6,
+            "f32x8 at μ={mu}: {} vs {want}",
+            lanes.lane(3)
+        );
+    }
+}

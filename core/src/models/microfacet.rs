@@ -135,17 +135,11 @@ impl Compensation {
     }
 
     /// f_ms(μi, μo) · factor, per channel (no cosine); 0 unless both μ > 0.
-    /// E(μ) is a per-lane table lookup.
     #[inline(always)]
     pub fn f<R: Real>(&self, cos_i: R, cos_o: R) -> Rgb<R> {
-        let mut ei = [0.0f32; 8];
-        let mut eo = [0.0f32; 8];
-        for lane in 0..R::LANES {
-            ei[lane] = self.slice.e_at(cos_i.lane(lane)) as f32;
-            eo[lane] = self.slice.e_at(cos_o.lane(lane)) as f32;
-        }
+        let (ei, eo) = (self.slice.e_lanes(cos_i), self.slice.e_lanes(cos_o));
         let k = R::splat(1.0 / (std::f64::consts::PI * (1.0 - self.slice.e_avg).max(1e-6)));
-        let ms = (R::ONE - R::load(&ei)) * (R::ONE - R::load(&eo)) * k;
+        let ms = (R::ONE - ei) * (R::ONE - eo) * k;
         let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
         Rgb::select(above, Rgb::from_f32(self.factor) * ms, Rgb::zero())
     }
