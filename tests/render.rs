@@ -158,3 +158,14 @@ fn furnace_scene_compensated_spheres_vanish() {
         "the α = 1 single-scattering sphere should be darker"
     );
 }
+
+#[test]
+fn benchmark_with_a_microfacet_row_renders_and_paths_agree() {
+    let mut scene =
+        load_scene(&fixtures().join("scenes/sphere-grid-materials.toml")).expect("scene");
+    scene.output.width = 480;
+    scene.output.height = 270;
+    let (worst, shaded) = simd_vs_scalar(&scene);
+    assert_eq!(shaded, 480 * 270);
+    assert!(worst < 1e-5, "worst relative difference {worst:e}");
+}
