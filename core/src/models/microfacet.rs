@@ -124,24 +124,31 @@ pub struct Microfacet {
 pub struct Compensation {
     pub slice: KcSlice,
     pub factor: [f32; 3],
+    /// factor / (π (1 − E_avg)) per channel: everything in f_ms that does
+    /// not depend on the directions, folded once here.
+    scale: [f32; 3],
 }
 
 impl Compensation {
     pub fn new(p: &MicrofacetParams, mode: KcColor) -> Compensation {
         let slice = KcTable::get(p.ndf, p.smith).slice(p.alpha as f64);
         let fa = f_avg(&p.fresnel);
-        let factor = fa.map(|f| color_factor(f, slice.e_avg, mode) as f32);
-        Compensation { slice, factor }
+        let factor = fa.map(|f| color_factor(f, slice.e_avg, mode));
+        let k = 1.0 / (std::f64::consts::PI * (1.0 - slice.e_avg).max(1e-6));
+        Compensation {
+            scale: factor.map(|f| (f * k) as f32),
+            factor: factor.map(|f| f as f32),
+            slice,
+        }
     }
 
     /// f_ms(μi, μo) · factor, per channel (no cosine); 0 unless both μ > 0.
     #[inline(always)]
     pub fn f<R: Real>(&self, cos_i: R, cos_o: R) -> Rgb<R> {
         let (ei, eo) = (self.slice.e_lanes(cos_i), self.slice.e_lanes(cos_o));
-        let k = R::splat(1.0 / (std::f64::consts::PI * (1.0 - self.slice.e_avg).max(1e-6)));
-        let ms = (R::ONE - ei) * (R::ONE - eo) * k;
+        let ms = (R::ONE - ei) * (R::ONE - eo);
         let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
-        Rgb::select(above, Rgb::from_f32(self.factor) * ms, Rgb::zero())
+        Rgb::select(above, Rgb::from_f32(self.scale) * ms, Rgb::zero())
     }
 }
 
@@ -346,11 +353,6 @@ impl Microfacet {
                 e: vec![[0.0; 3]; N_MU],
             },
         }
-    }
-
-    /// The compensation lobe, if enabled.
-    pub fn compensation(&self) -> Option<&Compensation> {
-        self.kc.as_ref()
     }
 
     /// Tabulated E(μo), one channel set (scalar twin of the lane lookup).
