@@ -6,12 +6,14 @@
 //! directions away from the surface, need not be normalized). Each line
 //! gets one line on stdout, in order: `{"f": [r, g, b]}`, the BRDF value
 //! (no cosine; 0 when either direction is at or below the horizon),
-//! evaluated in f64; or `{"error": "line N: ..."}`, and the run goes on.
+//! evaluated in f64 (`unlit` adds `"emission": [r, g, b]`, its radiance
+//! toward `wo`, and reflects nothing); or `{"error": "line N: ..."}`, and
+//! the run goes on.
 //! Material objects use the scene files' field names.
 
-use crate::material_desc::{MaterialDesc, Tables};
+use crate::material_desc::{MaterialDesc, Shading, Tables};
 use serde::Deserialize;
-use specula_core::{Material, V3};
+use specula_core::V3;
 use std::collections::HashMap;
 use std::io::{BufRead, Write};
 
@@ -27,7 +29,7 @@ struct Query {
 /// sweep directions over few materials).
 #[derive(Default)]
 pub struct Cache {
-    built: HashMap<String, Material>,
+    built: HashMap<String, Shading>,
 }
 
 /// Most materials kept; the cache is cleared when full.
@@ -43,7 +45,13 @@ fn unit(field: &str, v: [f64; 3]) -> Result<V3<f64>, String> {
     Ok(V3::new(v[0] / len, v[1] / len, v[2] / len))
 }
 
-fn eval(line: &str, cache: &mut Cache) -> Result<[f64; 3], String> {
+/// One answer: the BRDF value, and for `unlit` the emitted radiance.
+struct Answer {
+    f: [f64; 3],
+    emission: Option<[f64; 3]>,
+}
+
+fn eval(line: &str, cache: &mut Cache) -> Result<Answer, String> {
     let q: Query = serde_json::from_str(line).map_err(|e| e.to_string())?;
     let wi = unit("wi", q.wi)?;
     let wo = unit("wo", q.wo)?;
@@ -51,23 +59,42 @@ fn eval(line: &str, cache: &mut Cache) -> Result<[f64; 3], String> {
     if !cache.built.contains_key(&key) {
         let desc: MaterialDesc =
             serde_json::from_value(q.material).map_err(|e| format!("material: {e}"))?;
-        let m = desc
-            .build("eval", Tables::Skip, &mut Vec::new())
+        let (m, _) = desc
+            .build_shading(Tables::Skip, &mut Vec::new())
             .map_err(|e| format!("material.{e}"))?;
         if cache.built.len() >= CACHE_MAX {
             cache.built.clear();
         }
         cache.built.insert(key.clone(), m);
     }
-    let m = &cache.built[&key];
-    let f = m.model.f(V3::new(0.0, 0.0, 1.0), wi, wo);
-    Ok([f.x, f.y, f.z])
+    Ok(match &cache.built[&key] {
+        Shading::Lit(model) => {
+            let f = model.f(V3::new(0.0, 0.0, 1.0), wi, wo);
+            Answer {
+                f: [f.x, f.y, f.z],
+                emission: None,
+            }
+        }
+        // No reflection; emits toward every direction above the horizon.
+        Shading::Unlit(u) => Answer {
+            f: [0.0; 3],
+            emission: Some(if wo.z > 0.0 {
+                u.radiance().map(|c| c as f64)
+            } else {
+                [0.0; 3]
+            }),
+        },
+    })
 }
 
 /// The output line (without newline) for input line `lineno` (1-based).
 pub fn eval_line(line: &str, lineno: usize, cache: &mut Cache) -> String {
     match eval(line, cache) {
-        Ok(f) => serde_json::json!({ "f": f }).to_string(),
+        Ok(Answer { f, emission: None }) => serde_json::json!({ "f": f }).to_string(),
+        Ok(Answer {
+            f,
+            emission: Some(e),
+        }) => serde_json::json!({ "f": f, "emission": e }).to_string(),
         Err(e) => serde_json::json!({ "error": format!("line {lineno}: {e}") }).to_string(),
     }
 }

@@ -2,7 +2,7 @@
 //! for several roughnesses, without and with Kulla–Conty compensation —
 //! the white furnace test of the course notes as a table and a plot.
 
-use crate::material_desc::{MaterialDesc, Tables};
+use crate::material_desc::{MaterialDesc, Shading, Tables};
 use specula_core::{Model, V3};
 
 /// Albedo curves of one α: (μo, E without, E with compensation), RGB.
@@ -40,8 +40,11 @@ pub fn furnace(material_json: &str, alphas: &[f32]) -> Result<Vec<FurnaceCurve>,
             let mut d = base.clone();
             d.alpha = alpha;
             d.energy_compensation = ec;
-            let m = MaterialDesc::Microfacet(d).build("furnace", Tables::Build, &mut Vec::new());
-            m.map(|m| m.model).map_err(|e| format!("--material.{e}"))
+            match MaterialDesc::Microfacet(d).build_shading(Tables::Build, &mut Vec::new()) {
+                Ok((Shading::Lit(m), _)) => Ok(m),
+                Ok(_) => unreachable!("a microfacet description builds a model"),
+                Err(e) => Err(format!("--material.{e}")),
+            }
         };
         let (plain, comp) = (build(false)?, build(true)?);
         let points = mus()

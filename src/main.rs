@@ -1,7 +1,7 @@
 //! The `specula` command line.
 
 use clap::{Parser, Subcommand};
-use specula::render::{depth_aov, normal_aov, render_scene, RenderSettings};
+use specula::render::{depth_aov, id_aov, normal_aov, render_scene, RenderSettings};
 use specula::scene::{load_scene, LoadedScene};
 use specula::{demo, output};
 use specula_raster::frame::ShadePath;
@@ -152,6 +152,13 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     } else {
         ShadePath::Simd
     };
+    for aov in &aovs {
+        match aov {
+            Aov::Depth(_) => settings.buffers.depth = true,
+            Aov::Normal(_) => settings.buffers.normal = true,
+            Aov::Id(_) => settings.buffers.id = true,
+        }
+    }
     settings.target()?;
     let mut outs: Vec<&Path> = vec![&a.output];
     outs.extend(a.exr.as_deref());
@@ -176,17 +183,9 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     let (tw, th) = (r.frame.target.width, r.frame.target.height);
     for aov in &aovs {
         match aov {
-            Aov::Depth(p) => {
-                let d: Vec<[f32; 3]> = depth_aov(&r.frame).into_iter().map(|v| [v; 3]).collect();
-                output::write_exr(p, tw, th, &d)?
-            }
-            Aov::Normal(p) => output::write_exr(p, tw, th, &normal_aov(&scene, &r.frame))?,
-            Aov::Id(p) => output::write_ids(
-                p,
-                tw,
-                th,
-                &r.frame.target.to_row_major(&r.frame.visibility.vis.id),
-            )?,
+            Aov::Depth(p) => output::write_exr(p, tw, th, &depth_aov(&r.frame)?)?,
+            Aov::Normal(p) => output::write_exr(p, tw, th, &normal_aov(&r.frame)?)?,
+            Aov::Id(p) => output::write_ids(p, tw, th, id_aov(&r.frame)?)?,
         }
     }
     r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;

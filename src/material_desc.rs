@@ -8,7 +8,8 @@ use specula_core::models::microfacet::clamp_alpha;
 use specula_core::models::{
     Fresnel, Lambert, MetallicRoughness, Microfacet, MicrofacetParams, Ndf, Smith,
 };
-use specula_core::{Material, Model};
+use specula_core::Model;
+use specula_raster::{Lit, Material, Unlit};
 
 /// One material description; `model` selects the variant.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -17,6 +18,22 @@ pub enum MaterialDesc {
     Lambert(LambertDesc),
     MetallicRoughness(MetallicRoughnessDesc),
     Microfacet(MicrofacetDesc),
+    Unlit(UnlitDesc),
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+/// `unlit`: emits color × intensity, ignores lights.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct UnlitDesc {
+    pub color: [f32; 3],
+    #[serde(default = "one")]
+    pub intensity: f32,
+    #[serde(default)]
+    pub double_sided: bool,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -184,6 +201,14 @@ impl MicrofacetDesc {
     }
 }
 
+/// What a material description builds: a physically based model (shaded
+/// by [`Lit`]) or an [`Unlit`] surface.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Shading {
+    Lit(Model),
+    Unlit(Unlit),
+}
+
 impl MaterialDesc {
     /// Validates every field and builds the runtime material. Errors name the
     /// field (the caller adds where the material came from); adjustments
@@ -194,7 +219,41 @@ impl MaterialDesc {
         tables: Tables,
         warnings: &mut Vec<String>,
     ) -> Result<Material, String> {
+        let (shading, double_sided) = self.build_shading(tables, warnings)?;
+        Ok(match shading {
+            Shading::Lit(model) => Material::new(name, Lit { model }, double_sided),
+            Shading::Unlit(u) => Material::new(name, u, double_sided),
+        })
+    }
+
+    /// [`MaterialDesc::build`] before it becomes a shader (what `specula
+    /// eval` evaluates), and whether it is double-sided.
+    pub fn build_shading(
+        &self,
+        tables: Tables,
+        warnings: &mut Vec<String>,
+    ) -> Result<(Shading, bool), String> {
         let (model, double_sided) = match self {
+            MaterialDesc::Unlit(d) => {
+                check_color("color", d.color)?;
+                if !(d.intensity.is_finite() && d.intensity >= 0.0) {
+                    return Err(format!(
+                        "intensity: must be finite and ≥ 0, got {}",
+                        d.intensity
+                    ));
+                }
+                if d.color.iter().any(|c| !(c * d.intensity).is_finite()) {
+                    return Err(format!(
+                        "intensity: color × intensity overflows f32 ({:?} × {})",
+                        d.color, d.intensity
+                    ));
+                }
+                let u = Unlit {
+                    color: d.color,
+                    intensity: d.intensity,
+                };
+                return Ok((Shading::Unlit(u), d.double_sided));
+            }
             MaterialDesc::Lambert(d) => {
                 check_color("base_color", d.base_color)?;
                 (
@@ -230,10 +289,6 @@ impl MaterialDesc {
                 (Model::Microfacet(m), d.double_sided)
             }
         };
-        Ok(Material {
-            name: name.to_string(),
-            model,
-            double_sided,
-        })
+        Ok((Shading::Lit(model), double_sided))
     }
 }

@@ -3,10 +3,9 @@
 
 use crate::scene::LoadedScene;
 use serde::Serialize;
-use specula_raster::frame::{render, render_into, Frame, FrameStats, ShadePath};
-use specula_raster::post::{downsample, resolve_ldr, Tonemap};
-use specula_raster::resolve::ResolveContext;
-use specula_raster::{Target, MISS};
+use specula_raster::frame::{render_into, render_with, Frame, FrameStats, ShadePath};
+use specula_raster::post::{downsample, Post, Tonemap};
+use specula_raster::{BufferSet, Target};
 use std::time::Instant;
 
 #[derive(Clone, Debug)]
@@ -21,6 +20,8 @@ pub struct RenderSettings {
     pub threads: Option<usize>,
     /// Frames to render (timed separately); the last one is kept.
     pub repeat: u32,
+    /// Optional frame buffers to keep for AOVs (post stages add theirs).
+    pub buffers: BufferSet,
 }
 
 impl RenderSettings {
@@ -35,7 +36,13 @@ impl RenderSettings {
             path: ShadePath::Simd,
             threads: None,
             repeat: 1,
+            buffers: BufferSet::default(),
         }
+    }
+
+    /// The post stages of a frame: resolve, exposure, tone map, encode.
+    pub fn post(&self) -> Post {
+        Post::standard(self.ssaa, self.exposure, self.tonemap)
     }
 
     /// The supersampled render target; checks sizes before anything is
@@ -70,7 +77,8 @@ pub struct FrameTimes {
     pub bin: f64,
     pub raster: f64,
     pub shade: f64,
-    /// Supersampling resolve + tone mapping + sRGB encode (in memory).
+    /// The post stages: supersampling resolve + exposure + tone mapping +
+    /// sRGB encode (in memory).
     pub post: f64,
     /// The whole frame: vertex through post.
     pub frame: f64,
@@ -116,7 +124,8 @@ pub struct Rendered {
 impl Rendered {
     /// Linear HDR, row-major, after the supersampling resolve (for EXR).
     pub fn hdr(&self) -> Vec<[f32; 3]> {
-        downsample(&self.frame.target, &self.frame.color, self.ssaa).2
+        let b = &self.frame.buffers;
+        downsample(&b.color, b.width, b.height, self.ssaa).interleaved()
     }
 }
 
@@ -145,6 +154,9 @@ pub fn render_scene(
         .build()
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
     let repeat = settings.repeat.max(1);
+    let post = settings.post();
+    post.validate(target.width, target.height)?;
+    let buffers = settings.buffers.union(post.buffers());
     pool.install(|| {
         let mut frames = Vec::new();
         let mut last: Option<(Vec<u8>, Frame)> = None;
@@ -157,16 +169,10 @@ pub fn render_scene(
                     render_into(&scene.data, &mut f, settings.path);
                     f
                 }
-                None => render(&scene.data, target, settings.path),
+                None => render_with(&scene.data, target, settings.path, buffers),
             };
             let tp = Instant::now();
-            let ldr = resolve_ldr(
-                &frame.target,
-                &frame.color,
-                settings.ssaa,
-                settings.tonemap,
-                settings.exposure,
-            );
+            let ldr = post.run(&frame.buffers)?.ldr.unwrap_or_default();
             let post = tp.elapsed().as_secs_f64() * 1e3;
             let total = t0.elapsed().as_secs_f64() * 1e3;
             let t = frame.stats.times;
@@ -181,7 +187,7 @@ pub fn render_scene(
             });
             last = Some((ldr, frame));
         }
-        let (ldr, frame) = last.expect("at least one frame");
+        let (ldr, frame) = last.ok_or("no frame rendered")?;
         let frame_ms: Vec<f64> = frames.iter().map(|f| f.frame).collect();
         let stats = run_stats(
             &frame.stats,
@@ -297,55 +303,31 @@ impl RunStats {
 }
 
 /// Linear view depth per sample (+inf where nothing is hit), row-major at
-/// the supersampled size.
-pub fn depth_aov(frame: &Frame) -> Vec<f32> {
-    let t = &frame.target;
-    let v = &frame.visibility;
-    let tiled: Vec<f32> = (0..t.buffer_len())
-        .map(|i| {
-            let id = v.vis.id[i];
-            if id == MISS {
-                return f32::INFINITY;
-            }
-            let tile = i / specula_raster::target::TILE_PIXELS;
-            let (tx, ty) = t.tile_origin(tile);
-            let local = i % specula_raster::target::TILE_PIXELS;
-            let (x, y) = (
-                tx + (local % specula_raster::TILE) as u32,
-                ty + (local / specula_raster::TILE) as u32,
-            );
-            let p = &v.planes[id as usize];
-            let ks = specula_raster::setup::TriPlanes::eval(
-                &p.ks,
-                p.origin,
-                x as f32 + 0.5,
-                y as f32 + 0.5,
-            );
-            1.0 / ks
-        })
-        .collect();
-    t.to_row_major(&tiled)
+/// the supersampled size; the frame must hold the depth buffer.
+pub fn depth_aov(frame: &Frame) -> Result<Vec<[f32; 3]>, String> {
+    let d = &frame.buffers.depth;
+    if d.is_empty() {
+        return Err("the depth AOV needs the depth buffer (BufferSet::depth)".into());
+    }
+    Ok(d.iter().map(|&v| [v; 3]).collect())
 }
 
-/// World-space shading normal per sample (0 where nothing is hit).
-pub fn normal_aov(scene: &LoadedScene, frame: &Frame) -> Vec<[f32; 3]> {
-    let t = &frame.target;
-    let v = &frame.visibility;
-    let ctx = ResolveContext {
-        scene: &scene.data,
-        planes: &v.planes,
-        view: &v.view,
-    };
-    let ids = t.to_row_major(&v.vis.id);
-    ids.iter()
-        .enumerate()
-        .map(|(i, &id)| {
-            if id == MISS {
-                return [0.0; 3];
-            }
-            let (x, y) = (i as u32 % t.width, i as u32 / t.width);
-            let f = ctx.resolve::<f32>(x, y, &specula_raster::resolve::PacketTris::new(&[id], 1));
-            [f.n.x, f.n.y, f.n.z]
-        })
-        .collect()
+/// World-space shading normal per sample (0 where nothing is hit); the
+/// frame must hold the normal buffer.
+pub fn normal_aov(frame: &Frame) -> Result<Vec<[f32; 3]>, String> {
+    let n = &frame.buffers.normal;
+    if n.is_empty() {
+        return Err("the normal AOV needs the normal buffer (BufferSet::normal)".into());
+    }
+    Ok((0..n.len()).map(|i| n.get(i)).collect())
+}
+
+/// Visibility-buffer ids per sample, row-major; the frame must hold the id
+/// buffer.
+pub fn id_aov(frame: &Frame) -> Result<&[u32], String> {
+    let ids = &frame.buffers.id;
+    if ids.is_empty() {
+        return Err("the id AOV needs the id buffer (BufferSet::id)".into());
+    }
+    Ok(ids)
 }

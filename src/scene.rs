@@ -9,9 +9,10 @@ use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
 use serde::Deserialize;
 use specula_core::light::Light;
 use specula_core::models::MetallicRoughness;
-use specula_core::{Material, Model};
+use specula_core::Model;
 use specula_raster::post::Tonemap;
 use specula_raster::{Camera, SceneData};
+use specula_raster::{GeometryPass, Lit, Material};
 use std::collections::{BTreeMap, HashMap};
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -196,6 +197,57 @@ enum LightDesc {
         /// Irradiance on a surface facing the light, RGB.
         irradiance: [f32; 3],
     },
+    Polygon {
+        /// A planar convex polygon, 3 to 8 vertices, counter-clockwise seen
+        /// from the side it lights.
+        vertices: Vec<[f32; 3]>,
+        /// Radiance (W/m²/sr), RGB.
+        radiance: [f32; 3],
+    },
+}
+
+/// Checks a polygon light's vertices: 3..=MAX_POLYGON_VERTICES finite
+/// points, planar and convex with a non-zero area (so its orientation and
+/// every edge's plane are defined).
+fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), String> {
+    use specula_core::light::MAX_POLYGON_VERTICES;
+    if !(3..=MAX_POLYGON_VERTICES).contains(&v.len()) {
+        return Err(format!(
+            "{field}: a polygon light needs 3 to {MAX_POLYGON_VERTICES} vertices, got {}",
+            v.len()
+        ));
+    }
+    for (k, p) in v.iter().enumerate() {
+        check_finite(&format!("{field}[{k}]"), p)?;
+    }
+    let p: Vec<glam::DVec3> = v
+        .iter()
+        .map(|p| glam::DVec3::from(p.map(|c| c as f64)))
+        .collect();
+    // Newell's normal: twice the area vector of a planar polygon.
+    let mut n = glam::DVec3::ZERO;
+    for k in 0..p.len() {
+        n += p[k].cross(p[(k + 1) % p.len()]);
+    }
+    let size = p.iter().map(|q| (*q - p[0]).length()).fold(0.0, f64::max);
+    // Finite vertices (checked above) give a finite normal.
+    if size == 0.0 || n.length() <= 1e-9 * size * size {
+        return Err(format!("{field}: the polygon has no area"));
+    }
+    let n = n.normalize();
+    for (k, q) in p.iter().enumerate() {
+        if (*q - p[0]).dot(n).abs() > 1e-4 * size {
+            return Err(format!("{field}[{k}]: the polygon is not planar"));
+        }
+        let (a, b) = (p[(k + 1) % p.len()], p[(k + 2) % p.len()]);
+        if (a - *q).cross(b - a).dot(n) <= 0.0 {
+            return Err(format!(
+                "{field}: the polygon is not convex (or repeats a vertex) at vertex {}",
+                (k + 1) % p.len()
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// A scene-loading error: where, and what.
@@ -275,15 +327,12 @@ fn check_segments(field: &str, v: u32, min: u32) -> Result<(), String> {
 
 /// The material used where neither the scene nor an MTL gives one.
 fn default_material() -> Material {
-    Material {
-        name: "default".into(),
-        model: Model::MetallicRoughness(MetallicRoughness {
-            base_color: [0.8, 0.8, 0.8],
-            roughness: 0.5,
-            metallic: 0.0,
-        }),
-        double_sided: false,
-    }
+    let model = Model::MetallicRoughness(MetallicRoughness {
+        base_color: [0.8, 0.8, 0.8],
+        roughness: 0.5,
+        metallic: 0.0,
+    });
+    Material::new("default", Lit { model }, false)
 }
 
 /// The metallic-roughness reading of an MTL material: `Kd` base colour, `Pr`
@@ -320,15 +369,12 @@ fn mtl_material(m: &tobj::Material) -> Result<Material, String> {
         (None, Some(ns)) if ns.is_finite() && ns >= 0.0 => (2.0 / (ns + 2.0)).sqrt().sqrt(),
         _ => 0.5,
     };
-    Ok(Material {
-        name: m.name.clone(),
-        model: Model::MetallicRoughness(MetallicRoughness {
-            base_color,
-            roughness,
-            metallic: param("Pm")?.unwrap_or(0.0),
-        }),
-        double_sided: false,
-    })
+    let model = Model::MetallicRoughness(MetallicRoughness {
+        base_color,
+        roughness,
+        metallic: param("Pm")?.unwrap_or(0.0),
+    });
+    Ok(Material::new(&m.name, Lit { model }, false))
 }
 
 /// Parses and builds a scene from its text; `read` supplies the files it
@@ -412,6 +458,7 @@ pub fn load_scene_str(
         triangles: Vec::new(),
         tri_material: Vec::new(),
         materials: Vec::new(),
+        geometry: Vec::new(),
         lights: Vec::new(),
         environment: None,
         background: o.background,
@@ -574,6 +621,14 @@ pub fn load_scene_str(
                     irradiance: *irradiance,
                 }
             }
+            LightDesc::Polygon { vertices, radiance } => {
+                check_polygon(&format!("{field}.vertices"), vertices).map_err(&err)?;
+                check_radiometric(&format!("{field}.radiance"), *radiance).map_err(&err)?;
+                Light::Polygon {
+                    vertices: vertices.clone(),
+                    radiance: *radiance,
+                }
+            }
         });
     }
     if let Some(e) = &desc.environment {
@@ -581,6 +636,7 @@ pub fn load_scene_str(
         data.environment = Some(e.uniform);
     }
     data.materials = materials;
+    data.geometry = vec![GeometryPass::main(data.triangles.len())];
     data.validate().map_err(err)?;
     Ok(LoadedScene {
         data,

@@ -103,3 +103,24 @@ fn values_errors_and_order() {
         assert!((g - want).abs() < 1e-5 * want, "{g} vs {want}");
     }
 }
+
+#[test]
+fn unlit_reflects_nothing_and_emits_its_radiance_above_the_horizon() {
+    let m = r#"{"model": "unlit", "color": [0.25, 0.5, 1.0], "intensity": 3.0}"#;
+    let out = eval(&format!(
+        "{{\"material\": {m}, \"wi\": [0.3, 0, 1], \"wo\": [-0.2, 0.1, 1]}}\n\
+         {{\"material\": {m}, \"wi\": [0.3, 0, 1], \"wo\": [0, 0.1, -1]}}\n\
+         {{\"material\": {{\"model\": \"unlit\", \"color\": [1, 1, 1], \"intensity\": -1}}, \"wi\": [0, 0, 1], \"wo\": [0, 0, 1]}}\n"
+    ));
+    assert_eq!(f(&out[0]), [0.0; 3]);
+    let e: Vec<f64> = out[0]["emission"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|v| v.as_f64().unwrap())
+        .collect();
+    assert_eq!(e, [0.75, 1.5, 3.0]);
+    assert_eq!(out[1]["emission"], serde_json::json!([0.0, 0.0, 0.0]));
+    let err = out[2]["error"].as_str().unwrap();
+    assert!(err.starts_with("line 3: material.intensity"), "{err}");
+}

@@ -96,13 +96,14 @@ fn camera_inside_a_closed_mesh() {
         "a pixel sees no wall from inside the cube"
     );
     let f = render(&double.data, Target::new(64, 48).unwrap(), ShadePath::Simd);
-    let lit = f.color.r.iter().filter(|v| **v > 0.0).count();
+    let lit = f.buffers.color.r.iter().filter(|v| **v > 0.0).count();
     assert!(f
+        .buffers
         .color
         .r
         .iter()
-        .chain(&f.color.g)
-        .chain(&f.color.b)
+        .chain(&f.buffers.color.g)
+        .chain(&f.buffers.color.b)
         .all(|v| v.is_finite()));
     assert!(
         lit > 64 * 48 / 2,
@@ -145,11 +146,12 @@ fn nan_and_huge_vertices_are_skipped_and_counted_and_leave_no_nan_pixel() {
     assert_eq!(c.skipped_invalid, 4, "{c:?}");
     assert_eq!(c.drawn, 1, "{c:?}");
     assert!(f
+        .buffers
         .color
         .r
         .iter()
-        .chain(&f.color.g)
-        .chain(&f.color.b)
+        .chain(&f.buffers.color.g)
+        .chain(&f.buffers.color.b)
         .all(|v| v.is_finite()));
     assert!(f.visibility.vis.id.contains(&0));
 }
@@ -205,7 +207,7 @@ base_color = [1.0, 1.0, 1.0]
             let p = eye + d * (-eye.y / d.y);
             // mesh::plane: s along +z, t along +x, both from −100.
             let want = [(p.z + 100.0) / 200.0, (p.x + 100.0) / 200.0];
-            let tris = specula_raster::resolve::PacketTris::new(&[id], 1);
+            let tris = specula_raster::resolve::PacketTris::new(&[id], 1, &s.data);
             let frag = ctx.resolve::<f32>(px, py, &tris);
             let surf = ctx.surface::<f32>(&tris, &frag);
             let got = glam::DVec2::new(surf.uv[0] as f64, surf.uv[1] as f64);

@@ -22,7 +22,7 @@ fn simd_vs_scalar(scene: &LoadedScene) -> (f64, usize) {
     let simd = render_scene(scene, &s, 0.0).expect("simd");
     s.path = ShadePath::Scalar;
     let scalar = render_scene(scene, &s, 0.0).expect("scalar");
-    let (a, b) = (&simd.frame.color, &scalar.frame.color);
+    let (a, b) = (&simd.frame.buffers.color, &scalar.frame.buffers.color);
     let mut worst = 0.0f64;
     for (x, y) in
         a.r.iter()

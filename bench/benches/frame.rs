@@ -6,6 +6,8 @@
 //! - `shade/<model>/simd`, `shade/<model>/scalar`: resolve + shading of the
 //!   same visibility buffer, 8 pixels per packet vs one pixel at a time, for
 //!   metallic_roughness (the scene's own) and microfacet (GGX + conductor);
+//! - `post/fused`, `post/stages`: the standard post list (resolve, exposure,
+//!   tone map, sRGB encode) in one fused pass vs stage by stage;
 //! - `frame/full`: the whole frame, tone mapping and PNG encode included.
 //!
 //! Throughput is reported in pixels. Run: `cargo bench -p specula-bench`.
@@ -14,8 +16,11 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use specula::render::{render_scene, RenderSettings};
 use specula_bench::embree::EmbreeScene;
 use specula_bench::{benchmark_scene, benchmark_scene_microfacet, pool};
-use specula_raster::frame::{shade_into, visibility, visibility_into, FrameStats, ShadePath};
-use specula_raster::shade::ColorBuffer;
+use specula_raster::frame::{
+    render, shade_into, visibility, visibility_into, FrameStats, ShadePath,
+};
+use specula_raster::post::Post;
+use specula_raster::{BufferSet, FrameBuffers};
 
 fn benches(c: &mut Criterion) {
     let scene = benchmark_scene();
@@ -56,8 +61,8 @@ fn benches(c: &mut Criterion) {
     for threads in [1, 2] {
         let p = pool(threads);
         let vis = p.install(|| visibility(&scene.data, &target, &mut FrameStats::default()));
-        // Steady state: the colour buffer is reused.
-        let mut color = ColorBuffer::new(&target);
+        // Steady state: the frame buffers are reused.
+        let mut color = FrameBuffers::new(&target, BufferSet::default());
         for (model, sc) in [("metallic_roughness", &scene), ("microfacet", &microfacet)] {
             for (name, path) in [("simd", ShadePath::Simd), ("scalar", ShadePath::Scalar)] {
                 let id = BenchmarkId::new(format!("{model}/{name}"), threads);
@@ -69,6 +74,23 @@ fn benches(c: &mut Criterion) {
                 });
             }
         }
+    }
+    g.finish();
+
+    let mut g = c.benchmark_group("post");
+    g.throughput(Throughput::Elements(pixels));
+    g.sample_size(20);
+    let p = pool(2);
+    let frame = p.install(|| render(&scene.data, target, ShadePath::Simd));
+    let fused = settings.post();
+    let staged = Post {
+        fuse: false,
+        ..fused.clone()
+    };
+    for (name, post) in [("fused", &fused), ("stages", &staged)] {
+        g.bench_function(BenchmarkId::new(name, 2), |b| {
+            b.iter(|| p.install(|| post.run(&frame.buffers).expect("post")))
+        });
     }
     g.finish();
 

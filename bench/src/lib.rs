@@ -22,9 +22,13 @@ pub fn benchmark_scene() -> LoadedScene {
 pub fn benchmark_scene_microfacet() -> LoadedScene {
     use specula_core::models::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
     use specula_core::Model;
+    use specula_raster::Lit;
     let mut s = benchmark_scene();
     for m in &mut s.data.materials {
-        if let Model::MetallicRoughness(mr) = &m.model {
+        let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() else {
+            continue;
+        };
+        if let Model::MetallicRoughness(mr) = &lit.model {
             let params = MicrofacetParams {
                 ndf: Ndf::Ggx,
                 alpha: mr.alpha(),
@@ -35,7 +39,8 @@ pub fn benchmark_scene_microfacet() -> LoadedScene {
                 },
                 diffuse: mr.diffuse_color(),
             };
-            m.model = Model::Microfacet(Microfacet::new(params, None));
+            let model = Model::Microfacet(Microfacet::new(params, None));
+            *m = specula_raster::Material::new(&m.name, Lit { model }, m.double_sided);
         }
     }
     s

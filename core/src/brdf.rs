@@ -1,6 +1,20 @@
 //! The interface every material model implements, and the dispatch from the
-//! runtime `Material` value to monomorphized kernels.
+//! runtime [`Model`] value to monomorphized kernels.
+//!
+//! Shading is split in two steps, so that work that depends only on the
+//! pixel is done once per packet however many lights there are:
+//!
+//! 1. [`Brdf::prepare`] takes the view direction `wo` in the local shading
+//!    frame ([`ShadingFrame`]: tangent +X, bitangent +Y, normal +Z) and
+//!    returns the model's per-pixel state (μo, table lookups such as E(μo),
+//!    later LTC matrices and texture samples);
+//! 2. each light then asks that state for what it needs: a delta light for
+//!    f(wi, wo) cos θi at one local direction ([`Brdf::f_cos_local`]), the
+//!    uniform environment for the directional albedo
+//!    ([`Brdf::albedo_local`]), a polygon light for the integral over the
+//!    polygon ([`Brdf::polygon_local`], where the model has one).
 
+use crate::light::PolygonLocal;
 use crate::models::{Lambert, MetallicRoughness, Microfacet};
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
@@ -10,7 +24,87 @@ use crate::vec3::{Rgb, V3};
 /// with a warning where the scene is read.)
 pub const ALPHA_MIN: f32 = 1e-3;
 
-/// The angles every microfacet model starts from, per lane.
+/// Smallest cosine the models divide by: directions at or below the horizon
+/// are masked out by `above`, and this floor only keeps those lanes finite.
+const COS_FLOOR: f64 = 1e-7;
+
+/// An orthonormal frame per lane: tangent `t` (+X of the local frame),
+/// bitangent `b` (+Y) and normal `n` (+Z), right-handed (b = n × t).
+#[derive(Clone, Copy, Debug)]
+pub struct ShadingFrame<R> {
+    pub t: V3<R>,
+    pub b: V3<R>,
+    pub n: V3<R>,
+}
+
+impl<R: Real> ShadingFrame<R> {
+    /// Some frame around unit `n`, for isotropic models (any tangent will
+    /// do), without branches or normalization. [Duff17]:
+    /// s = sign(n.z), a = −1/(s + n.z), c = n.x n.y a,
+    /// t = (1 + s n.x² a, s c, −s n.x), b = (c, s + n.y² a, −n.y).
+    #[inline(always)]
+    pub fn from_normal(n: V3<R>) -> ShadingFrame<R> {
+        let s = R::select(n.z.ge(R::ZERO), R::ONE, -R::ONE);
+        // |s + n.z| ≥ 1, so the reciprocal is always of a normal number.
+        let a = -(s + n.z).rcp();
+        let c = n.x * n.y * a;
+        ShadingFrame {
+            t: V3::new((s * n.x * n.x).mul_add(a, R::ONE), s * c, -s * n.x),
+            b: V3::new(c, (n.y * n.y).mul_add(a, s), -n.y),
+            n,
+        }
+    }
+
+    /// The frame of unit `n` and a unit tangent `t` orthogonal to it;
+    /// `sign` = ±1 flips the bitangent (mirrored uv layouts). The frame is
+    /// then left-handed where sign = −1, which is what the texture layout
+    /// means; local coordinates stay (t, b, n) components.
+    #[inline(always)]
+    pub fn from_normal_tangent(n: V3<R>, t: V3<R>, sign: R) -> ShadingFrame<R> {
+        ShadingFrame {
+            t,
+            b: n.cross(t) * sign,
+            n,
+        }
+    }
+
+    /// `v` in local coordinates (components along t, b, n).
+    #[inline(always)]
+    pub fn to_local(&self, v: V3<R>) -> V3<R> {
+        V3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+
+    /// Local coordinates back to the frame's space.
+    #[inline(always)]
+    pub fn to_world(&self, v: V3<R>) -> V3<R> {
+        self.t * v.x + self.b * v.y + self.n * v.z
+    }
+}
+
+/// What every model knows of the view direction, per lane.
+#[derive(Clone, Copy, Debug)]
+pub struct Outgoing<R: Real> {
+    /// Unit view direction in the local frame.
+    pub wo: V3<R>,
+    /// μo = cos θo, floored at 1e-7 (see `above`).
+    pub cos_o: R,
+    /// wo strictly above the horizon; models give zero in other lanes.
+    pub above: R::Mask,
+}
+
+impl<R: Real> Outgoing<R> {
+    #[inline(always)]
+    pub fn new(wo: V3<R>) -> Outgoing<R> {
+        Outgoing {
+            wo,
+            cos_o: wo.z.max(R::splat(COS_FLOOR)),
+            above: wo.z.gt(R::ZERO),
+        }
+    }
+}
+
+/// The angles every microfacet model starts from, per lane, for one light
+/// direction against a prepared view direction (both local).
 #[derive(Clone, Copy, Debug)]
 pub struct HalfAngles<R: Real> {
     /// n·wi and n·wo, floored at 1e-7 (see `above`).
@@ -26,50 +120,101 @@ pub struct HalfAngles<R: Real> {
     pub sin2_h: R,
     /// cos θd = wi·h, the Fresnel angle.
     pub cos_d: R,
+    /// The unnormalized half vector s = wi + wo (local) and 1/|s|², for
+    /// models that need h's direction (anisotropic NDFs: h = s/|s|).
+    pub s: V3<R>,
+    pub inv_len2: R,
 }
 
 impl<R: Real> HalfAngles<R> {
+    /// From a unit local `wi` and the prepared view direction.
     #[inline(always)]
-    pub fn new(n: V3<R>, wi: V3<R>, wo: V3<R>) -> HalfAngles<R> {
-        let cos_i = n.dot(wi);
-        let cos_o = n.dot(wo);
-        let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
-        let tiny = R::splat(1e-7);
+    pub fn new(wi: V3<R>, o: &Outgoing<R>) -> HalfAngles<R> {
+        let cos_i = wi.z;
+        let above = cos_i.gt(R::ZERO) & o.above;
         // s = wi + wo is zero only for opposite directions, which `above`
         // excludes. For unit wi, wo: |s|² = 2 (1 + wi·wo), so
         // cos θd = wi·s / |s| = |s| / 2 — no normalized h needed.
-        let s = wi + wo;
+        let s = wi + o.wo;
         let len2 = s.length_squared();
         let inv_len2 = len2.rcp();
-        let c = n.dot(s);
         HalfAngles {
-            cos_i: cos_i.max(tiny),
-            cos_o: cos_o.max(tiny),
+            cos_i: cos_i.max(R::splat(COS_FLOOR)),
+            cos_o: o.cos_o,
             above,
-            cos2_h: c * c * inv_len2,
-            sin2_h: n.cross(s).length_squared() * inv_len2,
+            cos2_h: s.z * s.z * inv_len2,
+            sin2_h: s.x.mul_add(s.x, s.y * s.y) * inv_len2,
             cos_d: len2 * len2.rsqrt() * R::HALF,
+            s,
+            inv_len2,
         }
     }
 }
 
-/// A BRDF in any frame: `n` the unit shading normal, `wi` toward the light,
-/// `wo` toward the viewer, both unit length and pointing away from the surface.
+/// A BRDF in its local shading frame (normal +Z, tangent +X); directions
+/// are unit length and point away from the surface, `wi` toward the light,
+/// `wo` toward the viewer.
 pub trait Brdf: Send + Sync {
-    /// The BRDF value f(wi, wo), no cosine folded in; zero when either
-    /// direction is at or below the horizon.
-    fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R>;
+    /// What the model computes once per pixel from the view direction.
+    type Prepared<R: Real>: Copy;
 
-    /// f(wi, wo) · max(0, n·wi): the reflected radiance per unit radiance
+    /// The model reads the tangent (anisotropic): the shading pass then
+    /// builds the frame from the mesh's tangents instead of any frame
+    /// around the normal.
+    const ANISOTROPIC: bool = false;
+
+    /// The model integrates polygon lights ([`Brdf::polygon_local`]).
+    const POLYGON_LIGHTS: bool = false;
+
+    /// Per-pixel state from the unit local view direction.
+    fn prepare<R: Real>(&self, wo: V3<R>) -> Self::Prepared<R>;
+
+    /// f(wi, wo) for a unit local `wi`, no cosine folded in; zero when
+    /// either direction is at or below the horizon.
+    fn f_local<R: Real>(&self, p: &Self::Prepared<R>, wi: V3<R>) -> Rgb<R>;
+
+    /// f(wi, wo) · max(0, cos θi): the reflected radiance per unit radiance
     /// arriving from `wi`.
     #[inline(always)]
-    fn f_cos<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        self.f(n, wi, wo) * n.dot(wi).max(R::ZERO)
+    fn f_cos_local<R: Real>(&self, p: &Self::Prepared<R>, wi: V3<R>) -> Rgb<R> {
+        self.f_local(p, wi) * wi.z.max(R::ZERO)
     }
 
-    /// Directional albedo ρ(wo) = ∫ f(wi, wo) cos θi dωi over the hemisphere:
-    /// the reflected radiance under a uniform white environment of radiance 1.
-    fn albedo<R: Real>(&self, n: V3<R>, wo: V3<R>) -> Rgb<R>;
+    /// Directional albedo ρ(wo) = ∫ f(wi, wo) cos θi dωi over the
+    /// hemisphere: the reflected radiance under a uniform white environment
+    /// of radiance 1.
+    fn albedo_local<R: Real>(&self, p: &Self::Prepared<R>) -> Rgb<R>;
+
+    /// ∫ over the polygon of f(wi, wo) cos θi dωi: the reflected radiance
+    /// per unit radiance of a polygon light (vertices in the local frame,
+    /// relative to the shading point). Called only for models whose
+    /// [`Brdf::POLYGON_LIGHTS`] is true: scenes are checked when they load,
+    /// and a polygon light on any other model is an error there.
+    #[inline(always)]
+    fn polygon_local<R: Real>(&self, _p: &Self::Prepared<R>, _poly: &PolygonLocal<R>) -> Rgb<R> {
+        Rgb::zero()
+    }
+
+    /// f(wi, wo) for directions in any frame whose unit normal is `n` (an
+    /// isotropic model's value does not depend on the tangent).
+    #[inline(always)]
+    fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
+        self.f_in(&ShadingFrame::from_normal(n), wi, wo)
+    }
+
+    /// f(wi, wo) for directions given in the frame's own space.
+    #[inline(always)]
+    fn f_in<R: Real>(&self, frame: &ShadingFrame<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
+        let p = self.prepare(frame.to_local(wo));
+        self.f_local(&p, frame.to_local(wi))
+    }
+
+    /// Directional albedo at `wo`, around unit normal `n`.
+    #[inline(always)]
+    fn albedo<R: Real>(&self, n: V3<R>, wo: V3<R>) -> Rgb<R> {
+        let frame = ShadingFrame::from_normal(n);
+        self.albedo_local(&self.prepare(frame.to_local(wo)))
+    }
 }
 
 /// A material model, chosen at run time. Adding a model means adding a variant
@@ -79,16 +224,6 @@ pub enum Model {
     Lambert(Lambert),
     MetallicRoughness(MetallicRoughness),
     Microfacet(Microfacet),
-}
-
-/// A material: a model plus the properties the rasterizer needs.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
-    pub model: Model,
-    /// Back faces are drawn (and shaded with the normal flipped toward the
-    /// viewer) instead of culled.
-    pub double_sided: bool,
 }
 
 /// Code generic over the model: `Model::visit` calls `visit` with the concrete
@@ -109,15 +244,42 @@ impl Model {
         }
     }
 
-    /// The BRDF value f(wi, wo) for one direction pair (any precision).
-    pub fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        struct F<R: Real>(V3<R>, V3<R>, V3<R>);
-        impl<R: Real> BrdfVisitor for F<R> {
+    /// The BRDF value f(wi, wo) for one direction pair (any precision),
+    /// directions in the frame's space.
+    pub fn f_in<R: Real>(&self, frame: &ShadingFrame<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
+        struct F<'a, R: Real>(&'a ShadingFrame<R>, V3<R>, V3<R>);
+        impl<R: Real> BrdfVisitor for F<'_, R> {
             type Output = Rgb<R>;
             fn visit<B: Brdf>(self, b: &B) -> Rgb<R> {
-                b.f(self.0, self.1, self.2)
+                b.f_in(self.0, self.1, self.2)
             }
         }
-        self.visit(F(n, wi, wo))
+        self.visit(F(frame, wi, wo))
+    }
+
+    /// [`Model::f_in`] around unit normal `n`, for isotropic use.
+    pub fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
+        self.f_in(&ShadingFrame::from_normal(n), wi, wo)
+    }
+
+    /// Whether the model integrates polygon lights.
+    pub fn polygon_lights(&self) -> bool {
+        struct P;
+        impl BrdfVisitor for P {
+            type Output = bool;
+            fn visit<B: Brdf>(self, _: &B) -> bool {
+                B::POLYGON_LIGHTS
+            }
+        }
+        self.visit(P)
+    }
+
+    /// The model's name as scene files write it.
+    pub fn name(&self) -> &'static str {
+        match self {
+            Model::Lambert(_) => "lambert",
+            Model::MetallicRoughness(_) => "metallic_roughness",
+            Model::Microfacet(_) => "microfacet",
+        }
     }
 }

@@ -17,7 +17,7 @@ pub mod ndf;
 pub mod real;
 pub mod vec3;
 
-pub use brdf::{Brdf, BrdfVisitor, Material, Model};
+pub use brdf::{Brdf, BrdfVisitor, Model, Outgoing, ShadingFrame};
 pub use real::{Mask, Real};
 pub use vec3::{Rgb, V3};
 pub use wide::f32x8;

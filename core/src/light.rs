@@ -1,6 +1,13 @@
-//! Punctual lights.
+//! Light sources as the shading pass sees them (world space, linear RGB).
+//! The uniform environment is not here: it is the scene's `environment`,
+//! met through each model's directional albedo.
 
-/// A light as the shading pass uses it (world space, linear RGB).
+use crate::real::Real;
+use crate::vec3::V3;
+
+/// Most vertices a polygon light may have.
+pub const MAX_POLYGON_VERTICES: usize = 8;
+
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// Radiant intensity I (W/sr) at `position`; irradiance I / d² (inverse square).
@@ -14,4 +21,37 @@ pub enum Light {
         to_light: [f32; 3],
         irradiance: [f32; 3],
     },
+    /// A planar convex polygon of uniform radiance L (W/m²/sr), emitting
+    /// from its front side: the side from which its vertices run
+    /// counter-clockwise (like front faces). Validated where scenes load.
+    Polygon {
+        vertices: Vec<[f32; 3]>,
+        radiance: [f32; 3],
+    },
+}
+
+impl Light {
+    /// A short name for messages.
+    pub fn kind(&self) -> &'static str {
+        match self {
+            Light::Point { .. } => "point",
+            Light::Directional { .. } => "directional",
+            Light::Polygon { .. } => "polygon",
+        }
+    }
+}
+
+/// A polygon light seen from the shading points of a packet: its vertices
+/// relative to each lane's point, in that lane's local shading frame (not
+/// normalized, not clipped to the horizon), in the light's order.
+#[derive(Clone, Copy, Debug)]
+pub struct PolygonLocal<R> {
+    pub vertices: [V3<R>; MAX_POLYGON_VERTICES],
+    pub len: usize,
+}
+
+impl<R: Real> PolygonLocal<R> {
+    pub fn vertices(&self) -> &[V3<R>] {
+        &self.vertices[..self.len]
+    }
 }

@@ -1,18 +1,21 @@
-//! One frame, pass by pass: vertex → clip + setup → bin → raster (visibility
-//! buffer) → resolve + shade. Each pass is timed; parallel work is split in
-//! fixed pieces (vertex and setup chunks, tiles) so that the result does not
-//! depend on the thread count.
+//! One frame as a list of passes: the scene's geometry passes (each:
+//! vertex → clip + setup → bin → raster) into one visibility buffer, then
+//! resolve + shade into the frame buffers; post stages (post.rs) follow.
+//! Each pass is timed (geometry passes summed per stage); parallel work is
+//! split in fixed pieces (vertex and setup chunks, tiles) so that the result
+//! does not depend on the thread count.
 
 use crate::bin::{bin_chunk, BinnedChunk, CHUNK};
+use crate::buffers::{BufferSet, FrameBuffers, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
+use crate::geometry::{Cull, GeometryPass};
 use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
 use crate::setup::{SetupContext, SetupCounts, TriPlanes};
-use crate::shade::{shade_tile, ColorBuffer};
+use crate::shade::{shade_tile, ShadeTargets};
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
-use glam::Vec4;
 use rayon::prelude::*;
 use specula_core::f32x8;
 use std::time::Instant;
@@ -53,7 +56,8 @@ fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
-/// Vertex through visibility buffer, in the calling rayon pool.
+/// Every geometry pass of the scene into one visibility buffer, in the
+/// calling rayon pool.
 pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) -> Visibility {
     let mut v = Visibility {
         vis: VisBuffer::new(target),
@@ -78,18 +82,44 @@ pub fn visibility_into(
         "visibility buffers are for another target"
     );
     out.view = scene.camera.view(target.width, target.height);
+    let ids = scene
+        .geometry
+        .iter()
+        .map(|p| p.ids().end)
+        .max()
+        .unwrap_or(0);
+    out.planes.resize(ids as usize, TriPlanes::default());
+    for (i, pass) in scene.geometry.iter().enumerate() {
+        geometry_pass(scene, target, pass, i == 0, out, stats);
+    }
+    if scene.geometry.is_empty() {
+        out.vis.depth.fill(1.0);
+        out.vis.id.fill(MISS);
+    }
+}
 
+/// One geometry pass: vertex stage, clip + setup, bin, raster. The first
+/// pass of a frame clears the visibility buffer; later ones depth-test
+/// against what the earlier ones drew.
+fn geometry_pass(
+    scene: &SceneData,
+    target: &Target,
+    pass: &GeometryPass,
+    first: bool,
+    out: &mut Visibility,
+    stats: &mut FrameStats,
+) {
     let t = Instant::now();
-    let m = out.view.view_proj;
     out.clip.clear();
-    scene
-        .positions
-        .par_iter()
-        .with_min_len(4096)
-        .map(|p| (m * Vec4::from((*p, 1.0))).to_array())
-        .collect_into_vec(&mut out.clip);
+    pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
+    assert_eq!(
+        out.clip.len(),
+        scene.positions.len(),
+        "vertex stage of pass {:?}: one position per vertex",
+        pass.name
+    );
     let clip = &out.clip;
-    stats.times.vertex = ms_since(t);
+    stats.times.vertex += ms_since(t);
 
     let t = Instant::now();
     let ctx = SetupContext {
@@ -97,29 +127,35 @@ pub fn visibility_into(
         height: target.height,
         guard: GuardBand::for_image(target.width, target.height),
     };
-    out.planes
-        .resize(scene.triangles.len(), TriPlanes::default());
-    let set_up: Vec<(Vec<crate::setup::RasterTri>, SetupCounts)> = scene
-        .triangles
+    let range = pass.triangles.start as usize..pass.triangles.end as usize;
+    let ids = pass.ids();
+    let set_up: Vec<(Vec<crate::setup::RasterTri>, SetupCounts)> = scene.triangles[range.clone()]
         .par_chunks(CHUNK)
-        .zip(out.planes.par_chunks_mut(CHUNK))
+        .zip(out.planes[ids.start as usize..ids.end as usize].par_chunks_mut(CHUNK))
         .enumerate()
         .map(|(c, (tris, planes))| {
             let mut raster = Vec::with_capacity(tris.len());
             let mut counts = SetupCounts::default();
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate() {
-                let id = (c * CHUNK + i) as u32;
+                let src = range.start + c * CHUNK + i;
+                let id = ids.start as u32 + (c * CHUNK + i) as u32;
                 let v = tri.map(|k| clip[k as usize]);
-                let double_sided =
-                    scene.materials[scene.tri_material[id as usize] as usize].double_sided;
-                if let Some(p) = ctx.setup(id, v, double_sided, &mut raster, &mut counts) {
+                let cull = match pass.cull {
+                    Cull::Back
+                        if scene.materials[scene.tri_material[src] as usize].double_sided =>
+                    {
+                        Cull::None
+                    }
+                    c => c,
+                };
+                if let Some(p) = ctx.setup(id, v, cull, &mut raster, &mut counts) {
                     *plane = p;
                 }
             }
             (raster, counts)
         })
         .collect();
-    stats.times.setup = ms_since(t);
+    stats.times.setup += ms_since(t);
 
     let t = Instant::now();
     for (tris, c) in &set_up {
@@ -130,7 +166,7 @@ pub fn visibility_into(
         .into_par_iter()
         .map(|(tris, _)| bin_chunk(target, tris))
         .collect();
-    stats.times.bin = ms_since(t);
+    stats.times.bin += ms_since(t);
 
     let t = Instant::now();
     let planes = &out.planes;
@@ -140,12 +176,14 @@ pub fn visibility_into(
         .zip(out.vis.id.par_chunks_mut(TILE_PIXELS))
         .enumerate()
         .for_each(|(tile, (depth, ids))| {
-            // Cleared here, while the tile is about to be in cache anyway.
-            depth.fill(1.0);
-            ids.fill(MISS);
+            if first {
+                // Cleared here, while the tile is about to be in cache anyway.
+                depth.fill(1.0);
+                ids.fill(MISS);
+            }
             rasterize_tile(target, tile, &chunks, planes, depth, ids)
         });
-    stats.times.raster = ms_since(t);
+    stats.times.raster += ms_since(t);
 }
 
 /// Lane width of the shading pass.
@@ -158,83 +196,110 @@ pub enum ShadePath {
     Scalar,
 }
 
-impl ColorBuffer {
-    pub fn new(target: &Target) -> ColorBuffer {
-        let n = target.buffer_len();
-        ColorBuffer {
-            r: vec![0.0; n],
-            g: vec![0.0; n],
-            b: vec![0.0; n],
-        }
-    }
-}
-
-/// Resolve + shade every tile, in the calling rayon pool.
+/// Resolve + shade every tile into new frame buffers holding `set`, in
+/// the calling rayon pool.
 pub fn shade(
     scene: &SceneData,
     target: &Target,
     v: &Visibility,
     path: ShadePath,
+    set: BufferSet,
     stats: &mut FrameStats,
-) -> ColorBuffer {
-    let mut color = ColorBuffer::new(target);
-    shade_into(scene, target, v, path, &mut color, stats);
-    color
+) -> FrameBuffers {
+    let mut buffers = FrameBuffers::new(target, set);
+    shade_into(scene, target, v, path, &mut buffers, stats);
+    buffers
 }
 
-/// [`shade`] into the colour buffer of an earlier frame of the same target.
+/// [`shade`] into the frame buffers of an earlier frame of the same target
+/// (the buffers it holds are the ones filled).
 pub fn shade_into(
     scene: &SceneData,
     target: &Target,
     v: &Visibility,
     path: ShadePath,
-    color: &mut ColorBuffer,
+    buffers: &mut FrameBuffers,
     stats: &mut FrameStats,
 ) {
+    assert!(
+        buffers.fits(target, BufferSet::default()),
+        "frame buffers are for another target"
+    );
     let t = Instant::now();
     let ctx = ResolveContext {
         scene,
         planes: &v.planes,
         view: &v.view,
     };
-    let covered: u64 = color
-        .r
-        .par_chunks_mut(TILE_PIXELS)
-        .zip(color.g.par_chunks_mut(TILE_PIXELS))
-        .zip(color.b.par_chunks_mut(TILE_PIXELS))
-        .zip(v.vis.id.par_chunks(TILE_PIXELS))
+    let FrameBuffers {
+        color,
+        depth,
+        normal,
+        id,
+        ..
+    } = buffers;
+    let out = ShadeTargets {
+        color: [
+            TileWriter::new(&mut color.r, target),
+            TileWriter::new(&mut color.g, target),
+            TileWriter::new(&mut color.b, target),
+        ],
+        depth: TileWriter::new(depth, target),
+        normal: [
+            TileWriter::new(&mut normal.r, target),
+            TileWriter::new(&mut normal.g, target),
+            TileWriter::new(&mut normal.b, target),
+        ],
+        id: TileWriter::new(id, target),
+    };
+    let covered: u64 = v
+        .vis
+        .id
+        .par_chunks(TILE_PIXELS)
         .enumerate()
-        .map(|(tile, (((r, g), b), ids))| match path {
-            ShadePath::Simd => shade_tile::<f32x8>(&ctx, target, tile, ids, [r, g, b]),
-            ShadePath::Scalar => shade_tile::<f32>(&ctx, target, tile, ids, [r, g, b]),
+        .map(|(tile, ids)| {
+            // SAFETY: the parallel iterator gives each tile index to one
+            // call, and tiles are disjoint rectangles.
+            unsafe {
+                match path {
+                    ShadePath::Simd => shade_tile::<f32x8>(&ctx, target, tile, ids, &out),
+                    ShadePath::Scalar => shade_tile::<f32>(&ctx, target, tile, ids, &out),
+                }
+            }
         })
         .sum();
     stats.pixels_shaded = covered;
     stats.times.shade = ms_since(t);
 }
 
-/// A rendered frame: the visibility buffer and HDR colour at target size.
+/// A rendered frame: the visibility buffer and the frame buffers at target
+/// size.
 pub struct Frame {
     pub target: Target,
     pub visibility: Visibility,
-    pub color: ColorBuffer,
+    pub buffers: FrameBuffers,
     pub stats: FrameStats,
 }
 
-/// Renders one frame in the calling rayon pool.
+/// Renders one frame (colour only) in the calling rayon pool.
 pub fn render(scene: &SceneData, target: Target, path: ShadePath) -> Frame {
+    render_with(scene, target, path, BufferSet::default())
+}
+
+/// Renders one frame filling the optional buffers of `set` too.
+pub fn render_with(scene: &SceneData, target: Target, path: ShadePath, set: BufferSet) -> Frame {
     let mut stats = FrameStats::default();
     let visibility = visibility(scene, &target, &mut stats);
-    let color = shade(scene, &target, &visibility, path, &mut stats);
+    let buffers = shade(scene, &target, &visibility, path, set, &mut stats);
     Frame {
         target,
         visibility,
-        color,
+        buffers,
         stats,
     }
 }
 
-/// Renders the scene again into `frame`'s buffers (same target).
+/// Renders the scene again into `frame`'s buffers (same target, same set).
 pub fn render_into(scene: &SceneData, frame: &mut Frame, path: ShadePath) {
     let mut stats = FrameStats::default();
     visibility_into(scene, &frame.target, &mut frame.visibility, &mut stats);
@@ -243,7 +308,7 @@ pub fn render_into(scene: &SceneData, frame: &mut Frame, path: ShadePath) {
         &frame.target,
         &frame.visibility,
         path,
-        &mut frame.color,
+        &mut frame.buffers,
         &mut stats,
     );
     frame.stats = stats;

@@ -1,29 +1,43 @@
 //! specula-raster: the hand-written rasterizer and shading pass.
 //!
-//! Data flow (one frame): `frame::visibility` transforms vertices, clips
-//! (`clip`), sets up fixed-point edge functions (`setup`, `fixed`), bins screen
-//! triangles into 64×64 tiles (`bin`) and scan-converts each tile into the
-//! visibility buffer (`scan`, `target`); `frame::shade` rebuilds attributes at
-//! pixel centres (`resolve`) and evaluates materials 8 pixels at a time
-//! (`shade`); `post` resolves supersampling and tone maps.
+//! A frame is a list of passes (`frame`): the scene's geometry passes
+//! (`geometry`: vertex stage, cull mode, id range) each transform vertices,
+//! clip (`clip`), set up fixed-point edge functions (`setup`, `fixed`), bin
+//! screen triangles into 64×64 tiles (`bin`) and scan-convert each tile into
+//! the one visibility buffer (`scan`, `target`); the shading pass rebuilds
+//! attributes at pixel centres (`resolve`) and runs each material's surface
+//! shader (`shader`: `lit` for the physically based models, `unlit`) 8
+//! pixels at a time (`shade`) into row-major frame buffers (`buffers`:
+//! colour, depth, normal, id); `post` runs the post stages (supersampling
+//! resolve, exposure, tone map, encode, and any custom image-space stage).
 
 pub mod bin;
+pub mod buffers;
 pub mod camera;
 pub mod clip;
 pub mod fixed;
 pub mod frame;
+pub mod geometry;
+pub mod lit;
 pub mod post;
 pub mod resolve;
 pub mod scan;
 pub mod scene;
 pub mod setup;
 pub mod shade;
+pub mod shader;
 pub mod target;
+pub mod unlit;
 
+pub use buffers::{BufferSet, FrameBuffers, Planes3};
 pub use camera::{Camera, View};
 pub use frame::{
-    render, render_into, shade, shade_into, visibility, visibility_into, Frame, FrameStats,
-    PassTimes, ShadePath, Visibility,
+    render, render_into, render_with, shade, shade_into, visibility, visibility_into, Frame,
+    FrameStats, PassTimes, ShadePath, Visibility,
 };
+pub use geometry::{Cull, GeometryPass, Project, VertexStage};
+pub use lit::Lit;
 pub use scene::SceneData;
+pub use shader::{Material, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};
+pub use unlit::Unlit;

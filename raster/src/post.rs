@@ -1,8 +1,10 @@
-//! After shading: supersampling resolve (box filter, in linear HDR), then
-//! exposure, tone mapping and the one sRGB encode at the very end.
+//! After shading: a list of named post stages ([`Post`]) over the frame
+//! buffers: supersampling resolve (box filter, in linear HDR), exposure,
+//! tone mapping and the one sRGB encode at the very end, plus any custom
+//! image-space stage ([`PostStage`]) where the list puts it. The standard
+//! list runs fused in one pass over the samples ([`resolve_ldr`]).
 
-use crate::shade::ColorBuffer;
-use crate::target::{Target, TILE};
+use crate::buffers::{BufferSet, FrameBuffers, Planes3};
 use rayon::prelude::*;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
@@ -128,11 +130,11 @@ pub fn srgb_encode(v: f32) -> u8 {
 
 /// Sum of the ssaa² samples of output pixel (x, y), in sample order.
 #[inline]
-fn box_sum(target: &Target, color: &ColorBuffer, ssaa: u32, x: u32, y: u32) -> [f32; 3] {
+fn box_sum(color: &Planes3, width: usize, ssaa: usize, x: usize, y: usize) -> [f32; 3] {
     let mut s = [0.0f32; 3];
     for sy in 0..ssaa {
-        for sx in 0..ssaa {
-            let i = target.index(x * ssaa + sx, y * ssaa + sy);
+        let row = (y * ssaa + sy) * width + x * ssaa;
+        for i in row..row + ssaa {
             s[0] += color.r[i];
             s[1] += color.g[i];
             s[2] += color.b[i];
@@ -141,112 +143,284 @@ fn box_sum(target: &Target, color: &ColorBuffer, ssaa: u32, x: u32, y: u32) -> [
     s
 }
 
-/// Row-major linear HDR image of `width × height` (supersampled target size
-/// divided by `ssaa`), each output pixel the mean of its ssaa² samples.
-pub fn downsample(target: &Target, color: &ColorBuffer, ssaa: u32) -> (u32, u32, Vec<[f32; 3]>) {
-    let (w, h) = (target.width / ssaa, target.height / ssaa);
+/// A linear HDR image between post stages: row-major planes.
+#[derive(Clone, Debug, PartialEq)]
+pub struct HdrImage {
+    pub width: u32,
+    pub height: u32,
+    pub rgb: Planes3,
+}
+
+impl HdrImage {
+    /// Interleaved [r, g, b] per pixel, row-major (for image writers).
+    pub fn interleaved(&self) -> Vec<[f32; 3]> {
+        (0..self.rgb.len()).map(|i| self.rgb.get(i)).collect()
+    }
+}
+
+/// The supersampling resolve: each output pixel the mean of its ssaa²
+/// samples of `color` (`width × height` samples).
+pub fn downsample(color: &Planes3, width: u32, height: u32, ssaa: u32) -> HdrImage {
+    let (w, h) = (width / ssaa, height / ssaa);
     if ssaa == 1 {
-        let (r, g, b) = (
-            target.to_row_major(&color.r),
-            target.to_row_major(&color.g),
-            target.to_row_major(&color.b),
-        );
-        let rgb = r
-            .iter()
-            .zip(&g)
-            .zip(&b)
-            .map(|((r, g), b)| [*r, *g, *b])
-            .collect();
-        return (w, h, rgb);
+        return HdrImage {
+            width: w,
+            height: h,
+            rgb: color.clone(),
+        };
     }
     let scale = 1.0 / (ssaa * ssaa) as f32;
-    let mut out = vec![[0.0f32; 3]; (w * h) as usize];
-    out.par_chunks_mut(w as usize)
+    let mut rgb = Planes3::new((w * h) as usize);
+    rgb.r
+        .par_chunks_mut(w as usize)
+        .zip(rgb.g.par_chunks_mut(w as usize))
+        .zip(rgb.b.par_chunks_mut(w as usize))
         .enumerate()
-        .for_each(|(y, row)| {
-            for (x, px) in row.iter_mut().enumerate() {
-                *px = box_sum(target, color, ssaa, x as u32, y as u32).map(|c| c * scale);
+        .for_each(|(y, ((r, g), b))| {
+            for x in 0..w as usize {
+                let s = box_sum(color, width as usize, ssaa as usize, x, y);
+                r[x] = s[0] * scale;
+                g[x] = s[1] * scale;
+                b[x] = s[2] * scale;
             }
         });
-    (w, h, out)
+    HdrImage {
+        width: w,
+        height: h,
+        rgb,
+    }
+}
+
+/// An image-space stage from outside this crate (npr's Sobel outlines,
+/// posterization, ...). It runs where the post list puts it: on the
+/// supersampled image before [`Stage::Resolve`], on the output image after
+/// it (`img.width` tells), in linear HDR before [`Stage::Tonemap`] and in
+/// tone-mapped [0, 1] values after it.
+pub trait PostStage: std::fmt::Debug + Send + Sync {
+    fn name(&self) -> &str;
+    /// The frame buffers the stage reads (colour is always there).
+    fn buffers(&self) -> BufferSet {
+        BufferSet::default()
+    }
+    /// Transforms `img`; `frame` holds the shading pass's buffers at the
+    /// supersampled size.
+    fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers);
+}
+
+/// One named step of the post list.
+#[derive(Clone, Debug)]
+pub enum Stage {
+    /// Box-filters ssaa × ssaa samples into one pixel (linear HDR).
+    Resolve {
+        ssaa: u32,
+    },
+    /// Multiplies radiance by 2^stops.
+    Exposure {
+        stops: f32,
+    },
+    /// Per channel tone curve into [0, 1]; NaN and negatives become 0.
+    Tonemap(Tonemap),
+    /// sRGB encoding to 8 bits; the last stage when present.
+    Encode,
+    Custom(std::sync::Arc<dyn PostStage>),
+}
+
+impl Stage {
+    pub fn name(&self) -> &str {
+        match self {
+            Stage::Resolve { .. } => "resolve",
+            Stage::Exposure { .. } => "exposure",
+            Stage::Tonemap(_) => "tonemap",
+            Stage::Encode => "encode",
+            Stage::Custom(s) => s.name(),
+        }
+    }
+}
+
+/// What the post list produced: the final HDR image (after the last stage
+/// before `Encode`) unless the fused path ran, and the 8-bit sRGB pixels
+/// (RGB, row-major) if the list encodes.
+#[derive(Debug)]
+pub struct PostOutput {
+    pub width: u32,
+    pub height: u32,
+    pub hdr: Option<HdrImage>,
+    pub ldr: Option<Vec<u8>>,
+}
+
+/// The post stages of a frame, in order.
+#[derive(Clone, Debug)]
+pub struct Post {
+    pub stages: Vec<Stage>,
+    /// Run [`resolve_ldr`] (one pass over the samples, no HDR image in
+    /// between) when the list is exactly resolve, exposure, tone map,
+    /// encode. Off only to measure what fusing is worth.
+    pub fuse: bool,
+}
+
+impl Post {
+    /// The default list: resolve, exposure, tone map, encode.
+    pub fn standard(ssaa: u32, stops: f32, tonemap: Tonemap) -> Post {
+        Post {
+            stages: vec![
+                Stage::Resolve { ssaa },
+                Stage::Exposure { stops },
+                Stage::Tonemap(tonemap),
+                Stage::Encode,
+            ],
+            fuse: true,
+        }
+    }
+
+    /// The optional frame buffers the stages read.
+    pub fn buffers(&self) -> BufferSet {
+        self.stages
+            .iter()
+            .fold(BufferSet::default(), |acc, s| match s {
+                Stage::Custom(c) => acc.union(c.buffers()),
+                _ => acc,
+            })
+    }
+
+    /// Checks the list: `Encode` only last, one `Resolve` at most, whose
+    /// factor divides the frame size.
+    pub fn validate(&self, width: u32, height: u32) -> Result<(), String> {
+        let n = self.stages.len();
+        let mut resolves = 0;
+        for (i, s) in self.stages.iter().enumerate() {
+            match s {
+                Stage::Encode if i + 1 != n => {
+                    return Err("post: \"encode\" must be the last stage".into())
+                }
+                Stage::Resolve { ssaa } => {
+                    resolves += 1;
+                    if *ssaa == 0 || !width.is_multiple_of(*ssaa) || !height.is_multiple_of(*ssaa) {
+                        return Err(format!(
+                            "post: resolve factor {ssaa} does not divide the {width}×{height} frame"
+                        ));
+                    }
+                }
+                _ => {}
+            }
+        }
+        if resolves > 1 {
+            return Err("post: more than one resolve stage".into());
+        }
+        Ok(())
+    }
+
+    /// The fused form's parameters, if the list has that shape.
+    fn fused_form(&self) -> Option<(u32, f32, Tonemap)> {
+        match self.stages.as_slice() {
+            [Stage::Resolve { ssaa }, Stage::Exposure { stops }, Stage::Tonemap(t), Stage::Encode]
+                if self.fuse =>
+            {
+                Some((*ssaa, *stops, *t))
+            }
+            _ => None,
+        }
+    }
+
+    /// Runs the stages over the frame's colour.
+    pub fn run(&self, frame: &FrameBuffers) -> Result<PostOutput, String> {
+        self.validate(frame.width, frame.height)?;
+        if let Some((ssaa, stops, tonemap)) = self.fused_form() {
+            return Ok(PostOutput {
+                width: frame.width / ssaa,
+                height: frame.height / ssaa,
+                hdr: None,
+                ldr: Some(resolve_ldr(frame, ssaa, tonemap, stops)),
+            });
+        }
+        let mut img = HdrImage {
+            width: frame.width,
+            height: frame.height,
+            rgb: frame.color.clone(),
+        };
+        let mut ldr = None;
+        for s in &self.stages {
+            match s {
+                Stage::Resolve { ssaa } => img = downsample(&img.rgb, img.width, img.height, *ssaa),
+                Stage::Exposure { stops } => {
+                    let k = stops.exp2();
+                    for p in [&mut img.rgb.r, &mut img.rgb.g, &mut img.rgb.b] {
+                        p.par_iter_mut().for_each(|v| *v *= k);
+                    }
+                }
+                Stage::Tonemap(t) => {
+                    let t = *t;
+                    for p in [&mut img.rgb.r, &mut img.rgb.g, &mut img.rgb.b] {
+                        p.par_iter_mut().for_each(|v| *v = t.apply(*v));
+                    }
+                }
+                Stage::Encode => ldr = Some(encode_ldr(&img.rgb)),
+                Stage::Custom(c) => c.apply(&mut img, frame),
+            }
+        }
+        Ok(PostOutput {
+            width: img.width,
+            height: img.height,
+            hdr: Some(img),
+            ldr,
+        })
+    }
 }
 
 /// Supersampling resolve, exposure (in stops), tone mapping and sRGB
-/// encoding in one pass over the tiles: 8-bit RGB, row-major, of
-/// (width / ssaa) × (height / ssaa). Equal to `encode_ldr(downsample(..))`
-/// (a test checks it) without the full-size HDR copy in between.
-pub fn resolve_ldr(
-    target: &Target,
-    color: &ColorBuffer,
-    ssaa: u32,
-    tonemap: Tonemap,
-    exposure: f32,
-) -> Vec<u8> {
+/// encoding in one pass over the samples: 8-bit RGB, row-major, of
+/// (width / ssaa) × (height / ssaa). Equal to the unfused stage list (a
+/// test checks it) without the HDR images in between.
+pub fn resolve_ldr(frame: &FrameBuffers, ssaa: u32, tonemap: Tonemap, exposure: f32) -> Vec<u8> {
     // One monomorphized loop per curve: no match per channel.
     match tonemap {
-        Tonemap::Clamp => {
-            resolve_ldr_with(target, color, ssaa, exposure, |x| Tonemap::Clamp.apply(x))
+        Tonemap::Clamp => resolve_ldr_with(frame, ssaa, exposure, |x| Tonemap::Clamp.apply(x)),
+        Tonemap::Reinhard => {
+            resolve_ldr_with(frame, ssaa, exposure, |x| Tonemap::Reinhard.apply(x))
         }
-        Tonemap::Reinhard => resolve_ldr_with(target, color, ssaa, exposure, |x| {
-            Tonemap::Reinhard.apply(x)
-        }),
-        Tonemap::Aces => {
-            resolve_ldr_with(target, color, ssaa, exposure, |x| Tonemap::Aces.apply(x))
-        }
+        Tonemap::Aces => resolve_ldr_with(frame, ssaa, exposure, |x| Tonemap::Aces.apply(x)),
     }
 }
 
 fn resolve_ldr_with(
-    target: &Target,
-    color: &ColorBuffer,
+    frame: &FrameBuffers,
     ssaa: u32,
     exposure: f32,
     curve: impl Fn(f32) -> f32 + Sync,
 ) -> Vec<u8> {
-    let (w, h) = (target.width / ssaa, target.height / ssaa);
-    // The same products, in the same order, as downsample then encode_ldr.
+    let (sw, ssaa) = (frame.width as usize, ssaa as usize);
+    let (w, h) = (sw / ssaa, frame.height as usize / ssaa);
+    let color = &frame.color;
+    // The same products, in the same order, as the unfused stages.
     let (inv_n, k) = (1.0 / (ssaa * ssaa) as f32, exposure.exp2());
     let enc = SrgbEncoder::new();
-    let encode = |px: &mut [u8], s: [f32; 3]| {
-        for c in 0..3 {
-            px[c] = enc.encode(curve(s[c] * inv_n * k));
+    let mut out = vec![0u8; w * h * 3];
+    out.par_chunks_mut(3 * w).enumerate().for_each(|(y, row)| {
+        for (x, px) in row.chunks_exact_mut(3).enumerate() {
+            let s = if ssaa == 1 {
+                color.get(y * sw + x)
+            } else {
+                box_sum(color, sw, ssaa, x, y)
+            };
+            for c in 0..3 {
+                px[c] = enc.encode(curve(s[c] * inv_n * k));
+            }
         }
-    };
-    let mut out = vec![0u8; w as usize * h as usize * 3];
-    out.par_chunks_mut(3 * w as usize)
-        .enumerate()
-        .for_each(|(y, row)| {
-            if ssaa == 1 {
-                // Whole tile rows are contiguous in the tile-major planes.
-                for x0 in (0..w).step_by(TILE) {
-                    let at = target.index(x0, y as u32);
-                    let n = (w - x0).min(TILE as u32) as usize;
-                    let px = &mut row[3 * x0 as usize..3 * (x0 as usize + n)];
-                    for (i, px) in px.chunks_exact_mut(3).enumerate() {
-                        encode(px, [color.r[at + i], color.g[at + i], color.b[at + i]]);
-                    }
-                }
-                return;
-            }
-            for (x, px) in row.chunks_exact_mut(3).enumerate() {
-                encode(px, box_sum(target, color, ssaa, x as u32, y as u32));
-            }
-        });
+    });
     out
 }
 
-/// Exposure (in stops), tone mapping and sRGB encoding: 8-bit RGB, row-major.
-pub fn encode_ldr(hdr: &[[f32; 3]], tonemap: Tonemap, exposure: f32) -> Vec<u8> {
-    let k = exposure.exp2();
+/// sRGB encoding of tone-mapped values: 8-bit RGB, row-major.
+pub fn encode_ldr(rgb: &Planes3) -> Vec<u8> {
     let enc = SrgbEncoder::new();
-    let mut out = vec![0u8; hdr.len() * 3];
+    let mut out = vec![0u8; rgb.len() * 3];
     out.par_chunks_mut(3 * 4096)
-        .zip(hdr.par_chunks(4096))
-        .for_each(|(o, h)| {
-            for (o, px) in o.chunks_exact_mut(3).zip(h) {
-                for c in 0..3 {
-                    o[c] = enc.encode(tonemap.apply(px[c] * k));
-                }
+        .enumerate()
+        .for_each(|(chunk, o)| {
+            for (j, px) in o.chunks_exact_mut(3).enumerate() {
+                let i = chunk * 4096 + j;
+                px[0] = enc.encode(rgb.r[i]);
+                px[1] = enc.encode(rgb.g[i]);
+                px[2] = enc.encode(rgb.b[i]);
             }
         });
     out
@@ -301,22 +475,34 @@ mod tests {
     }
 
     #[test]
-    fn fused_resolve_equals_downsample_then_encode() {
-        let t = Target::new(150, 90).unwrap();
-        let n = t.buffer_len();
+    fn fused_post_equals_the_stage_list() {
+        let t = crate::Target::new(150, 90).unwrap();
+        let mut fb = FrameBuffers::new(&t, BufferSet::default());
         let f = |i: usize, c: f32| ((i as f32 * 0.37 + c).sin() * 2.0).max(0.0);
-        let color = ColorBuffer {
-            r: (0..n).map(|i| f(i, 0.0)).collect(),
-            g: (0..n).map(|i| f(i, 1.0)).collect(),
-            b: (0..n).map(|i| f(i, 2.0)).collect(),
-        };
-        for ssaa in [1, 3] {
-            let (_, _, hdr) = downsample(&t, &color, ssaa);
-            assert_eq!(
-                resolve_ldr(&t, &color, ssaa, Tonemap::Aces, 0.5),
-                encode_ldr(&hdr, Tonemap::Aces, 0.5)
-            );
+        for i in 0..fb.color.len() {
+            fb.color.r[i] = f(i, 0.0);
+            fb.color.g[i] = f(i, 1.0);
+            fb.color.b[i] = f(i, 2.0);
         }
+        for ssaa in [1, 3] {
+            let fused = Post::standard(ssaa, 0.5, Tonemap::Aces);
+            let mut staged = fused.clone();
+            staged.fuse = false;
+            let (a, b) = (fused.run(&fb).unwrap(), staged.run(&fb).unwrap());
+            assert!(a.hdr.is_none() && b.hdr.is_some());
+            assert_eq!((a.width, a.height), (150 / ssaa, 90 / ssaa));
+            assert_eq!(a.ldr, b.ldr, "ssaa {ssaa}");
+        }
+    }
+
+    #[test]
+    fn post_lists_are_checked() {
+        let t = crate::Target::new(150, 90).unwrap();
+        let fb = FrameBuffers::new(&t, BufferSet::default());
+        let mut p = Post::standard(4, 0.0, Tonemap::Clamp);
+        assert!(p.run(&fb).unwrap_err().contains("does not divide"));
+        p.stages = vec![Stage::Encode, Stage::Tonemap(Tonemap::Clamp)];
+        assert!(p.run(&fb).unwrap_err().contains("last"));
     }
 
     #[test]

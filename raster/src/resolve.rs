@@ -55,7 +55,11 @@ pub struct ResolveContext<'a> {
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PacketTris {
     pub n: usize,
+    /// Visibility-buffer ids.
     pub id: [u32; 8],
+    /// Their source triangles and materials (filled by [`PacketTris::new`]).
+    pub tri: [u32; 8],
+    pub material: [u32; 8],
     /// Bit i set: lane i shows triangle `id[t]`.
     pub lanes: [u32; 8],
     /// Lanes covered by any triangle.
@@ -63,9 +67,20 @@ pub struct PacketTris {
 }
 
 impl PacketTris {
-    /// Groups the first `lanes` ids (MISS lanes belong to no group).
+    /// Groups the first `lanes` ids (MISS lanes belong to no group) and
+    /// looks up each group's source triangle and material.
     #[inline(always)]
-    pub fn new(ids: &[u32], lanes: usize) -> PacketTris {
+    pub fn new(ids: &[u32], lanes: usize, scene: &SceneData) -> PacketTris {
+        let mut p = Self::group(ids, lanes);
+        for t in 0..p.n {
+            (p.tri[t], p.material[t]) = scene.id_info(p.id[t]);
+        }
+        p
+    }
+
+    /// The grouping alone (`tri` and `material` left zero).
+    #[inline(always)]
+    pub fn group(ids: &[u32], lanes: usize) -> PacketTris {
         let mut p = PacketTris::default();
         if lanes == 8 {
             // One vector compare per distinct triangle.
@@ -110,9 +125,9 @@ const GATHER: usize = 21;
 
 impl ResolveContext<'_> {
     #[inline(always)]
-    fn gather_one(&self, id: u32, out: &mut [f32; GATHER]) {
+    fn gather_one(&self, id: u32, tri: u32, out: &mut [f32; GATHER]) {
         let p = &self.planes[id as usize];
-        let tri = self.scene.triangles[id as usize];
+        let tri = self.scene.triangles[tri as usize];
         out[0..2].copy_from_slice(&p.origin);
         out[2..5].copy_from_slice(&p.k1);
         out[5..8].copy_from_slice(&p.k2);
@@ -124,7 +139,7 @@ impl ResolveContext<'_> {
     }
 
     /// Rebuilds the fragments of pixels (x + lane, y) covered by the
-    /// triangles of `tris` (at least one). Each triangle's data is read once
+    /// triangles of `tris` (at least one; from [`PacketTris::new`]). Each triangle's data is read once
     /// and broadcast into the lanes it covers: packets hold 1–3 triangles
     /// typically, and a per-lane gather through memory (8 scalar stores, then
     /// a vector load) stalls on store forwarding. Lanes no triangle covers
@@ -135,7 +150,7 @@ impl ResolveContext<'_> {
         let mut lanes = [R::ZERO; GATHER];
         let mut cur = [0.0f32; GATHER];
         for t in 0..tris.n {
-            self.gather_one(tris.id[t], &mut cur);
+            self.gather_one(tris.id[t], tris.tri[t], &mut cur);
             if t == 0 {
                 for (l, c) in lanes.iter_mut().zip(cur) {
                     *l = R::splat(c as f64);
@@ -218,7 +233,7 @@ impl ResolveContext<'_> {
         const N: usize = 6 + 9 + 1;
         let mut lanes = [R::ZERO; N];
         for t in 0..tris.n {
-            let tri = scene.triangles[tris.id[t] as usize];
+            let tri = scene.triangles[tris.tri[t] as usize];
             let uv = tri.map(|i| scene.uvs[i as usize]);
             let tg = tri.map(|i| scene.tangents[i as usize]);
             let mut cur = [0.0f32; N];
@@ -276,7 +291,7 @@ mod tests {
             [0, 1, 2, 3, 4, 5, 6, 7],
         ];
         for ids in cases {
-            let p = PacketTris::new(&ids, 8);
+            let p = PacketTris::group(&ids, 8);
             let mut seen = 0u32;
             for t in 0..p.n {
                 for lane in 0..8 {
@@ -288,7 +303,7 @@ mod tests {
             }
             assert_eq!(seen, p.covered);
             let scalar_covered: u32 = (0..8)
-                .filter(|&i| PacketTris::new(&ids[i..], 1).n == 1)
+                .filter(|&i| PacketTris::group(&ids[i..], 1).n == 1)
                 .map(|i| 1 << i)
                 .sum();
             assert_eq!(p.covered, scalar_covered, "{ids:?}");

@@ -1,9 +1,10 @@
 //! A prepared scene: flat world-space arrays the passes read.
 
 use crate::camera::Camera;
+use crate::geometry::{validate_passes, GeometryPass};
+use crate::shader::Material;
 use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
-use specula_core::Material;
 
 #[derive(Clone, Debug)]
 pub struct SceneData {
@@ -21,6 +22,9 @@ pub struct SceneData {
     /// Index into `materials`, one per triangle.
     pub tri_material: Vec<u32>,
     pub materials: Vec<Material>,
+    /// The geometry passes of a frame, in order (geometry.rs); loaders put
+    /// [`GeometryPass::main`] here.
+    pub geometry: Vec<GeometryPass>,
     pub lights: Vec<Light>,
     /// Uniform environment radiance, lighting every surface and seen where
     /// no surface is.
@@ -67,7 +71,30 @@ impl SceneData {
                 "triangle {t} uses material index past the {nm} given"
             ));
         }
+        validate_passes(&self.geometry, self.triangles.len(), nm)?;
+        for m in &self.materials {
+            m.shader
+                .check_lights(&self.lights)
+                .map_err(|e| format!("material {:?}: {e}", m.name))?;
+        }
         Ok(())
+    }
+
+    /// The source triangle and the material of a visibility-buffer id
+    /// (ids come only from the geometry passes, which `validate` checked
+    /// to be disjoint).
+    #[inline(always)]
+    pub fn id_info(&self, id: u32) -> (u32, u32) {
+        for p in &self.geometry {
+            if (id as u64) < p.ids().end && id >= p.id_base {
+                let tri = id - p.id_base;
+                if tri >= p.triangles.start {
+                    return (tri, p.material.unwrap_or(self.tri_material[tri as usize]));
+                }
+            }
+        }
+        debug_assert!(false, "id {id} written by no geometry pass");
+        (0, self.tri_material.first().copied().unwrap_or(0))
     }
 }
 

@@ -3,6 +3,7 @@
 
 use crate::clip::{ClipVertex, GuardBand};
 use crate::fixed::{pixel_centre, snap, SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE};
+use crate::geometry::Cull;
 
 /// An edge function E(X, Y) = A·X + B·Y + C over fixed-point coordinates,
 /// positive inside. `c` already holds the fill-rule bias, so a pixel centre is
@@ -86,6 +87,8 @@ pub const MAX_CLIP_COORD: f64 = (1u64 << 50) as f64;
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SetupCounts {
     pub triangles: u64,
+    /// Skipped by the pass's cull mode (back faces, or front faces in a
+    /// pass with `Cull::Front`).
     pub culled_backface: u64,
     pub culled_outside: u64,
     /// A vertex is NaN, infinite or beyond `MAX_CLIP_COORD`.
@@ -155,14 +158,15 @@ fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
 }
 
 impl SetupContext {
-    /// Sets up source triangle `tri` (clip-space vertices `v`). Pushes its
+    /// Sets up the triangle of id `tri` (clip-space vertices `v`), skipping
+    /// it if `cull` says its facing is not drawn. Pushes its
     /// screen triangles to `out` and returns its planes, or `None` if it
     /// draws nothing; `counts` says why.
     pub fn setup(
         &self,
         tri: u32,
         v: [[f32; 4]; 3],
-        double_sided: bool,
+        cull: Cull,
         out: &mut Vec<RasterTri>,
         counts: &mut SetupCounts,
     ) -> Option<TriPlanes> {
@@ -193,7 +197,12 @@ impl SetupContext {
             counts.skipped_degenerate += 1;
             return None;
         }
-        if det < 0.0 && !double_sided {
+        let culled = match cull {
+            Cull::Back => det < 0.0,
+            Cull::Front => det > 0.0,
+            Cull::None => false,
+        };
+        if culled {
             counts.culled_backface += 1;
             return None;
         }

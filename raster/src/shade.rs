@@ -1,115 +1,148 @@
 //! The shading pass: per tile, R::LANES pixels per packet; per material
-//! present in the packet, the light loop under that material's lane mask.
+//! present in the packet, that material's shader under the lane mask. The
+//! results go to the row-major frame buffers (buffers.rs).
 
-use crate::resolve::{Fragment, PacketTris, ResolveContext};
+use crate::buffers::TileWriter;
+use crate::resolve::{Fragment, PacketTris, ResolveContext, Surface};
+use crate::shader::{ShadeEnv, ShadeInput, ShadeLanes};
 use crate::target::{Target, TILE};
-use specula_core::light::Light;
-use specula_core::{Brdf, BrdfVisitor, Real, Rgb, V3};
+use specula_core::{Real, Rgb, ShadingFrame, V3};
 
-/// HDR radiance per pixel, tile-major like the visibility buffer, one plane
-/// per channel.
-pub struct ColorBuffer {
-    pub r: Vec<f32>,
-    pub g: Vec<f32>,
-    pub b: Vec<f32>,
+/// The frame buffers of one frame, open for tile-parallel writes. Planes
+/// that were not requested are empty writers and get nothing.
+pub struct ShadeTargets<'a> {
+    pub color: [TileWriter<'a, f32>; 3],
+    pub depth: TileWriter<'a, f32>,
+    pub normal: [TileWriter<'a, f32>; 3],
+    pub id: TileWriter<'a, u32>,
 }
 
-/// Squared distances below this are treated as this, so a light lying on a
-/// surface gives a large finite value instead of inf·0 = NaN.
-const MIN_DIST2: f64 = 1e-8;
-
-/// Reflected radiance toward `frag.wo` from all lights and the environment.
-struct ShadeLights<'a, R: Real> {
-    frag: &'a Fragment<R>,
-    lights: &'a [Light],
-    environment: Option<[f32; 3]>,
-}
-
-impl<R: Real> BrdfVisitor for ShadeLights<'_, R> {
-    type Output = Rgb<R>;
-
-    #[inline(always)]
-    fn visit<B: Brdf>(self, brdf: &B) -> Rgb<R> {
-        let f = self.frag;
-        let mut acc = Rgb::zero();
-        for light in self.lights {
-            match light {
-                Light::Point {
-                    position,
-                    intensity,
-                } => {
-                    let to_light = V3::from_f32(*position) - f.p;
-                    let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
-                    let inv_d = d2.rsqrt();
-                    let wi = to_light * inv_d;
-                    let f_cos = brdf.f_cos(f.n, wi, f.wo);
-                    acc += f_cos.mul_elem(V3::from_f32(*intensity)) * (inv_d * inv_d);
-                }
-                Light::Directional {
-                    to_light,
-                    irradiance,
-                } => {
-                    let f_cos = brdf.f_cos(f.n, V3::from_f32(*to_light), f.wo);
-                    acc += f_cos.mul_elem(V3::from_f32(*irradiance));
-                }
-            }
-        }
-        if let Some(env) = self.environment {
-            acc += brdf.albedo(f.n, f.wo).mul_elem(V3::from_f32(env));
-        }
-        acc
+/// Writes the first `out.len()` lanes of `v` (fewer than R::LANES only in
+/// the last packet of an image row whose width is not a multiple of it).
+#[inline(always)]
+fn store<R: Real>(v: R, out: &mut [f32]) {
+    if out.len() >= R::LANES {
+        v.store(out);
+    } else {
+        let mut tmp = [0.0f32; 8];
+        v.store(&mut tmp);
+        out.copy_from_slice(&tmp[..out.len()]);
     }
 }
 
-/// Shades tile `t` with lane type R, writing its slices of the colour planes.
-/// Returns the number of covered pixels.
-pub fn shade_tile<R: Real>(
+/// The frame of a shader that asked for the surface: the mesh's uv
+/// tangent where there is one, any tangent elsewhere.
+#[inline(always)]
+fn surface_frame<R: Real>(frag: &Fragment<R>, s: &Surface<R>) -> ShadingFrame<R> {
+    let any = ShadingFrame::from_normal(frag.n);
+    let uv = ShadingFrame::from_normal_tangent(frag.n, s.tangent, s.bitangent_sign);
+    let has = s.tangent.length_squared().gt(R::HALF);
+    ShadingFrame {
+        t: V3::select(has, uv.t, any.t),
+        b: V3::select(has, uv.b, any.b),
+        n: frag.n,
+    }
+}
+
+/// Shades tile `t` with lane type R: `ids` is the tile's slice of the
+/// visibility buffer. Returns the number of covered pixels.
+///
+/// # Safety
+/// The caller hands tile `t` to this call alone (see [`TileWriter`]).
+pub unsafe fn shade_tile<R: ShadeLanes>(
     ctx: &ResolveContext,
     target: &Target,
     t: usize,
     ids: &[u32],
-    out: [&mut [f32]; 3],
+    out: &ShadeTargets,
 ) -> u64 {
     let scene = ctx.scene;
+    let env = ShadeEnv {
+        lights: &scene.lights,
+        environment: scene.environment,
+    };
     let (tx, ty) = target.tile_origin(t);
     let background = scene.environment.unwrap_or(scene.background);
-    let [out_r, out_g, out_b] = out;
     let mut covered = 0u64;
+    let tile_w = TILE.min((target.width - tx) as usize);
     for row in 0..TILE.min((target.height - ty) as usize) {
-        let y = ty + row as u32;
+        let y = (ty as usize) + row;
+        let x0 = tx as usize;
+        // SAFETY: tile t is this call's alone (the function's contract).
+        let (color, depth, normal, id_out) = unsafe {
+            (
+                out.color.each_ref().map(|w| w.tile_row(x0, y)),
+                out.depth.tile_row(x0, y),
+                out.normal.each_ref().map(|w| w.tile_row(x0, y)),
+                out.id.tile_row(x0, y),
+            )
+        };
+        if !id_out.is_empty() {
+            id_out.copy_from_slice(&ids[row * TILE..row * TILE + tile_w]);
+        }
         let mut lx = 0;
-        while lx < TILE.min((target.width - tx) as usize) {
+        while lx < tile_w {
             let at = row * TILE + lx;
-            let tris = PacketTris::new(&ids[at..], R::LANES);
-            let mut color: Rgb<R> = Rgb::from_f32(background);
+            let n_px = R::LANES.min(tile_w - lx);
+            let tris = PacketTris::new(&ids[at..], R::LANES, scene);
+            let mut rgb: Rgb<R> = Rgb::from_f32(background);
+            let mut w = R::splat(f64::INFINITY);
+            let mut n = V3::zero();
             if tris.n > 0 {
                 covered += tris.covered.count_ones() as u64;
-                let frag = ctx.resolve::<R>(tx + lx as u32, y, &tris);
+                let frag = ctx.resolve::<R>(tx + lx as u32, y as u32, &tris);
+                let frame = ShadingFrame::from_normal(frag.n);
+                let mut surface = None;
                 // Shade once per material present, under its lanes' mask.
                 let mut done = 0u32;
                 for t in 0..tris.n {
                     if done & (1 << t) != 0 {
                         continue;
                     }
-                    let m = scene.tri_material[tris.id[t] as usize];
+                    let m = tris.material[t];
                     let mut group = 0u32;
                     for u in t..tris.n {
-                        if scene.tri_material[tris.id[u] as usize] == m {
+                        if tris.material[u] == m {
                             group |= tris.lanes[u];
                             done |= 1 << u;
                         }
                     }
-                    let rgb = scene.materials[m as usize].model.visit(ShadeLights {
-                        frag: &frag,
-                        lights: &scene.lights,
-                        environment: scene.environment,
-                    });
-                    color = Rgb::select(R::mask_from_bits(group), rgb, color);
+                    let shader = &*scene.materials[m as usize].shader;
+                    let input = if shader.needs_surface() {
+                        let s = surface.get_or_insert_with(|| ctx.surface(&tris, &frag));
+                        ShadeInput {
+                            frag: &frag,
+                            frame: surface_frame(&frag, s),
+                            surface: Some(&*s),
+                            lanes: group,
+                        }
+                    } else {
+                        ShadeInput {
+                            frag: &frag,
+                            frame,
+                            surface: None,
+                            lanes: group,
+                        }
+                    };
+                    let c = R::shade_with(shader, &input, &env);
+                    rgb = Rgb::select(R::mask_from_bits(group), c, rgb);
                 }
+                let hit = R::mask_from_bits(tris.covered);
+                w = R::select(hit, frag.w, w);
+                n = V3::select(hit, frag.n, n);
             }
-            color.x.store(&mut out_r[at..]);
-            color.y.store(&mut out_g[at..]);
-            color.z.store(&mut out_b[at..]);
+            let px = lx..lx + n_px;
+            store(rgb.x, &mut color[0][px.clone()]);
+            store(rgb.y, &mut color[1][px.clone()]);
+            store(rgb.z, &mut color[2][px.clone()]);
+            if !depth.is_empty() {
+                store(w, &mut depth[px.clone()]);
+            }
+            if !normal[0].is_empty() {
+                store(n.x, &mut normal[0][px.clone()]);
+                store(n.y, &mut normal[1][px.clone()]);
+                store(n.z, &mut normal[2][px]);
+            }
             lx += R::LANES;
         }
     }

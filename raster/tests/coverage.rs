@@ -8,6 +8,7 @@ use specula_raster::clip::GuardBand;
 use specula_raster::fixed::{pixel_centre, SUBPIXEL_ONE};
 use specula_raster::scan::covered_groups;
 use specula_raster::setup::{RasterTri, SetupContext, SetupCounts};
+use specula_raster::Cull;
 
 const W: u32 = 96;
 const H: u32 = 80;
@@ -165,7 +166,7 @@ fn triangle_fans_are_watertight_at_random_offsets_and_rotations() {
         let mut counts = SetupCounts::default();
         for k in 0..n {
             let v = [centre, rim[k], rim[(k + 1) % n]];
-            ctx.setup(k as u32, v, false, &mut tris, &mut counts);
+            ctx.setup(k as u32, v, Cull::Back, &mut tris, &mut counts);
         }
         assert_eq!(
             counts.culled_backface, 0,
@@ -261,7 +262,7 @@ fn closed_convex_mesh_covers_its_silhouette_exactly_once() {
                 ctx.setup(
                     i as u32,
                     f.map(|k| clip[k]),
-                    double_sided,
+                    if double_sided { Cull::None } else { Cull::Back },
                     &mut tris,
                     &mut counts,
                 );
@@ -357,7 +358,7 @@ fn zero_area_triangles_are_skipped() {
         .setup(
             0,
             [v, v, clip_of(20.0, 10.0, 0.5)],
-            false,
+            Cull::Back,
             &mut out,
             &mut counts
         )

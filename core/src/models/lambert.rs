@@ -1,6 +1,6 @@
 //! The Lambertian material.
 
-use crate::brdf::Brdf;
+use crate::brdf::{Brdf, Outgoing};
 use crate::diffuse::f_lambert;
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
@@ -12,9 +12,16 @@ pub struct Lambert {
 }
 
 impl Brdf for Lambert {
+    type Prepared<R: Real> = Outgoing<R>;
+
     #[inline(always)]
-    fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        let above = n.dot(wi).gt(R::ZERO) & n.dot(wo).gt(R::ZERO);
+    fn prepare<R: Real>(&self, wo: V3<R>) -> Outgoing<R> {
+        Outgoing::new(wo)
+    }
+
+    #[inline(always)]
+    fn f_local<R: Real>(&self, p: &Outgoing<R>, wi: V3<R>) -> Rgb<R> {
+        let above = wi.z.gt(R::ZERO) & p.above;
         Rgb::select(
             above,
             f_lambert(Rgb::from_f32(self.base_color)),
@@ -23,12 +30,8 @@ impl Brdf for Lambert {
     }
 
     #[inline(always)]
-    fn albedo<R: Real>(&self, n: V3<R>, wo: V3<R>) -> Rgb<R> {
+    fn albedo_local<R: Real>(&self, p: &Outgoing<R>) -> Rgb<R> {
         // ∫ (ρ/π) cos θi dωi = ρ exactly.
-        Rgb::select(
-            n.dot(wo).gt(R::ZERO),
-            Rgb::from_f32(self.base_color),
-            Rgb::zero(),
-        )
+        Rgb::select(p.above, Rgb::from_f32(self.base_color), Rgb::zero())
     }
 }

@@ -7,7 +7,7 @@
 //! with α = roughness², F0 = mix(0.04, base_color, metallic).   [glTF2, Appendix B]
 
 use crate::albedo_tables::AlbedoTables;
-use crate::brdf::{Brdf, HalfAngles, ALPHA_MIN};
+use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::diffuse::f_lambert;
 use crate::fresnel::f_schlick;
 use crate::masking::v_smith_ggx_correlated;
@@ -51,8 +51,15 @@ impl MetallicRoughness {
 }
 
 impl Brdf for MetallicRoughness {
+    type Prepared<R: Real> = Outgoing<R>;
+
     #[inline(always)]
-    fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
+    fn prepare<R: Real>(&self, wo: V3<R>) -> Outgoing<R> {
+        Outgoing::new(wo)
+    }
+
+    #[inline(always)]
+    fn f_local<R: Real>(&self, o: &Outgoing<R>, wi: V3<R>) -> Rgb<R> {
         let alpha = R::splat(self.alpha() as f64);
         let f0 = Rgb::from_f32(self.f0());
         let diffuse = Rgb::from_f32(self.diffuse_color());
@@ -64,7 +71,8 @@ impl Brdf for MetallicRoughness {
             cos2_h,
             sin2_h,
             cos_d,
-        } = HalfAngles::new(n, wi, wo);
+            ..
+        } = HalfAngles::new(wi, o);
 
         let f = f_schlick(f0, cos_d);
         let dv = d_ggx(alpha, cos2_h, sin2_h) * v_smith_ggx_correlated(alpha, cos_i, cos_o);
@@ -74,9 +82,8 @@ impl Brdf for MetallicRoughness {
     }
 
     #[inline(always)]
-    fn albedo<R: Real>(&self, n: V3<R>, wo: V3<R>) -> Rgb<R> {
-        let cos_o = n.dot(wo);
-        let t = AlbedoTables::get().ggx_schlick(self.alpha(), cos_o.max(R::ZERO));
+    fn albedo_local<R: Real>(&self, o: &Outgoing<R>) -> Rgb<R> {
+        let t = AlbedoTables::get().ggx_schlick(self.alpha(), o.wo.z.max(R::ZERO));
         // Split sum: E_spec = F0·A + B, E_diff = (1 − F0)(1 − C)·ρd   (see albedo_tables)
         let f0: Rgb<R> = Rgb::from_f32(self.f0());
         let diffuse: Rgb<R> = Rgb::from_f32(self.diffuse_color());
@@ -87,6 +94,6 @@ impl Brdf for MetallicRoughness {
         );
         let one = Rgb::splat(R::ONE);
         let diff = (one - f0).mul_elem(diffuse) * (R::ONE - t.c);
-        Rgb::select(cos_o.gt(R::ZERO), spec + diff, Rgb::zero())
+        Rgb::select(o.above, spec + diff, Rgb::zero())
     }
 }

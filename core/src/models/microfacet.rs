@@ -12,7 +12,7 @@
 //! Uniform environment light needs the directional albedo E(μo): it is
 //! tabulated per material when the material is built (`AlbedoTable`).
 
-use crate::brdf::{Brdf, HalfAngles, ALPHA_MIN};
+use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::fresnel::{f_conductor, f_dielectric, f_schlick};
 use crate::kulla_conty::{color_factor, f_avg, KcColor, KcSlice, KcTable};
 use crate::masking::{g2_height_correlated, g2_separable, lambda_beckmann, lambda_ggx};
@@ -142,13 +142,18 @@ impl Compensation {
         }
     }
 
-    /// f_ms(μi, μo) · factor, per channel (no cosine); 0 unless both μ > 0.
+    /// 1 − E(μo): the view's factor of f_ms, computed once per pixel.
     #[inline(always)]
-    pub fn f<R: Real>(&self, cos_i: R, cos_o: R) -> Rgb<R> {
-        let (ei, eo) = (self.slice.e_lanes(cos_i), self.slice.e_lanes(cos_o));
-        let ms = (R::ONE - ei) * (R::ONE - eo);
-        let above = cos_i.gt(R::ZERO) & cos_o.gt(R::ZERO);
-        Rgb::select(above, Rgb::from_f32(self.scale) * ms, Rgb::zero())
+    pub fn prepare<R: Real>(&self, cos_o: R) -> R {
+        R::ONE - self.slice.e_lanes(cos_o)
+    }
+
+    /// f_ms(μi, μo) · factor, per channel (no cosine), from the prepared
+    /// 1 − E(μo); the caller masks lanes below either horizon.
+    #[inline(always)]
+    pub fn f<R: Real>(&self, cos_i: R, one_minus_e_o: R) -> Rgb<R> {
+        let ms = (R::ONE - self.slice.e_lanes(cos_i)) * one_minus_e_o;
+        Rgb::from_f32(self.scale) * ms
     }
 }
 
@@ -198,20 +203,13 @@ impl MicrofacetParams {
         }
     }
 
-    /// The specular lobe F G2 D / (4 μi μo) (no diffuse, no cosine); zero
-    /// below either horizon.
+    /// The specular lobe F G2 D / (4 μi μo) (no diffuse, no cosine) for
+    /// angles already formed; the caller zeroes lanes outside `h.above`.
     #[inline(always)]
-    pub fn specular<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        let HalfAngles {
-            cos_i,
-            cos_o,
-            above,
-            cos2_h,
-            sin2_h,
-            cos_d,
-        } = HalfAngles::new(n, wi, wo);
-        let dg = self.d(cos2_h, sin2_h) * self.g2(cos_i, cos_o) / (R::splat(4.0) * cos_i * cos_o);
-        Rgb::select(above, self.f(cos_d) * dg, Rgb::zero())
+    pub fn specular<R: Real>(&self, h: &HalfAngles<R>) -> Rgb<R> {
+        let dg = self.d(h.cos2_h, h.sin2_h) * self.g2(h.cos_i, h.cos_o)
+            / (R::splat(4.0) * h.cos_i * h.cos_o);
+        self.f(h.cos_d) * dg
     }
 
     /// E_spec(μo) = ∫ f cos θi dωi (F included), by deterministic
@@ -366,21 +364,42 @@ impl Microfacet {
     }
 }
 
+/// A microfacet material's per-pixel state.
+#[derive(Clone, Copy)]
+pub struct MicrofacetPrepared<R: Real> {
+    pub o: Outgoing<R>,
+    /// 1 − E(μo) of the compensation lobe (unused without compensation).
+    pub one_minus_e_o: R,
+}
+
 impl Brdf for Microfacet {
+    type Prepared<R: Real> = MicrofacetPrepared<R>;
+
     #[inline(always)]
-    fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        let p = &self.params;
-        let above = n.dot(wi).gt(R::ZERO) & n.dot(wo).gt(R::ZERO);
-        let diffuse = Rgb::select(above, Rgb::from_f32(p.diffuse) * R::FRAC_1_PI, Rgb::zero());
-        let single = p.specular(n, wi, wo) + diffuse;
-        match &self.kc {
-            Some(k) => single + k.f(n.dot(wi), n.dot(wo)),
-            None => single,
+    fn prepare<R: Real>(&self, wo: V3<R>) -> MicrofacetPrepared<R> {
+        let o = Outgoing::new(wo);
+        MicrofacetPrepared {
+            o,
+            one_minus_e_o: match &self.kc {
+                Some(k) => k.prepare(o.cos_o),
+                None => R::ZERO,
+            },
         }
     }
 
-    fn albedo<R: Real>(&self, n: V3<R>, wo: V3<R>) -> Rgb<R> {
-        let mu = n.dot(wo);
+    #[inline(always)]
+    fn f_local<R: Real>(&self, p: &MicrofacetPrepared<R>, wi: V3<R>) -> Rgb<R> {
+        let params = &self.params;
+        let h = HalfAngles::new(wi, &p.o);
+        let mut f = params.specular(&h) + Rgb::from_f32(params.diffuse) * R::FRAC_1_PI;
+        if let Some(k) = &self.kc {
+            f += k.f(h.cos_i, p.one_minus_e_o);
+        }
+        Rgb::select(h.above, f, Rgb::zero())
+    }
+
+    fn albedo_local<R: Real>(&self, p: &MicrofacetPrepared<R>) -> Rgb<R> {
+        let mu = p.o.wo.z;
         let mut out = [[0.0f32; 8]; 3];
         for lane in 0..R::LANES {
             let e = self.albedo_at(mu.lane(lane) as f32);
@@ -389,7 +408,7 @@ impl Brdf for Microfacet {
             }
         }
         let e = Rgb::new(R::load(&out[0]), R::load(&out[1]), R::load(&out[2]));
-        Rgb::select(mu.gt(R::ZERO), e, Rgb::zero())
+        Rgb::select(p.o.above, e, Rgb::zero())
     }
 }
 

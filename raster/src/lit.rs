@@ -1,0 +1,114 @@
+//! The physically based shader: a core [`Model`] lit by the scene's lights.
+//!
+//! Per packet the model first prepares what depends on the pixel alone
+//! ([`Brdf::prepare`] with wo in the local frame); then each light adds its
+//! part in the local frame: delta lights (point, directional) through one
+//! direction, polygon lights through the model's integral over the polygon,
+//! the uniform environment through the directional albedo.
+
+use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
+use specula_core::light::{Light, PolygonLocal, MAX_POLYGON_VERTICES};
+use specula_core::{Brdf, BrdfVisitor, Model, Real, Rgb, V3};
+
+/// A model under the scene's lights.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Lit {
+    pub model: Model,
+}
+
+/// Squared distances below this are treated as this, so a light lying on a
+/// surface gives a large finite value instead of inf·0 = NaN.
+const MIN_DIST2: f64 = 1e-8;
+
+struct LightLoop<'a, 'b, R: Real> {
+    input: &'a ShadeInput<'b, R>,
+    env: &'a ShadeEnv<'a>,
+}
+
+impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
+    type Output = Rgb<R>;
+
+    #[inline(always)]
+    fn visit<B: Brdf>(self, brdf: &B) -> Rgb<R> {
+        let (frag, frame) = (self.input.frag, &self.input.frame);
+        let prepared = brdf.prepare(frame.to_local(frag.wo));
+        let mut acc = Rgb::zero();
+        for light in self.env.lights {
+            match light {
+                Light::Point {
+                    position,
+                    intensity,
+                } => {
+                    let to_light = V3::from_f32(*position) - frag.p;
+                    let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
+                    let inv_d = d2.rsqrt();
+                    let wi = frame.to_local(to_light * inv_d);
+                    let f_cos = brdf.f_cos_local(&prepared, wi);
+                    acc += f_cos.mul_elem(V3::from_f32(*intensity)) * (inv_d * inv_d);
+                }
+                Light::Directional {
+                    to_light,
+                    irradiance,
+                } => {
+                    let wi = frame.to_local(V3::from_f32(*to_light));
+                    let f_cos = brdf.f_cos_local(&prepared, wi);
+                    acc += f_cos.mul_elem(V3::from_f32(*irradiance));
+                }
+                Light::Polygon { vertices, radiance } => {
+                    // Only models with B::POLYGON_LIGHTS meet one
+                    // (`check_lights`); the constant folds this arm away
+                    // for the others.
+                    if B::POLYGON_LIGHTS {
+                        let mut poly = PolygonLocal {
+                            vertices: [V3::zero(); MAX_POLYGON_VERTICES],
+                            len: vertices.len(),
+                        };
+                        for (v, p) in poly.vertices.iter_mut().zip(vertices) {
+                            *v = frame.to_local(V3::from_f32(*p) - frag.p);
+                        }
+                        let e = brdf.polygon_local(&prepared, &poly);
+                        acc += e.mul_elem(V3::from_f32(*radiance));
+                    }
+                }
+            }
+        }
+        if let Some(env) = self.env.environment {
+            acc += brdf.albedo_local(&prepared).mul_elem(V3::from_f32(env));
+        }
+        acc
+    }
+}
+
+impl PacketShader for Lit {
+    #[inline(always)]
+    fn shade<R: Real>(&self, input: &ShadeInput<R>, env: &ShadeEnv) -> Rgb<R> {
+        self.model.visit(LightLoop { input, env })
+    }
+
+    fn needs_surface(&self) -> bool {
+        struct Aniso;
+        impl BrdfVisitor for Aniso {
+            type Output = bool;
+            fn visit<B: Brdf>(self, _: &B) -> bool {
+                B::ANISOTROPIC
+            }
+        }
+        self.model.visit(Aniso)
+    }
+
+    fn check_lights(&self, lights: &[Light]) -> Result<(), String> {
+        if !self.model.polygon_lights() {
+            if let Some(i) = lights
+                .iter()
+                .position(|l| matches!(l, Light::Polygon { .. }))
+            {
+                return Err(format!(
+                    "light {} is a polygon light, and the \"{}\" model has no integral over polygons yet (polygon lights shade only materials that have one; \"unlit\" ignores lights)",
+                    i + 1,
+                    self.model.name()
+                ));
+            }
+        }
+        Ok(())
+    }
+}

@@ -1,0 +1,138 @@
+//! The seam between the shading pass and what a material does to a pixel
+//! packet: [`SurfaceShader`].
+//!
+//! A shader is written once, generic over the lane type, by implementing
+//! [`PacketShader`]; the blanket impl turns it into a [`SurfaceShader`],
+//! the object-safe form the scene stores (`Arc<dyn SurfaceShader>`), with
+//! one monomorphized entry per lane width (f32x8 for the hot path, f32 for
+//! `--scalar`). The dynamic call happens once per packet and material;
+//! everything inside it (the light loop, the BRDF) is static. Crates above
+//! raster (npr's toon and hatching shaders) add shaders this way without
+//! touching core or raster.
+//!
+//! Shaders in this crate: [`crate::lit::Lit`] (a physically based
+//! [`specula_core::Model`] under the scene's lights) and
+//! [`crate::unlit::Unlit`] (a constant radiance).
+
+use crate::resolve::{Fragment, Surface};
+use specula_core::light::Light;
+use specula_core::{f32x8, Real, Rgb, ShadingFrame};
+use std::any::Any;
+use std::fmt::Debug;
+use std::sync::Arc;
+
+/// What the shading pass knows of a packet, for the lanes of one material.
+pub struct ShadeInput<'a, R: Real> {
+    /// Position, normal, view direction, depth, barycentrics.
+    pub frag: &'a Fragment<R>,
+    /// The local shading frame (normal +Z). Its tangent follows the mesh's
+    /// uv tangents when the shader asked for the surface
+    /// ([`SurfaceShader::needs_surface`]) and the mesh has uvs; otherwise it
+    /// is some tangent orthogonal to the normal (fine for isotropic models).
+    pub frame: ShadingFrame<R>,
+    /// uv, uv derivatives and tangents, when the shader asked for them.
+    pub surface: Option<&'a Surface<R>>,
+    /// Bit i set: lane i shows this material (other lanes are computed and
+    /// discarded, so they only need to stay finite).
+    pub lanes: u32,
+}
+
+/// The scene's light, shared by every packet.
+#[derive(Clone, Copy, Debug)]
+pub struct ShadeEnv<'a> {
+    pub lights: &'a [Light],
+    /// Uniform environment radiance, if the scene has one.
+    pub environment: Option<[f32; 3]>,
+}
+
+/// A shader written once over the lane type; see the module docs.
+pub trait PacketShader: Debug + Send + Sync + 'static {
+    /// Outgoing radiance toward the eye in the lanes of `input.lanes`.
+    fn shade<R: Real>(&self, input: &ShadeInput<R>, env: &ShadeEnv) -> Rgb<R>;
+
+    /// The shader reads [`ShadeInput::surface`] (uvs, tangents).
+    fn needs_surface(&self) -> bool {
+        false
+    }
+
+    /// Whether the shader can light itself with these lights; called once
+    /// when a scene is loaded, so a shader never meets a light it cannot
+    /// handle. The error says which light and why.
+    fn check_lights(&self, _lights: &[Light]) -> Result<(), String> {
+        Ok(())
+    }
+}
+
+/// The object-safe form of [`PacketShader`] that materials hold.
+pub trait SurfaceShader: Debug + Send + Sync + 'static {
+    fn shade_x8(&self, input: &ShadeInput<f32x8>, env: &ShadeEnv) -> Rgb<f32x8>;
+    fn shade_x1(&self, input: &ShadeInput<f32>, env: &ShadeEnv) -> Rgb<f32>;
+    fn needs_surface(&self) -> bool;
+    fn check_lights(&self, lights: &[Light]) -> Result<(), String>;
+    /// For callers that need the concrete shader back (benchmarks swapping
+    /// a model, tests).
+    fn as_any(&self) -> &dyn Any;
+}
+
+impl<T: PacketShader> SurfaceShader for T {
+    fn shade_x8(&self, input: &ShadeInput<f32x8>, env: &ShadeEnv) -> Rgb<f32x8> {
+        self.shade(input, env)
+    }
+    fn shade_x1(&self, input: &ShadeInput<f32>, env: &ShadeEnv) -> Rgb<f32> {
+        self.shade(input, env)
+    }
+    fn needs_surface(&self) -> bool {
+        PacketShader::needs_surface(self)
+    }
+    fn check_lights(&self, lights: &[Light]) -> Result<(), String> {
+        PacketShader::check_lights(self, lights)
+    }
+    fn as_any(&self) -> &dyn Any {
+        self
+    }
+}
+
+/// The lane types the shading pass runs: picks the matching entry of a
+/// `dyn SurfaceShader`.
+pub trait ShadeLanes: Real {
+    fn shade_with(
+        shader: &dyn SurfaceShader,
+        input: &ShadeInput<Self>,
+        env: &ShadeEnv,
+    ) -> Rgb<Self>;
+}
+
+impl ShadeLanes for f32x8 {
+    #[inline(always)]
+    fn shade_with(s: &dyn SurfaceShader, input: &ShadeInput<Self>, env: &ShadeEnv) -> Rgb<Self> {
+        s.shade_x8(input, env)
+    }
+}
+
+impl ShadeLanes for f32 {
+    #[inline(always)]
+    fn shade_with(s: &dyn SurfaceShader, input: &ShadeInput<Self>, env: &ShadeEnv) -> Rgb<Self> {
+        s.shade_x1(input, env)
+    }
+}
+
+/// A material as the passes see it: a shader plus the properties the
+/// geometry passes need.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub shader: Arc<dyn SurfaceShader>,
+    /// Back faces are drawn (and shaded with the normal flipped toward the
+    /// viewer) instead of culled by a pass with [`crate::geometry::Cull::Back`].
+    pub double_sided: bool,
+}
+
+impl Material {
+    pub fn new(name: &str, shader: impl SurfaceShader, double_sided: bool) -> Material {
+        Material {
+            name: name.to_string(),
+            shader: Arc::new(shader),
+            double_sided,
+        }
+    }
+}
