@@ -180,11 +180,7 @@ base_color = [1.0, 1.0, 1.0]
     let (w, h) = (320, 200);
     let t = Target::new(w, h).unwrap();
     let vis = visibility(&s.data, &t, &mut FrameStats::default());
-    let ctx = ResolveContext {
-        scene: &s.data,
-        planes: &vis.planes,
-        view: &vis.view,
-    };
+    let ctx = ResolveContext::new(&s.data, &vis.planes, &vis.view);
     let ids = t.to_row_major(&vis.vis.id);
     let cam = &s.data.camera;
     let (eye, target) = (cam.eye.as_dvec3(), cam.target.as_dvec3());
@@ -207,7 +203,7 @@ base_color = [1.0, 1.0, 1.0]
             let p = eye + d * (-eye.y / d.y);
             // mesh::plane: s along +z, t along +x, both from −100.
             let want = [(p.z + 100.0) / 200.0, (p.x + 100.0) / 200.0];
-            let tris = specula_raster::resolve::PacketTris::new(&[id], 1, &s.data);
+            let tris = specula_raster::resolve::PacketTris::new(&[id], 1, &ctx);
             let frag = ctx.resolve::<f32>(px, py, &tris);
             let surf = ctx.surface::<f32>(&tris, &frag);
             let got = glam::DVec2::new(surf.uv[0] as f64, surf.uv[1] as f64);

@@ -226,11 +226,7 @@ pub fn shade_into(
         "frame buffers are for another target"
     );
     let t = Instant::now();
-    let ctx = ResolveContext {
-        scene,
-        planes: &v.planes,
-        view: &v.view,
-    };
+    let ctx = ResolveContext::new(scene, &v.planes, &v.view);
     let FrameBuffers {
         color,
         depth,

@@ -127,3 +127,63 @@ pub fn validate_passes(
     }
     Ok(())
 }
+
+/// Visibility-buffer id → (source triangle, material), from the passes'
+/// id ranges; built once per frame so the per-packet look-up scans a few
+/// small entries (usually one) instead of the pass list.
+#[derive(Clone, Debug, Default)]
+pub struct IdMap {
+    ranges: Vec<IdRange>,
+    /// One range whose ids are the triangle indices, no override: the
+    /// default single pass, answered without scanning.
+    identity: bool,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct IdRange {
+    start: u32,
+    end: u32,
+    id_base: u32,
+    /// Override material, or `u32::MAX` for each triangle's own.
+    material: u32,
+}
+
+impl IdMap {
+    /// From passes that [`validate_passes`] accepted.
+    pub fn new(passes: &[GeometryPass]) -> IdMap {
+        let ranges: Vec<IdRange> = passes
+                .iter()
+                .filter(|p| !p.triangles.is_empty())
+                .map(|p| IdRange {
+                    start: p.ids().start as u32,
+                    end: p.ids().end as u32,
+                    id_base: p.id_base,
+                    material: p.material.unwrap_or(u32::MAX),
+                })
+                .collect();
+        let identity = matches!(ranges.as_slice(), [r] if r.id_base == 0 && r.material == u32::MAX);
+        IdMap { ranges, identity }
+    }
+
+    /// The source triangle and material of `id`, an id some pass wrote.
+    #[inline(always)]
+    pub fn look_up(&self, id: u32, tri_material: &[u32]) -> (u32, u32) {
+        if self.identity {
+            return (id, tri_material[id as usize]);
+        }
+        for r in &self.ranges {
+            if id >= r.start && id < r.end {
+                let tri = id - r.id_base;
+                let m = if r.material == u32::MAX {
+                    tri_material[tri as usize]
+                } else {
+                    r.material
+                };
+                return (tri, m);
+            }
+        }
+        // Unreachable for ids from the visibility buffer; a finite answer
+        // rather than a panic in per-pixel code.
+        (0, tri_material.first().copied().unwrap_or(0))
+    }
+}

@@ -2,6 +2,7 @@
 //! centres, R::LANES horizontally adjacent pixels at a time.
 
 use crate::camera::View;
+use crate::geometry::IdMap;
 use crate::scene::SceneData;
 use crate::setup::TriPlanes;
 use crate::target::MISS;
@@ -49,6 +50,29 @@ pub struct ResolveContext<'a> {
     pub scene: &'a SceneData,
     pub planes: &'a [TriPlanes],
     pub view: &'a View,
+    pub ids: IdMap,
+    /// Per material: its shader reads the surface (uvs, tangents).
+    pub needs_surface: Vec<bool>,
+    /// Some material's shader does.
+    pub any_needs_surface: bool,
+}
+
+impl<'a> ResolveContext<'a> {
+    pub fn new(scene: &'a SceneData, planes: &'a [TriPlanes], view: &'a View) -> Self {
+        let needs_surface: Vec<bool> = scene
+            .materials
+            .iter()
+            .map(|m| m.shader.needs_surface())
+            .collect();
+        ResolveContext {
+            scene,
+            planes,
+            view,
+            ids: IdMap::new(&scene.geometry),
+            any_needs_surface: needs_surface.contains(&true),
+            needs_surface,
+        }
+    }
 }
 
 /// The distinct triangles of one packet and the lanes each covers.
@@ -70,49 +94,64 @@ impl PacketTris {
     /// Groups the first `lanes` ids (MISS lanes belong to no group) and
     /// looks up each group's source triangle and material.
     #[inline(always)]
-    pub fn new(ids: &[u32], lanes: usize, scene: &SceneData) -> PacketTris {
-        let mut p = Self::group(ids, lanes);
-        for t in 0..p.n {
-            (p.tri[t], p.material[t]) = scene.id_info(p.id[t]);
-        }
+    pub fn new(ids: &[u32], lanes: usize, ctx: &ResolveContext) -> PacketTris {
+        let mut p = PacketTris::default();
+        p.fill(ids, lanes, Some(ctx));
         p
     }
 
     /// The grouping alone (`tri` and `material` left zero).
-    #[inline(always)]
     pub fn group(ids: &[u32], lanes: usize) -> PacketTris {
         let mut p = PacketTris::default();
+        p.fill(ids, lanes, None);
+        p
+    }
+
+    /// [`PacketTris::new`] in place: the shading pass keeps one across
+    /// packets. (Returning the struct by value cost a third of the pass:
+    /// its fields are written by scalar stores and the copy reads them
+    /// back with vector loads, which stall on store forwarding.)
+    #[inline(always)]
+    pub fn fill(&mut self, ids: &[u32], lanes: usize, ctx: Option<&ResolveContext>) {
+        self.n = 0;
         if lanes == 8 {
             // One vector compare per distinct triangle.
             let v = u32x8::new(ids[..8].try_into().expect("8 ids"));
             let mut todo = !v.simd_eq(u32x8::splat(MISS)).to_bitmask() & 0xFF;
-            p.covered = todo;
+            self.covered = todo;
             while todo != 0 {
                 let id = ids[todo.trailing_zeros() as usize];
                 let lanes = v.simd_eq(u32x8::splat(id)).to_bitmask();
-                p.id[p.n] = id;
-                p.lanes[p.n] = lanes;
-                p.n += 1;
+                self.id[self.n] = id;
+                self.lanes[self.n] = lanes;
+                self.n += 1;
                 todo &= !lanes;
             }
-            return p;
-        }
-        for (i, &id) in ids[..lanes].iter().enumerate() {
-            if id == MISS {
-                continue;
-            }
-            p.covered |= 1 << i;
-            let t = match p.id[..p.n].iter().position(|&x| x == id) {
-                Some(t) => t,
-                None => {
-                    p.id[p.n] = id;
-                    p.n += 1;
-                    p.n - 1
+        } else {
+            self.covered = 0;
+            for (i, &id) in ids[..lanes].iter().enumerate() {
+                if id == MISS {
+                    continue;
                 }
-            };
-            p.lanes[t] |= 1 << i;
+                self.covered |= 1 << i;
+                let t = match self.id[..self.n].iter().position(|&x| x == id) {
+                    Some(t) => t,
+                    None => {
+                        self.id[self.n] = id;
+                        self.lanes[self.n] = 0;
+                        self.n += 1;
+                        self.n - 1
+                    }
+                };
+                self.lanes[t] |= 1 << i;
+            }
         }
-        p
+        if let Some(ctx) = ctx {
+            for t in 0..self.n {
+                (self.tri[t], self.material[t]) =
+                    ctx.ids.look_up(self.id[t], &ctx.scene.tri_material);
+            }
+        }
     }
 }
 

@@ -79,23 +79,6 @@ impl SceneData {
         }
         Ok(())
     }
-
-    /// The source triangle and the material of a visibility-buffer id
-    /// (ids come only from the geometry passes, which `validate` checked
-    /// to be disjoint).
-    #[inline(always)]
-    pub fn id_info(&self, id: u32) -> (u32, u32) {
-        for p in &self.geometry {
-            if (id as u64) < p.ids().end && id >= p.id_base {
-                let tri = id - p.id_base;
-                if tri >= p.triangles.start {
-                    return (tri, p.material.unwrap_or(self.tri_material[tri as usize]));
-                }
-            }
-        }
-        debug_assert!(false, "id {id} written by no geometry pass");
-        (0, self.tri_material.first().copied().unwrap_or(0))
-    }
 }
 
 /// Per-vertex tangent frames from uvs [Lengyel01]: each triangle's ∂p/∂u

@@ -65,15 +65,18 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
     let background = scene.environment.unwrap_or(scene.background);
     let mut covered = 0u64;
     let tile_w = TILE.min((target.width - tx) as usize);
+    let mut tris = PacketTris::default();
     for row in 0..TILE.min((target.height - ty) as usize) {
         let y = (ty as usize) + row;
         let x0 = tx as usize;
         // SAFETY: tile t is this call's alone (the function's contract).
         let (color, depth, normal, id_out) = unsafe {
+            let [r, g, b] = &out.color;
+            let [nx, ny, nz] = &out.normal;
             (
-                out.color.each_ref().map(|w| w.tile_row(x0, y)),
+                [r.tile_row(x0, y), g.tile_row(x0, y), b.tile_row(x0, y)],
                 out.depth.tile_row(x0, y),
-                out.normal.each_ref().map(|w| w.tile_row(x0, y)),
+                [nx.tile_row(x0, y), ny.tile_row(x0, y), nz.tile_row(x0, y)],
                 out.id.tile_row(x0, y),
             )
         };
@@ -84,15 +87,26 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
         while lx < tile_w {
             let at = row * TILE + lx;
             let n_px = R::LANES.min(tile_w - lx);
-            let tris = PacketTris::new(&ids[at..], R::LANES, scene);
+            tris.fill(&ids[at..], R::LANES, Some(ctx));
             let mut rgb: Rgb<R> = Rgb::from_f32(background);
             let mut w = R::splat(f64::INFINITY);
             let mut n = V3::zero();
             if tris.n > 0 {
                 covered += tris.covered.count_ones() as u64;
                 let frag = ctx.resolve::<R>(tx + lx as u32, y as u32, &tris);
-                let frame = ShadingFrame::from_normal(frag.n);
-                let mut surface = None;
+                // The mesh's uv frame only for shaders that read the surface
+                // (anisotropic models, textures); any frame for the rest.
+                let needs = |t: usize| ctx.needs_surface[tris.material[t] as usize];
+                let surface = (ctx.any_needs_surface && (0..tris.n).any(needs))
+                    .then(|| ctx.surface(&tris, &frag));
+                let uv_frame = surface.as_ref().map(|s| surface_frame(&frag, s));
+                let any_frame = ShadingFrame::from_normal(frag.n);
+                let mut input = ShadeInput {
+                    frag: &frag,
+                    frame: any_frame,
+                    surface: None,
+                    lanes: 0,
+                };
                 // Shade once per material present, under its lanes' mask.
                 let mut done = 0u32;
                 for t in 0..tris.n {
@@ -107,29 +121,27 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
                             done |= 1 << u;
                         }
                     }
+                    input.lanes = group;
+                    match (&uv_frame, uv_frame.is_some() && needs(t)) {
+                        (Some(f), true) => {
+                            input.frame = *f;
+                            input.surface = surface.as_ref();
+                        }
+                        _ if input.surface.is_some() => {
+                            input.frame = any_frame;
+                            input.surface = None;
+                        }
+                        _ => {}
+                    }
                     let shader = &*scene.materials[m as usize].shader;
-                    let input = if shader.needs_surface() {
-                        let s = surface.get_or_insert_with(|| ctx.surface(&tris, &frag));
-                        ShadeInput {
-                            frag: &frag,
-                            frame: surface_frame(&frag, s),
-                            surface: Some(&*s),
-                            lanes: group,
-                        }
-                    } else {
-                        ShadeInput {
-                            frag: &frag,
-                            frame,
-                            surface: None,
-                            lanes: group,
-                        }
-                    };
                     let c = R::shade_with(shader, &input, &env);
                     rgb = Rgb::select(R::mask_from_bits(group), c, rgb);
                 }
-                let hit = R::mask_from_bits(tris.covered);
-                w = R::select(hit, frag.w, w);
-                n = V3::select(hit, frag.n, n);
+                if !depth.is_empty() || !normal[0].is_empty() {
+                    let hit = R::mask_from_bits(tris.covered);
+                    w = R::select(hit, frag.w, w);
+                    n = V3::select(hit, frag.n, n);
+                }
             }
             let px = lx..lx + n_px;
             store(rgb.x, &mut color[0][px.clone()]);
