@@ -131,3 +131,84 @@ fn gather_speed() {
         eprintln!("table of {len}: Real::gather {hw:.2} ns, per-lane loads {sw:.2} ns per 8 lanes");
     }
 }
+
+/// GTR D(m) from Burley's c and base^(−γ) [Burley12, App. B], combined in
+/// f64 logs: ln D = ln c − γ ln base, with ln c written per branch so that
+/// (α²)^(1−γ) never overflows (for γ > 1 it is factored out of
+/// 1 − (α²)^(1−γ)).
+fn d_gtr_oracle(alpha: f64, gamma: f64, c2: f64, s2: f64) -> f64 {
+    let pi = std::f64::consts::PI;
+    let a2 = alpha * alpha;
+    let base = c2 * a2 + s2;
+    if alpha == 1.0 {
+        return base.powf(-gamma) / pi;
+    }
+    let ln_c = if gamma == 1.0 {
+        ((a2 - 1.0) / (pi * a2.ln())).ln()
+    } else if gamma > 1.0 {
+        // 1 − (α²)^(1−γ) = −(α²)^(1−γ) (1 − (α²)^(γ−1))
+        (gamma - 1.0).ln() + (1.0 - a2).ln()
+            - pi.ln()
+            - ((1.0 - gamma) * a2.ln() + (1.0 - a2.powf(gamma - 1.0)).ln())
+    } else {
+        ((gamma - 1.0) * (a2 - 1.0) / (pi * (1.0 - a2.powf(1.0 - gamma)))).ln()
+    };
+    (ln_c - gamma * base.ln()).exp()
+}
+
+#[test]
+fn d_gtr_is_finite_and_accurate_at_extreme_alpha_and_gamma() {
+    use specula_core::ndf::d_gtr;
+    let gammas = [
+        0.5, 0.75, 0.999, 1.0, 1.001, 1.5, 2.0, 3.0, 5.5, 10.0, 16.0, 33.3, 64.0, 100.0,
+    ];
+    let alphas = [
+        1e-3f32, 2e-3, 5e-3, 0.01, 0.02, 0.05, 0.1, 0.25, 0.5, 0.9, 0.999, 1.0,
+    ];
+    let (mut worst, mut at) = (0.0f64, String::new());
+    for gamma in gammas {
+        for alpha in alphas {
+            // θ = (π/2) k³/n³: dense near the peak.
+            let n = 400;
+            let thetas: Vec<f64> = (0..=n)
+                .map(|k| std::f64::consts::FRAC_PI_2 * (k as f64 / n as f64).powi(3))
+                .collect();
+            for chunk in thetas.chunks(8) {
+                let c2: [f32; 8] =
+                    core::array::from_fn(|l| chunk.get(l).map_or(1.0, |t| t.cos().powi(2)) as f32);
+                let s2: [f32; 8] =
+                    core::array::from_fn(|l| chunk.get(l).map_or(0.0, |t| t.sin().powi(2)) as f32);
+                let lanes =
+                    d_gtr(f32x8::splat(alpha), gamma, f32x8::from(c2), f32x8::from(s2)).to_array();
+                for l in 0..8 {
+                    let want = d_gtr_oracle(alpha as f64, gamma, c2[l] as f64, s2[l] as f64);
+                    let scalar = d_gtr(alpha, gamma, c2[l], s2[l]);
+                    let wide = d_gtr(alpha as f64, gamma, c2[l] as f64, s2[l] as f64);
+                    assert!(
+                        want < 1e-25 || (wide - want).abs() <= 1e-10 * want,
+                        "f64 at α={alpha} γ={gamma}: {wide} vs {want}"
+                    );
+                    for got in [scalar, lanes[l]] {
+                        let got = got as f64;
+                        let where_ = format!(
+                            "α={alpha} γ={gamma} cos²={} sin²={}: {got} vs {want}",
+                            c2[l], s2[l]
+                        );
+                        assert!(got.is_finite() && got >= 0.0, "{where_}");
+                        if want >= 1e-25 {
+                            let rel = (got - want).abs() / want;
+                            if rel > worst {
+                                (worst, at) = (rel, where_.clone());
+                            }
+                        } else {
+                            // Past f32's useful range: only finite and tiny.
+                            assert!(got <= 2e-25, "{where_}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+    eprintln!("worst d_gtr f32/f32x8 vs f64 relative error: {worst:.2e} at {at}");
+    assert!(worst <= 1e-5, "{worst:e} at {at}");
+}
