@@ -329,4 +329,32 @@ impl<const C: usize> Table2<C> {
             .collect();
         Table1::from_nodes(self.x, values)
     }
+
+    /// As [`Table2::slice_y`], but each x node's column is interpolated
+    /// along y by the Catmull–Rom cubic in the node coordinate through the
+    /// four nearest rows (the outer ones repeated at the ends):
+    ///
+    /// v = v₁ + ½ w (v₂ − v₀ + w (2v₀ − 5v₁ + 4v₂ − v₃ + w (3(v₁ − v₂) + v₃ − v₀)))
+    ///
+    /// For per-material slices, where the cost is paid once and a function
+    /// curved along y (Kulla–Conty's E at small α) needs more than a lerp.
+    /// It can overshoot the node values; callers clamp if that matters.
+    pub fn slice_y_cubic(&self, y: f64) -> Table1<C> {
+        let (j, w) = self.y.locate(y);
+        let j = j as usize;
+        let row = |k: isize| k.clamp(0, self.y.n as isize - 1) as usize;
+        let values = (0..self.x.n)
+            .map(|i| {
+                let v = |k: isize| self.node_value(i, row(j as isize + k));
+                let (v0, v1, v2, v3) = (v(-1), v(0), v(1), v(2));
+                core::array::from_fn(|c| {
+                    let [p0, p1, p2, p3] = [v0[c], v1[c], v2[c], v3[c]].map(|x| x as f64);
+                    let t = 3.0 * (p1 - p2) + p3 - p0;
+                    (p1 + 0.5 * w * (p2 - p0 + w * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + w * t)))
+                        as f32
+                })
+            })
+            .collect();
+        Table1::from_nodes(self.x, values)
+    }
 }

@@ -220,3 +220,25 @@ fn integrate_is_exact_for_the_interpolant() {
     let [got] = t.integrate(|_| 1.0);
     assert!((got - mid).abs() < 1e-9, "{got} vs {mid}");
 }
+
+#[test]
+fn cubic_slice_reproduces_quadratics_in_the_node_coordinate() {
+    // Catmull–Rom on uniform nodes is exact for quadratics; with a √ warp
+    // the node coordinate is u = √y, so f = 1 + 2u − 3u² along y.
+    let ax = Axis::new(5, 0.0, 1.0, Warp::Linear, Nodes::Ends);
+    let ay = Axis::new(12, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
+    let q = |x: f64, u: f64| 1.0 + 2.0 * u - 3.0 * u * u + x;
+    let t = Table2::build(ax, ay, |x, y| [q(x, y.sqrt())]);
+    for k in 0..100 {
+        // Interior intervals only: the ends repeat the outer rows.
+        let u = 1.0 / 11.0 + (9.0 / 11.0) * k as f64 / 99.0;
+        let s = t.slice_y_cubic(u * u);
+        for i in 0..5 {
+            let want = q(i as f64 / 4.0, u);
+            assert!(
+                (s.node_value(i)[0] as f64 - want).abs() < 1e-6,
+                "u={u} node {i}"
+            );
+        }
+    }
+}
