@@ -106,9 +106,9 @@ pub trait Real:
     /// `self * a + b`, fused where the lane type has FMA.
     fn mul_add(self, a: Self, b: Self) -> Self;
     /// `self` if `self > o`, else `o`, on every target: a NaN `self` gives
-    /// `o` (so `x.max(ZERO)` clears NaN) and a NaN `o` gives NaN. Written
-    /// as a select on the comparison, not as the platform's max (x86
-    /// `maxps` happens to agree, NEON `fmax` propagates NaN).
+    /// `o` (so `x.max(ZERO)` clears NaN) and a NaN `o` gives NaN. A select
+    /// on the comparison, or on x86 `maxps`, whose definition is that rule
+    /// (not the platform's generic max: NEON `fmax` propagates NaN).
     fn max(self, o: Self) -> Self;
     /// `self` if `self < o`, else `o`; NaN as [`Real::max`].
     fn min(self, o: Self) -> Self;
@@ -385,12 +385,11 @@ impl Real for f32x8 {
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        // `if self > o { self } else { o }` per lane, NaN rule included.
-        self.simd_gt(o).select(self, o)
+        max_f32x8(self, o)
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
-        self.simd_lt(o).select(self, o)
+        min_f32x8(self, o)
     }
     #[inline(always)]
     fn abs(self) -> Self {
@@ -448,6 +447,41 @@ impl Real for f32x8 {
         let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
         gather_f32x8(table, i)
     }
+}
+
+/// `if a > b { a } else { b }` per lane. `vmaxps a, b` is defined as
+/// exactly that (Intel SDM: the second operand when either is NaN or both
+/// are zero), one instruction where the select below compiles to a compare
+/// and a blend (checked in the disassembly); other targets use the select,
+/// since e.g. NEON `fmax` propagates NaN. Tested bit for bit against the
+/// scalar rule in core/tests/numerics.rs.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[inline(always)]
+fn max_f32x8(a: f32x8, b: f32x8) -> f32x8 {
+    use core::arch::x86_64::_mm256_max_ps;
+    // SAFETY: AVX is enabled (cfg).
+    bytemuck::cast(unsafe { _mm256_max_ps(bytemuck::cast(a), bytemuck::cast(b)) })
+}
+
+/// `if a < b { a } else { b }` per lane; `vminps a, b` as [`max_f32x8`].
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[inline(always)]
+fn min_f32x8(a: f32x8, b: f32x8) -> f32x8 {
+    use core::arch::x86_64::_mm256_min_ps;
+    // SAFETY: AVX is enabled (cfg).
+    bytemuck::cast(unsafe { _mm256_min_ps(bytemuck::cast(a), bytemuck::cast(b)) })
+}
+
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+#[inline(always)]
+fn max_f32x8(a: f32x8, b: f32x8) -> f32x8 {
+    a.simd_gt(b).select(a, b)
+}
+
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+#[inline(always)]
+fn min_f32x8(a: f32x8, b: f32x8) -> f32x8 {
+    a.simd_lt(b).select(a, b)
 }
 
 /// 8 loads at i32 indices already in `0..table.len()`: `vgatherdps`.
