@@ -7,10 +7,10 @@
 //! - E_spec(μo, α) = F0 · A(μo, α) + B(μo, α),  A = ∫ s (1 − w) dωi,  B = ∫ s w dωi
 //! - E_diff(μo)    = (1 − F0) ρd (1 − C(μo)),   C = ∫ w (n·wi)/π dωi  (independent of α)
 //!
-//! Layout: A, B are `N_MU × N_ALPHA` grids sampled at texel centres,
-//! μ_j = (j + ½)/N_MU, √α_k = (k + ½)/N_ALPHA (roughness spacing: the
-//! integrals change fastest at small α), bilinear lookup clamped at the edges.
-//! C is `N_MU` entries on the same μ axis.
+//! Layout (table.rs): A, B are one 2-channel table over μo (x) and α (y),
+//! C a 1-channel table over μo, all at texel centres: μ_j = (j + ½)/N_MU,
+//! √α_k = (k + ½)/N_ALPHA (`Warp::Sqrt`, roughness spacing: the integrals
+//! change fastest at small α), bilinear, clamped past the outer centres.
 //!
 //! Computed once per process by deterministic quadrature (Hammersley points,
 //! importance-sampling D(h)(n·h)); see the tests for the measured error.
@@ -18,6 +18,7 @@
 use crate::fresnel::schlick_weight;
 use crate::masking::v_smith_ggx_correlated;
 use crate::real::Real;
+use crate::table::{Axis, Nodes, Table1, Table2, Warp};
 use std::sync::OnceLock;
 
 pub const N_MU: usize = 32;
@@ -33,10 +34,14 @@ pub struct SplitSum<R> {
 }
 
 pub struct AlbedoTables {
-    a: Vec<f32>,
-    b: Vec<f32>,
-    c: Vec<f32>,
+    /// [A, B] over (μo, α).
+    ab: Table2<2>,
+    /// C over μo.
+    c: Table1<1>,
 }
+
+const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Linear, Nodes::Centres);
+const ALPHA_AXIS: Axis = Axis::new(N_ALPHA, 0.0, 1.0, Warp::Sqrt, Nodes::Centres);
 
 /// Point `i` of an `n`-point Hammersley set in [0, 1)².
 fn hammersley(i: u32, n: u32) -> (f64, f64) {
@@ -93,30 +98,15 @@ fn integrate_c(mu_o: f64) -> f64 {
     s / n as f64
 }
 
-/// Bilinear weights on a texel-centre axis of `n` entries over [0, 1].
-fn axis(t: f32, n: usize) -> (usize, usize, f32) {
-    let x = (t * n as f32 - 0.5).clamp(0.0, (n - 1) as f32);
-    let i0 = (x as usize).min(n - 1);
-    let i1 = (i0 + 1).min(n - 1);
-    (i0, i1, x - i0 as f32)
-}
-
 impl AlbedoTables {
     fn build() -> Self {
-        let mut a = vec![0.0; N_MU * N_ALPHA];
-        let mut b = vec![0.0; N_MU * N_ALPHA];
-        let mut c = vec![0.0; N_MU];
-        for j in 0..N_MU {
-            let mu = (j as f64 + 0.5) / N_MU as f64;
-            c[j] = integrate_c(mu) as f32;
-            for k in 0..N_ALPHA {
-                let r = (k as f64 + 0.5) / N_ALPHA as f64;
-                let (ia, ib) = integrate_ab(mu, r * r);
-                a[j * N_ALPHA + k] = ia as f32;
-                b[j * N_ALPHA + k] = ib as f32;
-            }
+        AlbedoTables {
+            ab: Table2::build(MU_AXIS, ALPHA_AXIS, |mu, alpha| {
+                let (a, b) = integrate_ab(mu, alpha);
+                [a, b]
+            }),
+            c: Table1::build(MU_AXIS, |mu| [integrate_c(mu)]),
         }
-        AlbedoTables { a, b, c }
     }
 
     /// The process-wide tables, built on first use (about 10 ms).
@@ -125,32 +115,17 @@ impl AlbedoTables {
         T.get_or_init(Self::build)
     }
 
-    /// A, B, C for one (μo, α); scalar twin of [`AlbedoTables::ggx_schlick`].
+    /// A, B, C for one (μo, α); [`AlbedoTables::ggx_schlick`] at f32.
     pub fn lookup(&self, mu_o: f32, alpha: f32) -> [f32; 3] {
-        let (j0, j1, tj) = axis(mu_o, N_MU);
-        let (k0, k1, tk) = axis(alpha.max(0.0).sqrt(), N_ALPHA);
-        let bilerp = |t: &[f32]| {
-            let v0 = t[j0 * N_ALPHA + k0] + (t[j0 * N_ALPHA + k1] - t[j0 * N_ALPHA + k0]) * tk;
-            let v1 = t[j1 * N_ALPHA + k0] + (t[j1 * N_ALPHA + k1] - t[j1 * N_ALPHA + k0]) * tk;
-            v0 + (v1 - v0) * tj
-        };
-        let c = self.c[j0] + (self.c[j1] - self.c[j0]) * tj;
-        [bilerp(&self.a), bilerp(&self.b), c]
+        let t = self.ggx_schlick(alpha, mu_o);
+        [t.a, t.b, t.c]
     }
 
-    /// A, B, C per lane (a gather: lanes look up independently).
+    /// A, B, C per lane (μo per lane, α per material).
+    #[inline(always)]
     pub fn ggx_schlick<R: Real>(&self, alpha: f32, mu_o: R) -> SplitSum<R> {
-        let mut out = [[0.0f32; 8]; 3];
-        for lane in 0..R::LANES {
-            let v = self.lookup(mu_o.lane(lane) as f32, alpha);
-            for (o, x) in out.iter_mut().zip(v) {
-                o[lane] = x;
-            }
-        }
-        SplitSum {
-            a: R::load(&out[0]),
-            b: R::load(&out[1]),
-            c: R::load(&out[2]),
-        }
+        let [a, b] = self.ab.lookup(mu_o, R::splat(alpha as f64));
+        let [c] = self.c.lookup(mu_o);
+        SplitSum { a, b, c }
     }
 }

@@ -14,7 +14,9 @@ pub mod light;
 pub mod masking;
 pub mod models;
 pub mod ndf;
+pub mod quadrature;
 pub mod real;
+pub mod table;
 pub mod vec3;
 
 pub use brdf::{Brdf, BrdfVisitor, Model, Outgoing, ShadingFrame};

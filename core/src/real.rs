@@ -105,10 +105,12 @@ pub trait Real:
     fn rcp(self) -> Self;
     /// `self * a + b`, fused where the lane type has FMA.
     fn mul_add(self, a: Self, b: Self) -> Self;
-    /// `self` if `self > o`, else `o`: one `maxps`, and a NaN `self`
-    /// gives `o` (so `x.max(ZERO)` also clears NaN).
+    /// `self` if `self > o`, else `o`, on every target: a NaN `self` gives
+    /// `o` (so `x.max(ZERO)` clears NaN) and a NaN `o` gives NaN. A select
+    /// on the comparison, or on x86 `maxps`, whose definition is that rule
+    /// (not the platform's generic max: NEON `fmax` propagates NaN).
     fn max(self, o: Self) -> Self;
-    /// `self` if `self < o`, else `o` (a NaN `self` gives `o`).
+    /// `self` if `self < o`, else `o`; NaN as [`Real::max`].
     fn min(self, o: Self) -> Self;
     fn abs(self) -> Self;
     /// Largest integer ≤ self.
@@ -128,8 +130,15 @@ pub trait Real:
     fn is_finite(self) -> Self::Mask;
     /// `a` where `m` is set, else `b`.
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
+    /// Per lane, `table[index]` as a lane value: the one memory read of
+    /// table lookups (table.rs). Index lanes hold integral values in
+    /// `0..table.len()` (exact in f32 up to 2²⁴); an index outside that
+    /// (or NaN) panics on the scalar types and is clamped into range on
+    /// f32x8, never read out of bounds.
+    fn gather(table: &[f32], index: Self) -> Self;
 
-    /// Clamps to [lo, hi]; NaN lanes become `hi`.
+    /// Clamps to [lo, hi] (for lo ≤ hi) as `self.max(lo).min(hi)`: a NaN
+    /// `self` becomes `lo`.
     #[inline(always)]
     fn clamp(self, lo: Self, hi: Self) -> Self {
         self.max(lo).min(hi)
@@ -298,6 +307,10 @@ macro_rules! scalar_real {
                     b
                 }
             }
+            #[inline(always)]
+            fn gather(table: &[f32], index: Self) -> Self {
+                table[index as usize] as $t
+            }
         }
     };
 }
@@ -372,13 +385,11 @@ impl Real for f32x8 {
     }
     #[inline(always)]
     fn max(self, o: Self) -> Self {
-        // maxps returns its second operand when either is NaN or both are
-        // equal: exactly `if self > o { self } else { o }`.
-        self.fast_max(o)
+        max_f32x8(self, o)
     }
     #[inline(always)]
     fn min(self, o: Self) -> Self {
-        self.fast_min(o)
+        min_f32x8(self, o)
     }
     #[inline(always)]
     fn abs(self) -> Self {
@@ -428,6 +439,86 @@ impl Real for f32x8 {
     fn select(m: Self, a: Self, b: Self) -> Self {
         m.select(a, b)
     }
+    #[inline(always)]
+    fn gather(table: &[f32], index: Self) -> Self {
+        // Indices clamped into range (NaN truncates to i32::MIN, then 0):
+        // two integer ops that make the read sound whatever the caller did.
+        let last = wide::i32x8::splat(table.len() as i32 - 1);
+        let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
+        gather_f32x8(table, i)
+    }
+}
+
+/// `if a > b { a } else { b }` per lane. `vmaxps a, b` is defined as
+/// exactly that (Intel SDM: the second operand when either is NaN or both
+/// are zero), one instruction where the select below compiles to a compare
+/// and a blend (checked in the disassembly); other targets use the select,
+/// since e.g. NEON `fmax` propagates NaN. Tested bit for bit against the
+/// scalar rule in core/tests/numerics.rs.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[inline(always)]
+fn max_f32x8(a: f32x8, b: f32x8) -> f32x8 {
+    use core::arch::x86_64::_mm256_max_ps;
+    // SAFETY: AVX is enabled (cfg).
+    bytemuck::cast(unsafe { _mm256_max_ps(bytemuck::cast(a), bytemuck::cast(b)) })
+}
+
+/// `if a < b { a } else { b }` per lane; `vminps a, b` as [`max_f32x8`].
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[inline(always)]
+fn min_f32x8(a: f32x8, b: f32x8) -> f32x8 {
+    use core::arch::x86_64::_mm256_min_ps;
+    // SAFETY: AVX is enabled (cfg).
+    bytemuck::cast(unsafe { _mm256_min_ps(bytemuck::cast(a), bytemuck::cast(b)) })
+}
+
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+#[inline(always)]
+fn max_f32x8(a: f32x8, b: f32x8) -> f32x8 {
+    a.simd_gt(b).select(a, b)
+}
+
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+#[inline(always)]
+fn min_f32x8(a: f32x8, b: f32x8) -> f32x8 {
+    a.simd_lt(b).select(a, b)
+}
+
+/// 8 loads at i32 indices already in `0..table.len()`: `vgatherdps`.
+/// Measured by `gather_speed` in core/tests/numerics.rs (shared Xeon,
+/// AVX2, tables of 64 to 65536 floats): 5.4–11.5 ns per 8 lanes against
+/// 7.3–14.3 ns for eight scalar loads, so the hardware gather is kept.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn gather_f32x8(table: &[f32], i: wide::i32x8) -> f32x8 {
+    use core::arch::x86_64::{__m256i, _mm256_i32gather_ps};
+    assert!(!table.is_empty());
+    let iv: __m256i = bytemuck::cast(i);
+    // SAFETY: AVX2 is enabled (cfg); every index lane is in
+    // 0..table.len() (clamped by the caller), so each read is in bounds.
+    let v = unsafe { _mm256_i32gather_ps::<4>(table.as_ptr(), iv) };
+    bytemuck::cast(v)
+}
+
+/// Per-lane fallback of [`gather_f32x8`].
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+#[inline(always)]
+fn gather_f32x8(table: &[f32], i: wide::i32x8) -> f32x8 {
+    let i = i.to_array();
+    f32x8::new(core::array::from_fn(|l| table[i[l] as usize]))
+}
+
+/// The per-lane read, for the speed comparison in the tests.
+#[doc(hidden)]
+#[inline(always)]
+pub fn gather_f32x8_per_lane(table: &[f32], index: f32x8) -> f32x8 {
+    let last = wide::i32x8::splat(table.len() as i32 - 1);
+    let i = index
+        .fast_trunc_int()
+        .max(wide::i32x8::ZERO)
+        .min(last)
+        .to_array();
+    f32x8::new(core::array::from_fn(|l| table[i[l] as usize]))
 }
 
 #[cfg(test)]

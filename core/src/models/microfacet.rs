@@ -17,7 +17,9 @@ use crate::fresnel::{f_conductor, f_dielectric, f_schlick};
 use crate::kulla_conty::{color_factor, f_avg, KcColor, KcSlice, KcTable};
 use crate::masking::{g2_height_correlated, g2_separable, lambda_beckmann, lambda_ggx};
 use crate::ndf::{d_beckmann, d_ggx, d_gtr};
+use crate::quadrature::{adaptive_simpson, simpson};
 use crate::real::Real;
+use crate::table::{Axis, Nodes, Table1, Warp};
 use crate::vec3::{Rgb, V3};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -70,45 +72,13 @@ pub struct MicrofacetParams {
 /// μ_j = (j + ½)/N_MU, linear interpolation clamped at the ends.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AlbedoTable {
-    e: Vec<[f32; 3]>,
+    e: Table1<3>,
 }
 
 const N_MU: usize = 64;
+const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Linear, Nodes::Centres);
 /// Simpson intervals (even) over φ in `albedo_ring`.
 const N_PHI: usize = 32;
-
-fn simpson(a: f64, b: f64, fa: [f64; 3], fm: [f64; 3], fb: [f64; 3]) -> [f64; 3] {
-    [0, 1, 2].map(|c| (b - a) / 6.0 * (fa[c] + 4.0 * fm[c] + fb[c]))
-}
-
-/// Adaptive Simpson on a vector integrand (refines where any channel needs it).
-#[allow(clippy::too_many_arguments)]
-fn adaptive_simpson(
-    f: &dyn Fn(f64) -> [f64; 3],
-    a: f64,
-    b: f64,
-    fa: [f64; 3],
-    fm: [f64; 3],
-    fb: [f64; 3],
-    whole: [f64; 3],
-    tol: f64,
-    depth: u32,
-) -> [f64; 3] {
-    let m = 0.5 * (a + b);
-    let (lm, rm) = (0.5 * (a + m), 0.5 * (m + b));
-    let (flm, frm) = (f(lm), f(rm));
-    let left = simpson(a, m, fa, flm, fm);
-    let right = simpson(m, b, fm, frm, fb);
-    let err = (0..3)
-        .map(|c| (left[c] + right[c] - whole[c]).abs())
-        .fold(0.0, f64::max);
-    if depth == 0 || err <= 15.0 * tol {
-        return [0, 1, 2].map(|c| left[c] + right[c] + (left[c] + right[c] - whole[c]) / 15.0);
-    }
-    let l = adaptive_simpson(f, a, m, fa, flm, fm, left, tol / 2.0, depth - 1);
-    let r = adaptive_simpson(f, m, b, fm, frm, fb, right, tol / 2.0, depth - 1);
-    [0, 1, 2].map(|c| l[c] + r[c])
-}
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Microfacet {
@@ -323,17 +293,14 @@ impl Microfacet {
     /// compensation lobe's exact factor · (1 − E(μo)), plus the diffuse ρd.
     pub fn new(params: MicrofacetParams, kc: Option<KcColor>) -> Microfacet {
         let kc = kc.map(|mode| Compensation::new(&params, mode));
-        let e = (0..N_MU)
-            .map(|j| {
-                let mu = (j as f64 + 0.5) / N_MU as f64;
-                let s = params.specular_albedo(mu);
-                let ms = kc.as_ref().map_or(0.0, |k| 1.0 - k.slice.e_at(mu));
-                [0, 1, 2].map(|c| {
-                    let f = kc.as_ref().map_or(0.0, |k| k.factor[c] as f64);
-                    (s[c] + f * ms + params.diffuse[c] as f64) as f32
-                })
+        let e = Table1::build(MU_AXIS, |mu| {
+            let s = params.specular_albedo(mu);
+            let ms = kc.as_ref().map_or(0.0, |k| 1.0 - k.slice.e_at(mu));
+            [0, 1, 2].map(|c| {
+                let f = kc.as_ref().map_or(0.0, |k| k.factor[c] as f64);
+                s[c] + f * ms + params.diffuse[c] as f64
             })
-            .collect();
+        });
         Microfacet {
             params,
             albedo: AlbedoTable { e },
@@ -348,19 +315,14 @@ impl Microfacet {
             kc: kc.map(|mode| Compensation::new(&params, mode)),
             params,
             albedo: AlbedoTable {
-                e: vec![[0.0; 3]; N_MU],
+                e: Table1::from_nodes(MU_AXIS, vec![[0.0; 3]; N_MU]),
             },
         }
     }
 
-    /// Tabulated E(μo), one channel set (scalar twin of the lane lookup).
+    /// Tabulated E(μo) per channel: the lane lookup of `albedo` at f32.
     pub fn albedo_at(&self, mu_o: f32) -> [f32; 3] {
-        let x = (mu_o * N_MU as f32 - 0.5).clamp(0.0, (N_MU - 1) as f32);
-        let j0 = x as usize;
-        let j1 = (j0 + 1).min(N_MU - 1);
-        let t = x - j0 as f32;
-        let (a, b) = (self.albedo.e[j0], self.albedo.e[j1]);
-        [0, 1, 2].map(|c| a[c] + (b[c] - a[c]) * t)
+        self.albedo.e.lookup(mu_o)
     }
 }
 
@@ -398,17 +360,10 @@ impl Brdf for Microfacet {
         Rgb::select(h.above, f, Rgb::zero())
     }
 
+    #[inline(always)]
     fn albedo_local<R: Real>(&self, p: &MicrofacetPrepared<R>) -> Rgb<R> {
-        let mu = p.o.wo.z;
-        let mut out = [[0.0f32; 8]; 3];
-        for lane in 0..R::LANES {
-            let e = self.albedo_at(mu.lane(lane) as f32);
-            for (o, v) in out.iter_mut().zip(e) {
-                o[lane] = v;
-            }
-        }
-        let e = Rgb::new(R::load(&out[0]), R::load(&out[1]), R::load(&out[2]));
-        Rgb::select(p.o.above, e, Rgb::zero())
+        let [r, g, b] = self.albedo.e.lookup(p.o.wo.z);
+        Rgb::select(p.o.above, Rgb::new(r, g, b), Rgb::zero())
     }
 }
 

@@ -1,0 +1,360 @@
+//! Tables of smooth functions over one or two axes, C channels of f32 per
+//! node, looked up for f64, f32 and f32x8 from one source.
+//!
+//! An [`Axis`] maps a user coordinate x to a node position in four
+//! documented steps, all in lane arithmetic:
+//!
+//! 1. t = (x − lo)/(hi − lo), clamped to [0, 1] (a NaN x becomes t = 0,
+//!    the [`Real::clamp`] rule, so every index stays in range);
+//! 2. u = warp(t): [`Warp::Linear`] u = t, [`Warp::Sqrt`] u = √t (nodes
+//!    dense near t = 0, e.g. grazing μ or small α), [`Warp::Square`] u = t²
+//!    (dense near t = 1);
+//! 3. node position p: [`Nodes::Ends`] p = u (n − 1) (first and last node
+//!    on the ends of the range), [`Nodes::Centres`] p = u n − ½ clamped to
+//!    [0, n − 1] (texel centres u_i = (i + ½)/n, constant past the outer
+//!    centres);
+//! 4. lower node i = min(⌊p⌋, n − 2) and the weight w of node i + 1:
+//!    [`Interp::Warped`] w = p − i (linear in u, the usual choice), or
+//!    [`Interp::Linear`] w = (t − t_i)/(t_{i+1} − t_i) clamped to [0, 1],
+//!    linear in the user coordinate between nodes t_i = warp⁻¹(u_i) (for a
+//!    closed-form integral of the interpolant in x, as Kulla–Conty's E_avg).
+//!
+//! The value is v = v_i + (v_{i+1} − v_i) w per channel (fused multiply-add),
+//! and for two axes the same along x on the rows y_j and y_{j+1}, then along
+//! y. Node values are read with [`Real::gather`]; the f64 lookup evaluates
+//! exactly this interpolant on the stored f32 values, which the tests check
+//! against a plainly written one.
+//!
+//! [`Table1::build`] and [`Table2::build`] evaluate a closure at the nodes,
+//! so a round trip (lookup at a node == the closure there, to f32) is a test.
+
+use crate::quadrature::GaussLegendre;
+use crate::real::Real;
+
+/// How an axis spaces its nodes over t ∈ [0, 1]; see the module docs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Warp {
+    /// u = t.
+    Linear,
+    /// u = √t: nodes dense near t = 0.
+    Sqrt,
+    /// u = t²: nodes dense near t = 1. Interpolated in u it is only first
+    /// order next to t = 0 (du/dt = 0 there); use [`Interp::Linear`] if
+    /// that end matters.
+    Square,
+}
+
+/// Where the n nodes sit in u ∈ [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Nodes {
+    /// u_i = i/(n − 1): nodes on both ends.
+    Ends,
+    /// u_i = (i + ½)/n: texel centres.
+    Centres,
+}
+
+/// What the weight between two nodes is linear in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Interp {
+    /// The warped coordinate u.
+    Warped,
+    /// The user coordinate x.
+    Linear,
+}
+
+/// One table axis; see the module docs.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Axis {
+    /// Number of nodes, ≥ 2.
+    pub n: usize,
+    pub lo: f64,
+    pub hi: f64,
+    pub warp: Warp,
+    pub nodes: Nodes,
+    pub interp: Interp,
+}
+
+impl Warp {
+    #[inline(always)]
+    fn apply<R: Real>(self, t: R) -> R {
+        match self {
+            Warp::Linear => t,
+            Warp::Sqrt => t.sqrt(),
+            Warp::Square => t * t,
+        }
+    }
+
+    #[inline(always)]
+    fn invert<R: Real>(self, u: R) -> R {
+        match self {
+            Warp::Linear => u,
+            Warp::Sqrt => u * u,
+            Warp::Square => u.sqrt(),
+        }
+    }
+}
+
+impl Axis {
+    /// An axis of `n` nodes over [lo, hi], interpolated in the warped
+    /// coordinate.
+    pub const fn new(n: usize, lo: f64, hi: f64, warp: Warp, nodes: Nodes) -> Axis {
+        assert!(n >= 2, "an axis needs two nodes to interpolate");
+        assert!(hi > lo, "an axis needs hi > lo");
+        Axis {
+            n,
+            lo,
+            hi,
+            warp,
+            nodes,
+            interp: Interp::Warped,
+        }
+    }
+
+    /// The same axis, interpolated linearly in the user coordinate.
+    pub const fn linear_between_nodes(self) -> Axis {
+        Axis {
+            interp: Interp::Linear,
+            ..self
+        }
+    }
+
+    /// u of node i, per lane (i integral).
+    #[inline(always)]
+    fn node_u<R: Real>(&self, i: R) -> R {
+        match self.nodes {
+            Nodes::Ends => i * R::splat(1.0 / (self.n - 1) as f64),
+            Nodes::Centres => (i + R::HALF) * R::splat(1.0 / self.n as f64),
+        }
+    }
+
+    /// The user coordinate of node `i`.
+    pub fn node(&self, i: usize) -> f64 {
+        let t = self.warp.invert(self.node_u(i as f64));
+        self.lo + (self.hi - self.lo) * t
+    }
+
+    /// Lower node index (as an integral lane value) and the weight of the
+    /// next node at x: steps 1–4 of the module docs.
+    #[inline(always)]
+    pub fn locate<R: Real>(&self, x: R) -> (R, R) {
+        let last = (self.n - 1) as f64;
+        let t =
+            ((x - R::splat(self.lo)) * R::splat(1.0 / (self.hi - self.lo))).clamp(R::ZERO, R::ONE);
+        let u = self.warp.apply(t);
+        let p = match self.nodes {
+            Nodes::Ends => u * R::splat(last),
+            Nodes::Centres => u
+                .mul_add(R::splat(self.n as f64), -R::HALF)
+                .clamp(R::ZERO, R::splat(last)),
+        };
+        let i = p.floor().min(R::splat(last - 1.0));
+        let w = match self.interp {
+            Interp::Warped => p - i,
+            Interp::Linear => {
+                let t0 = self.warp.invert(self.node_u(i));
+                let t1 = self.warp.invert(self.node_u(i + R::ONE));
+                ((t - t0) / (t1 - t0)).clamp(R::ZERO, R::ONE)
+            }
+        };
+        (i, w)
+    }
+}
+
+/// v0 + (v1 − v0) w.
+#[inline(always)]
+fn lerp<R: Real>(v0: R, v1: R, w: R) -> R {
+    (v1 - v0).mul_add(w, v0)
+}
+
+/// Largest table an f32 lane can index exactly (integers up to 2²⁴).
+const MAX_LEN: usize = 1 << 24;
+
+/// A 1-D table of C channels: value c of node i at `data[i * C + c]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table1<const C: usize> {
+    axis: Axis,
+    data: Vec<f32>,
+}
+
+impl<const C: usize> Table1<C> {
+    /// Evaluates `f` at every node (rounded to f32).
+    pub fn build(axis: Axis, mut f: impl FnMut(f64) -> [f64; C]) -> Table1<C> {
+        Self::from_nodes(
+            axis,
+            (0..axis.n)
+                .map(|i| f(axis.node(i)).map(|v| v as f32))
+                .collect(),
+        )
+    }
+
+    /// A table from its node values, one `[f32; C]` per node.
+    pub fn from_nodes(axis: Axis, values: Vec<[f32; C]>) -> Table1<C> {
+        assert_eq!(values.len(), axis.n, "one value per node");
+        assert!(axis.n * C <= MAX_LEN, "table too large for f32 indices");
+        Table1 {
+            axis,
+            data: values.into_iter().flatten().collect(),
+        }
+    }
+
+    pub fn axis(&self) -> &Axis {
+        &self.axis
+    }
+
+    /// The stored values of node i.
+    pub fn node_value(&self, i: usize) -> [f32; C] {
+        core::array::from_fn(|c| self.data[i * C + c])
+    }
+
+    /// The interpolant at x, per lane and channel (module docs).
+    #[inline(always)]
+    pub fn lookup<R: Real>(&self, x: R) -> [R; C] {
+        let (i, w) = self.axis.locate(x);
+        let base = i * R::splat(C as f64);
+        core::array::from_fn(|c| {
+            let v0 = R::gather(&self.data, base + R::splat(c as f64));
+            let v1 = R::gather(&self.data, base + R::splat((C + c) as f64));
+            lerp(v0, v1, w)
+        })
+    }
+
+    /// ∫ over [lo, hi] of lookup(x) g(x) dx, per channel, in f64: 4-point
+    /// Gauss–Legendre in u on every node interval (and on the clamped
+    /// stretches past outer texel centres), with dx = (hi − lo) dt/du du.
+    /// Exact when the interpolant times g dx/du is a polynomial of degree
+    /// ≤ 7 in u on each interval: e.g. √ warp, linear in x or in u, g(x) = x.
+    pub fn integrate(&self, g: impl Fn(f64) -> f64) -> [f64; C] {
+        let rule = GaussLegendre::new(4);
+        let a = &self.axis;
+        let span = a.hi - a.lo;
+        let mut breaks: Vec<f64> = (0..a.n).map(|i| a.node_u(i as f64)).collect();
+        breaks.insert(0, 0.0);
+        breaks.push(1.0);
+        let dt_du = |u: f64| match a.warp {
+            Warp::Linear => 1.0,
+            Warp::Sqrt => 2.0 * u,
+            Warp::Square => 0.5 / u.max(1e-300).sqrt(),
+        };
+        let mut s = [0.0; C];
+        for seg in breaks.windows(2) {
+            if seg[1] <= seg[0] {
+                continue;
+            }
+            let part = rule.integrate(seg[0], seg[1], |u| {
+                let x = a.lo + span * a.warp.invert(u);
+                let k = g(x) * span * dt_du(u);
+                self.lookup(x).map(|v| v * k)
+            });
+            for c in 0..C {
+                s[c] += part[c];
+            }
+        }
+        s
+    }
+}
+
+/// A 2-D table of C channels: value c of node (i along x, j along y) at
+/// `data[(j * nx + i) * C + c]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Table2<const C: usize> {
+    x: Axis,
+    y: Axis,
+    data: Vec<f32>,
+}
+
+impl<const C: usize> Table2<C> {
+    /// Evaluates `f(x, y)` at every node (rounded to f32), row by row in y.
+    pub fn build(x: Axis, y: Axis, mut f: impl FnMut(f64, f64) -> [f64; C]) -> Table2<C> {
+        let rows: Vec<Vec<[f32; C]>> = (0..y.n)
+            .map(|j| {
+                (0..x.n)
+                    .map(|i| f(x.node(i), y.node(j)).map(|v| v as f32))
+                    .collect()
+            })
+            .collect();
+        Self::from_rows(x, y, rows)
+    }
+
+    /// A table from its rows (one per y node, each one value per x node).
+    pub fn from_rows(x: Axis, y: Axis, rows: Vec<Vec<[f32; C]>>) -> Table2<C> {
+        assert_eq!(rows.len(), y.n, "one row per y node");
+        assert!(rows.iter().all(|r| r.len() == x.n), "one value per x node");
+        assert!(x.n * y.n * C <= MAX_LEN, "table too large for f32 indices");
+        Table2 {
+            x,
+            y,
+            data: rows.into_iter().flatten().flatten().collect(),
+        }
+    }
+
+    pub fn axes(&self) -> (&Axis, &Axis) {
+        (&self.x, &self.y)
+    }
+
+    /// The stored values of node (i, j).
+    pub fn node_value(&self, i: usize, j: usize) -> [f32; C] {
+        core::array::from_fn(|c| self.data[(j * self.x.n + i) * C + c])
+    }
+
+    /// The bilinear interpolant at (x, y), per lane and channel.
+    #[inline(always)]
+    pub fn lookup<R: Real>(&self, x: R, y: R) -> [R; C] {
+        let (i, wx) = self.x.locate(x);
+        let (j, wy) = self.y.locate(y);
+        let c_ = R::splat(C as f64);
+        let row = R::splat((self.x.n * C) as f64);
+        let base = j.mul_add(row, i * c_);
+        core::array::from_fn(|c| {
+            let b = base + R::splat(c as f64);
+            let v00 = R::gather(&self.data, b);
+            let v10 = R::gather(&self.data, b + c_);
+            let v01 = R::gather(&self.data, b + row);
+            let v11 = R::gather(&self.data, b + row + c_);
+            lerp(lerp(v00, v10, wx), lerp(v01, v11, wx), wy)
+        })
+    }
+
+    /// The 1-D table along x at a fixed y: each x node's value interpolated
+    /// along y in f64 (as [`Table2::lookup`] does), rounded to f32. The
+    /// slice's lookup then equals this table's lookup at that y up to that
+    /// rounding.
+    pub fn slice_y(&self, y: f64) -> Table1<C> {
+        let (j, w) = self.y.locate(y);
+        let j = j as usize;
+        let values = (0..self.x.n)
+            .map(|i| {
+                let (a, b) = (self.node_value(i, j), self.node_value(i, j + 1));
+                core::array::from_fn(|c| lerp(a[c] as f64, b[c] as f64, w) as f32)
+            })
+            .collect();
+        Table1::from_nodes(self.x, values)
+    }
+
+    /// As [`Table2::slice_y`], but each x node's column is interpolated
+    /// along y by the Catmull–Rom cubic in the node coordinate through the
+    /// four nearest rows (the outer ones repeated at the ends):
+    ///
+    /// v = v₁ + ½ w (v₂ − v₀ + w (2v₀ − 5v₁ + 4v₂ − v₃ + w (3(v₁ − v₂) + v₃ − v₀)))
+    ///
+    /// For per-material slices, where the cost is paid once and a function
+    /// curved along y (Kulla–Conty's E at small α) needs more than a lerp.
+    /// It can overshoot the node values; callers clamp if that matters.
+    pub fn slice_y_cubic(&self, y: f64) -> Table1<C> {
+        let (j, w) = self.y.locate(y);
+        let j = j as usize;
+        let row = |k: isize| k.clamp(0, self.y.n as isize - 1) as usize;
+        let values = (0..self.x.n)
+            .map(|i| {
+                let v = |k: isize| self.node_value(i, row(j as isize + k));
+                let (v0, v1, v2, v3) = (v(-1), v(0), v(1), v(2));
+                core::array::from_fn(|c| {
+                    let [p0, p1, p2, p3] = [v0[c], v1[c], v2[c], v3[c]].map(|x| x as f64);
+                    let t = 3.0 * (p1 - p2) + p3 - p0;
+                    (p1 + 0.5 * w * (p2 - p0 + w * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + w * t)))
+                        as f32
+                })
+            })
+            .collect();
+        Table1::from_nodes(self.x, values)
+    }
+}
