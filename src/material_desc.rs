@@ -204,6 +204,7 @@ impl MicrofacetDesc {
 /// What a material description builds: a physically based model (shaded
 /// by [`Lit`]) or an [`Unlit`] surface.
 #[derive(Clone, Debug, PartialEq)]
+#[allow(clippy::large_enum_variant)] // built once per material, as `Model`
 pub enum Shading {
     Lit(Model),
     Unlit(Unlit),

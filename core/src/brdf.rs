@@ -220,6 +220,9 @@ pub trait Brdf: Send + Sync {
 /// A material model, chosen at run time. Adding a model means adding a variant
 /// here and a `Brdf` impl; the rasterizer only sees [`BrdfVisitor`].
 #[derive(Clone, Debug, PartialEq)]
+// A scene holds a handful of materials, each built once: the size of the
+// largest variant (microfacet's tables) costs nothing worth a box.
+#[allow(clippy::large_enum_variant)]
 pub enum Model {
     Lambert(Lambert),
     MetallicRoughness(MetallicRoughness),

@@ -23,13 +23,24 @@ pub fn lambda_ggx<R: Real>(alpha: R, cos_theta: R) -> R {
 /// `cos_i`, `cos_o` must be > 0.
 #[inline(always)]
 pub fn v_smith_ggx_correlated<R: Real>(alpha: R, cos_i: R, cos_o: R) -> R {
+    let (s_i, s_o) = (smith_ggx_root(alpha, cos_i), smith_ggx_root(alpha, cos_o));
+    v_smith_ggx_correlated_roots(cos_i, cos_o, s_i, s_o)
+}
+
+/// √(α² + (1 − α²) cos²θ), the per-direction root of
+/// [`v_smith_ggx_correlated`]: a shader computes the view's once per pixel.
+#[inline(always)]
+pub fn smith_ggx_root<R: Real>(alpha: R, cos_theta: R) -> R {
     let a2 = alpha * alpha;
-    let one_minus_a2 = R::ONE - a2;
-    // Both radicands are ≥ α² > 0, so √x = x·rsqrt(x) is safe.
-    let r_i = (cos_i * cos_i).mul_add(one_minus_a2, a2);
-    let r_o = (cos_o * cos_o).mul_add(one_minus_a2, a2);
-    let s_i = r_i * r_i.rsqrt();
-    let s_o = r_o * r_o.rsqrt();
+    // The radicand is ≥ α² > 0, so √x = x·rsqrt(x) is safe.
+    let r = (cos_theta * cos_theta).mul_add(R::ONE - a2, a2);
+    r * r.rsqrt()
+}
+
+/// [`v_smith_ggx_correlated`] from the two roots of [`smith_ggx_root`]:
+/// V = 0.5 / (μo s_i + μi s_o).
+#[inline(always)]
+pub fn v_smith_ggx_correlated_roots<R: Real>(cos_i: R, cos_o: R, s_i: R, s_o: R) -> R {
     R::HALF * cos_o.mul_add(s_i, cos_i * s_o).rcp()
 }
 

@@ -72,6 +72,10 @@ pub struct Axis {
     pub warp: Warp,
     pub nodes: Nodes,
     pub interp: Interp,
+    /// 1 / (hi − lo) and the u spacing of the nodes, formed once here:
+    /// lookups run per pixel, and an f64 division there is not free.
+    inv_span: f64,
+    du: f64,
 }
 
 impl Warp {
@@ -107,6 +111,11 @@ impl Axis {
             warp,
             nodes,
             interp: Interp::Warped,
+            inv_span: 1.0 / (hi - lo),
+            du: match nodes {
+                Nodes::Ends => 1.0 / (n - 1) as f64,
+                Nodes::Centres => 1.0 / n as f64,
+            },
         }
     }
 
@@ -122,8 +131,8 @@ impl Axis {
     #[inline(always)]
     fn node_u<R: Real>(&self, i: R) -> R {
         match self.nodes {
-            Nodes::Ends => i * R::splat(1.0 / (self.n - 1) as f64),
-            Nodes::Centres => (i + R::HALF) * R::splat(1.0 / self.n as f64),
+            Nodes::Ends => i * R::splat(self.du),
+            Nodes::Centres => (i + R::HALF) * R::splat(self.du),
         }
     }
 
@@ -138,8 +147,7 @@ impl Axis {
     #[inline(always)]
     pub fn locate<R: Real>(&self, x: R) -> (R, R) {
         let last = (self.n - 1) as f64;
-        let t =
-            ((x - R::splat(self.lo)) * R::splat(1.0 / (self.hi - self.lo))).clamp(R::ZERO, R::ONE);
+        let t = ((x - R::splat(self.lo)) * R::splat(self.inv_span)).clamp(R::ZERO, R::ONE);
         let u = self.warp.apply(t);
         let p = match self.nodes {
             Nodes::Ends => u * R::splat(last),

@@ -152,15 +152,15 @@ impl IdMap {
     /// From passes that [`validate_passes`] accepted.
     pub fn new(passes: &[GeometryPass]) -> IdMap {
         let ranges: Vec<IdRange> = passes
-                .iter()
-                .filter(|p| !p.triangles.is_empty())
-                .map(|p| IdRange {
-                    start: p.ids().start as u32,
-                    end: p.ids().end as u32,
-                    id_base: p.id_base,
-                    material: p.material.unwrap_or(u32::MAX),
-                })
-                .collect();
+            .iter()
+            .filter(|p| !p.triangles.is_empty())
+            .map(|p| IdRange {
+                start: p.ids().start as u32,
+                end: p.ids().end as u32,
+                id_base: p.id_base,
+                material: p.material.unwrap_or(u32::MAX),
+            })
+            .collect();
         let identity = matches!(ranges.as_slice(), [r] if r.id_base == 0 && r.material == u32::MAX);
         IdMap { ranges, identity }
     }

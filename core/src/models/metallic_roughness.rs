@@ -10,7 +10,7 @@ use crate::albedo_tables::AlbedoTables;
 use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::diffuse::f_lambert;
 use crate::fresnel::f_schlick;
-use crate::masking::v_smith_ggx_correlated;
+use crate::masking::{smith_ggx_root, v_smith_ggx_correlated_roots};
 use crate::ndf::d_ggx;
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
@@ -50,16 +50,29 @@ impl MetallicRoughness {
     }
 }
 
+/// Per-pixel state: the view direction and its Smith root.
+#[derive(Clone, Copy)]
+pub struct MetallicRoughnessPrepared<R: Real> {
+    pub o: Outgoing<R>,
+    /// √(α² + (1 − α²) μo²) (masking.rs).
+    pub smith_root_o: R,
+}
+
 impl Brdf for MetallicRoughness {
-    type Prepared<R: Real> = Outgoing<R>;
+    type Prepared<R: Real> = MetallicRoughnessPrepared<R>;
 
     #[inline(always)]
-    fn prepare<R: Real>(&self, wo: V3<R>) -> Outgoing<R> {
-        Outgoing::new(wo)
+    fn prepare<R: Real>(&self, wo: V3<R>) -> MetallicRoughnessPrepared<R> {
+        let o = Outgoing::new(wo);
+        MetallicRoughnessPrepared {
+            smith_root_o: smith_ggx_root(R::splat(self.alpha() as f64), o.cos_o),
+            o,
+        }
     }
 
     #[inline(always)]
-    fn f_local<R: Real>(&self, o: &Outgoing<R>, wi: V3<R>) -> Rgb<R> {
+    fn f_local<R: Real>(&self, p: &MetallicRoughnessPrepared<R>, wi: V3<R>) -> Rgb<R> {
+        let o = &p.o;
         let alpha = R::splat(self.alpha() as f64);
         let f0 = Rgb::from_f32(self.f0());
         let diffuse = Rgb::from_f32(self.diffuse_color());
@@ -75,14 +88,21 @@ impl Brdf for MetallicRoughness {
         } = HalfAngles::new(wi, o);
 
         let f = f_schlick(f0, cos_d);
-        let dv = d_ggx(alpha, cos2_h, sin2_h) * v_smith_ggx_correlated(alpha, cos_i, cos_o);
+        let v = v_smith_ggx_correlated_roots(
+            cos_i,
+            cos_o,
+            smith_ggx_root(alpha, cos_i),
+            p.smith_root_o,
+        );
+        let dv = d_ggx(alpha, cos2_h, sin2_h) * v;
         let specular = f * dv;
         let diffuse = (Rgb::splat(R::ONE) - f).mul_elem(f_lambert(diffuse));
         Rgb::select(above, specular + diffuse, Rgb::zero())
     }
 
     #[inline(always)]
-    fn albedo_local<R: Real>(&self, o: &Outgoing<R>) -> Rgb<R> {
+    fn albedo_local<R: Real>(&self, p: &MetallicRoughnessPrepared<R>) -> Rgb<R> {
+        let o = &p.o;
         let t = AlbedoTables::get().ggx_schlick(self.alpha(), o.wo.z.max(R::ZERO));
         // Split sum: E_spec = F0·A + B, E_diff = (1 − F0)(1 − C)·ρd   (see albedo_tables)
         let f0: Rgb<R> = Rgb::from_f32(self.f0());

@@ -152,7 +152,12 @@ impl MicrofacetParams {
     /// G2 from the two Λ.
     #[inline(always)]
     pub fn g2<R: Real>(&self, cos_i: R, cos_o: R) -> R {
-        let (li, lo) = (self.lambda(cos_i), self.lambda(cos_o));
+        self.g2_lambdas(self.lambda(cos_i), self.lambda(cos_o))
+    }
+
+    /// G2 from Λ(i) and Λ(o) already formed.
+    #[inline(always)]
+    pub fn g2_lambdas<R: Real>(&self, li: R, lo: R) -> R {
         match self.smith {
             Smith::Separable => g2_separable(li, lo),
             Smith::HeightCorrelated => g2_height_correlated(li, lo),
@@ -174,11 +179,12 @@ impl MicrofacetParams {
     }
 
     /// The specular lobe F G2 D / (4 μi μo) (no diffuse, no cosine) for
-    /// angles already formed; the caller zeroes lanes outside `h.above`.
+    /// angles already formed and the view's Λ(o) (a per-pixel value); the
+    /// caller zeroes lanes outside `h.above`.
     #[inline(always)]
-    pub fn specular<R: Real>(&self, h: &HalfAngles<R>) -> Rgb<R> {
-        let dg = self.d(h.cos2_h, h.sin2_h) * self.g2(h.cos_i, h.cos_o)
-            / (R::splat(4.0) * h.cos_i * h.cos_o);
+    pub fn specular<R: Real>(&self, h: &HalfAngles<R>, lambda_o: R) -> Rgb<R> {
+        let g2 = self.g2_lambdas(self.lambda(h.cos_i), lambda_o);
+        let dg = self.d(h.cos2_h, h.sin2_h) * g2 / (R::splat(4.0) * h.cos_i * h.cos_o);
         self.f(h.cos_d) * dg
     }
 
@@ -330,6 +336,8 @@ impl Microfacet {
 #[derive(Clone, Copy)]
 pub struct MicrofacetPrepared<R: Real> {
     pub o: Outgoing<R>,
+    /// Smith Λ(o) of the view direction.
+    pub lambda_o: R,
     /// 1 − E(μo) of the compensation lobe (unused without compensation).
     pub one_minus_e_o: R,
 }
@@ -341,6 +349,7 @@ impl Brdf for Microfacet {
     fn prepare<R: Real>(&self, wo: V3<R>) -> MicrofacetPrepared<R> {
         let o = Outgoing::new(wo);
         MicrofacetPrepared {
+            lambda_o: self.params.lambda(o.cos_o),
             o,
             one_minus_e_o: match &self.kc {
                 Some(k) => k.prepare(o.cos_o),
@@ -353,7 +362,7 @@ impl Brdf for Microfacet {
     fn f_local<R: Real>(&self, p: &MicrofacetPrepared<R>, wi: V3<R>) -> Rgb<R> {
         let params = &self.params;
         let h = HalfAngles::new(wi, &p.o);
-        let mut f = params.specular(&h) + Rgb::from_f32(params.diffuse) * R::FRAC_1_PI;
+        let mut f = params.specular(&h, p.lambda_o) + Rgb::from_f32(params.diffuse) * R::FRAC_1_PI;
         if let Some(k) = &self.kc {
             f += k.f(h.cos_i, p.one_minus_e_o);
         }
