@@ -73,12 +73,6 @@ impl<R: Real> ShadingFrame<R> {
     pub fn to_local(&self, v: V3<R>) -> V3<R> {
         V3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
     }
-
-    /// Local coordinates back to the frame's space.
-    #[inline(always)]
-    pub fn to_world(&self, v: V3<R>) -> V3<R> {
-        self.t * v.x + self.b * v.y + self.n * v.z
-    }
 }
 
 /// What every model knows of the view direction, per lane.

@@ -30,17 +30,6 @@ pub enum Light {
     },
 }
 
-impl Light {
-    /// A short name for messages.
-    pub fn kind(&self) -> &'static str {
-        match self {
-            Light::Point { .. } => "point",
-            Light::Directional { .. } => "directional",
-            Light::Polygon { .. } => "polygon",
-        }
-    }
-}
-
 /// A polygon light seen from the shading points of a packet: its vertices
 /// relative to each lane's point, in that lane's local shading frame (not
 /// normalized, not clipped to the horizon), in the light's order.
