@@ -24,10 +24,6 @@ pub struct Fragment<R: Real> {
     /// Perspective-correct barycentrics of vertices 1 and 2 (b0 = 1 − b1 − b2).
     pub b1: R,
     pub b2: R,
-    /// Their screen-space derivatives [∂/∂x, ∂/∂y] (per pixel), analytic:
-    /// b = k / Σk with k, Σk affine, so ∂b/∂x = (∂k/∂x − b ∂Σk/∂x) · w.
-    pub db1: [R; 2],
-    pub db2: [R; 2],
 }
 
 /// Texture-space attributes of a fragment, for materials that sample
@@ -88,6 +84,12 @@ pub struct PacketTris {
     pub lanes: [u32; 8],
     /// Lanes covered by any triangle.
     pub covered: u32,
+    /// The distinct materials of the packet (filled by [`PacketTris::new`]),
+    /// in order of first appearance, and the lanes each covers: the shading
+    /// pass calls one shader per entry.
+    pub groups: usize,
+    pub group_material: [u32; 8],
+    pub group_lanes: [u32; 8],
 }
 
 impl PacketTris {
@@ -146,10 +148,24 @@ impl PacketTris {
                 self.lanes[t] |= 1 << i;
             }
         }
+        self.groups = 0;
         if let Some(ctx) = ctx {
             for t in 0..self.n {
-                (self.tri[t], self.material[t]) =
-                    ctx.ids.look_up(self.id[t], &ctx.scene.tri_material);
+                let (tri, m) = ctx.ids.look_up(self.id[t], &ctx.scene.tri_material);
+                (self.tri[t], self.material[t]) = (tri, m);
+                // Packets hold one material almost always: compare with the
+                // last group first.
+                match (0..self.groups)
+                    .rev()
+                    .find(|&g| self.group_material[g] == m)
+                {
+                    Some(g) => self.group_lanes[g] |= self.lanes[t],
+                    None => {
+                        self.group_material[self.groups] = m;
+                        self.group_lanes[self.groups] = self.lanes[t];
+                        self.groups += 1;
+                    }
+                }
             }
         }
     }
@@ -163,42 +179,54 @@ const MIN_COS_VIEW: f64 = 0.02;
 const GATHER: usize = 21;
 
 impl ResolveContext<'_> {
+    /// Triangle `t`'s resolve inputs, in the order of [`GATHER`], each
+    /// read straight from the scene's arrays (no staging copy: every value
+    /// becomes one broadcast from memory).
     #[inline(always)]
-    fn gather_one(&self, id: u32, tri: u32, out: &mut [f32; GATHER]) {
-        let p = &self.planes[id as usize];
-        let tri = self.scene.triangles[tri as usize];
-        out[0..2].copy_from_slice(&p.origin);
-        out[2..5].copy_from_slice(&p.k1);
-        out[5..8].copy_from_slice(&p.k2);
-        out[8..11].copy_from_slice(&p.ks);
-        out[11] = p.facing;
-        for (v, &i) in tri.iter().enumerate() {
-            out[12 + 3 * v..15 + 3 * v].copy_from_slice(&self.scene.normals[i as usize].to_array());
-        }
+    fn gathered(&self, tris: &PacketTris, t: usize) -> [f32; GATHER] {
+        let p = &self.planes[tris.id[t] as usize];
+        let tri = self.scene.triangles[tris.tri[t] as usize];
+        let [n0, n1, n2] = tri.map(|i| self.scene.normals[i as usize]);
+        [
+            p.origin[0],
+            p.origin[1],
+            p.k1[0],
+            p.k1[1],
+            p.k1[2],
+            p.k2[0],
+            p.k2[1],
+            p.k2[2],
+            p.ks[0],
+            p.ks[1],
+            p.ks[2],
+            p.facing,
+            n0.x,
+            n0.y,
+            n0.z,
+            n1.x,
+            n1.y,
+            n1.z,
+            n2.x,
+            n2.y,
+            n2.z,
+        ]
     }
 
     /// Rebuilds the fragments of pixels (x + lane, y) covered by the
-    /// triangles of `tris` (at least one; from [`PacketTris::new`]). Each triangle's data is read once
-    /// and broadcast into the lanes it covers: packets hold 1–3 triangles
-    /// typically, and a per-lane gather through memory (8 scalar stores, then
-    /// a vector load) stalls on store forwarding. Lanes no triangle covers
-    /// carry the first triangle's data, so they stay finite; callers mask them.
+    /// triangles of `tris` (at least one; from [`PacketTris::new`]). Each
+    /// triangle's data is read once and broadcast into the lanes it covers:
+    /// packets hold 1–3 triangles typically, and a per-lane gather through
+    /// memory (8 scalar stores, then a vector load) stalls on store
+    /// forwarding. Lanes no triangle covers carry the first triangle's data,
+    /// so they stay finite; callers mask them.
     #[inline(always)]
     pub fn resolve<R: Real>(&self, x: u32, y: u32, tris: &PacketTris) -> Fragment<R> {
         debug_assert!(tris.n > 0);
-        let mut lanes = [R::ZERO; GATHER];
-        let mut cur = [0.0f32; GATHER];
-        for t in 0..tris.n {
-            self.gather_one(tris.id[t], tris.tri[t], &mut cur);
-            if t == 0 {
-                for (l, c) in lanes.iter_mut().zip(cur) {
-                    *l = R::splat(c as f64);
-                }
-            } else {
-                let m = R::mask_from_bits(tris.lanes[t]);
-                for (l, c) in lanes.iter_mut().zip(cur) {
-                    *l = R::select(m, R::splat(c as f64), *l);
-                }
+        let mut lanes = self.gathered(tris, 0).map(|c| R::splat(c as f64));
+        for t in 1..tris.n {
+            let m = R::mask_from_bits(tris.lanes[t]);
+            for (l, c) in lanes.iter_mut().zip(self.gathered(tris, t)) {
+                *l = R::select(m, R::splat(c as f64), *l);
             }
         }
         let g = |k: usize| lanes[k];
@@ -238,8 +266,6 @@ impl ResolveContext<'_> {
         let min_cos = R::splat(MIN_COS_VIEW);
         let bent = (n - wo * (cos_v - min_cos)).normalize_or(wo);
         let n = V3::select(cos_v.lt(min_cos), bent, n);
-        // ∂b/∂x = (∂k/∂x − b ∂Σk/∂x)·w, and likewise for y.
-        let db = |k: usize, b: R| [(g(k) - b * g(8)) * w, (g(k + 1) - b * g(9)) * w];
         Fragment {
             p,
             n,
@@ -247,8 +273,6 @@ impl ResolveContext<'_> {
             w,
             b1,
             b2,
-            db1: db(2, b1),
-            db2: db(5, b2),
         }
     }
 
@@ -267,29 +291,26 @@ impl ResolveContext<'_> {
                 bitangent_sign: R::ONE,
             };
         }
-        // Per triangle: uv0, uv1 − uv0, uv2 − uv0, three tangents (xyz) and
-        // vertex 0's handedness.
-        const N: usize = 6 + 9 + 1;
-        let mut lanes = [R::ZERO; N];
-        for t in 0..tris.n {
+        // Per triangle: uv0, uv1 − uv0, uv2 − uv0, three tangents (xyz),
+        // vertex 0's handedness, and the screen gradients [∂/∂x, ∂/∂y] of
+        // the barycentric planes k1, k2 and Σk.
+        const N: usize = 6 + 9 + 1 + 6;
+        let gathered = |t: usize| -> [f32; N] {
+            let p = &self.planes[tris.id[t] as usize];
             let tri = scene.triangles[tris.tri[t] as usize];
-            let uv = tri.map(|i| scene.uvs[i as usize]);
-            let tg = tri.map(|i| scene.tangents[i as usize]);
-            let mut cur = [0.0f32; N];
-            cur[0..2].copy_from_slice(&uv[0].to_array());
-            cur[2..4].copy_from_slice(&(uv[1] - uv[0]).to_array());
-            cur[4..6].copy_from_slice(&(uv[2] - uv[0]).to_array());
-            for v in 0..3 {
-                cur[6 + 3 * v..9 + 3 * v].copy_from_slice(&tg[v].truncate().to_array());
-            }
-            cur[15] = tg[0].w;
+            let [uv0, uv1, uv2] = tri.map(|i| scene.uvs[i as usize]);
+            let (e1, e2) = (uv1 - uv0, uv2 - uv0);
+            let [t0, t1, t2] = tri.map(|i| scene.tangents[i as usize]);
+            [
+                uv0.x, uv0.y, e1.x, e1.y, e2.x, e2.y, t0.x, t0.y, t0.z, t1.x, t1.y, t1.z, t2.x,
+                t2.y, t2.z, t0.w, p.k1[0], p.k1[1], p.k2[0], p.k2[1], p.ks[0], p.ks[1],
+            ]
+        };
+        let mut lanes = gathered(0).map(|c| R::splat(c as f64));
+        for t in 1..tris.n {
             let m = R::mask_from_bits(tris.lanes[t]);
-            for (l, c) in lanes.iter_mut().zip(cur) {
-                *l = if t == 0 {
-                    R::splat(c as f64)
-                } else {
-                    R::select(m, R::splat(c as f64), *l)
-                };
+            for (l, c) in lanes.iter_mut().zip(gathered(t)) {
+                *l = R::select(m, R::splat(c as f64), *l);
             }
         }
         let g = |k: usize| lanes[k];
@@ -298,8 +319,11 @@ impl ResolveContext<'_> {
             g(2).mul_add(b1, g(4).mul_add(b2, g(0))),
             g(3).mul_add(b1, g(5).mul_add(b2, g(1))),
         ];
+        // b = k / Σk with k and Σk affine in screen space, so
+        // ∂b/∂x = (∂k/∂x − b ∂Σk/∂x)·w (and likewise for y), analytic.
+        let db = |axis: usize, k: usize, b: R| (g(k + axis) - b * g(20 + axis)) * frag.w;
         let d = |axis: usize| {
-            let (d1, d2) = (frag.db1[axis], frag.db2[axis]);
+            let (d1, d2) = (db(axis, 16, b1), db(axis, 18, b2));
             [g(2).mul_add(d1, g(4) * d2), g(3).mul_add(d1, g(5) * d2)]
         };
         let b0 = R::ONE - b1 - b2;

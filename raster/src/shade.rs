@@ -96,46 +96,27 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
                 let frag = ctx.resolve::<R>(tx + lx as u32, y as u32, &tris);
                 // The mesh's uv frame only for shaders that read the surface
                 // (anisotropic models, textures); any frame for the rest.
-                let needs = |t: usize| ctx.needs_surface[tris.material[t] as usize];
-                let surface = (ctx.any_needs_surface && (0..tris.n).any(needs))
+                let groups = 0..tris.groups;
+                let needs = |g: usize| ctx.needs_surface[tris.group_material[g] as usize];
+                let surface = (ctx.any_needs_surface && groups.clone().any(needs))
                     .then(|| ctx.surface(&tris, &frag));
                 let uv_frame = surface.as_ref().map(|s| surface_frame(&frag, s));
                 let any_frame = ShadingFrame::from_normal(frag.n);
-                let mut input = ShadeInput {
-                    frag: &frag,
-                    frame: any_frame,
-                    surface: None,
-                    lanes: 0,
-                };
                 // Shade once per material present, under its lanes' mask.
-                let mut done = 0u32;
-                for t in 0..tris.n {
-                    if done & (1 << t) != 0 {
-                        continue;
-                    }
-                    let m = tris.material[t];
-                    let mut group = 0u32;
-                    for u in t..tris.n {
-                        if tris.material[u] == m {
-                            group |= tris.lanes[u];
-                            done |= 1 << u;
-                        }
-                    }
-                    input.lanes = group;
-                    match (&uv_frame, uv_frame.is_some() && needs(t)) {
-                        (Some(f), true) => {
-                            input.frame = *f;
-                            input.surface = surface.as_ref();
-                        }
-                        _ if input.surface.is_some() => {
-                            input.frame = any_frame;
-                            input.surface = None;
-                        }
-                        _ => {}
-                    }
-                    let shader = &*scene.materials[m as usize].shader;
+                for g in groups {
+                    let (frame, surface) = match &uv_frame {
+                        Some(f) if needs(g) => (*f, surface.as_ref()),
+                        _ => (any_frame, None),
+                    };
+                    let input = ShadeInput {
+                        frag: &frag,
+                        frame,
+                        surface,
+                        lanes: tris.group_lanes[g],
+                    };
+                    let shader = &*scene.materials[tris.group_material[g] as usize].shader;
                     let c = R::shade_with(shader, &input, &env);
-                    rgb = Rgb::select(R::mask_from_bits(group), c, rgb);
+                    rgb = Rgb::select(R::mask_from_bits(input.lanes), c, rgb);
                 }
                 if !depth.is_empty() || !normal[0].is_empty() {
                     let hit = R::mask_from_bits(tris.covered);
