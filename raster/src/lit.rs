@@ -30,7 +30,7 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
 
     #[inline(always)]
     fn visit<B: Brdf>(self, brdf: &B) -> Rgb<R> {
-        let (frag, frame) = (self.input.frag, &self.input.frame);
+        let (frag, frame) = (self.input.frag, &self.input.frame());
         let prepared = brdf.prepare(frame.to_local(frag.wo));
         let mut acc = Rgb::zero();
         for light in self.env.lights {

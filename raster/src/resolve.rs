@@ -6,7 +6,7 @@ use crate::geometry::IdMap;
 use crate::scene::SceneData;
 use crate::setup::TriPlanes;
 use crate::target::MISS;
-use specula_core::{Real, V3};
+use specula_core::{Real, ShadingFrame, V3};
 use wide::u32x8;
 
 /// Per-lane surface data the shading pass needs.
@@ -39,6 +39,9 @@ pub struct Surface<R: Real> {
     pub tangent: V3<R>,
     /// ±1: bitangent = sign · n × tangent (mirrored uv layouts give −1).
     pub bitangent_sign: R,
+    /// The shading frame of the uv tangent where the mesh has one, any
+    /// frame around the normal elsewhere.
+    pub frame: ShadingFrame<R>,
 }
 
 /// Everything resolve and shading read, shared by all tiles.
@@ -289,6 +292,7 @@ impl ResolveContext<'_> {
                 duv_dy: [R::ZERO; 2],
                 tangent: V3::zero(),
                 bitangent_sign: R::ONE,
+                frame: ShadingFrame::from_normal(frag.n),
             };
         }
         // Per triangle: uv0, uv1 − uv0, uv2 − uv0, three tangents (xyz),
@@ -331,12 +335,20 @@ impl ResolveContext<'_> {
         let t = vt(6) * b0 + vt(9) * b1 + vt(12) * b2;
         // Gram–Schmidt against the shading normal.
         let t = (t - frag.n * frag.n.dot(t)).normalize_or(V3::zero());
+        let any = ShadingFrame::from_normal(frag.n);
+        let tangent_frame = ShadingFrame::from_normal_tangent(frag.n, t, g(15));
+        let has = t.length_squared().gt(R::HALF);
         Surface {
             uv,
             duv_dx: d(0),
             duv_dy: d(1),
             tangent: t,
             bitangent_sign: g(15),
+            frame: ShadingFrame {
+                t: V3::select(has, tangent_frame.t, any.t),
+                b: V3::select(has, tangent_frame.b, any.b),
+                n: frag.n,
+            },
         }
     }
 }

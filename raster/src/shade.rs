@@ -3,10 +3,10 @@
 //! results go to the row-major frame buffers (buffers.rs).
 
 use crate::buffers::TileWriter;
-use crate::resolve::{Fragment, PacketTris, ResolveContext, Surface};
+use crate::resolve::{PacketTris, ResolveContext};
 use crate::shader::{ShadeEnv, ShadeInput, ShadeLanes};
 use crate::target::{Target, TILE};
-use specula_core::{Real, Rgb, ShadingFrame, V3};
+use specula_core::{Real, Rgb, V3};
 
 /// The frame buffers of one frame, open for tile-parallel writes. Planes
 /// that were not requested are empty writers and get nothing.
@@ -27,20 +27,6 @@ fn store<R: Real>(v: R, out: &mut [f32]) {
         let mut tmp = [0.0f32; 8];
         v.store(&mut tmp);
         out.copy_from_slice(&tmp[..out.len()]);
-    }
-}
-
-/// The frame of a shader that asked for the surface: the mesh's uv
-/// tangent where there is one, any tangent elsewhere.
-#[inline(always)]
-fn surface_frame<R: Real>(frag: &Fragment<R>, s: &Surface<R>) -> ShadingFrame<R> {
-    let any = ShadingFrame::from_normal(frag.n);
-    let uv = ShadingFrame::from_normal_tangent(frag.n, s.tangent, s.bitangent_sign);
-    let has = s.tangent.length_squared().gt(R::HALF);
-    ShadingFrame {
-        t: V3::select(has, uv.t, any.t),
-        b: V3::select(has, uv.b, any.b),
-        n: frag.n,
     }
 }
 
@@ -100,18 +86,11 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
                 let needs = |g: usize| ctx.needs_surface[tris.group_material[g] as usize];
                 let surface = (ctx.any_needs_surface && groups.clone().any(needs))
                     .then(|| ctx.surface(&tris, &frag));
-                let uv_frame = surface.as_ref().map(|s| surface_frame(&frag, s));
-                let any_frame = ShadingFrame::from_normal(frag.n);
                 // Shade once per material present, under its lanes' mask.
                 for g in groups {
-                    let (frame, surface) = match &uv_frame {
-                        Some(f) if needs(g) => (*f, surface.as_ref()),
-                        _ => (any_frame, None),
-                    };
                     let input = ShadeInput {
                         frag: &frag,
-                        frame,
-                        surface,
+                        surface: surface.as_ref().filter(|_| needs(g)),
                         lanes: tris.group_lanes[g],
                     };
                     let shader = &*scene.materials[tris.group_material[g] as usize].shader;

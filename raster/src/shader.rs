@@ -25,16 +25,28 @@ use std::sync::Arc;
 pub struct ShadeInput<'a, R: Real> {
     /// Position, normal, view direction, depth, barycentrics.
     pub frag: &'a Fragment<R>,
-    /// The local shading frame (normal +Z). Its tangent follows the mesh's
-    /// uv tangents when the shader asked for the surface
-    /// ([`SurfaceShader::needs_surface`]) and the mesh has uvs; otherwise it
-    /// is some tangent orthogonal to the normal (fine for isotropic models).
-    pub frame: ShadingFrame<R>,
-    /// uv, uv derivatives and tangents, when the shader asked for them.
+    /// uv, uv derivatives and the uv tangent frame, when the shader asked
+    /// for them ([`SurfaceShader::needs_surface`]).
     pub surface: Option<&'a Surface<R>>,
     /// Bit i set: lane i shows this material (other lanes are computed and
     /// discarded, so they only need to stay finite).
     pub lanes: u32,
+}
+
+impl<R: Real> ShadeInput<'_, R> {
+    /// The local shading frame (normal +Z). Its tangent follows the mesh's
+    /// uv tangents when the shader asked for the surface and the mesh has
+    /// uvs; otherwise it is some tangent orthogonal to the normal (fine for
+    /// isotropic models). Built here, inside the shader, rather than by the
+    /// shading pass: passed through memory across the dynamic call it cost
+    /// more than the dozen instructions that compute it.
+    #[inline(always)]
+    pub fn frame(&self) -> ShadingFrame<R> {
+        match self.surface {
+            Some(s) => s.frame,
+            None => ShadingFrame::from_normal(self.frag.n),
+        }
+    }
 }
 
 /// The scene's light, shared by every packet.
