@@ -147,6 +147,35 @@ impl<'a, T> TileWriter<'a, T> {
         self.width == 0
     }
 
+    /// Asks the cache for row `y` of the tile at `x0` for writing (its lines
+    /// arrive while the rows before it are shaded). Row-major planes give a
+    /// tile row only TILE × 4 bytes before the next row's page, too short a
+    /// run for the hardware prefetcher, and without this every packet's
+    /// store waited on a line from memory: the shading pass ran ~25 %
+    /// slower than into a tile-local buffer (measured, docs/PERFORMANCE.md).
+    #[inline(always)]
+    pub fn prefetch_row(&self, x0: usize, y: usize) {
+        if self.width == 0 || y >= self.height {
+            return;
+        }
+        let n = TILE.min(self.width - x0);
+        let bytes = n * std::mem::size_of::<T>();
+        #[cfg(target_arch = "x86_64")]
+        for off in (0..bytes).step_by(64) {
+            // SAFETY: a prefetch is a hint: it never faults, and the
+            // address is inside the plane (x0 + n ≤ width, y < height).
+            // (`prefetchw` where the target has PRFCHW, else `prefetcht0`:
+            // x86-64-v3 does not include it, and t0 measured as good here.)
+            unsafe {
+                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_ET0};
+                let p = (self.ptr.add(y * self.width + x0) as *const i8).add(off);
+                _mm_prefetch::<_MM_HINT_ET0>(p);
+            }
+        }
+        #[cfg(not(target_arch = "x86_64"))]
+        let _ = bytes;
+    }
+
     /// Row `y` of the tile whose left column is `x0`: the pixels
     /// x0 .. min(x0 + TILE, width).
     ///

@@ -52,6 +52,9 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
     let mut covered = 0u64;
     let tile_w = TILE.min((target.width - tx) as usize);
     let mut tris = PacketTris::default();
+    for plane in out.color.iter().chain(&out.normal).chain([&out.depth]) {
+        plane.prefetch_row(tx as usize, ty as usize);
+    }
     for row in 0..TILE.min((target.height - ty) as usize) {
         let y = (ty as usize) + row;
         let x0 = tx as usize;
@@ -68,6 +71,10 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
         };
         if !id_out.is_empty() {
             id_out.copy_from_slice(&ids[row * TILE..row * TILE + tile_w]);
+        }
+        // The next row's lines, fetched while this row is shaded.
+        for plane in out.color.iter().chain(&out.normal).chain([&out.depth]) {
+            plane.prefetch_row(x0, y + 1);
         }
         let mut lx = 0;
         while lx < tile_w {
