@@ -30,6 +30,24 @@ struct SceneFile {
     materials: BTreeMap<String, MaterialDesc>,
     #[serde(default, rename = "light")]
     lights: Vec<LightDesc>,
+    posterize: Option<PosterizeDesc>,
+}
+
+/// `[posterize]`: quantize the tone-mapped image (npr/src/posterize.rs).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PosterizeDesc {
+    levels: u32,
+    #[serde(default)]
+    mode: PosterizeModeDesc,
+}
+
+#[derive(Debug, Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum PosterizeModeDesc {
+    #[default]
+    Rgb,
+    Luminance,
 }
 
 fn default_up() -> [f32; 3] {
@@ -274,6 +292,9 @@ pub struct LoadedScene {
     pub inputs: Vec<PathBuf>,
     /// Things worth telling the user that did not stop the load.
     pub warnings: Vec<String>,
+    /// Image-space stages the scene asks for, run after the tone map and
+    /// before the encode (`[posterize]`).
+    pub post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
 }
 
 /// Reads a scene file from disk; relative paths resolve against its folder.
@@ -638,10 +659,21 @@ pub fn load_scene_str(
     data.materials = materials;
     data.geometry = vec![GeometryPass::main(data.triangles.len())];
     data.validate().map_err(err)?;
+    let mut post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>> = Vec::new();
+    if let Some(p) = &desc.posterize {
+        use specula_npr::posterize::{Posterize, PosterizeMode};
+        let mode = match p.mode {
+            PosterizeModeDesc::Rgb => PosterizeMode::Rgb,
+            PosterizeModeDesc::Luminance => PosterizeMode::Luminance,
+        };
+        let stage = Posterize::new(p.levels, mode).map_err(|e| err(format!("posterize.{e}")))?;
+        post_stages.push(std::sync::Arc::new(stage));
+    }
     Ok(LoadedScene {
         data,
         output: desc.output,
         inputs,
         warnings,
+        post_stages,
     })
 }

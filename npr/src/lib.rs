@@ -8,4 +8,5 @@
 //! of silhouette, crease and boundary edges.
 
 pub mod plot;
+pub mod posterize;
 pub mod tam;
