@@ -360,7 +360,12 @@ fn default_material() -> Material {
 /// roughness and `Pm` metallic (the PBR extension); without `Pr`, roughness
 /// from Phong `Ns` through α² = 2 / (Ns + 2) [Walter07, §5.2]; defaults 0.5
 /// and 0.
-fn mtl_material(m: &tobj::Material) -> Result<Material, String> {
+/// `map_Kd` (relative to the OBJ's folder) becomes the base-colour texture.
+fn mtl_material(
+    m: &tobj::Material,
+    obj_dir: &Path,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<Material, String> {
     let param = |key: &str| -> Result<Option<f32>, String> {
         match m.unknown_param.get(key) {
             None => Ok(None),
@@ -395,7 +400,19 @@ fn mtl_material(m: &tobj::Material) -> Result<Material, String> {
         roughness,
         metallic: param("Pm")?.unwrap_or(0.0),
     });
-    Ok(Material::new(&m.name, Lit { model }, false))
+    match &m.diffuse_texture {
+        Some(tex) => {
+            let path = obj_dir.join(tex.trim());
+            let map = crate::textures::load_color_map(&path, read)
+                .map_err(|e| format!("material {}: map_Kd: {e}", m.name))?;
+            let shader =
+                specula_raster::textured::TexturedLit::new(model, map).ok_or_else(|| {
+                    format!("material {}: map_Kd: the model takes no texture", m.name)
+                })?;
+            Ok(Material::new(&m.name, shader, false))
+        }
+        None => Ok(Material::new(&m.name, Lit { model }, false)),
+    }
 }
 
 /// Parses and builds a scene from its text; `read` supplies the files it
@@ -456,11 +473,16 @@ pub fn load_scene_str(
     // Materials: scene materials first, so they win over MTL ones of the same name.
     let mut materials = Vec::new();
     let mut by_name: HashMap<String, u32> = HashMap::new();
+    // Materials that read uvs (textures, tonal art maps).
+    let mut textured = std::collections::HashSet::new();
     for (name, m) in &desc.materials {
         let mut notes = Vec::new();
         let built = m
-            .build(name, crate::material_desc::Tables::Build, &mut notes)
+            .build_with(name, crate::material_desc::Tables::Build, &mut notes, read)
             .map_err(|e| err(format!("materials.{name}.{e}")))?;
+        if m.needs_uvs() {
+            textured.insert(materials.len() as u32);
+        }
         warnings.extend(
             notes
                 .into_iter()
@@ -545,8 +567,12 @@ pub fn load_scene_str(
                         let Some(mt) = mesh.mtl.iter().find(|m| &m.name == n) else {
                             return Err(err(format!("{field}.material: no material named {n:?} in [materials] or the mesh's MTL")));
                         };
-                        let built =
-                            mtl_material(mt).map_err(|e| err(format!("{field}.obj: {e}")))?;
+                        let obj_dir = md.obj.as_deref().and_then(Path::parent);
+                        let built = mtl_material(mt, obj_dir.unwrap_or(Path::new("")), read)
+                            .map_err(|e| err(format!("{field}.obj: {e}")))?;
+                        if mt.diffuse_texture.is_some() {
+                            textured.insert(materials.len() as u32);
+                        }
                         let id = materials.len() as u32;
                         materials.push(built);
                         by_name.insert(n.clone(), id);
@@ -559,6 +585,26 @@ pub fn load_scene_str(
                 }),
             };
             local.push(id);
+        }
+        if mesh.uvs.is_empty() {
+            let used: std::collections::BTreeSet<u32> = mesh
+                .tri_material
+                .iter()
+                .map(|m| local[*m as usize])
+                .collect();
+            if let Some(m) = used.iter().find(|m| textured.contains(m)) {
+                let what = match &md.obj {
+                    Some(p) => format!(
+                        "{field}.obj: {} has no texture coordinates (vt)",
+                        p.display()
+                    ),
+                    None => format!("{field}: the mesh has no texture coordinates"),
+                };
+                return Err(err(format!(
+                    "{what}, and its material {:?} samples a texture (give the mesh uvs or use an untextured material)",
+                    materials[*m as usize].name
+                )));
+            }
         }
 
         let scale = match md.scale {

@@ -372,11 +372,19 @@ impl TamTexture {
 
     /// Reads a directory written by [`Tam::write_dir`]; errors name the file.
     pub fn read_dir(dir: &Path) -> Result<TamTexture, String> {
+        TamTexture::read_with(dir, &|p: &Path| std::fs::read(p))
+    }
+
+    /// [`TamTexture::read_dir`] with the files supplied by `read` (scene
+    /// loaders resolve paths against the scene's folder).
+    pub fn read_with(
+        dir: &Path,
+        read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    ) -> Result<TamTexture, String> {
         let path = dir.join("tam.json");
-        let text =
-            std::fs::read_to_string(&path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
         let m: Manifest =
-            serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+            serde_json::from_slice(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
         if m.sizes.len() != m.levels || m.darkness.len() != m.tones || m.levels == 0 {
             return Err(format!(
                 "{}: sizes must list the {} levels and darkness the {} tones",
@@ -385,12 +393,19 @@ impl TamTexture {
                 m.tones
             ));
         }
+        if m.tones > 64 || m.sizes.iter().any(|&n| n == 0 || n > 8192) {
+            return Err(format!(
+                "{}: at most 64 tones of at most 8192×8192",
+                path.display()
+            ));
+        }
         let mut images = Vec::with_capacity(m.tones);
         for t in 0..m.tones {
             let mut tone = Vec::with_capacity(m.levels);
             for (l, &n) in m.sizes.iter().enumerate() {
                 let p = dir.join(file_name(t, l));
-                let img = image::open(&p)
+                let bytes = read(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                let img = image::load_from_memory(&bytes)
                     .map_err(|e| format!("{}: {e}", p.display()))?
                     .to_luma8();
                 if img.dimensions() != (n, n) {
