@@ -109,7 +109,7 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
             ([0.3, -0.2, 0.1], [0.2, 0.9, 0.1]),
             ([-0.4, 0.1, -0.3], [0.0, 0.8, -0.6]),
         ] {
-            let len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2] as f64).sqrt();
+            let len = f64::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             let n = n.map(|v: f64| v / len);
             let light = Light::Polygon {
                 vertices: poly.iter().map(|v| v.map(|c| c as f32)).collect(),
