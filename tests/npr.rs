@@ -504,6 +504,9 @@ fn npr_fixture_scenes_render_and_shading_paths_agree() {
         }
         // Hard edges (bands, hatching tone steps) may flip a pixel where
         // f32x8 and f32 round n·l differently on the edge itself.
-        assert!(off * 2000 < a.len() * 3, "{name}: {off} values differ (worst {worst})");
+        assert!(
+            off * 2000 < a.len() * 3,
+            "{name}: {off} values differ (worst {worst})"
+        );
     }
 }
