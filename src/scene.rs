@@ -483,6 +483,7 @@ pub fn load_scene_str(
         if m.needs_uvs() {
             textured.insert(materials.len() as u32);
         }
+        inputs.extend(m.base_color_texture().map(Path::to_path_buf));
         warnings.extend(
             notes
                 .into_iter()
