@@ -510,3 +510,48 @@ fn npr_fixture_scenes_render_and_shading_paths_agree() {
         );
     }
 }
+
+#[test]
+fn bad_npr_materials_are_named() {
+    let none = |_: &std::path::Path| -> std::io::Result<Vec<u8>> {
+        Err(std::io::ErrorKind::NotFound.into())
+    };
+    let cases = [
+        (
+            "model = \"toon\"\nbase_color = [1, 1, 1]\nbands = 3\nramp = [[0.0, [1, 1, 1]]]",
+            "materials.m.bands / ramp",
+        ),
+        (
+            "model = \"toon\"\nbase_color = [1, 1, 1]\nbands = 0",
+            "materials.m.bands",
+        ),
+        (
+            "model = \"toon\"\nbase_color = [1, 1, 1]\nramp = [[0.5, [1, 1, 1]], [0.2, [1, 1, 1]]]",
+            "materials.m.ramp[1]",
+        ),
+        (
+            "model = \"toon\"\nbase_color = [1, 1, 1]\nspecular_threshold = 2.0",
+            "materials.m.specular_threshold",
+        ),
+        ("model = \"hatching\"\nscale = 0.0", "materials.m.scale"),
+        (
+            "model = \"hatching\"\ntam = \"missing\"",
+            "materials.m.tam: missing/tam.json",
+        ),
+        ("model = \"hatching\"\nink = [-1, 0, 0]", "materials.m.ink"),
+    ];
+    for (body, want) in cases {
+        let toml = format!(
+            "{PLANE_CAMERA}\n[[mesh]]\nsphere = {{}}\nmaterial = \"m\"\n\n[materials.m]\n{body}\n"
+        );
+        let err = load(&toml, &none)
+            .err()
+            .unwrap_or_else(|| panic!("{body}: loaded"));
+        assert!(err.contains(want), "{body}: {err}");
+    }
+    // eval refuses stylized and textured materials with a reason.
+    let mut cache = specula::eval::Cache::default();
+    let line = r#"{"material": {"model": "toon", "base_color": [1, 1, 1]}, "wi": [0, 0, 1], "wo": [0, 0, 1]}"#;
+    let out = specula::eval::eval_line(line, 1, &mut cache);
+    assert!(out.contains("error") && out.contains("toon"), "{out}");
+}

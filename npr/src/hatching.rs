@@ -99,9 +99,7 @@ impl Hatching {
             [duv_dy[0] * k, duv_dy[1] * k],
         );
         let (i, w) = self.tone_pair(d);
-        let b0 = t.sample_channel(&TAM_SAMPLER, uv, lod, i);
-        let b1 = t.sample_channel(&TAM_SAMPLER, uv, lod, i + R::ONE);
-        b0 + (b1 - b0) * w
+        t.sample_channel_blend(&TAM_SAMPLER, uv, lod, i, w)
     }
 }
 

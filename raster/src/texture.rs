@@ -438,6 +438,43 @@ impl Texture {
         }
     }
 
+    /// (1 − w)·channel `ch` + w·channel `ch + 1` per lane: two channels
+    /// blended, with the taps (and level lookups) computed once. Equal to
+    /// blending two [`Texture::sample_channel`] calls (tested).
+    #[inline(always)]
+    pub fn sample_channel_blend<R: Real>(&self, s: &Sampler, uv: [R; 2], lod: R, ch: R, w: R) -> R {
+        let top = R::splat((self.channels - 1) as f64);
+        let c0 = ch.clamp(R::ZERO, top);
+        let c1 = (ch + R::ONE).clamp(R::ZERO, top);
+        let u = reduce(s.wrap_u, uv[0]);
+        let v = reduce(s.wrap_v, uv[1]);
+        let bilinear = |t: &[R; 4], fx: R, fy: R| {
+            let g = |i: R| {
+                let a = R::gather(&self.data, i + c0);
+                let b = R::gather(&self.data, i + c1);
+                lerp(a, b, w)
+            };
+            lerp(lerp(g(t[0]), g(t[1]), fx), lerp(g(t[2]), g(t[3]), fx), fy)
+        };
+        match s.filter {
+            Filter::Nearest => lerp(self.nearest(s, u, v, c0), self.nearest(s, u, v, c1), w),
+            Filter::Bilinear => {
+                let (t, fx, fy) = self.taps(s, &self.level0(), u, v);
+                bilinear(&t, fx, fy)
+            }
+            Filter::Trilinear => {
+                let last = R::splat((self.levels.len() - 1) as f64);
+                let lod = lod.clamp(R::ZERO, last);
+                let l0 = lod.floor();
+                let t = lod - l0;
+                let l1 = (l0 + R::ONE).min(last);
+                let (ta, fxa, fya) = self.taps(s, &self.level_lanes(l0), u, v);
+                let (tb, fxb, fyb) = self.taps(s, &self.level_lanes(l1), u, v);
+                lerp(bilinear(&ta, fxa, fya), bilinear(&tb, fxb, fyb), t)
+            }
+        }
+    }
+
     /// Channels 0..C (C ≤ [`Texture::channels`]; later ones repeat the
     /// last channel) at uv with the level of detail from its derivatives.
     #[inline(always)]

@@ -320,3 +320,24 @@ fn f32x8_lookups_equal_the_scalar_twin_lane_by_lane() {
         }
     }
 }
+
+#[test]
+fn blended_channel_pair_equals_two_lookups() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+    let (w, h, c) = (16, 8, 5);
+    let img: Vec<f32> = (0..w * h * c).map(|_| rng.random::<f32>()).collect();
+    let tex = Texture::from_f32(w, h, c, img).unwrap();
+    for filter in [Filter::Nearest, Filter::Bilinear, Filter::Trilinear] {
+        let s = Sampler::new(Wrap::Repeat, filter);
+        for _ in 0..500 {
+            let uv = [rng.random_range(-2.0..2.0f64), rng.random_range(-2.0..2.0)];
+            let lod = rng.random_range(-1.0..5.0f64);
+            let ch = rng.random_range(0..c + 1) as f64;
+            let wt = rng.random::<f64>();
+            let a = tex.sample_channel(&s, uv, lod, ch);
+            let b = tex.sample_channel(&s, uv, lod, ch + 1.0);
+            let got = tex.sample_channel_blend(&s, uv, lod, ch, wt);
+            assert!((got - (a + (b - a) * wt)).abs() < 1e-9, "{filter:?}");
+        }
+    }
+}
