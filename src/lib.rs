@@ -2,7 +2,8 @@
 //! core. This facade ties the crates together: scene files (`scene`), meshes
 //! (`mesh`), the material contract shared by scenes and `specula eval`
 //! (`material_desc`), rendering with statistics (`render`) and image output
-//! (`output`). The built-in demo lives in `demo`.
+//! (`output`), image files as textures (`textures`). The built-in demo
+//! lives in `demo`.
 
 pub mod demo;
 pub mod eval;
@@ -12,6 +13,7 @@ pub mod mesh;
 pub mod output;
 pub mod render;
 pub mod scene;
+pub mod textures;
 
 pub use specula_core as core;
 pub use specula_raster as raster;

@@ -30,6 +30,28 @@ enum Command {
     /// Directional albedo E(μo) of a microfacet material at several
     /// roughnesses, without and with Kulla-Conty compensation.
     Furnace(FurnaceArgs),
+    /// Generate a tonal art map (hatching textures, light to dark, with
+    /// mip levels drawn at equal stroke width) into a directory.
+    Tam(TamArgs),
+}
+
+#[derive(clap::Args)]
+struct TamArgs {
+    /// Output directory (created if missing): tam_t{tone}_l{level}.png and tam.json.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Number of tones, light to dark.
+    #[arg(long, default_value_t = 6)]
+    tones: usize,
+    /// Mip levels (default: down to 16×16).
+    #[arg(long)]
+    levels: Option<usize>,
+    /// Width and height of level 0 (a power of two).
+    #[arg(long, default_value_t = 256)]
+    size: u32,
+    /// Random seed: the same seed gives the same files.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 #[derive(clap::Args)]
@@ -215,6 +237,22 @@ fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
     Ok(())
 }
 
+fn run_tam(a: TamArgs) -> Result<(), String> {
+    let mut p = specula_npr::tam::TamParams::new(a.tones, a.size, a.seed);
+    if let Some(l) = a.levels {
+        p.levels = l;
+    }
+    let tam = specula_npr::tam::generate(p).map_err(|e| format!("tam: {e}"))?;
+    tam.write_dir(&a.output)?;
+    let m = tam.manifest();
+    for (t, d) in m.darkness.iter().enumerate() {
+        let levels: Vec<String> = m.measured[t].iter().map(|v| format!("{v:.3}")).collect();
+        println!("tone {t}: darkness {d:.3}, measured {}", levels.join(" "));
+    }
+    println!("wrote {}", a.output.display());
+    Ok(())
+}
+
 fn run_demo() -> Result<(), String> {
     let t = Instant::now();
     let scene = demo::demo_scene().map_err(|e| e.to_string())?;
@@ -237,6 +275,7 @@ fn main() -> ExitCode {
         None => run_demo(),
         Some(Command::Render(a)) => run_render(a),
         Some(Command::Furnace(a)) => run_furnace(a),
+        Some(Command::Tam(a)) => run_tam(a),
         Some(Command::Eval) => {
             let stdin = std::io::stdin().lock();
             let stdout = std::io::BufWriter::new(std::io::stdout().lock());

@@ -9,7 +9,17 @@ use specula_core::models::{
     Fresnel, Lambert, MetallicRoughness, Microfacet, MicrofacetParams, Ndf, Smith,
 };
 use specula_core::Model;
+use specula_npr::hatching::{builtin_tam, Hatching};
+use specula_npr::tam::TamTexture;
+use specula_npr::toon::{Hard, Ramp, Toon};
+use specula_raster::textured::TexturedLit;
 use specula_raster::{Lit, Material, Unlit};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Supplies the files a material names (textures, tonal art maps),
+/// relative to the scene's folder.
+pub type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
 
 /// One material description; `model` selects the variant.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -19,6 +29,63 @@ pub enum MaterialDesc {
     MetallicRoughness(MetallicRoughnessDesc),
     Microfacet(MicrofacetDesc),
     Unlit(UnlitDesc),
+    Toon(ToonDesc),
+    Hatching(HatchingDesc),
+}
+
+fn white() -> [f32; 3] {
+    [1.0; 3]
+}
+
+/// `toon`: hard shading (npr/src/toon.rs). `bands` or an explicit `ramp`
+/// of `[edge, [r, g, b]]` pairs on n·l (default 3 bands); a hard highlight
+/// where n·h ≥ `specular_threshold`; a rim where 1 − n·v ≥ `rim_threshold`.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ToonDesc {
+    pub base_color: [f32; 3],
+    #[serde(default)]
+    pub base_color_texture: Option<PathBuf>,
+    #[serde(default)]
+    pub bands: Option<u32>,
+    #[serde(default)]
+    pub ramp: Option<Vec<(f32, [f32; 3])>>,
+    #[serde(default)]
+    pub specular_threshold: Option<f32>,
+    #[serde(default = "white")]
+    pub specular_color: [f32; 3],
+    #[serde(default)]
+    pub rim_threshold: Option<f32>,
+    #[serde(default = "white")]
+    pub rim_color: [f32; 3],
+    #[serde(default)]
+    pub double_sided: bool,
+}
+
+fn default_ink() -> [f32; 3] {
+    [0.02, 0.02, 0.03]
+}
+fn default_scale() -> f32 {
+    4.0
+}
+
+/// `hatching`: a tonal art map selected by the shaded luminance
+/// (npr/src/hatching.rs). `tam` names a directory written by `specula tam`
+/// (relative to the scene file); without it a built-in map is generated.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct HatchingDesc {
+    #[serde(default)]
+    pub tam: Option<PathBuf>,
+    #[serde(default = "default_ink")]
+    pub ink: [f32; 3],
+    #[serde(default = "white")]
+    pub paper: [f32; 3],
+    /// Map repeats per unit of uv.
+    #[serde(default = "default_scale")]
+    pub scale: f32,
+    #[serde(default)]
+    pub double_sided: bool,
 }
 
 fn one() -> f32 {
@@ -101,6 +168,9 @@ pub struct MicrofacetDesc {
 #[serde(deny_unknown_fields)]
 pub struct LambertDesc {
     pub base_color: [f32; 3],
+    /// An sRGB image multiplying base_color at the surface's uv.
+    #[serde(default)]
+    pub base_color_texture: Option<PathBuf>,
     #[serde(default)]
     pub double_sided: bool,
 }
@@ -112,6 +182,9 @@ pub struct MetallicRoughnessDesc {
     pub roughness: f32,
     #[serde(default)]
     pub metallic: f32,
+    /// An sRGB image multiplying base_color at the surface's uv.
+    #[serde(default)]
+    pub base_color_texture: Option<PathBuf>,
     #[serde(default)]
     pub double_sided: bool,
 }
@@ -220,21 +293,96 @@ impl MaterialDesc {
         tables: Tables,
         warnings: &mut Vec<String>,
     ) -> Result<Material, String> {
-        let (shading, double_sided) = self.build_shading(tables, warnings)?;
+        let no_files = |p: &Path| -> std::io::Result<Vec<u8>> {
+            Err(std::io::Error::new(
+                std::io::ErrorKind::NotFound,
+                format!("{}: no files are available here", p.display()),
+            ))
+        };
+        self.build_with(name, tables, warnings, &no_files)
+    }
+
+    /// [`MaterialDesc::build`] with the files the material names (textures,
+    /// tonal art maps) read through `read`.
+    pub fn build_with(
+        &self,
+        name: &str,
+        tables: Tables,
+        warnings: &mut Vec<String>,
+        read: ReadFile,
+    ) -> Result<Material, String> {
+        match self {
+            MaterialDesc::Toon(d) => {
+                return Ok(Material::new(name, d.shader(read)?, d.double_sided))
+            }
+            MaterialDesc::Hatching(d) => {
+                return Ok(Material::new(name, d.shader(read)?, d.double_sided))
+            }
+            _ => {}
+        }
+        let (shading, double_sided) = self.build_model(tables, warnings)?;
         Ok(match shading {
-            Shading::Lit(model) => Material::new(name, Lit { model }, double_sided),
+            Shading::Lit(model) => match self.base_color_texture() {
+                Some(path) => {
+                    let map = crate::textures::load_color_map(path, read)
+                        .map_err(|e| format!("base_color_texture: {e}"))?;
+                    let name_ = model.name();
+                    let shader = TexturedLit::new(model, map).ok_or_else(|| {
+                        format!("base_color_texture: the \"{name_}\" model takes no texture")
+                    })?;
+                    Material::new(name, shader, double_sided)
+                }
+                None => Material::new(name, Lit { model }, double_sided),
+            },
             Shading::Unlit(u) => Material::new(name, u, double_sided),
         })
     }
 
+    /// The base-colour image the material names, if any.
+    pub fn base_color_texture(&self) -> Option<&Path> {
+        match self {
+            MaterialDesc::Lambert(d) => d.base_color_texture.as_deref(),
+            MaterialDesc::MetallicRoughness(d) => d.base_color_texture.as_deref(),
+            MaterialDesc::Toon(d) => d.base_color_texture.as_deref(),
+            _ => None,
+        }
+    }
+
+    /// The material reads uvs (a texture or a tonal art map): meshes
+    /// without them cannot use it.
+    pub fn needs_uvs(&self) -> bool {
+        self.base_color_texture().is_some() || matches!(self, MaterialDesc::Hatching(_))
+    }
+
     /// [`MaterialDesc::build`] before it becomes a shader (what `specula
-    /// eval` evaluates), and whether it is double-sided.
+    /// eval` evaluates), and whether it is double-sided. Only materials
+    /// with a BRDF value at a direction pair have one: stylized shaders
+    /// and textured materials (whose value depends on uv) are refused.
     pub fn build_shading(
         &self,
         tables: Tables,
         warnings: &mut Vec<String>,
     ) -> Result<(Shading, bool), String> {
+        if self.base_color_texture().is_some() {
+            return Err("base_color_texture: a textured material has no single BRDF value (it depends on uv); leave the texture out".into());
+        }
+        if let MaterialDesc::Toon(_) | MaterialDesc::Hatching(_) = self {
+            return Err(
+                "model: \"toon\" and \"hatching\" are stylized shaders with no BRDF value".into(),
+            );
+        }
+        self.build_model(tables, warnings)
+    }
+
+    fn build_model(
+        &self,
+        tables: Tables,
+        warnings: &mut Vec<String>,
+    ) -> Result<(Shading, bool), String> {
         let (model, double_sided) = match self {
+            MaterialDesc::Toon(_) | MaterialDesc::Hatching(_) => {
+                return Err("model: a stylized shader has no BRDF".into())
+            }
             MaterialDesc::Unlit(d) => {
                 check_color("color", d.color)?;
                 if !(d.intensity.is_finite() && d.intensity >= 0.0) {
@@ -291,5 +439,73 @@ impl MaterialDesc {
             }
         };
         Ok((Shading::Lit(model), double_sided))
+    }
+}
+
+impl ToonDesc {
+    fn shader(&self, read: ReadFile) -> Result<Toon, String> {
+        check_color("base_color", self.base_color)?;
+        let ramp = match (&self.bands, &self.ramp) {
+            (Some(_), Some(_)) => return Err("bands / ramp: give one of them, not both".into()),
+            (_, Some(r)) => Ramp::explicit(r.clone())?,
+            (b, None) => Ramp::bands(b.unwrap_or(3))?,
+        };
+        let hard = |field: &str, t: Option<f32>, color: [f32; 3], cfield: &str| {
+            t.map(|t| {
+                if !(-1.0..=1.0).contains(&t) {
+                    return Err(format!("{field}: must be in [-1, 1], got {t}"));
+                }
+                check_color(cfield, color)?;
+                Ok(Hard {
+                    threshold: t,
+                    color,
+                })
+            })
+            .transpose()
+        };
+        let base_color_map = match &self.base_color_texture {
+            Some(p) => Some(
+                crate::textures::load_color_map(p, read)
+                    .map_err(|e| format!("base_color_texture: {e}"))?,
+            ),
+            None => None,
+        };
+        Ok(Toon {
+            base_color: self.base_color,
+            base_color_map,
+            ramp,
+            specular: hard(
+                "specular_threshold",
+                self.specular_threshold,
+                self.specular_color,
+                "specular_color",
+            )?,
+            rim: hard(
+                "rim_threshold",
+                self.rim_threshold,
+                self.rim_color,
+                "rim_color",
+            )?,
+        })
+    }
+}
+
+impl HatchingDesc {
+    fn shader(&self, read: ReadFile) -> Result<Hatching, String> {
+        check_color("ink", self.ink)?;
+        check_color("paper", self.paper)?;
+        check_positive("scale", self.scale)?;
+        let tam = match &self.tam {
+            Some(dir) => {
+                Arc::new(TamTexture::read_with(dir, read).map_err(|e| format!("tam: {e}"))?)
+            }
+            None => builtin_tam().map_err(|e| format!("tam: the built-in map: {e}"))?,
+        };
+        Ok(Hatching {
+            tam,
+            ink: self.ink,
+            paper: self.paper,
+            scale: self.scale,
+        })
     }
 }

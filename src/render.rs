@@ -4,8 +4,9 @@
 use crate::scene::LoadedScene;
 use serde::Serialize;
 use specula_raster::frame::{render_into, render_with, Frame, FrameStats, ShadePath};
-use specula_raster::post::{downsample, Post, Tonemap};
+use specula_raster::post::{downsample, Post, PostStage, Stage, Tonemap};
 use specula_raster::{BufferSet, Target};
+use std::sync::Arc;
 use std::time::Instant;
 
 #[derive(Clone, Debug)]
@@ -22,6 +23,8 @@ pub struct RenderSettings {
     pub repeat: u32,
     /// Optional frame buffers to keep for AOVs (post stages add theirs).
     pub buffers: BufferSet,
+    /// Image-space stages run after the tone map, before the encode.
+    pub post_stages: Vec<Arc<dyn PostStage>>,
 }
 
 impl RenderSettings {
@@ -37,12 +40,19 @@ impl RenderSettings {
             threads: None,
             repeat: 1,
             buffers: BufferSet::default(),
+            post_stages: s.post_stages.clone(),
         }
     }
 
-    /// The post stages of a frame: resolve, exposure, tone map, encode.
+    /// The post stages of a frame: resolve, exposure, tone map, the
+    /// custom stages, encode (fused when there are no custom stages).
     pub fn post(&self) -> Post {
-        Post::standard(self.ssaa, self.exposure, self.tonemap)
+        let mut p = Post::standard(self.ssaa, self.exposure, self.tonemap);
+        let encode = p.stages.pop();
+        p.stages
+            .extend(self.post_stages.iter().cloned().map(Stage::Custom));
+        p.stages.extend(encode);
+        p
     }
 
     /// The supersampled render target; checks sizes before anything is

@@ -30,6 +30,24 @@ struct SceneFile {
     materials: BTreeMap<String, MaterialDesc>,
     #[serde(default, rename = "light")]
     lights: Vec<LightDesc>,
+    posterize: Option<PosterizeDesc>,
+}
+
+/// `[posterize]`: quantize the tone-mapped image (npr/src/posterize.rs).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PosterizeDesc {
+    levels: u32,
+    #[serde(default)]
+    mode: PosterizeModeDesc,
+}
+
+#[derive(Debug, Deserialize, Default, Clone, Copy)]
+#[serde(rename_all = "snake_case")]
+enum PosterizeModeDesc {
+    #[default]
+    Rgb,
+    Luminance,
 }
 
 fn default_up() -> [f32; 3] {
@@ -274,6 +292,9 @@ pub struct LoadedScene {
     pub inputs: Vec<PathBuf>,
     /// Things worth telling the user that did not stop the load.
     pub warnings: Vec<String>,
+    /// Image-space stages the scene asks for, run after the tone map and
+    /// before the encode (`[posterize]`).
+    pub post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
 }
 
 /// Reads a scene file from disk; relative paths resolve against its folder.
@@ -339,7 +360,12 @@ fn default_material() -> Material {
 /// roughness and `Pm` metallic (the PBR extension); without `Pr`, roughness
 /// from Phong `Ns` through α² = 2 / (Ns + 2) [Walter07, §5.2]; defaults 0.5
 /// and 0.
-fn mtl_material(m: &tobj::Material) -> Result<Material, String> {
+/// `map_Kd` (relative to the OBJ's folder) becomes the base-colour texture.
+fn mtl_material(
+    m: &tobj::Material,
+    obj_dir: &Path,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<Material, String> {
     let param = |key: &str| -> Result<Option<f32>, String> {
         match m.unknown_param.get(key) {
             None => Ok(None),
@@ -374,7 +400,19 @@ fn mtl_material(m: &tobj::Material) -> Result<Material, String> {
         roughness,
         metallic: param("Pm")?.unwrap_or(0.0),
     });
-    Ok(Material::new(&m.name, Lit { model }, false))
+    match &m.diffuse_texture {
+        Some(tex) => {
+            let path = obj_dir.join(tex.trim());
+            let map = crate::textures::load_color_map(&path, read)
+                .map_err(|e| format!("material {}: map_Kd: {e}", m.name))?;
+            let shader =
+                specula_raster::textured::TexturedLit::new(model, map).ok_or_else(|| {
+                    format!("material {}: map_Kd: the model takes no texture", m.name)
+                })?;
+            Ok(Material::new(&m.name, shader, false))
+        }
+        None => Ok(Material::new(&m.name, Lit { model }, false)),
+    }
 }
 
 /// Parses and builds a scene from its text; `read` supplies the files it
@@ -435,11 +473,17 @@ pub fn load_scene_str(
     // Materials: scene materials first, so they win over MTL ones of the same name.
     let mut materials = Vec::new();
     let mut by_name: HashMap<String, u32> = HashMap::new();
+    // Materials that read uvs (textures, tonal art maps).
+    let mut textured = std::collections::HashSet::new();
     for (name, m) in &desc.materials {
         let mut notes = Vec::new();
         let built = m
-            .build(name, crate::material_desc::Tables::Build, &mut notes)
+            .build_with(name, crate::material_desc::Tables::Build, &mut notes, read)
             .map_err(|e| err(format!("materials.{name}.{e}")))?;
+        if m.needs_uvs() {
+            textured.insert(materials.len() as u32);
+        }
+        inputs.extend(m.base_color_texture().map(Path::to_path_buf));
         warnings.extend(
             notes
                 .into_iter()
@@ -524,8 +568,12 @@ pub fn load_scene_str(
                         let Some(mt) = mesh.mtl.iter().find(|m| &m.name == n) else {
                             return Err(err(format!("{field}.material: no material named {n:?} in [materials] or the mesh's MTL")));
                         };
-                        let built =
-                            mtl_material(mt).map_err(|e| err(format!("{field}.obj: {e}")))?;
+                        let obj_dir = md.obj.as_deref().and_then(Path::parent);
+                        let built = mtl_material(mt, obj_dir.unwrap_or(Path::new("")), read)
+                            .map_err(|e| err(format!("{field}.obj: {e}")))?;
+                        if mt.diffuse_texture.is_some() {
+                            textured.insert(materials.len() as u32);
+                        }
                         let id = materials.len() as u32;
                         materials.push(built);
                         by_name.insert(n.clone(), id);
@@ -538,6 +586,26 @@ pub fn load_scene_str(
                 }),
             };
             local.push(id);
+        }
+        if mesh.uvs.is_empty() {
+            let used: std::collections::BTreeSet<u32> = mesh
+                .tri_material
+                .iter()
+                .map(|m| local[*m as usize])
+                .collect();
+            if let Some(m) = used.iter().find(|m| textured.contains(m)) {
+                let what = match &md.obj {
+                    Some(p) => format!(
+                        "{field}.obj: {} has no texture coordinates (vt)",
+                        p.display()
+                    ),
+                    None => format!("{field}: the mesh has no texture coordinates"),
+                };
+                return Err(err(format!(
+                    "{what}, and its material {:?} samples a texture (give the mesh uvs or use an untextured material)",
+                    materials[*m as usize].name
+                )));
+            }
         }
 
         let scale = match md.scale {
@@ -638,10 +706,21 @@ pub fn load_scene_str(
     data.materials = materials;
     data.geometry = vec![GeometryPass::main(data.triangles.len())];
     data.validate().map_err(err)?;
+    let mut post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>> = Vec::new();
+    if let Some(p) = &desc.posterize {
+        use specula_npr::posterize::{Posterize, PosterizeMode};
+        let mode = match p.mode {
+            PosterizeModeDesc::Rgb => PosterizeMode::Rgb,
+            PosterizeModeDesc::Luminance => PosterizeMode::Luminance,
+        };
+        let stage = Posterize::new(p.levels, mode).map_err(|e| err(format!("posterize.{e}")))?;
+        post_stages.push(std::sync::Arc::new(stage));
+    }
     Ok(LoadedScene {
         data,
         output: desc.output,
         inputs,
         warnings,
+        post_stages,
     })
 }

@@ -8,7 +8,9 @@
 //! attributes at pixel centres (`resolve`) and runs each material's surface
 //! shader (`shader`: `lit` for the physically based models, `unlit`) 8
 //! pixels at a time (`shade`) into row-major frame buffers (`buffers`:
-//! colour, depth, normal, id); `post` runs the post stages (supersampling
+//! colour, depth, normal, id); `texture` is the mip-mapped texture
+//! sampler shaders read (base-colour maps, tonal art maps), `textured` the
+//! lit models with a base-colour map; `post` runs the post stages (supersampling
 //! resolve, exposure, tone map, encode, and any custom image-space stage).
 
 pub mod bin;
@@ -27,6 +29,8 @@ pub mod setup;
 pub mod shade;
 pub mod shader;
 pub mod target;
+pub mod texture;
+pub mod textured;
 pub mod unlit;
 
 pub use buffers::{BufferSet, FrameBuffers, Planes3};

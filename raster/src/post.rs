@@ -63,8 +63,8 @@ pub fn srgb_curve(v: f64) -> f64 {
     }
 }
 
-/// Inverse of [`srgb_curve`].
-fn srgb_curve_inverse(s: f64) -> f64 {
+/// Inverse of [`srgb_curve`]: sRGB-encoded [0, 1] to linear.
+pub fn srgb_curve_inverse(s: f64) -> f64 {
     if s <= 0.040_45 {
         s / 12.92
     } else {

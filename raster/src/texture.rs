@@ -1,0 +1,562 @@
+//! Textures and their sampler: images of any channel count stored as linear
+//! f32 with a mip chain, looked up for f32, f64 and f32x8 lanes from one
+//! source through [`Real::gather`] (the same memory read the tables use).
+//!
+//! Conventions (the same for every user: base-colour maps, tonal art maps):
+//! - texel (i, j) of a w × h level has its centre at uv = ((i + ½)/w,
+//!   (j + ½)/h); row j = 0 is v = 0. Loaders of images stored top row first
+//!   decide which way v runs (scene files use the OBJ convention, v = 0 at
+//!   the bottom of the picture, see `src/material_desc.rs`);
+//! - texels are linear values: 8-bit colour is decoded from sRGB (channels
+//!   0–2; alpha stays linear) or read as linear ([`Encoding`]) when the
+//!   texture is made, so filtering happens in linear space;
+//! - level l + 1 is max(1, ⌊w_l/2⌋) × max(1, ⌊h_l/2⌋), down to 1 × 1. Each
+//!   texel of it is the area average of the level-l texels under its
+//!   footprint (a box filter of exact area: for odd sizes a source texel is
+//!   split between two targets by how much of it each covers), so every
+//!   level keeps the mean of level 0;
+//! - level of detail λ = ½ log₂ max(|∂(uw, vh)/∂x|², |∂(uw, vh)/∂y|²) in
+//!   level-0 texels per pixel (the larger axis of the footprint, as
+//!   OpenGL's scale factor ρ), clamped to [0, levels − 1];
+//! - filters: [`Filter::Nearest`] and [`Filter::Bilinear`] read level 0,
+//!   [`Filter::Trilinear`] blends the bilinear values of levels ⌊λ⌋ and
+//!   ⌊λ⌋ + 1 by the fraction of λ.
+//!
+//! Every input is safe: a NaN or infinite uv reads texel 0 and a NaN
+//! derivative level 0; the result is always finite for finite texels.
+//! The one source serves f32x8 and the scalar twin (f32, f64); tests check
+//! them lane by lane against each other and against plain f64 formulas.
+
+use specula_core::Real;
+
+/// What happens to uv outside [0, 1].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Wrap {
+    /// Tiles: u and u + 1 read the same texel.
+    #[default]
+    Repeat,
+    /// The edge texels extend outward.
+    Clamp,
+    /// Tiles with every other copy mirrored: u and 2 − u read the same texel.
+    Mirror,
+}
+
+/// How texels are combined; see the module docs.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Filter {
+    /// The texel of level 0 containing uv.
+    Nearest,
+    /// The four nearest texel centres of level 0, bilinearly weighted.
+    Bilinear,
+    /// Bilinear on the two levels around λ, blended linearly.
+    #[default]
+    Trilinear,
+}
+
+/// Wrap modes along u and v, and the filter.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub struct Sampler {
+    pub wrap_u: Wrap,
+    pub wrap_v: Wrap,
+    pub filter: Filter,
+}
+
+impl Sampler {
+    pub fn new(wrap: Wrap, filter: Filter) -> Sampler {
+        Sampler {
+            wrap_u: wrap,
+            wrap_v: wrap,
+            filter,
+        }
+    }
+}
+
+/// How 8-bit texels encode their values.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Encoding {
+    /// Colour channels (0–2) are sRGB-encoded (IEC 61966-2-1) and decoded
+    /// to linear; a fourth channel (alpha) is linear.
+    Srgb,
+    /// Every channel is value / 255.
+    Linear,
+}
+
+/// Largest number of f32 values all levels together may hold: an f32 lane
+/// indexes exactly up to 2²⁴ (the gather's contract).
+pub const MAX_VALUES: usize = 1 << 24;
+
+/// Where a level lives in [`Texture`]'s data.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Level {
+    width: usize,
+    height: usize,
+    offset: usize,
+}
+
+/// Per-level values the lanes gather when each lane reads its own level.
+const META: usize = 3;
+
+/// A mip-mapped image of `channels` linear f32 values per texel; see the
+/// module docs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Texture {
+    channels: usize,
+    levels: Vec<Level>,
+    /// Every level, row-major, channels interleaved: value c of texel
+    /// (x, y) of level l at `offset_l + (y · w_l + x) · channels + c`.
+    data: Vec<f32>,
+    /// Per level: offset, width, height (as f32, exact).
+    meta: Vec<f32>,
+}
+
+/// The size of the level below a w × h one.
+pub fn next_level_size(w: usize, h: usize) -> (usize, usize) {
+    ((w / 2).max(1), (h / 2).max(1))
+}
+
+/// Area weights of a 1-D box resampling from `n` to `m` < n texels: for
+/// each target, the (source index, weight) pairs, weights summing to 1.
+fn box_weights(n: usize, m: usize) -> Vec<Vec<(usize, f64)>> {
+    let scale = n as f64 / m as f64;
+    (0..m)
+        .map(|i| {
+            let (a, b) = (i as f64 * scale, (i + 1) as f64 * scale);
+            let mut w = Vec::new();
+            let mut j = a.floor() as usize;
+            while (j as f64) < b && j < n {
+                let overlap = (b.min(j as f64 + 1.0) - a.max(j as f64)).max(0.0);
+                if overlap > 0.0 {
+                    w.push((j, overlap / scale));
+                }
+                j += 1;
+            }
+            w
+        })
+        .collect()
+}
+
+/// The area-average of a w × h image (c channels) at (w2, h2): separable,
+/// rows first, in f64.
+fn downsample(src: &[f32], w: usize, h: usize, c: usize, w2: usize, h2: usize) -> Vec<f32> {
+    let wx = if w2 == w {
+        (0..w).map(|i| vec![(i, 1.0)]).collect()
+    } else {
+        box_weights(w, w2)
+    };
+    let wy = if h2 == h {
+        (0..h).map(|j| vec![(j, 1.0)]).collect()
+    } else {
+        box_weights(h, h2)
+    };
+    let mut rows = vec![0.0f64; w2 * h * c];
+    for y in 0..h {
+        for (x2, taps) in wx.iter().enumerate() {
+            for &(x, k) in taps {
+                for ch in 0..c {
+                    rows[(y * w2 + x2) * c + ch] += k * src[(y * w + x) * c + ch] as f64;
+                }
+            }
+        }
+    }
+    let mut out = vec![0.0f64; w2 * h2 * c];
+    for (y2, taps) in wy.iter().enumerate() {
+        for &(y, k) in taps {
+            for i in 0..w2 * c {
+                out[y2 * w2 * c + i] += k * rows[y * w2 * c + i];
+            }
+        }
+    }
+    out.into_iter().map(|v| v as f32).collect()
+}
+
+/// One lane value per level field, for the lanes of one lookup.
+#[derive(Clone, Copy)]
+struct LevelLanes<R> {
+    offset: R,
+    width: R,
+    height: R,
+}
+
+#[inline(always)]
+fn lerp<R: Real>(a: R, b: R, t: R) -> R {
+    a + (b - a) * t
+}
+
+/// u reduced to the wrap's period ([0, 1) for repeat, [0, 2) for mirror,
+/// [−1, 2] for clamp, where anything beyond reads the edge anyway) so
+/// texel coordinates stay small; a NaN or infinite u becomes 0.
+#[inline(always)]
+fn reduce<R: Real>(mode: Wrap, u: R) -> R {
+    let u = R::select(u.is_finite(), u, R::ZERO);
+    match mode {
+        Wrap::Repeat => u - u.floor(),
+        Wrap::Mirror => u - (u * R::HALF).floor() * R::splat(2.0),
+        Wrap::Clamp => u.clamp(-R::ONE, R::splat(2.0)),
+    }
+}
+
+/// Texel index i (integral, within one period of the reduced range) wrapped
+/// into [0, n − 1]. The last clamp also catches the rounding of `reduce`
+/// (u − ⌊u⌋ can round up to exactly 1).
+#[inline(always)]
+fn wrap_index<R: Real>(mode: Wrap, i: R, n: R) -> R {
+    let last = n - R::ONE;
+    let r = match mode {
+        Wrap::Clamp => i,
+        Wrap::Repeat => {
+            let r = R::select(i.lt(R::ZERO), i + n, i);
+            R::select(r.ge(n), r - n, r)
+        }
+        Wrap::Mirror => {
+            let n2 = n + n;
+            let r = R::select(i.lt(R::ZERO), i + n2, i);
+            let r = R::select(r.ge(n2), r - n2, r);
+            R::select(r.ge(n), n2 - R::ONE - r, r)
+        }
+    };
+    r.clamp(R::ZERO, last)
+}
+
+impl Texture {
+    /// A texture from level-0 texels (`width · height · channels` values,
+    /// row-major, channels interleaved), with its mip chain.
+    pub fn from_f32(
+        width: usize,
+        height: usize,
+        channels: usize,
+        texels: Vec<f32>,
+    ) -> Result<Texture, String> {
+        check_size(width, height, channels, texels.len())?;
+        if let Some(i) = texels.iter().position(|v| !v.is_finite()) {
+            return Err(format!(
+                "texel value {i} is not finite ({}); textures hold finite values",
+                texels[i]
+            ));
+        }
+        let mut levels = vec![(width, height, texels)];
+        while let Some((w, h, d)) = levels.last() {
+            if *w == 1 && *h == 1 {
+                break;
+            }
+            let (w2, h2) = next_level_size(*w, *h);
+            let next = downsample(d, *w, *h, channels, w2, h2);
+            levels.push((w2, h2, next));
+        }
+        Self::assemble(channels, levels)
+    }
+
+    /// A texture from 8-bit texels (`width · height · channels` bytes,
+    /// row-major, channels interleaved), decoded per `encoding`.
+    pub fn from_u8(
+        width: usize,
+        height: usize,
+        channels: usize,
+        bytes: &[u8],
+        encoding: Encoding,
+    ) -> Result<Texture, String> {
+        check_size(width, height, channels, bytes.len())?;
+        let srgb: [f32; 256] =
+            core::array::from_fn(|k| crate::post::srgb_curve_inverse(k as f64 / 255.0) as f32);
+        let texels = bytes
+            .iter()
+            .enumerate()
+            .map(|(i, &b)| match encoding {
+                Encoding::Srgb if i % channels < 3 => srgb[b as usize],
+                _ => b as f32 / 255.0,
+            })
+            .collect();
+        Self::from_f32(width, height, channels, texels)
+    }
+
+    /// A texture whose mip levels are given, level 0 first (e.g. a tonal art
+    /// map, each level drawn at its own size): each (width, height, texels)
+    /// as in [`Texture::from_f32`], sizes halving as [`next_level_size`].
+    /// The chain may stop before 1 × 1; lookups clamp λ to the levels given.
+    pub fn from_levels(
+        channels: usize,
+        levels: Vec<(usize, usize, Vec<f32>)>,
+    ) -> Result<Texture, String> {
+        let Some(first) = levels.first() else {
+            return Err("a texture needs at least one level".into());
+        };
+        let (mut w, mut h) = (first.0, first.1);
+        for (l, (lw, lh, d)) in levels.iter().enumerate() {
+            if l > 0 {
+                (w, h) = next_level_size(w, h);
+            }
+            if (*lw, *lh) != (w, h) {
+                return Err(format!(
+                    "level {l} is {lw}×{lh}; after level 0 of {}×{} it must be {w}×{h}",
+                    first.0, first.1
+                ));
+            }
+            check_size(w, h, channels, d.len()).map_err(|e| format!("level {l}: {e}"))?;
+            if d.iter().any(|v| !v.is_finite()) {
+                return Err(format!("level {l}: texel values must be finite"));
+            }
+        }
+        Self::assemble(channels, levels)
+    }
+
+    fn assemble(channels: usize, levels: Vec<(usize, usize, Vec<f32>)>) -> Result<Texture, String> {
+        let total: usize = levels.iter().map(|l| l.2.len()).sum();
+        if total > MAX_VALUES {
+            return Err(format!(
+                "texture too large: {total} values with its mip chain, at most {MAX_VALUES}"
+            ));
+        }
+        let mut t = Texture {
+            channels,
+            levels: Vec::with_capacity(levels.len()),
+            data: Vec::with_capacity(total),
+            meta: Vec::new(),
+        };
+        for (width, height, d) in levels {
+            let offset = t.data.len();
+            t.levels.push(Level {
+                width,
+                height,
+                offset,
+            });
+            t.meta.extend([offset as f32, width as f32, height as f32]);
+            t.data.extend(d);
+        }
+        Ok(t)
+    }
+
+    pub fn channels(&self) -> usize {
+        self.channels
+    }
+
+    pub fn level_count(&self) -> usize {
+        self.levels.len()
+    }
+
+    /// (width, height) of level `l`.
+    pub fn level_size(&self, l: usize) -> (usize, usize) {
+        (self.levels[l].width, self.levels[l].height)
+    }
+
+    /// Channel `c` of texel (x, y) of level `l`.
+    pub fn texel(&self, l: usize, x: usize, y: usize, c: usize) -> f32 {
+        let lv = &self.levels[l];
+        self.data[lv.offset + (y * lv.width + x) * self.channels + c]
+    }
+
+    #[inline(always)]
+    fn level0<R: Real>(&self) -> LevelLanes<R> {
+        let l = &self.levels[0];
+        LevelLanes {
+            offset: R::ZERO,
+            width: R::splat(l.width as f64),
+            height: R::splat(l.height as f64),
+        }
+    }
+
+    /// Each lane's level `l` (integral, in range).
+    #[inline(always)]
+    fn level_lanes<R: Real>(&self, l: R) -> LevelLanes<R> {
+        let base = l * R::splat(META as f64);
+        LevelLanes {
+            offset: R::gather(&self.meta, base),
+            width: R::gather(&self.meta, base + R::ONE),
+            height: R::gather(&self.meta, base + R::splat(2.0)),
+        }
+    }
+
+    /// λ from the screen derivatives of uv (module docs), clamped to the
+    /// levels there are; NaN derivatives give 0.
+    #[inline(always)]
+    pub fn lod<R: Real>(&self, duv_dx: [R; 2], duv_dy: [R; 2]) -> R {
+        let (w, h) = (
+            R::splat(self.levels[0].width as f64),
+            R::splat(self.levels[0].height as f64),
+        );
+        let (ax, ay) = (duv_dx[0] * w, duv_dx[1] * h);
+        let (bx, by) = (duv_dy[0] * w, duv_dy[1] * h);
+        let rho2 = (ax * ax + ay * ay).max(bx * bx + by * by);
+        // ½ log₂ ρ² = ln ρ² / (2 ln 2); ρ² = 0 gives −inf and NaN stays
+        // NaN: the clamp sends both to 0.
+        let lambda = rho2.ln() * R::splat(0.5 / core::f64::consts::LN_2);
+        lambda.clamp(R::ZERO, R::splat((self.levels.len() - 1) as f64))
+    }
+
+    /// Index of channel 0 of the four bilinear taps of `lv` at reduced
+    /// (u, v), and the weights of the second column and row.
+    #[inline(always)]
+    fn taps<R: Real>(&self, s: &Sampler, lv: &LevelLanes<R>, u: R, v: R) -> ([R; 4], R, R) {
+        let x = u * lv.width - R::HALF;
+        let y = v * lv.height - R::HALF;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let xa = wrap_index(s.wrap_u, x0, lv.width);
+        let xb = wrap_index(s.wrap_u, x0 + R::ONE, lv.width);
+        let ya = wrap_index(s.wrap_v, y0, lv.height);
+        let yb = wrap_index(s.wrap_v, y0 + R::ONE, lv.height);
+        let c = R::splat(self.channels as f64);
+        let at = |x: R, y: R| (y * lv.width + x).mul_add(c, lv.offset);
+        ([at(xa, ya), at(xb, ya), at(xa, yb), at(xb, yb)], fx, fy)
+    }
+
+    #[inline(always)]
+    fn bilinear<R: Real>(&self, s: &Sampler, lv: &LevelLanes<R>, u: R, v: R, ch: R) -> R {
+        let (t, fx, fy) = self.taps(s, lv, u, v);
+        let g = |i: R| R::gather(&self.data, i + ch);
+        lerp(lerp(g(t[0]), g(t[1]), fx), lerp(g(t[2]), g(t[3]), fx), fy)
+    }
+
+    #[inline(always)]
+    fn nearest<R: Real>(&self, s: &Sampler, u: R, v: R, ch: R) -> R {
+        let lv = self.level0::<R>();
+        let x = wrap_index(s.wrap_u, (u * lv.width).floor(), lv.width);
+        let y = wrap_index(s.wrap_v, (v * lv.height).floor(), lv.height);
+        let i = (y * lv.width + x).mul_add(R::splat(self.channels as f64), ch);
+        R::gather(&self.data, i)
+    }
+
+    /// The value of each lane's channel `ch` (integral lane values, clamped
+    /// to the channels there are) at uv, level of detail `lod` (used by
+    /// [`Filter::Trilinear`] only; clamp it with [`Texture::lod`]).
+    #[inline(always)]
+    pub fn sample_channel<R: Real>(&self, s: &Sampler, uv: [R; 2], lod: R, ch: R) -> R {
+        let ch = ch.clamp(R::ZERO, R::splat((self.channels - 1) as f64));
+        let u = reduce(s.wrap_u, uv[0]);
+        let v = reduce(s.wrap_v, uv[1]);
+        match s.filter {
+            Filter::Nearest => self.nearest(s, u, v, ch),
+            Filter::Bilinear => self.bilinear(s, &self.level0(), u, v, ch),
+            Filter::Trilinear => {
+                let last = R::splat((self.levels.len() - 1) as f64);
+                let lod = lod.clamp(R::ZERO, last);
+                let l0 = lod.floor();
+                let t = lod - l0;
+                let l1 = (l0 + R::ONE).min(last);
+                let a = self.bilinear(s, &self.level_lanes(l0), u, v, ch);
+                let b = self.bilinear(s, &self.level_lanes(l1), u, v, ch);
+                lerp(a, b, t)
+            }
+        }
+    }
+
+    /// (1 − w)·channel `ch` + w·channel `ch + 1` per lane: two channels
+    /// blended, with the taps (and level lookups) computed once. Equal to
+    /// blending two [`Texture::sample_channel`] calls (tested).
+    #[inline(always)]
+    pub fn sample_channel_blend<R: Real>(&self, s: &Sampler, uv: [R; 2], lod: R, ch: R, w: R) -> R {
+        let top = R::splat((self.channels - 1) as f64);
+        let c0 = ch.clamp(R::ZERO, top);
+        let c1 = (ch + R::ONE).clamp(R::ZERO, top);
+        let u = reduce(s.wrap_u, uv[0]);
+        let v = reduce(s.wrap_v, uv[1]);
+        let bilinear = |t: &[R; 4], fx: R, fy: R| {
+            let g = |i: R| {
+                let a = R::gather(&self.data, i + c0);
+                let b = R::gather(&self.data, i + c1);
+                lerp(a, b, w)
+            };
+            lerp(lerp(g(t[0]), g(t[1]), fx), lerp(g(t[2]), g(t[3]), fx), fy)
+        };
+        match s.filter {
+            Filter::Nearest => lerp(self.nearest(s, u, v, c0), self.nearest(s, u, v, c1), w),
+            Filter::Bilinear => {
+                let (t, fx, fy) = self.taps(s, &self.level0(), u, v);
+                bilinear(&t, fx, fy)
+            }
+            Filter::Trilinear => {
+                let last = R::splat((self.levels.len() - 1) as f64);
+                let lod = lod.clamp(R::ZERO, last);
+                let l0 = lod.floor();
+                let t = lod - l0;
+                let l1 = (l0 + R::ONE).min(last);
+                let (ta, fxa, fya) = self.taps(s, &self.level_lanes(l0), u, v);
+                let (tb, fxb, fyb) = self.taps(s, &self.level_lanes(l1), u, v);
+                lerp(bilinear(&ta, fxa, fya), bilinear(&tb, fxb, fyb), t)
+            }
+        }
+    }
+
+    /// Channels 0..C (C ≤ [`Texture::channels`]; later ones repeat the
+    /// last channel) at uv with the level of detail from its derivatives.
+    #[inline(always)]
+    pub fn sample<R: Real, const C: usize>(
+        &self,
+        s: &Sampler,
+        uv: [R; 2],
+        duv_dx: [R; 2],
+        duv_dy: [R; 2],
+    ) -> [R; C] {
+        let lod = match s.filter {
+            Filter::Trilinear => self.lod(duv_dx, duv_dy),
+            _ => R::ZERO,
+        };
+        self.sample_lod(s, uv, lod)
+    }
+
+    /// [`Texture::sample`] at a given level of detail.
+    #[inline(always)]
+    pub fn sample_lod<R: Real, const C: usize>(&self, s: &Sampler, uv: [R; 2], lod: R) -> [R; C] {
+        let u = reduce(s.wrap_u, uv[0]);
+        let v = reduce(s.wrap_v, uv[1]);
+        let ch = |c: usize| R::splat(c.min(self.channels - 1) as f64);
+        match s.filter {
+            Filter::Nearest => core::array::from_fn(|c| self.nearest(s, u, v, ch(c))),
+            Filter::Bilinear => {
+                let lv = self.level0();
+                let (t, fx, fy) = self.taps(s, &lv, u, v);
+                core::array::from_fn(|c| {
+                    let g = |i: R| R::gather(&self.data, i + ch(c));
+                    lerp(lerp(g(t[0]), g(t[1]), fx), lerp(g(t[2]), g(t[3]), fx), fy)
+                })
+            }
+            Filter::Trilinear => {
+                let last = R::splat((self.levels.len() - 1) as f64);
+                let lod = lod.clamp(R::ZERO, last);
+                let l0 = lod.floor();
+                let t = lod - l0;
+                let l1 = (l0 + R::ONE).min(last);
+                let (ta, fxa, fya) = self.taps(s, &self.level_lanes(l0), u, v);
+                let (tb, fxb, fyb) = self.taps(s, &self.level_lanes(l1), u, v);
+                core::array::from_fn(|c| {
+                    let g = |i: R| R::gather(&self.data, i + ch(c));
+                    let a = lerp(
+                        lerp(g(ta[0]), g(ta[1]), fxa),
+                        lerp(g(ta[2]), g(ta[3]), fxa),
+                        fya,
+                    );
+                    let b = lerp(
+                        lerp(g(tb[0]), g(tb[1]), fxb),
+                        lerp(g(tb[2]), g(tb[3]), fxb),
+                        fyb,
+                    );
+                    lerp(a, b, t)
+                })
+            }
+        }
+    }
+}
+
+fn check_size(width: usize, height: usize, channels: usize, len: usize) -> Result<(), String> {
+    if width == 0 || height == 0 || channels == 0 {
+        return Err(format!(
+            "texture size {width}×{height} with {channels} channels: all must be ≥ 1"
+        ));
+    }
+    match width
+        .checked_mul(height)
+        .and_then(|n| n.checked_mul(channels))
+    {
+        Some(n) if n == len => {}
+        Some(n) if n > MAX_VALUES => {
+            return Err(format!(
+                "texture too large: {width}×{height}×{channels} values, at most {MAX_VALUES}"
+            ))
+        }
+        Some(n) => {
+            return Err(format!(
+                "{len} values given for a {width}×{height} texture of {channels} channels ({n} expected)"
+            ))
+        }
+        None => return Err(format!("texture size {width}×{height} overflows")),
+    }
+    Ok(())
+}

@@ -1,0 +1,30 @@
+//! Image files as textures: PNG (or any format the `image` crate reads
+//! here) through `image`, decoded from sRGB to linear, rows flipped so that
+//! v = 0 is the bottom of the picture (the OBJ/MTL convention for `vt`).
+
+use crate::material_desc::ReadFile;
+use specula_raster::texture::{Encoding, Filter, Sampler, Texture, Wrap};
+use specula_raster::textured::ColorMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// Reads an sRGB colour image (alpha dropped) with its mip chain, sampled
+/// with repeat wrapping and trilinear filtering.
+pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, String> {
+    let bytes = read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let img = image::load_from_memory(&bytes)
+        .map_err(|e| format!("{}: {e}", path.display()))?
+        .to_rgb8();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let raw = img.into_raw();
+    let mut flipped = Vec::with_capacity(raw.len());
+    for row in raw.chunks_exact(w * 3).rev() {
+        flipped.extend_from_slice(row);
+    }
+    let texture = Texture::from_u8(w, h, 3, &flipped, Encoding::Srgb)
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(ColorMap {
+        texture: Arc::new(texture),
+        sampler: Sampler::new(Wrap::Repeat, Filter::Trilinear),
+    })
+}
