@@ -627,6 +627,8 @@ pub fn load_scene_str(
                 Light::Polygon {
                     vertices: vertices.clone(),
                     radiance: *radiance,
+                    two_sided: false,
+                    method: specula_core::light::AreaMethod::Ltc,
                 }
             }
         });
