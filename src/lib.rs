@@ -10,6 +10,7 @@ pub mod furnace;
 pub mod material_desc;
 pub mod mesh;
 pub mod output;
+pub mod polygon_light;
 pub mod render;
 pub mod scene;
 
