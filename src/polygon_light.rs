@@ -216,9 +216,9 @@ mod tests {
     fn self_intersecting_and_repeated_vertices_are_refused() {
         let bow = [
             [0.0, 0.0, 0.0],
-            [1.0, 1.0, 0.0],
             [1.0, 0.0, 0.0],
             [0.0, 1.0, 0.0],
+            [1.3, 1.4, 0.0],
         ];
         assert!(check_polygon("b", &bow).unwrap_err().contains("not simple"));
         let rep = [
