@@ -6,6 +6,7 @@
 
 pub mod demo;
 pub mod eval;
+pub mod fit_ltc;
 pub mod furnace;
 pub mod material_desc;
 pub mod mesh;

@@ -30,6 +30,16 @@ enum Command {
     /// Directional albedo E(μo) of a microfacet material at several
     /// roughnesses, without and with Kulla-Conty compensation.
     Furnace(FurnaceArgs),
+    /// Fit the LTC table of the GGX lobe (core/data/ltc_ggx.bin; format in
+    /// core/src/ltc/ggx.rs).
+    FitLtc(FitLtcArgs),
+}
+
+#[derive(clap::Args)]
+struct FitLtcArgs {
+    /// Where to write the table.
+    #[arg(short, long, default_value = "core/data/ltc_ggx.bin")]
+    output: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -237,6 +247,7 @@ fn main() -> ExitCode {
         None => run_demo(),
         Some(Command::Render(a)) => run_render(a),
         Some(Command::Furnace(a)) => run_furnace(a),
+        Some(Command::FitLtc(a)) => specula::fit_ltc::run(&a.output),
         Some(Command::Eval) => {
             let stdin = std::io::stdin().lock();
             let stdout = std::io::BufWriter::new(std::io::stdout().lock());
