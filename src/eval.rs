@@ -150,6 +150,9 @@ fn eval_light(
     let l = light.radiance;
     match method {
         Method::Ltc => {
+            if let Some(why) = crate::polygon_light::ltc_refusal(model) {
+                return Err(format!("method: {why}; use \"reference\""));
+            }
             let mut poly = PolygonLocal {
                 vertices: [V3::zero(); MAX_POLYGON_VERTICES],
                 len: verts.len(),

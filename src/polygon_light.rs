@@ -4,7 +4,9 @@
 
 use glam::{DVec2, DVec3, Vec3, Vec4};
 use specula_core::light::MAX_POLYGON_VERTICES;
-use specula_raster::{Material, SceneData, Unlit};
+use specula_core::models::microfacet::Ndf;
+use specula_core::Model;
+use specula_raster::{Lit, Material, SceneData, Unlit};
 
 /// Newell's normal of the polygon (twice its vector area, toward its front)
 /// and its size (the largest distance from the first vertex).
@@ -93,6 +95,31 @@ pub fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), String> {
                 return Err(format!(
                     "{field}: the polygon is not simple (edges {i} and {j} cross)"
                 ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Why `model` cannot take polygon lights by LTC, if it cannot: the
+/// table is fitted to GGX, and Beckmann or GTR lobes through it err by up
+/// to 30 % of the albedo (core/tests/ltc_ggx.rs).
+pub fn ltc_refusal(model: &Model) -> Option<String> {
+    match model {
+        Model::Microfacet(m) if m.params.ndf != Ndf::Ggx => Some(format!(
+            "polygon lights need ndf = \"ggx\" on microfacet materials (the LTC table is fitted to GGX; {:?} through it errs by up to 30 %)",
+            m.params.ndf
+        )),
+        _ => None,
+    }
+}
+
+/// Checks every lit material against polygon lights (see [`ltc_refusal`]).
+pub fn check_materials(materials: &[Material]) -> Result<(), String> {
+    for m in materials {
+        if let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() {
+            if let Some(why) = ltc_refusal(&lit.model) {
+                return Err(format!("material {:?}: {why}", m.name));
             }
         }
     }

@@ -639,6 +639,10 @@ pub fn load_scene_str(
                 }
             }
         };
+        if matches!(light, Light::Polygon { .. }) {
+            crate::polygon_light::check_materials(&materials)
+                .map_err(|e| err(format!("{field}: {e}")))?;
+        }
         data.lights.push(light);
     }
     if let Some(e) = &desc.environment {

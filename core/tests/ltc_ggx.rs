@@ -168,22 +168,21 @@ fn the_committed_table_round_trips_through_its_format() {
     assert!(decode(b"nonsense").is_err());
 }
 
-#[test]
-fn ltc_error_table_against_the_reference() {
+/// Errors of `model`'s LTC integral against the reference, as fractions
+/// of its albedo n (F = 1), over the test set: all, by view, the worst.
+fn error_table(model: impl Fn(f32) -> Microfacet) -> (Vec<f64>, Vec<Vec<f64>>, String) {
     let alphas = [0.05, 0.1, 0.2, 0.35, 0.5, 0.75, 1.0];
-    let views: [f64; 8] = [0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0];
     let tol = Tolerance {
         relative: 1e-4,
         absolute: 1e-7,
         max_nodes: 100_000,
     };
-    // (view band, errors)
     let mut all = Vec::new();
-    let mut by_view: Vec<Vec<f64>> = vec![Vec::new(); views.len()];
+    let mut by_view: Vec<Vec<f64>> = vec![Vec::new(); VIEWS.len()];
     let mut worst = (0.0, String::new());
     for &alpha in &alphas {
-        let m = ggx(alpha as f32, [1.0; 3]);
-        for (vi, &deg) in views.iter().enumerate() {
+        let m = model(alpha as f32);
+        for (vi, &deg) in VIEWS.iter().enumerate() {
             let theta = deg.to_radians();
             let wo = v(theta.sin(), 0.0, theta.cos());
             let p = m.prepare(wo);
@@ -215,9 +214,16 @@ fn ltc_error_table_against_the_reference() {
             }
         }
     }
-    eprintln!("LTC error / albedo, by view (all α, polygons, sidedness):");
+    all.sort_by(f64::total_cmp);
+    (all, by_view, worst.1)
+}
+
+const VIEWS: [f64; 8] = [0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0];
+
+fn print_table(title: &str, all: &[f64], by_view: &[Vec<f64>], worst: &str) {
+    eprintln!("{title}: LTC error / albedo, by view (all α, polygons, sidedness):");
     eprintln!("  θo     median     p90       max");
-    for (vi, &deg) in views.iter().enumerate() {
+    for (vi, &deg) in VIEWS.iter().enumerate() {
         let mut e = by_view[vi].clone();
         e.sort_by(f64::total_cmp);
         eprintln!(
@@ -227,28 +233,66 @@ fn ltc_error_table_against_the_reference() {
             100.0 * quantile(&e, 1.0)
         );
     }
-    all.sort_by(f64::total_cmp);
-    let (med, p90, max) = (
-        quantile(&all, 0.5),
-        quantile(&all, 0.9),
-        quantile(&all, 1.0),
-    );
     eprintln!(
         "  all    {:7.3}%  {:7.3}%  {:7.3}%   ({} cases)",
-        100.0 * med,
-        100.0 * p90,
-        100.0 * max,
+        100.0 * quantile(all, 0.5),
+        100.0 * quantile(all, 0.9),
+        100.0 * quantile(all, 1.0),
         all.len()
     );
-    eprintln!("  worst: {}", worst.1);
-    // Thresholds: the measured values (see the report in the commit and
-    // docs) with a margin.
+    eprintln!("  worst: {worst}");
+}
+
+#[test]
+fn ltc_error_table_against_the_reference() {
+    let (all, by_view, worst) = error_table(|a| ggx(a, [1.0; 3]));
+    print_table("GGX, height-correlated Smith", &all, &by_view, &worst);
+    let (p90, max) = (quantile(&all, 0.9), quantile(&all, 1.0));
     assert!(
         p90 < P90_BOUND && max < MAX_BOUND,
-        "p90 {p90}, max {max}: {}",
-        worst.1
+        "p90 {p90}, max {max}: {worst}"
     );
 }
+
+/// What sharing the fit costs: separable Smith and Beckmann through the
+/// GGX (height-correlated) table at the same α.
+#[test]
+fn ltc_error_of_the_lobes_that_share_the_ggx_fit() {
+    let with = |ndf: Ndf, smith: Smith| {
+        move |alpha: f32| {
+            Microfacet::new_without_table(
+                MicrofacetParams {
+                    ndf,
+                    alpha,
+                    smith,
+                    fresnel: Fresnel::Schlick { f0: [1.0; 3] },
+                    diffuse: [0.0; 3],
+                },
+                None,
+            )
+        }
+    };
+    let (all, by_view, worst) = error_table(with(Ndf::Ggx, Smith::Separable));
+    print_table(
+        "GGX, separable Smith (height-correlated fit)",
+        &all,
+        &by_view,
+        &worst,
+    );
+    assert!(quantile(&all, 0.9) < SEPARABLE_P90 && quantile(&all, 1.0) < SEPARABLE_MAX);
+    let (all, by_view, worst) = error_table(with(Ndf::Beckmann, Smith::HeightCorrelated));
+    print_table("Beckmann (GGX fit at the same α)", &all, &by_view, &worst);
+    assert!(quantile(&all, 0.9) < BECKMANN_P90 && quantile(&all, 1.0) < BECKMANN_MAX);
+}
+
+/// Measured: separable Smith p90 1.3 %, max 9.0 % (the table's n is the
+/// height-correlated albedo, up to 1.5 % above the separable one at
+/// grazing views); Beckmann p90 10.5 %, max 30 %, which is why scenes and
+/// eval refuse polygon lights on non-GGX microfacet materials.
+const SEPARABLE_P90: f64 = 0.02;
+const SEPARABLE_MAX: f64 = 0.11;
+const BECKMANN_P90: f64 = 0.14;
+const BECKMANN_MAX: f64 = 0.36;
 
 /// Measured p90 and max with a margin: 1.13 % and 7.5 % over 1008 cases
 /// with the committed table (median 0.13 %; by view, p90 0.18–0.31 % at

@@ -2,7 +2,7 @@
 //! hemisphere exactly, in lane arithmetic (f64 / f32 / f32x8 from one
 //! source).
 //!
-//! Lambert's formula [Lambert1760; Arvo95, eq. 7]: for a spherical polygon
+//! Lambert's formula [Lambert1760; Arvo95]: for a spherical polygon
 //! P above the horizon with great-arc edges from vᵢ to vᵢ₊₁ (unit),
 //!
 //! (1/π) ∫_P cos θ dω = (1/2π) Σᵢ θᵢ ẑ·(vᵢ₊₁ × vᵢ)/|vᵢ₊₁ × vᵢ|,  θᵢ = ∠(vᵢ, vᵢ₊₁)

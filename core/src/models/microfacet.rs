@@ -392,9 +392,11 @@ impl Brdf for Microfacet {
         Rgb::select(p.o.above, Rgb::new(r, g, b), Rgb::zero())
     }
 
-    /// The specular lobe by the GGX LTC at this α (ltc/ggx.rs; Beckmann
-    /// and GTR lobes use the GGX fit at the same α, and separable Smith
-    /// the height-correlated fit), with Schlick's split at F0 (`f0`: exact
+    /// The specular lobe by the GGX LTC at this α (ltc/ggx.rs; separable
+    /// Smith uses the height-correlated fit, measured p90 1.3 %, max 9 %;
+    /// Beckmann and GTR lobes would get the GGX fit at the same α, off by
+    /// up to 30 %, so scenes and eval refuse polygon lights on them), with
+    /// Schlick's split at F0 (`f0`: exact
     /// Fresnel kinds are taken at normal incidence); the diffuse base as ρd
     /// times the form factor (exact); the Kulla–Conty lobe as its albedo
     /// factor (1 − E(μo)) times the form factor (exact when 1 − E(μi) is
