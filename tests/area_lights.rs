@@ -377,3 +377,41 @@ fn the_area_lights_fixture_renders_by_ltc_close_to_its_reference() {
     // silhouettes, at grazing views, where the pixel's own radiance is
     // small.
 }
+
+#[test]
+fn a_concave_16_vertex_light_and_a_light_in_the_floor_plane_shade_finitely() {
+    // A 16-point star (concave) over the floor, two-sided, and a quad lying
+    // in the floor's own plane (every floor point sees it edge-on).
+    let star: Vec<String> = (0..16)
+        .map(|k| {
+            let phi = std::f64::consts::TAU * k as f64 / 16.0;
+            let r = if k % 2 == 0 { 0.8 } else { 0.35 };
+            format!("[{:.4}, 1.2, {:.4}]", r * phi.sin(), r * phi.cos())
+        })
+        .collect();
+    let text = FLOOR.replace(
+        "[[-0.5, 1.5, -0.5], [0.5, 1.5, -0.5], [0.5, 1.5, 0.5], [-0.5, 1.5, 0.5]]",
+        &format!("[{}]", star.join(", ")),
+    ) + "two_sided = true\n[[light]]\ntype = \"polygon\"\nvertices = [[-0.3, 0.0, -0.3], [0.3, 0.0, -0.3], [0.3, 0.0, 0.3], [-0.3, 0.0, 0.3]]\nradiance = [1.0, 1.0, 1.0]\n";
+    let (ltc, id) = render(&text, ShadePath::Simd);
+    let (reference, _) = render(
+        &(text.clone() + "[render]\narea_lights = \"reference\"\n"),
+        ShadePath::Simd,
+    );
+    let (scalar, _) = render(&text, ShadePath::Scalar);
+    let mut worst = 0.0f64;
+    for i in 0..id.len() {
+        assert!(ltc[i]
+            .iter()
+            .chain(&reference[i])
+            .chain(&scalar[i])
+            .all(|c| c.is_finite()));
+        if id[i] == MISS || id[i] >= 2 {
+            continue; // only the floor's two triangles
+        }
+        let (a, b) = (ltc[i][0] as f64, reference[i][0] as f64);
+        worst = worst.max((a - b).abs() / b.max(1e-3));
+    }
+    eprintln!("16-vertex star over a Lambert floor: worst relative LTC vs reference {worst:e}");
+    assert!(worst < 2e-3, "{worst:e}");
+}
