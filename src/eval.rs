@@ -10,10 +10,20 @@
 //! toward `wo`, and reflects nothing); or `{"error": "line N: ..."}`, and
 //! the run goes on.
 //! Material objects use the scene files' field names.
+//!
+//! A line may give `"light"` instead of `"wi"`: `{"material": {...}, "wo":
+//! [x, y, z], "light": {"polygon": [[x, y, z], ...], "radiance": [r, g, b],
+//! "two_sided": false}, "method": "ltc"}` answers `{"radiance": [r, g, b]}`,
+//! the radiance reflected toward `wo` at the origin by a polygon light (in
+//! the same local frame, validated as in scene files); `"method":
+//! "reference"` integrates numerically and adds `"error"`, the estimated
+//! absolute error of each channel's value.
 
 use crate::material_desc::{MaterialDesc, Shading, Tables};
 use serde::Deserialize;
-use specula_core::V3;
+use specula_core::light::{PolygonLocal, MAX_POLYGON_VERTICES};
+use specula_core::ltc::reference::{integrate_polygon, Tolerance};
+use specula_core::{Brdf, BrdfVisitor, Model, V3};
 use std::collections::HashMap;
 use std::io::{BufRead, Write};
 
@@ -21,8 +31,26 @@ use std::io::{BufRead, Write};
 #[serde(deny_unknown_fields)]
 struct Query {
     material: serde_json::Value,
-    wi: [f64; 3],
+    wi: Option<[f64; 3]>,
     wo: [f64; 3],
+    light: Option<PolygonQuery>,
+    method: Option<Method>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PolygonQuery {
+    polygon: Vec<[f32; 3]>,
+    radiance: [f64; 3],
+    #[serde(default)]
+    two_sided: bool,
+}
+
+#[derive(Clone, Copy, Deserialize, PartialEq)]
+#[serde(rename_all = "snake_case")]
+enum Method {
+    Ltc,
+    Reference,
 }
 
 /// Materials already built, keyed by their JSON text (scripts usually
@@ -51,10 +79,124 @@ struct Answer {
     emission: Option<[f64; 3]>,
 }
 
-fn eval(line: &str, cache: &mut Cache) -> Result<Answer, String> {
+/// What a line answers.
+enum Reply {
+    Brdf(Answer),
+    Light(LightAnswer),
+}
+
+/// A `"light"` line's answer: reflected radiance, and the reference's
+/// estimated error.
+struct LightAnswer {
+    radiance: [f64; 3],
+    error: Option<[f64; 3]>,
+}
+
+/// ∫ f cos over the polygon by the model's own LTC integral (f64 lanes).
+struct LtcIntegral<'a> {
+    wo: V3<f64>,
+    poly: &'a PolygonLocal<f64>,
+}
+
+impl BrdfVisitor for LtcIntegral<'_> {
+    type Output = Option<[f64; 3]>;
+    fn visit<B: Brdf>(self, b: &B) -> Option<[f64; 3]> {
+        if !B::POLYGON_LIGHTS {
+            return None;
+        }
+        let e = b.polygon_local(&b.prepare(self.wo), self.poly);
+        Some([e.x, e.y, e.z])
+    }
+}
+
+/// The reference integral of the model's f cos over the polygon.
+struct RefIntegral<'a> {
+    wo: V3<f64>,
+    vertices: &'a [V3<f64>],
+    two_sided: bool,
+}
+
+impl BrdfVisitor for RefIntegral<'_> {
+    type Output = ([f64; 3], f64);
+    fn visit<B: Brdf>(self, b: &B) -> ([f64; 3], f64) {
+        let p = b.prepare(self.wo);
+        let f = |wi: V3<f64>| {
+            let c = b.f_cos_local(&p, wi);
+            [c.x, c.y, c.z]
+        };
+        let e = integrate_polygon(self.vertices, self.two_sided, &f, Tolerance::FINE);
+        (e.value, e.error)
+    }
+}
+
+fn eval_light(
+    model: &Model,
+    wo: V3<f64>,
+    light: &PolygonQuery,
+    method: Method,
+) -> Result<LightAnswer, String> {
+    crate::polygon_light::check_polygon("light.polygon", &light.polygon)?;
+    if !light.radiance.iter().all(|c| c.is_finite() && *c >= 0.0) {
+        return Err(format!(
+            "light.radiance: must be finite and ≥ 0, got {:?}",
+            light.radiance
+        ));
+    }
+    let verts: Vec<V3<f64>> = light
+        .polygon
+        .iter()
+        .map(|p| V3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .collect();
+    let l = light.radiance;
+    match method {
+        Method::Ltc => {
+            if let Some(why) = crate::polygon_light::ltc_refusal(model) {
+                return Err(format!("method: {why}; use \"reference\""));
+            }
+            let mut poly = PolygonLocal {
+                vertices: [V3::zero(); MAX_POLYGON_VERTICES],
+                len: verts.len(),
+                two_sided: light.two_sided,
+            };
+            poly.vertices[..verts.len()].copy_from_slice(&verts);
+            let e = model
+                .visit(LtcIntegral { wo, poly: &poly })
+                .ok_or_else(|| {
+                    format!(
+                        "method: the \"{}\" model has no LTC integral; use \"reference\"",
+                        model.name()
+                    )
+                })?;
+            Ok(LightAnswer {
+                radiance: [0, 1, 2].map(|c| e[c] * l[c]),
+                error: None,
+            })
+        }
+        Method::Reference => {
+            let (e, err) = model.visit(RefIntegral {
+                wo,
+                vertices: &verts,
+                two_sided: light.two_sided,
+            });
+            Ok(LightAnswer {
+                radiance: [0, 1, 2].map(|c| e[c] * l[c]),
+                error: Some(l.map(|c| err * c)),
+            })
+        }
+    }
+}
+
+fn eval(line: &str, cache: &mut Cache) -> Result<Reply, String> {
     let q: Query = serde_json::from_str(line).map_err(|e| e.to_string())?;
-    let wi = unit("wi", q.wi)?;
     let wo = unit("wo", q.wo)?;
+    let wi = match (&q.wi, &q.light) {
+        (Some(wi), None) => Some(unit("wi", *wi)?),
+        (None, Some(_)) => None,
+        _ => return Err("give exactly one of \"wi\" and \"light\"".into()),
+    };
+    if wi.is_some() && q.method.is_some() {
+        return Err("\"method\" goes with \"light\", not \"wi\"".into());
+    }
     let key = q.material.to_string();
     if !cache.built.contains_key(&key) {
         let desc: MaterialDesc =
@@ -67,7 +209,18 @@ fn eval(line: &str, cache: &mut Cache) -> Result<Answer, String> {
         }
         cache.built.insert(key.clone(), m);
     }
-    Ok(match &cache.built[&key] {
+    let Some(wi) = wi else {
+        let light = q.light.as_ref().expect("checked above");
+        let method = q.method.unwrap_or(Method::Ltc);
+        return Ok(Reply::Light(match &cache.built[&key] {
+            Shading::Lit(model) => eval_light(model, wo, light, method)?,
+            Shading::Unlit(_) => LightAnswer {
+                radiance: [0.0; 3],
+                error: (method == Method::Reference).then_some([0.0; 3]),
+            },
+        }));
+    };
+    Ok(Reply::Brdf(match &cache.built[&key] {
         Shading::Lit(model) => {
             let f = model.f(V3::new(0.0, 0.0, 1.0), wi, wo);
             Answer {
@@ -84,17 +237,25 @@ fn eval(line: &str, cache: &mut Cache) -> Result<Answer, String> {
                 [0.0; 3]
             }),
         },
-    })
+    }))
 }
 
 /// The output line (without newline) for input line `lineno` (1-based).
 pub fn eval_line(line: &str, lineno: usize, cache: &mut Cache) -> String {
     match eval(line, cache) {
-        Ok(Answer { f, emission: None }) => serde_json::json!({ "f": f }).to_string(),
-        Ok(Answer {
+        Ok(Reply::Brdf(Answer { f, emission: None })) => serde_json::json!({ "f": f }).to_string(),
+        Ok(Reply::Brdf(Answer {
             f,
             emission: Some(e),
-        }) => serde_json::json!({ "f": f, "emission": e }).to_string(),
+        })) => serde_json::json!({ "f": f, "emission": e }).to_string(),
+        Ok(Reply::Light(LightAnswer {
+            radiance,
+            error: None,
+        })) => serde_json::json!({ "radiance": radiance }).to_string(),
+        Ok(Reply::Light(LightAnswer {
+            radiance,
+            error: Some(e),
+        })) => serde_json::json!({ "radiance": radiance, "error": e }).to_string(),
         Err(e) => serde_json::json!({ "error": format!("line {lineno}: {e}") }).to_string(),
     }
 }

@@ -7,10 +7,12 @@
 
 pub mod demo;
 pub mod eval;
+pub mod fit_ltc;
 pub mod furnace;
 pub mod material_desc;
 pub mod mesh;
 pub mod output;
+pub mod polygon_light;
 pub mod render;
 pub mod scene;
 pub mod textures;

@@ -33,6 +33,9 @@ enum Command {
     /// Generate a tonal art map (hatching textures, light to dark, with
     /// mip levels drawn at equal stroke width) into a directory.
     Tam(TamArgs),
+    /// Fit the LTC table of the GGX lobe (core/data/ltc_ggx.bin; format in
+    /// core/src/ltc/ggx.rs).
+    FitLtc(FitLtcArgs),
 }
 
 #[derive(clap::Args)]
@@ -52,6 +55,13 @@ struct TamArgs {
     /// Random seed: the same seed gives the same files.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+}
+
+#[derive(clap::Args)]
+struct FitLtcArgs {
+    /// Where to write the table.
+    #[arg(short, long, default_value = "core/data/ltc_ggx.bin")]
+    output: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -276,6 +286,7 @@ fn main() -> ExitCode {
         Some(Command::Render(a)) => run_render(a),
         Some(Command::Furnace(a)) => run_furnace(a),
         Some(Command::Tam(a)) => run_tam(a),
+        Some(Command::FitLtc(a)) => specula::fit_ltc::run(&a.output),
         Some(Command::Eval) => {
             let stdin = std::io::stdin().lock();
             let stdout = std::io::BufWriter::new(std::io::stdout().lock());

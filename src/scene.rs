@@ -31,6 +31,8 @@ struct SceneFile {
     #[serde(default, rename = "light")]
     lights: Vec<LightDesc>,
     posterize: Option<PosterizeDesc>,
+    #[serde(default)]
+    render: RenderDesc,
 }
 
 /// `[posterize]`: quantize the tone-mapped image (npr/src/posterize.rs).
@@ -48,6 +50,28 @@ enum PosterizeModeDesc {
     #[default]
     Rgb,
     Luminance,
+}
+
+/// How the frame is lit (the `[render]` table).
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderDesc {
+    /// How polygon lights are integrated: "ltc" (closed form) or
+    /// "reference" (converged quadrature per pixel, slow).
+    #[serde(default)]
+    area_lights: AreaLightsDesc,
+}
+
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+enum AreaLightsDesc {
+    #[default]
+    Ltc,
+    Reference,
+}
+
+fn yes() -> bool {
+    true
 }
 
 fn default_up() -> [f32; 3] {
@@ -216,56 +240,18 @@ enum LightDesc {
         irradiance: [f32; 3],
     },
     Polygon {
-        /// A planar convex polygon, 3 to 8 vertices, counter-clockwise seen
-        /// from the side it lights.
+        /// A planar simple polygon (convex or not), 3 to 16 vertices,
+        /// counter-clockwise seen from the side it lights.
         vertices: Vec<[f32; 3]>,
         /// Radiance (W/m²/sr), RGB.
         radiance: [f32; 3],
+        /// Emits from both sides.
+        #[serde(default)]
+        two_sided: bool,
+        /// Drawn as unlit geometry of its radiance.
+        #[serde(default = "yes")]
+        visible: bool,
     },
-}
-
-/// Checks a polygon light's vertices: 3..=MAX_POLYGON_VERTICES finite
-/// points, planar and convex with a non-zero area (so its orientation and
-/// every edge's plane are defined).
-fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), String> {
-    use specula_core::light::MAX_POLYGON_VERTICES;
-    if !(3..=MAX_POLYGON_VERTICES).contains(&v.len()) {
-        return Err(format!(
-            "{field}: a polygon light needs 3 to {MAX_POLYGON_VERTICES} vertices, got {}",
-            v.len()
-        ));
-    }
-    for (k, p) in v.iter().enumerate() {
-        check_finite(&format!("{field}[{k}]"), p)?;
-    }
-    let p: Vec<glam::DVec3> = v
-        .iter()
-        .map(|p| glam::DVec3::from(p.map(|c| c as f64)))
-        .collect();
-    // Newell's normal: twice the area vector of a planar polygon.
-    let mut n = glam::DVec3::ZERO;
-    for k in 0..p.len() {
-        n += p[k].cross(p[(k + 1) % p.len()]);
-    }
-    let size = p.iter().map(|q| (*q - p[0]).length()).fold(0.0, f64::max);
-    // Finite vertices (checked above) give a finite normal.
-    if size == 0.0 || n.length() <= 1e-9 * size * size {
-        return Err(format!("{field}: the polygon has no area"));
-    }
-    let n = n.normalize();
-    for (k, q) in p.iter().enumerate() {
-        if (*q - p[0]).dot(n).abs() > 1e-4 * size {
-            return Err(format!("{field}[{k}]: the polygon is not planar"));
-        }
-        let (a, b) = (p[(k + 1) % p.len()], p[(k + 2) % p.len()]);
-        if (a - *q).cross(b - a).dot(n) <= 0.0 {
-            return Err(format!(
-                "{field}: the polygon is not convex (or repeats a vertex) at vertex {}",
-                (k + 1) % p.len()
-            ));
-        }
-    }
-    Ok(())
 }
 
 /// A scene-loading error: where, and what.
@@ -661,7 +647,7 @@ pub fn load_scene_str(
 
     for (i, l) in desc.lights.iter().enumerate() {
         let field = format!("light[{i}]");
-        data.lights.push(match l {
+        let light = match l {
             LightDesc::Point {
                 position,
                 intensity,
@@ -689,15 +675,43 @@ pub fn load_scene_str(
                     irradiance: *irradiance,
                 }
             }
-            LightDesc::Polygon { vertices, radiance } => {
+            LightDesc::Polygon {
+                vertices,
+                radiance,
+                two_sided,
+                visible,
+            } => {
+                use crate::polygon_light::{add_visible, check_polygon};
+                use specula_core::light::AreaMethod;
                 check_polygon(&format!("{field}.vertices"), vertices).map_err(&err)?;
                 check_radiometric(&format!("{field}.radiance"), *radiance).map_err(&err)?;
+                if *visible {
+                    let name = format!("light[{i}]");
+                    add_visible(
+                        &mut data,
+                        &mut materials,
+                        &name,
+                        vertices,
+                        *radiance,
+                        *two_sided,
+                    );
+                }
                 Light::Polygon {
                     vertices: vertices.clone(),
                     radiance: *radiance,
+                    two_sided: *two_sided,
+                    method: match desc.render.area_lights {
+                        AreaLightsDesc::Ltc => AreaMethod::Ltc,
+                        AreaLightsDesc::Reference => AreaMethod::Reference,
+                    },
                 }
             }
-        });
+        };
+        if matches!(light, Light::Polygon { .. }) {
+            crate::polygon_light::check_materials(&materials)
+                .map_err(|e| err(format!("{field}: {e}")))?;
+        }
+        data.lights.push(light);
     }
     if let Some(e) = &desc.environment {
         check_radiometric("environment.uniform", e.uniform).map_err(&err)?;

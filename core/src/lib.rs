@@ -11,6 +11,7 @@ pub mod diffuse;
 pub mod fresnel;
 pub mod kulla_conty;
 pub mod light;
+pub mod ltc;
 pub mod masking;
 pub mod models;
 pub mod ndf;

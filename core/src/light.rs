@@ -6,7 +6,7 @@ use crate::real::Real;
 use crate::vec3::V3;
 
 /// Most vertices a polygon light may have.
-pub const MAX_POLYGON_VERTICES: usize = 8;
+pub const MAX_POLYGON_VERTICES: usize = 16;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
@@ -21,13 +21,27 @@ pub enum Light {
         to_light: [f32; 3],
         irradiance: [f32; 3],
     },
-    /// A planar convex polygon of uniform radiance L (W/m²/sr), emitting
-    /// from its front side: the side from which its vertices run
-    /// counter-clockwise (like front faces). Validated where scenes load.
+    /// A planar simple polygon (convex or not) of uniform radiance L
+    /// (W/m²/sr), emitting from its front side, the side from which its
+    /// vertices run counter-clockwise (like front faces), or from both
+    /// sides. Validated where scenes load.
     Polygon {
         vertices: Vec<[f32; 3]>,
         radiance: [f32; 3],
+        two_sided: bool,
+        /// How materials integrate it.
+        method: AreaMethod,
     },
+}
+
+/// How polygon lights are integrated (the scene's `area_lights`).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum AreaMethod {
+    /// Linearly transformed cosines: closed form, per pixel [Heitz16].
+    #[default]
+    Ltc,
+    /// The converged quadrature of `ltc::reference` (slow; for comparing).
+    Reference,
 }
 
 /// A polygon light seen from the shading points of a packet: its vertices
@@ -37,6 +51,8 @@ pub enum Light {
 pub struct PolygonLocal<R> {
     pub vertices: [V3<R>; MAX_POLYGON_VERTICES],
     pub len: usize,
+    /// The light emits from both sides.
+    pub two_sided: bool,
 }
 
 impl<R: Real> PolygonLocal<R> {

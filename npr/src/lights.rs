@@ -55,8 +55,13 @@ pub fn for_each_light<R: Real>(p: V3<R>, env: &ShadeEnv, mut f: impl FnMut(V3<R>
                 to_light,
                 irradiance,
             } => f(V3::from_f32(*to_light), V3::from_f32(*irradiance)),
-            Light::Polygon { vertices, radiance } => {
-                let (dir, scale) = polygon_irradiance(p, vertices);
+            Light::Polygon {
+                vertices,
+                radiance,
+                two_sided,
+                ..
+            } => {
+                let (dir, scale) = polygon_irradiance(p, vertices, *two_sided);
                 f(dir, V3::from_f32(*radiance) * scale);
             }
         }
@@ -65,9 +70,10 @@ pub fn for_each_light<R: Real>(p: V3<R>, env: &ShadeEnv, mut f: impl FnMut(V3<R>
 
 /// The direction of the vector irradiance of a unit-radiance polygon at
 /// `p` and its magnitude π|F| (module docs); zero where `p` is behind the
-/// emitting side.
+/// emitting side of a one-sided light (a two-sided light emits from both,
+/// and its direction is then toward the polygon from either side).
 #[inline(always)]
-fn polygon_irradiance<R: Real>(p: V3<R>, vertices: &[[f32; 3]]) -> (V3<R>, R) {
+fn polygon_irradiance<R: Real>(p: V3<R>, vertices: &[[f32; 3]], two_sided: bool) -> (V3<R>, R) {
     let n = vertices.len().min(MAX_POLYGON_VERTICES);
     let mut v = [V3::zero(); MAX_POLYGON_VERTICES];
     for (v, q) in v.iter_mut().zip(vertices) {
@@ -86,8 +92,17 @@ fn polygon_irradiance<R: Real>(p: V3<R>, vertices: &[[f32; 3]]) -> (V3<R>, R) {
     let f = sum * R::splat(-0.5 * core::f64::consts::FRAC_1_PI);
     let to_centre = centre * R::splat(1.0 / n as f64) - p;
     let len2 = f.length_squared();
-    let front = f.dot(to_centre).gt(R::ZERO) & len2.gt(R::splat(1e-30));
+    let toward = f.dot(to_centre).gt(R::ZERO);
     let len = len2.sqrt();
     let dir = f.normalize_or(V3::new(R::ZERO, R::ZERO, R::ONE));
+    if two_sided {
+        // Seen from behind, Σ θ ĉ turns around: flip it back toward the polygon.
+        let dir = V3::select(toward, dir, -dir);
+        return (
+            dir,
+            R::select(len2.gt(R::splat(1e-30)), len * R::PI, R::ZERO),
+        );
+    }
+    let front = toward & len2.gt(R::splat(1e-30));
     (dir, R::select(front, len * R::PI, R::ZERO))
 }

@@ -111,10 +111,13 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
         ] {
             let len = f64::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
             let n = n.map(|v: f64| v / len);
-            let light = Light::Polygon {
+            let polygon = |two_sided| Light::Polygon {
                 vertices: poly.iter().map(|v| v.map(|c| c as f32)).collect(),
                 radiance: [1.0; 3],
+                two_sided,
+                method: Default::default(),
             };
+            let light = polygon(false);
             let env = ShadeEnv {
                 lights: std::slice::from_ref(&light),
                 environment: None,
@@ -145,6 +148,26 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
             let bp = V3::new(behind_p[0], behind_p[1], behind_p[2]);
             for_each_light(bp, &env, |_, e: V3<f64>| behind += e.x);
             assert_eq!(behind, 0.0);
+            // A two-sided light lights the point behind it like one seen
+            // from the front (facing normal: toward the polygon).
+            let two = polygon(true);
+            let env2 = ShadeEnv {
+                lights: std::slice::from_ref(&two),
+                environment: None,
+            };
+            let ln = f64::sqrt(nq.iter().map(|v| v * v).sum::<f64>());
+            let nb = nq.map(|v| v / ln);
+            let mut got2 = 0.0;
+            for_each_light(bp, &env2, |wi: V3<f64>, e| {
+                got2 += e.x * wi.dot(V3::new(nb[0], nb[1], nb[2])).max(0.0);
+            });
+            // Its back seen from behind_p is the reversed polygon's front.
+            let reversed: Vec<[f64; 3]> = poly.iter().rev().copied().collect();
+            let want2 = irradiance_numeric(behind_p, nb, &reversed);
+            assert!(
+                (got2 - want2).abs() < 2e-4 * want2.max(1.0),
+                "two-sided, behind: {got2} vs {want2}"
+            );
         }
     }
     assert!(checked >= 5, "{checked} cases");

@@ -7,7 +7,8 @@
 //! the uniform environment through the directional albedo.
 
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
-use specula_core::light::{Light, PolygonLocal, MAX_POLYGON_VERTICES};
+use specula_core::light::{AreaMethod, Light, PolygonLocal, MAX_POLYGON_VERTICES};
+use specula_core::ltc::reference::polygon_reference_lanes;
 use specula_core::{Brdf, BrdfVisitor, Model, Real, Rgb, V3};
 
 /// A model under the scene's lights.
@@ -54,7 +55,12 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
                     let f_cos = brdf.f_cos_local(&prepared, wi);
                     acc += f_cos.mul_elem(V3::from_f32(*irradiance));
                 }
-                Light::Polygon { vertices, radiance } => {
+                Light::Polygon {
+                    vertices,
+                    radiance,
+                    two_sided,
+                    method,
+                } => {
                     // Only models with B::POLYGON_LIGHTS meet one
                     // (`check_lights`); the constant folds this arm away
                     // for the others.
@@ -62,11 +68,17 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
                         let mut poly = PolygonLocal {
                             vertices: [V3::zero(); MAX_POLYGON_VERTICES],
                             len: vertices.len(),
+                            two_sided: *two_sided,
                         };
                         for (v, p) in poly.vertices.iter_mut().zip(vertices) {
                             *v = frame.to_local(V3::from_f32(*p) - frag.p);
                         }
-                        let e = brdf.polygon_local(&prepared, &poly);
+                        let e = match method {
+                            AreaMethod::Ltc => brdf.polygon_local(&prepared, &poly),
+                            AreaMethod::Reference => {
+                                polygon_reference_lanes(brdf, frame.to_local(frag.wo), &poly)
+                            }
+                        };
                         acc += e.mul_elem(V3::from_f32(*radiance));
                     }
                 }

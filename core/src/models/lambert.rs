@@ -2,6 +2,8 @@
 
 use crate::brdf::{Brdf, Outgoing};
 use crate::diffuse::f_lambert;
+use crate::light::PolygonLocal;
+use crate::ltc::form_factor;
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
 
@@ -13,6 +15,7 @@ pub struct Lambert {
 
 impl Brdf for Lambert {
     type Prepared<R: Real> = Outgoing<R>;
+    const POLYGON_LIGHTS: bool = true;
 
     #[inline(always)]
     fn prepare<R: Real>(&self, wo: V3<R>) -> Outgoing<R> {
@@ -33,5 +36,13 @@ impl Brdf for Lambert {
     fn albedo_local<R: Real>(&self, p: &Outgoing<R>) -> Rgb<R> {
         // ∫ (ρ/π) cos θi dωi = ρ exactly.
         Rgb::select(p.above, Rgb::from_f32(self.base_color), Rgb::zero())
+    }
+
+    /// ∫ (ρ/π) cos θi dωi over the polygon = ρ F, F the exact form factor
+    /// (ltc/polygon.rs): the LTC of a Lambertian lobe is the identity.
+    #[inline(always)]
+    fn polygon_local<R: Real>(&self, p: &Outgoing<R>, poly: &PolygonLocal<R>) -> Rgb<R> {
+        let f = form_factor(poly.vertices(), poly.two_sided);
+        Rgb::select(p.above, Rgb::from_f32(self.base_color) * f, Rgb::zero())
     }
 }

@@ -10,6 +10,9 @@ use crate::albedo_tables::AlbedoTables;
 use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::diffuse::f_lambert;
 use crate::fresnel::f_schlick;
+use crate::light::PolygonLocal;
+use crate::ltc::form_factor;
+use crate::ltc::ggx::LtcGgx;
 use crate::masking::{smith_ggx_root, v_smith_ggx_correlated_roots};
 use crate::ndf::d_ggx;
 use crate::real::Real;
@@ -60,6 +63,7 @@ pub struct MetallicRoughnessPrepared<R: Real> {
 
 impl Brdf for MetallicRoughness {
     type Prepared<R: Real> = MetallicRoughnessPrepared<R>;
+    const POLYGON_LIGHTS: bool = true;
 
     #[inline(always)]
     fn prepare<R: Real>(&self, wo: V3<R>) -> MetallicRoughnessPrepared<R> {
@@ -115,5 +119,30 @@ impl Brdf for MetallicRoughness {
         let one = Rgb::splat(R::ONE);
         let diff = (one - f0).mul_elem(diffuse) * (R::ONE - t.c);
         Rgb::select(o.above, spec + diff, Rgb::zero())
+    }
+
+    /// Specular by the GGX LTC (ltc/ggx.rs) with Schlick's split at F0;
+    /// diffuse as the split sum's (1 − F0) ρd (1 − C(μo)) times the form
+    /// factor (the (1 − F) weight replaced by its hemispherical mean).
+    #[inline(always)]
+    fn polygon_local<R: Real>(
+        &self,
+        p: &MetallicRoughnessPrepared<R>,
+        poly: &PolygonLocal<R>,
+    ) -> Rgb<R> {
+        let o = &p.o;
+        let ltc = LtcGgx::new(R::splat(self.alpha() as f64), o.wo);
+        let spec = ltc.integral(poly);
+        let f0: Rgb<R> = Rgb::from_f32(self.f0());
+        let specular = Rgb::new(
+            ltc.schlick_albedo(f0.x),
+            ltc.schlick_albedo(f0.y),
+            ltc.schlick_albedo(f0.z),
+        ) * spec;
+        let t = AlbedoTables::get().ggx_schlick(self.alpha(), o.wo.z.max(R::ZERO));
+        let ff = form_factor(poly.vertices(), poly.two_sided);
+        let diffuse: Rgb<R> = Rgb::from_f32(self.diffuse_color());
+        let diff = (Rgb::splat(R::ONE) - f0).mul_elem(diffuse) * ((R::ONE - t.c) * ff);
+        Rgb::select(o.above, specular + diff, Rgb::zero())
     }
 }
