@@ -9,9 +9,11 @@ pub mod eval;
 pub mod furnace;
 pub mod material_desc;
 pub mod mesh;
+pub mod objcheck;
 pub mod output;
 pub mod render;
 pub mod scene;
+pub mod validate;
 
 pub use specula_core as core;
 pub use specula_raster as raster;

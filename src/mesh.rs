@@ -214,7 +214,14 @@ pub fn load_obj(
     let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |mtl: &Path| {
         let p = dir.join(mtl);
         match read(&p) {
-            Ok(b) => tobj::load_mtl_buf(&mut std::io::Cursor::new(b)),
+            // tobj panics on some malformed MTL lines: check first.
+            Ok(b) => match crate::objcheck::check_mtl(&p, &b) {
+                Ok(()) => tobj::load_mtl_buf(&mut std::io::Cursor::new(b)),
+                Err(e) => {
+                    mtl_errors.borrow_mut().push(e);
+                    Err(tobj::LoadError::MaterialParseError)
+                }
+            },
             Err(e) => {
                 mtl_errors
                     .borrow_mut()
