@@ -11,6 +11,7 @@ pub mod material_desc;
 pub mod mesh;
 pub mod objcheck;
 pub mod output;
+pub mod outputs;
 pub mod render;
 pub mod scene;
 pub mod validate;

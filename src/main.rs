@@ -1,9 +1,10 @@
 //! The `specula` command line.
 
 use clap::{Parser, Subcommand};
+use image::ImageFormat;
 use specula::render::{depth_aov, id_aov, normal_aov, render_scene, RenderSettings};
-use specula::scene::{load_scene, LoadedScene};
-use specula::{demo, output};
+use specula::scene::load_scene;
+use specula::{demo, output, outputs};
 use specula_raster::frame::ShadePath;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -53,7 +54,8 @@ struct FurnaceArgs {
 struct RenderArgs {
     /// Scene file (TOML).
     scene: PathBuf,
-    /// Output image: PNG, or OpenEXR (linear HDR) if it ends in .exr.
+    /// Output image, its format from the extension: .png, .exr (linear HDR)
+    /// or another format the image crate writes; `-` writes PNG to stdout.
     #[arg(short, long)]
     output: PathBuf,
     /// Image width in pixels (overrides the scene).
@@ -111,24 +113,6 @@ fn parse_aov(s: &str) -> Result<Aov, String> {
     }
 }
 
-/// Refuses outputs that would overwrite one of the scene's input files.
-fn check_not_input(out: &Path, scene: &LoadedScene) -> Result<(), String> {
-    let canon = |p: &Path| std::fs::canonicalize(p).ok();
-    if let Some(o) = canon(out) {
-        if scene.inputs.iter().any(|i| canon(i).as_ref() == Some(&o)) {
-            return Err(format!(
-                "{}: is an input of the scene; refusing to overwrite it",
-                out.display()
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn is_exr(p: &Path) -> bool {
-    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
-}
-
 fn run_render(a: RenderArgs) -> Result<(), String> {
     let aovs: Vec<Aov> = a
         .aov
@@ -160,43 +144,65 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
         }
     }
     settings.target()?;
-    let mut outs: Vec<&Path> = vec![&a.output];
-    outs.extend(a.exr.as_deref());
+    let mut outs: Vec<(&str, &Path)> = vec![("-o", &a.output)];
+    outs.extend(a.exr.as_deref().map(|p| ("--exr", p)));
     outs.extend(aovs.iter().map(|v| match v {
-        Aov::Depth(p) | Aov::Normal(p) | Aov::Id(p) => p.as_path(),
+        Aov::Depth(p) => ("--aov depth", p.as_path()),
+        Aov::Normal(p) => ("--aov normal", p.as_path()),
+        Aov::Id(p) => ("--aov id", p.as_path()),
     }));
-    outs.extend(a.stats_json.as_deref());
-    for o in &outs {
-        check_not_input(o, &scene)?;
+    outs.extend(a.stats_json.as_deref().map(|p| ("--stats-json", p)));
+    let plan = outputs::plan(&outs, &scene.inputs, Some("-o"))?;
+    let main_format = plan[0].image_format(ImageFormat::Png)?;
+    for o in &plan[1..] {
+        if o.flag != "--aov id"
+            && o.flag != "--stats-json"
+            && o.image_format(ImageFormat::OpenExr)? != ImageFormat::OpenExr
+        {
+            return Err(format!(
+                "{} {}: this output is OpenEXR; give the name a .exr extension",
+                o.flag,
+                o.path.display()
+            ));
+        }
     }
+    let by_flag = |f: &str| plan.iter().find(|o| o.flag == f).expect("planned");
 
     let mut r = render_scene(&scene, &settings, load_ms)?;
     let t = Instant::now();
-    if is_exr(&a.output) {
-        output::write_exr(&a.output, r.width, r.height, &r.hdr())?;
+    let main_bytes = if output::is_hdr(main_format) {
+        output::encode_hdr(r.width, r.height, &r.hdr(), main_format)?
     } else {
-        output::write_png(&a.output, r.width, r.height, std::mem::take(&mut r.ldr))?;
-    }
-    if let Some(p) = &a.exr {
-        output::write_exr(p, r.width, r.height, &r.hdr())?;
+        output::encode_ldr(r.width, r.height, std::mem::take(&mut r.ldr), main_format)?
+    };
+    plan[0].write(&main_bytes)?;
+    if a.exr.is_some() {
+        let bytes = output::encode_hdr(r.width, r.height, &r.hdr(), ImageFormat::OpenExr)?;
+        by_flag("--exr").write(&bytes)?;
     }
     let (tw, th) = (r.frame.target.width, r.frame.target.height);
+    let exr = |rgb: &[[f32; 3]]| output::encode_hdr(tw, th, rgb, ImageFormat::OpenExr);
     for aov in &aovs {
         match aov {
-            Aov::Depth(p) => output::write_exr(p, tw, th, &depth_aov(&r.frame)?)?,
-            Aov::Normal(p) => output::write_exr(p, tw, th, &normal_aov(&r.frame)?)?,
-            Aov::Id(p) => output::write_ids(p, tw, th, id_aov(&r.frame)?)?,
+            Aov::Depth(_) => by_flag("--aov depth").write(&exr(&depth_aov(&r.frame)?)?)?,
+            Aov::Normal(_) => by_flag("--aov normal").write(&exr(&normal_aov(&r.frame)?)?)?,
+            Aov::Id(_) => {
+                by_flag("--aov id").write(&output::encode_ids(tw, th, id_aov(&r.frame)?))?
+            }
         }
     }
     r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
     if a.stats {
-        print!("{}", r.stats.report());
+        // With the image on standard output, the report goes to stderr.
+        if plan[0].sink == outputs::Sink::Stdout {
+            eprint!("{}", r.stats.report());
+        } else {
+            print!("{}", r.stats.report());
+        }
     }
-    if let Some(p) = &a.stats_json {
+    if a.stats_json.is_some() {
         let json = serde_json::to_string_pretty(&r.stats).map_err(|e| e.to_string())?;
-        output::write_atomic(p, |tmp| {
-            std::fs::write(tmp, json.as_bytes()).map_err(|e| e.to_string())
-        })?;
+        by_flag("--stats-json").write(json.as_bytes())?;
     }
     Ok(())
 }
@@ -205,10 +211,15 @@ fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
     let curves = specula::furnace::furnace(&a.material, &a.alpha)?;
     print!("{}", specula::furnace::table(&curves));
     if let Some(p) = &a.output {
+        let plan = outputs::plan(&[("-o", p)], &[], Some("-o"))?;
+        if plan[0].image_format(ImageFormat::Png)? != ImageFormat::Png {
+            return Err(format!(
+                "-o {}: the plot is written as PNG; give the name a .png extension",
+                p.display()
+            ));
+        }
         let png = specula::furnace::plot_png(&curves)?;
-        output::write_atomic(p, |tmp| {
-            std::fs::write(tmp, &png).map_err(|e| e.to_string())
-        })?;
+        plan[0].write(&png)?;
         eprint!("{}", specula::furnace::legend(&curves));
         eprintln!("wrote {}", p.display());
     }
@@ -220,10 +231,16 @@ fn run_demo() -> Result<(), String> {
     let scene = demo::demo_scene().map_err(|e| e.to_string())?;
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     let settings = RenderSettings::from_scene(&scene);
-    let mut r = render_scene(&scene, &settings, load_ms)?;
     let out = PathBuf::from("specula-demo.png");
+    let plan = outputs::plan(&[("demo", &out)], &[], None)?;
+    let mut r = render_scene(&scene, &settings, load_ms)?;
     let t = Instant::now();
-    output::write_png(&out, r.width, r.height, std::mem::take(&mut r.ldr))?;
+    plan[0].write(&output::encode_ldr(
+        r.width,
+        r.height,
+        std::mem::take(&mut r.ldr),
+        ImageFormat::Png,
+    )?)?;
     r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
     print!("{}", r.stats.report());
     let shown = std::fs::canonicalize(&out).unwrap_or(out);

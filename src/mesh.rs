@@ -17,6 +17,8 @@ pub struct MeshData {
     pub material_names: Vec<Option<String>>,
     /// Materials defined by the mesh's MTL files.
     pub mtl: Vec<tobj::Material>,
+    /// The MTL files read (as passed to `read`): inputs, never outputs.
+    pub mtl_files: Vec<std::path::PathBuf>,
 }
 
 impl MeshData {
@@ -211,8 +213,10 @@ pub fn load_obj(
     };
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let mtl_errors = std::cell::RefCell::new(Vec::new());
+    let mtl_files = std::cell::RefCell::new(Vec::new());
     let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |mtl: &Path| {
         let p = dir.join(mtl);
+        mtl_files.borrow_mut().push(p.clone());
         match read(&p) {
             // tobj panics on some malformed MTL lines: check first.
             Ok(b) => match crate::objcheck::check_mtl(&p, &b) {
@@ -254,6 +258,7 @@ pub fn load_obj(
     let mut m = MeshData {
         material_names: materials.iter().map(|mt| Some(mt.name.clone())).collect(),
         mtl: materials,
+        mtl_files: mtl_files.into_inner(),
         ..Default::default()
     };
     let no_material = m.material_names.len() as u32;

@@ -269,7 +269,8 @@ impl std::error::Error for SceneError {}
 pub struct LoadedScene {
     pub data: SceneData,
     pub output: OutputDesc,
-    /// Files the scene was read from (the scene file, OBJs, MTLs): outputs
+    /// Files the scene was read from (the scene file, OBJs, MTLs; relative
+    /// ones against the scene's folder): outputs
     /// must never overwrite them.
     pub inputs: Vec<PathBuf>,
     /// Things worth telling the user that did not stop the load.
@@ -485,6 +486,7 @@ pub fn load_scene_str(
             inputs.push(p.clone());
             let m =
                 mesh::load_obj(p, &bytes, read).map_err(|e| err(format!("{field}.obj: {e}")))?;
+            inputs.extend(m.mtl_files.iter().cloned());
             let limit = specula_raster::setup::MAX_CLIP_COORD as f32;
             let bad = m
                 .positions

@@ -97,3 +97,194 @@ fn short_mtl_colour_is_an_error_naming_the_mtl_line() {
         );
     }
 }
+
+fn sphere_scene() -> String {
+    format!("{CAMERA}\n[[mesh]]\nsphere = {{ radius = 1.0, segments = 16, rings = 8 }}\n")
+}
+
+const MTL: &[u8] = b"newmtl a\nKd 0.5 0.5 0.5\n";
+
+#[test]
+fn outputs_may_not_overwrite_the_mtl() {
+    let scene = obj_scene();
+    for (i, args) in [
+        ["-o", "m.mtl"].as_slice(),
+        &["-o", "out.png", "--stats-json", "m.mtl"],
+        &["-o", "out.png", "--aov", "id=./m.mtl"],
+    ]
+    .iter()
+    .enumerate()
+    {
+        let mut all = vec!["render", "scene.toml"];
+        all.extend_from_slice(args);
+        let name = format!("robust-mtl-out-{i}");
+        expect_error(
+            &name,
+            &[
+                ("scene.toml", scene.as_bytes()),
+                ("m.obj", TRI_OBJ),
+                ("m.mtl", MTL),
+            ],
+            &all,
+            &["m.mtl", "input"],
+        );
+        let dir = std::path::PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join(&name);
+        assert_eq!(std::fs::read(dir.join("m.mtl")).unwrap(), MTL);
+    }
+}
+
+#[test]
+fn two_outputs_with_one_path_are_refused() {
+    let scene = sphere_scene();
+    expect_error(
+        "robust-dup-out",
+        &[("scene.toml", scene.as_bytes())],
+        &[
+            "render",
+            "scene.toml",
+            "-o",
+            "a.exr",
+            "--exr",
+            "a.exr",
+            "--aov",
+            "depth=a.exr",
+        ],
+        &["--exr a.exr", "same file as -o a.exr"],
+    );
+}
+
+#[test]
+fn every_output_path_is_checked_before_rendering() {
+    let scene = sphere_scene();
+    expect_error(
+        "robust-stats-nowhere",
+        &[("scene.toml", scene.as_bytes())],
+        &[
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--stats-json",
+            "/nonexistent/s.json",
+        ],
+        &["--stats-json", "/nonexistent"],
+    );
+}
+
+#[test]
+fn a_symlinked_output_is_written_through_and_kept() {
+    let scene = sphere_scene();
+    let dir = temp_dir("robust-symlink");
+    std::fs::write(dir.join("scene.toml"), &scene).unwrap();
+    std::fs::write(dir.join("real.png"), b"old").unwrap();
+    std::os::unix::fs::symlink("real.png", dir.join("link.png")).unwrap();
+    let out = specula(&["render", "scene.toml", "-o", "link.png"], &dir);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let meta = std::fs::symlink_metadata(dir.join("link.png")).unwrap();
+    assert!(meta.is_symlink(), "the link was replaced by a file");
+    let png = image::open(dir.join("real.png")).expect("the target holds the image");
+    assert_eq!((png.width(), png.height()), (32, 24));
+}
+
+#[test]
+fn a_fifo_output_is_written_through_and_kept() {
+    use std::io::Read;
+    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+    let scene = sphere_scene();
+    let dir = temp_dir("robust-fifo");
+    std::fs::write(dir.join("scene.toml"), &scene).unwrap();
+    let fifo = dir.join("pipe.png");
+    let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo");
+    assert!(made.success());
+    // Open the reading end without blocking (O_NONBLOCK = 0o4000 on Linux), so
+    // specula's open for writing finds a reader; the image (a few kB) fits
+    // in the pipe's buffer.
+    let mut reader = std::fs::OpenOptions::new()
+        .read(true)
+        .custom_flags(0o4000)
+        .open(&fifo)
+        .unwrap();
+    let out = specula(&["render", "scene.toml", "-o", "pipe.png"], &dir);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let ft = std::fs::symlink_metadata(&fifo).unwrap().file_type();
+    assert!(ft.is_fifo(), "the FIFO was replaced");
+    let mut bytes = Vec::new();
+    let _ = reader.read_to_end(&mut bytes);
+    let png = image::load_from_memory(&bytes).expect("a PNG came through the pipe");
+    assert_eq!((png.width(), png.height()), (32, 24));
+}
+
+#[test]
+fn a_full_device_reports_no_space() {
+    if !Path::new("/dev/full").exists() {
+        return;
+    }
+    let scene = sphere_scene();
+    let err = expect_error(
+        "robust-dev-full",
+        &[("scene.toml", scene.as_bytes())],
+        &["render", "scene.toml", "-o", "/dev/full"],
+        &["/dev/full", "cannot write", "space"],
+    );
+    let meta = std::fs::symlink_metadata("/dev/full").unwrap();
+    use std::os::unix::fs::FileTypeExt;
+    assert!(meta.file_type().is_char_device(), "{err}");
+}
+
+#[test]
+fn the_extension_names_the_format_or_is_refused() {
+    let scene = sphere_scene();
+    let dir = temp_dir("robust-ext");
+    std::fs::write(dir.join("scene.toml"), &scene).unwrap();
+    for (name, format) in [
+        ("out.jpg", image::ImageFormat::Jpeg),
+        ("out.tiff", image::ImageFormat::Tiff),
+        ("out.bmp", image::ImageFormat::Bmp),
+    ] {
+        let out = specula(&["render", "scene.toml", "-o", name], &dir);
+        assert!(out.status.success(), "{name}: {}", stderr(&out));
+        let bytes = std::fs::read(dir.join(name)).unwrap();
+        assert_eq!(image::guess_format(&bytes).unwrap(), format, "{name}");
+    }
+    expect_error(
+        "robust-ext-unknown",
+        &[("scene.toml", scene.as_bytes())],
+        &["render", "scene.toml", "-o", "out.xyz"],
+        &["-o out.xyz", "cannot write", "png"],
+    );
+    expect_error(
+        "robust-ext-exr-flag",
+        &[("scene.toml", scene.as_bytes())],
+        &["render", "scene.toml", "-o", "out.png", "--exr", "hdr.png"],
+        &["--exr hdr.png", ".exr"],
+    );
+    expect_error(
+        "robust-ext-furnace",
+        &[],
+        &["furnace", "--alpha", "0.5", "-o", "plot.exr"],
+        &["plot.exr", ".png"],
+    );
+}
+
+#[test]
+fn dash_writes_png_to_standard_output() {
+    let scene = sphere_scene();
+    let (out, dir) = run_in(
+        "robust-stdout",
+        &[("scene.toml", scene.as_bytes())],
+        &["render", "scene.toml", "-o", "-", "--stats"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let png = image::load_from_memory_with_format(&out.stdout, image::ImageFormat::Png)
+        .expect("stdout is one PNG");
+    assert_eq!((png.width(), png.height()), (32, 24));
+    assert!(
+        stderr(&out).contains("pass times"),
+        "--stats goes to stderr"
+    );
+    assert_eq!(
+        std::fs::read_dir(&dir).unwrap().count(),
+        1,
+        "no file named -"
+    );
+}
