@@ -5,6 +5,7 @@
 
 use crate::material_desc::MaterialDesc;
 use crate::mesh::{self, MeshData};
+use crate::validate::{check_extent, check_point, MAX_FOV_Y_DEG, MAX_WORLD, MIN_FOV_Y_DEG};
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
 use serde::Deserialize;
 use specula_core::light::Light;
@@ -313,6 +314,27 @@ fn check_radiometric(field: &str, v: [f32; 3]) -> Result<(), String> {
     }
 }
 
+/// The accepted |scale| per axis: their ratio (≤ 1e24) keeps the normal
+/// matrix finite in f32.
+const MIN_SCALE: f32 = 1e-12;
+const MAX_SCALE: f32 = 1e12;
+
+/// Checks that a mesh's transform keeps its (finite, in-range) vertices
+/// inside ±MAX_WORLD.
+fn check_transform(field: &str, positions: &[Vec3], model: &Mat4) -> Result<(), String> {
+    let inside = |p: Vec3| p.is_finite() && p.abs().max_element() <= MAX_WORLD;
+    if let Some(p) = positions
+        .iter()
+        .find(|p| inside(**p) && !inside(model.transform_point3(**p)))
+    {
+        return Err(format!(
+            "{field}.translate / scale: move vertex {p} to {}, outside ±{MAX_WORLD:e} (the world's extent)",
+            model.transform_point3(*p)
+        ));
+    }
+    Ok(())
+}
+
 /// Largest segment count a procedural mesh accepts (per axis).
 const MAX_SEGMENTS: u32 = 4096;
 
@@ -402,9 +424,11 @@ pub fn load_scene_str(
     ] {
         check_finite(f, v).map_err(&err)?;
     }
-    if !(c.fov_y > 0.0 && c.fov_y < 180.0) {
+    check_point("camera.eye", c.eye).map_err(&err)?;
+    check_point("camera.target", c.target).map_err(&err)?;
+    if !(MIN_FOV_Y_DEG..=MAX_FOV_Y_DEG).contains(&c.fov_y) {
         return Err(err(format!(
-            "camera.fov_y: must be in (0, 180) degrees, got {}",
+            "camera.fov_y: must be in [{MIN_FOV_Y_DEG}, {MAX_FOV_Y_DEG}] degrees, got {}",
             c.fov_y
         )));
     }
@@ -503,15 +527,18 @@ pub fn load_scene_str(
         } else if let Some(s) = &md.sphere {
             check_segments(&format!("{field}.sphere.segments"), s.segments, 3).map_err(&err)?;
             check_segments(&format!("{field}.sphere.rings"), s.rings, 2).map_err(&err)?;
+            check_extent(&format!("{field}.sphere.radius"), s.radius).map_err(&err)?;
             mesh::sphere(s.radius, s.segments, s.rings)
         } else if let Some(p) = &md.plane {
             for (k, v) in p.segments.iter().enumerate() {
                 check_segments(&format!("{field}.plane.segments[{k}]"), *v, 1).map_err(&err)?;
+                check_extent(&format!("{field}.plane.size[{k}]"), p.size[k]).map_err(&err)?;
             }
             mesh::plane(p.size, p.segments)
         } else {
             let c = md.cube.as_ref().expect("one shape is set");
             check_segments(&format!("{field}.cube.segments"), c.segments, 1).map_err(&err)?;
+            check_extent(&format!("{field}.cube.size"), c.size).map_err(&err)?;
             mesh::cube(c.size, c.segments)
         };
 
@@ -548,16 +575,22 @@ pub fn load_scene_str(
         };
         check_finite(&format!("{field}.translate"), &md.translate).map_err(&err)?;
         check_finite(&format!("{field}.rotate"), &md.rotate).map_err(&err)?;
-        if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
+        if !(scale.abs().cmpge(Vec3::splat(MIN_SCALE)) & scale.abs().cmple(Vec3::splat(MAX_SCALE)))
+            .all()
+        {
             return Err(err(format!(
-                "{field}.scale: must be finite and non-zero, got {scale}"
+                "{field}.scale: every component must be a number with {MIN_SCALE:e} ≤ |s| ≤ {MAX_SCALE:e}, got {scale}"
             )));
         }
         let r = md.rotate.map(f32::to_radians);
         let rot = Quat::from_euler(EulerRot::ZYX, r[2], r[1], r[0]);
         let model = Mat4::from_scale_rotation_translation(scale, rot, md.translate.into());
-        let normal_m = Mat3::from_mat4(model).inverse().transpose();
+        // (R·S)⁻ᵀ = R·S⁻¹, scaled by the smallest |s| so no entry overflows
+        // (normals are renormalized anyway).
+        let normal_m = Mat3::from_quat(rot)
+            * Mat3::from_diagonal(Vec3::splat(scale.abs().min_element()) / scale);
         let flip = model.determinant() < 0.0;
+        check_transform(&field, &mesh.positions, &model).map_err(&err)?;
 
         let base = data.positions.len() as u32;
         data.positions
@@ -600,7 +633,7 @@ pub fn load_scene_str(
                 position,
                 intensity,
             } => {
-                check_finite(&format!("{field}.position"), position).map_err(&err)?;
+                check_point(&format!("{field}.position"), *position).map_err(&err)?;
                 check_radiometric(&format!("{field}.intensity"), *intensity).map_err(&err)?;
                 Light::Point {
                     position: *position,
@@ -612,12 +645,8 @@ pub fn load_scene_str(
                 irradiance,
             } => {
                 check_radiometric(&format!("{field}.irradiance"), *irradiance).map_err(&err)?;
-                let d = Vec3::from(*direction);
-                let Some(d) = d.try_normalize() else {
-                    return Err(err(format!(
-                        "{field}.direction: must be a finite non-zero vector, got {direction:?}"
-                    )));
-                };
+                let d = crate::validate::direction(&format!("{field}.direction"), *direction)
+                    .map_err(&err)?;
                 Light::Directional {
                     to_light: (-d).to_array(),
                     irradiance: *irradiance,

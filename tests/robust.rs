@@ -288,3 +288,70 @@ fn dash_writes_png_to_standard_output() {
         "no file named -"
     );
 }
+
+/// The error loading `toml` (files: none), via the library.
+fn load_err(toml: &str) -> String {
+    let read = |_: &Path| -> std::io::Result<Vec<u8>> { Err(std::io::ErrorKind::NotFound.into()) };
+    match specula::scene::load_scene_str(Path::new("s.toml"), toml, &read) {
+        Ok(_) => panic!("accepted:\n{toml}"),
+        Err(e) => e.to_string(),
+    }
+}
+
+fn load_ok(toml: &str) -> specula::scene::LoadedScene {
+    let read = |_: &Path| -> std::io::Result<Vec<u8>> { Err(std::io::ErrorKind::NotFound.into()) };
+    specula::scene::load_scene_str(Path::new("s.toml"), toml, &read)
+        .unwrap_or_else(|e| panic!("{e}\n{toml}"))
+}
+
+#[test]
+fn shape_sizes_fov_and_transforms_are_checked() {
+    let mesh = |m: &str| format!("{CAMERA}\n[[mesh]]\n{m}\n");
+    for (m, field) in [
+        ("sphere = { radius = nan }", "mesh[0].sphere.radius"),
+        ("sphere = { radius = inf }", "mesh[0].sphere.radius"),
+        ("sphere = { radius = 0.0 }", "mesh[0].sphere.radius"),
+        ("sphere = { radius = -1.0 }", "mesh[0].sphere.radius"),
+        ("plane = { size = [nan, 1.0] }", "mesh[0].plane.size[0]"),
+        ("plane = { size = [1.0, -2.0] }", "mesh[0].plane.size[1]"),
+        ("cube = { size = nan }", "mesh[0].cube.size"),
+        ("cube = { size = 0.0 }", "mesh[0].cube.size"),
+        ("cube = { size = -1.0 }", "mesh[0].cube.size"),
+        (
+            "cube = {}\ntranslate = [1e30, 0.0, 0.0]",
+            "mesh[0].translate",
+        ),
+        ("cube = {}\nscale = 1e30", "mesh[0].scale"),
+        ("cube = {}\nscale = 1e10", "mesh[0].translate / scale"),
+        ("cube = {}\nscale = 1e-40", "mesh[0].scale"),
+        ("cube = {}\nscale = [1.0, 1e13, 1.0]", "mesh[0].scale"),
+    ] {
+        let e = load_err(&mesh(m));
+        assert!(e.contains("s.toml") && e.contains(field), "{m}: {e}");
+    }
+    let e = load_err(&CAMERA.replace("fov_y = 45.0", "fov_y = 1e-30"));
+    assert!(
+        e.contains("camera.fov_y") && e.contains("[0.001, 179]"),
+        "{e}"
+    );
+    let e = load_err(&CAMERA.replace("[2.0, 2.0, 2.0]", "[1e20, 4.0, 3.0]"));
+    assert!(e.contains("light[0].position") && e.contains("1e9"), "{e}");
+    // In range: accepted.
+    load_ok(&mesh("cube = { size = 2.0 }\ntranslate = [1e6, 0.0, 0.0]"));
+}
+
+#[test]
+fn huge_finite_directions_are_accepted() {
+    let toml = format!(
+        "{CAMERA}\n[[light]]\ntype = \"directional\"\ndirection = [3e38, -3e38, 0.0]\nirradiance = [1.0, 1.0, 1.0]\n"
+    );
+    let s = load_ok(&toml);
+    let specula::core::light::Light::Directional { to_light, .. } = s.data.lights[1] else {
+        panic!("a directional light");
+    };
+    let h = std::f32::consts::FRAC_1_SQRT_2;
+    assert!(
+        (to_light[0] + h).abs() < 1e-6 && (to_light[1] - h).abs() < 1e-6,
+        "{to_light:?}"
+    );
+}
