@@ -209,6 +209,9 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
 
 fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
     let curves = specula::furnace::furnace(&a.material, &a.alpha)?;
+    for n in curves.iter().flat_map(|c| &c.notes) {
+        eprintln!("warning: --material.{n}");
+    }
     print!("{}", specula::furnace::table(&curves));
     if let Some(p) = &a.output {
         let plan = outputs::plan(&[("-o", p)], &[], Some("-o"))?;

@@ -152,8 +152,11 @@ fn check_positive(field: &str, v: f32) -> Result<(), String> {
 
 impl MicrofacetDesc {
     fn params(&self, warnings: &mut Vec<String>) -> Result<MicrofacetParams, String> {
-        if !self.alpha.is_finite() {
-            return Err(format!("alpha: must be finite, got {}", self.alpha));
+        if !(self.alpha.is_finite() && self.alpha >= 0.0) {
+            return Err(format!(
+                "alpha: must be a finite number ≥ 0 (values outside [1e-3, 1] are clamped into it), got {}",
+                self.alpha
+            ));
         }
         let (alpha, clamped) = clamp_alpha(self.alpha);
         if clamped {

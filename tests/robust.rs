@@ -355,3 +355,105 @@ fn huge_finite_directions_are_accepted() {
         "{to_light:?}"
     );
 }
+
+/// Runs `specula eval` on raw bytes: (exit success, answer lines).
+fn eval_bytes(input: &[u8]) -> (bool, Vec<serde_json::Value>) {
+    use std::io::Write;
+    use std::process::Stdio;
+    let mut child = Command::new(env!("CARGO_BIN_EXE_specula"))
+        .arg("eval")
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("run specula eval");
+    child.stdin.take().unwrap().write_all(input).unwrap();
+    let out = child.wait_with_output().unwrap();
+    let lines = String::from_utf8(out.stdout)
+        .expect("answers are UTF-8")
+        .lines()
+        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
+        .collect();
+    (out.status.success(), lines)
+}
+
+const LAMBERT: &str =
+    r#"{"material":{"model":"lambert","base_color":[1,1,1]},"wi":[0,0,1],"wo":[0,0,1]}"#;
+
+#[test]
+fn eval_answers_a_non_utf8_line_and_goes_on() {
+    let mut input = Vec::new();
+    input.extend_from_slice(LAMBERT.as_bytes());
+    input.extend_from_slice(b"\n\xff\xfe{\"wi\": \xc3\n\x00\x01\x02\r\n");
+    input.extend_from_slice(LAMBERT.as_bytes());
+    input.push(b'\n');
+    let (ok, lines) = eval_bytes(&input);
+    assert!(ok);
+    assert_eq!(lines.len(), 4, "{lines:?}");
+    let e = lines[1]["error"].as_str().expect("an error");
+    assert!(e.starts_with("line 2:") && e.contains("UTF-8"), "{e}");
+    assert!(lines[2]["error"].as_str().unwrap().starts_with("line 3:"));
+    let f = lines[3]["f"][0].as_f64().unwrap();
+    assert!(
+        (f - std::f64::consts::FRAC_1_PI).abs() < 1e-12,
+        "line 4 is answered: {f}"
+    );
+}
+
+fn ggx(alpha: &str) -> String {
+    format!(
+        r#"{{"material":{{"model":"microfacet","ndf":"ggx","alpha":{alpha},"fresnel":{{"type":"schlick","f0":[1,1,1]}}}},"wi":[0.3,0,1],"wo":[-0.3,0,1]}}"#
+    )
+}
+
+#[test]
+fn eval_warns_about_a_clamped_alpha_and_refuses_a_negative_one() {
+    let input = [
+        ggx("0"),
+        ggx("1e-30"),
+        ggx("1e30"),
+        ggx("0.5"),
+        ggx("-1"),
+        ggx("0"),
+    ]
+    .join("\n");
+    let (ok, lines) = eval_bytes(input.as_bytes());
+    assert!(ok);
+    for (i, want) in [
+        (0, "clamped to 0.001"),
+        (1, "clamped to 0.001"),
+        (2, "clamped to 1 "),
+        (5, "clamped to 0.001"),
+    ] {
+        let w = lines[i]["warning"]
+            .as_str()
+            .unwrap_or_else(|| panic!("line {}: {}", i + 1, lines[i]));
+        assert!(w.starts_with("material.alpha") && w.contains(want), "{w}");
+        assert!(lines[i]["f"].is_array());
+    }
+    assert!(lines[3].get("warning").is_none(), "{}", lines[3]);
+    let e = lines[4]["error"].as_str().unwrap();
+    assert!(
+        e.contains("line 5") && e.contains("alpha") && e.contains("≥ 0"),
+        "{e}"
+    );
+}
+
+#[test]
+fn furnace_refuses_a_negative_alpha_and_labels_a_clamped_one() {
+    let dir = temp_dir("robust-furnace-alpha");
+    let out = specula(&["furnace", "--alpha=-1"], &dir);
+    assert!(!out.status.success());
+    let err = stderr(&out);
+    assert!(err.contains("--alpha -1") && err.contains("≥ 0"), "{err}");
+    assert!(out.stdout.is_empty(), "no rows for a refused alpha");
+    let out = specula(&["furnace", "--alpha=0"], &dir);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(stderr(&out).contains("clamped"), "{}", stderr(&out));
+    let text = String::from_utf8_lossy(&out.stdout);
+    let row = text.lines().nth(1).unwrap();
+    assert!(
+        row.starts_with("0.001\t"),
+        "rows carry the α they were computed at: {row}"
+    );
+}
