@@ -4,11 +4,16 @@ use clap::{Parser, Subcommand};
 use image::ImageFormat;
 use specula::render::{depth_aov, id_aov, normal_aov, render_scene, RenderSettings};
 use specula::scene::load_scene;
+use specula::validate::truncate_lines;
 use specula::{demo, output, outputs};
 use specula_raster::frame::ShadePath;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
+
+/// Longest line of an error or warning printed: messages may quote input
+/// (a TOML error shows the offending line), which may be megabytes long.
+const MESSAGE_LINE_MAX: usize = 1000;
 
 #[derive(Parser)]
 #[command(
@@ -123,7 +128,7 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     let scene = load_scene(&a.scene).map_err(|e| e.to_string())?;
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     for w in &scene.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", truncate_lines(w, MESSAGE_LINE_MAX));
     }
     let mut settings = RenderSettings::from_scene(&scene);
     settings.width = a.width.unwrap_or(settings.width);
@@ -143,7 +148,19 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
             Aov::Id(_) => settings.buffers.id = true,
         }
     }
-    settings.target()?;
+    settings.target().map_err(|e| {
+        // The scene's own sizes were checked at load: name where each came from.
+        let from = |flag: Option<u32>, name: &str| match flag {
+            Some(v) => format!("--{name} {v}"),
+            None => format!("{}: output.{name}", a.scene.display()),
+        };
+        format!(
+            "{e} (width from {}, height from {}, ssaa from {})",
+            from(a.width, "width"),
+            from(a.height, "height"),
+            from(a.ssaa, "ssaa")
+        )
+    })?;
     let mut outs: Vec<(&str, &Path)> = vec![("-o", &a.output)];
     outs.extend(a.exr.as_deref().map(|p| ("--exr", p)));
     outs.extend(aovs.iter().map(|v| match v {
@@ -266,7 +283,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {}", truncate_lines(&e, MESSAGE_LINE_MAX));
             ExitCode::FAILURE
         }
     }

@@ -335,6 +335,25 @@ fn check_transform(field: &str, positions: &[Vec3], model: &Mat4) -> Result<(), 
     Ok(())
 }
 
+/// The image size and supersampling: each side, supersampled, within the
+/// render target's limit.
+fn check_output_size(o: &OutputDesc) -> Result<(), String> {
+    let max = specula_raster::target::MAX_DIM;
+    if !(1..=16).contains(&o.ssaa) {
+        return Err(format!("output.ssaa: must be in 1..=16, got {}", o.ssaa));
+    }
+    for (field, v) in [("output.width", o.width), ("output.height", o.height)] {
+        let limit = max / o.ssaa;
+        if !(1..=limit).contains(&v) {
+            return Err(format!(
+                "{field}: must be in 1..={limit} (at most {max} after ssaa {}), got {v}",
+                o.ssaa
+            ));
+        }
+    }
+    Ok(())
+}
+
 /// Largest segment count a procedural mesh accepts (per axis).
 const MAX_SEGMENTS: u32 = 4096;
 
@@ -452,6 +471,7 @@ pub fn load_scene_str(
     };
 
     let o = &desc.output;
+    check_output_size(o).map_err(&err)?;
     check_radiometric("output.background", o.background).map_err(&err)?;
     if !o.exposure.is_finite() {
         return Err(err("output.exposure: must be finite".into()));
@@ -511,6 +531,7 @@ pub fn load_scene_str(
             let m =
                 mesh::load_obj(p, &bytes, read).map_err(|e| err(format!("{field}.obj: {e}")))?;
             inputs.extend(m.mtl_files.iter().cloned());
+            warnings.extend(m.warnings.iter().cloned());
             let limit = specula_raster::setup::MAX_CLIP_COORD as f32;
             let bad = m
                 .positions

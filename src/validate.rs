@@ -14,6 +14,15 @@ pub fn truncate_echo(s: &str, max: usize) -> String {
     }
 }
 
+/// Every line of `s` cut to at most `max` characters ([`truncate_echo`]):
+/// for messages that may quote user input (a TOML error shows the line).
+pub fn truncate_lines(s: &str, max: usize) -> String {
+    s.lines()
+        .map(|l| truncate_echo(l, max))
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
 use glam::Vec3;
 
 /// Largest |coordinate| of a world-space point: vertices after their mesh's
@@ -78,6 +87,7 @@ mod tests {
     fn truncate_keeps_short_text_and_cuts_long_text_on_a_char_boundary() {
         assert_eq!(truncate_echo("abc", 3), "abc");
         assert_eq!(truncate_echo("ééééé", 2), "éé… (3 more characters)");
+        assert_eq!(truncate_lines("abcd\nef", 2), "ab… (2 more characters)\nef");
     }
 
     #[test]

@@ -457,3 +457,99 @@ fn furnace_refuses_a_negative_alpha_and_labels_a_clamped_one() {
         "rows carry the α they were computed at: {row}"
     );
 }
+
+#[test]
+fn obj_and_mtl_errors_name_file_and_line() {
+    let scene = obj_scene();
+    for (i, (obj, needle)) in [
+        (
+            "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0.5\nf 1 2 3\n",
+            "vt needs two numbers",
+        ),
+        ("v 0 0 0\nv 1 0 0 0\nv 0 1 0\nf 1 2 3\n", "weight w"),
+        (
+            "v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0\nf 1 2 3\n",
+            "vertex colour",
+        ),
+    ]
+    .iter()
+    .enumerate()
+    {
+        let line = if i == 0 {
+            "line 4"
+        } else if i == 1 {
+            "line 2"
+        } else {
+            "line 3"
+        };
+        expect_error(
+            &format!("robust-obj-line-{i}"),
+            &[("scene.toml", scene.as_bytes()), ("m.obj", obj.as_bytes())],
+            &["render", "scene.toml", "-o", "out.png"],
+            &["scene.toml", "mesh[0].obj", "m.obj", line, needle],
+        );
+    }
+    expect_error(
+        "robust-mtl-line",
+        &[
+            ("scene.toml", scene.as_bytes()),
+            ("m.obj", TRI_OBJ),
+            ("m.mtl", b"newmtl a\nKd 1 1 1\n\nillum two\n"),
+        ],
+        &["render", "scene.toml", "-o", "out.png"],
+        &["m.mtl", "line 4", "illum"],
+    );
+}
+
+#[test]
+fn dropped_point_and_line_faces_are_reported() {
+    let scene = obj_scene();
+    let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\nf 1\nf 1 2 3\n";
+    let (out, _) = run_in(
+        "robust-dropped-faces",
+        &[("scene.toml", scene.as_bytes()), ("m.obj", obj)],
+        &["render", "scene.toml", "-o", "out.png"],
+    );
+    let err = stderr(&out);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning")
+            && err.contains("m.obj")
+            && err.contains("2 faces with fewer than 3 corners"),
+        "{err}"
+    );
+}
+
+#[test]
+fn image_size_errors_name_the_file_field_or_flag() {
+    let scene = sphere_scene().replace("width = 32", "width = 100000");
+    expect_error(
+        "robust-width-scene",
+        &[("scene.toml", scene.as_bytes())],
+        &["render", "scene.toml", "-o", "out.png"],
+        &["scene.toml", "output.width", "100000"],
+    );
+    let scene = sphere_scene();
+    expect_error(
+        "robust-width-flag",
+        &[("scene.toml", scene.as_bytes())],
+        &["render", "scene.toml", "-o", "out.png", "--width", "100000"],
+        &["--width 100000", "scene.toml: output.height"],
+    );
+}
+
+#[test]
+fn a_huge_bad_value_is_not_echoed_whole() {
+    let big = "x".repeat(5 << 20);
+    let scene = sphere_scene().replace(
+        "height = 24\n",
+        &format!("height = 24\ntonemap = \"{big}\"\n"),
+    );
+    let err = expect_error(
+        "robust-huge-echo",
+        &[("scene.toml", scene.as_bytes())],
+        &["render", "scene.toml", "-o", "out.png"],
+        &["scene.toml", "tonemap"],
+    );
+    assert!(err.len() < 20_000, "stderr is {} bytes", err.len());
+}
