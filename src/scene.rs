@@ -305,12 +305,20 @@ fn check_finite(field: &str, v: &[f32]) -> Result<(), String> {
     }
 }
 
+/// Largest accepted radiometric value (radiance, intensity, irradiance).
+/// A pixel sums lights × BRDF (up to ~3e5 at α = 1e-3) over up to 256
+/// supersamples: 1e20 · 3e5 · 256 ≈ 8e27 leaves f32 (3.4e38) room for many
+/// lights; a uniform environment of 3e38 overflowed at ssaa 4.
+const MAX_RADIOMETRIC: f32 = 1e20;
+
 fn check_radiometric(field: &str, v: [f32; 3]) -> Result<(), String> {
     check_finite(field, &v)?;
-    if v.iter().all(|x| *x >= 0.0) {
+    if v.iter().all(|x| (0.0..=MAX_RADIOMETRIC).contains(x)) {
         Ok(())
     } else {
-        Err(format!("{field}: must be ≥ 0, got {v:?}"))
+        Err(format!(
+            "{field}: every component must be in [0, {MAX_RADIOMETRIC:e}], got {v:?}"
+        ))
     }
 }
 

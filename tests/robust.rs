@@ -553,3 +553,131 @@ fn a_huge_bad_value_is_not_echoed_whole() {
     );
     assert!(err.len() < 20_000, "stderr is {} bytes", err.len());
 }
+
+/// Renders `toml` through the library (SIMD or scalar path) and counts the
+/// non-finite values of the linear HDR image.
+fn non_finite_pixels(toml: &str, scalar: bool, ssaa: u32) -> usize {
+    use specula::raster::frame::ShadePath;
+    let scene = load_ok(toml);
+    let mut settings = specula::render::RenderSettings::from_scene(&scene);
+    settings.ssaa = ssaa;
+    settings.threads = Some(1);
+    settings.path = if scalar {
+        ShadePath::Scalar
+    } else {
+        ShadePath::Simd
+    };
+    let r = specula::render::render_scene(&scene, &settings, 0.0).expect("renders");
+    r.hdr()
+        .iter()
+        .filter(|p| !p.iter().all(|c| c.is_finite()))
+        .count()
+}
+
+fn material_scene(material: &str) -> String {
+    format!(
+        "{}\n[[mesh]]\nsphere = {{ radius = 1.0, segments = 32, rings = 16 }}\nmaterial = \"m\"\n[materials.m]\n{material}\n",
+        CAMERA.replace("width = 32\nheight = 24", "width = 64\nheight = 48")
+    )
+}
+
+#[test]
+fn extreme_materials_render_finite_or_are_refused() {
+    for gamma in ["40", "100", "1e6"] {
+        let toml = material_scene(&format!(
+            "model = \"microfacet\"\nndf = \"gtr\"\ngamma = {gamma}\nalpha = 0.5\nfresnel = {{ type = \"schlick\", f0 = [1, 1, 1] }}"
+        ));
+        for scalar in [false, true] {
+            let bad = non_finite_pixels(&toml, scalar, 1);
+            assert_eq!(
+                bad, 0,
+                "GTR gamma {gamma} (scalar {scalar}): {bad} non-finite pixels"
+            );
+        }
+    }
+    for (eta, k) in [
+        ("[1e10, 1.0, 1.0]", "[1.0, 1.0, 1.0]"),
+        ("[1.0, 1.0, 1.0]", "[1.0, 1e10, 1.0]"),
+    ] {
+        let toml = material_scene(&format!(
+            "model = \"microfacet\"\nndf = \"ggx\"\nalpha = 0.5\nfresnel = {{ type = \"conductor\", eta = {eta}, k = {k} }}"
+        ));
+        let e = load_err(&toml);
+        assert!(e.contains("fresnel.") && e.contains("1e4"), "{e}");
+    }
+    // The largest accepted values render finite, in f32 and f32x8.
+    for fresnel in [
+        "{ type = \"conductor\", eta = [1e4, 1.0, 1.0], k = [1.0, 1e4, 0.0] }",
+        "{ type = \"dielectric\", ior = 1e4 }",
+    ] {
+        let toml = material_scene(&format!(
+            "model = \"microfacet\"\nndf = \"ggx\"\nalpha = 0.5\nfresnel = {fresnel}"
+        ));
+        for scalar in [false, true] {
+            let bad = non_finite_pixels(&toml, scalar, 1);
+            assert_eq!(bad, 0, "{fresnel}: {bad} non-finite pixels");
+        }
+    }
+    let toml = material_scene(
+        "model = \"microfacet\"\nndf = \"ggx\"\nalpha = 0.5\nfresnel = { type = \"dielectric\", ior = 1e20 }",
+    );
+    assert!(load_err(&toml).contains("fresnel.ior"));
+}
+
+#[test]
+fn eval_is_finite_for_nearly_opposite_grazing_directions() {
+    let materials = [
+        r#"{"model":"microfacet","ndf":"ggx","alpha":0.5,"fresnel":{"type":"schlick","f0":[1,1,1]}}"#,
+        r#"{"model":"microfacet","ndf":"beckmann","alpha":0.5,"smith":"separable","fresnel":{"type":"dielectric","ior":1.5}}"#,
+        r#"{"model":"microfacet","ndf":"gtr","gamma":1e6,"alpha":0.5,"fresnel":{"type":"conductor","eta":[0.2,0.9,1.1],"k":[3,2.5,2.2]}}"#,
+        r#"{"model":"metallic_roughness","base_color":[1,0.5,0.2],"roughness":0.5,"metallic":1}"#,
+    ];
+    let dirs = [
+        ("[1, 0, 1e-155]", "[-1, 0, 1e-155]"),
+        ("[1, 0, 1e-300]", "[-1, 1e-300, 1e-300]"),
+        ("[1, 0, 1e-20]", "[-1, 0, 1e-20]"),
+    ];
+    let mut input = String::new();
+    for m in materials {
+        for (wi, wo) in dirs {
+            input += &format!("{{\"material\":{m},\"wi\":{wi},\"wo\":{wo}}}\n");
+        }
+    }
+    let (ok, lines) = eval_bytes(input.as_bytes());
+    assert!(ok);
+    assert_eq!(lines.len(), materials.len() * dirs.len());
+    for (i, l) in lines.iter().enumerate() {
+        let f = l["f"]
+            .as_array()
+            .unwrap_or_else(|| panic!("line {}: {l}", i + 1));
+        assert!(
+            f.iter()
+                .all(|v| v.as_f64().is_some_and(|x| x.is_finite() && x >= 0.0)),
+            "line {}: {l}",
+            i + 1
+        );
+    }
+}
+
+#[test]
+fn huge_radiometric_values_are_refused_and_the_largest_accepted_stay_finite() {
+    let sphere = "\n[[mesh]]\nsphere = { radius = 1.0, segments = 16, rings = 8 }\n";
+    let env = |v: &str| format!("{CAMERA}{sphere}\n[environment]\nuniform = [{v}, {v}, {v}]\n");
+    let e = load_err(&env("3e38"));
+    assert!(
+        e.contains("environment.uniform") && e.contains("1e20"),
+        "{e}"
+    );
+    let bad = non_finite_pixels(&env("1e20"), false, 4);
+    assert_eq!(bad, 0, "environment 1e20, ssaa 4");
+    let light = CAMERA.replace("[10.0, 10.0, 10.0]", "[1e20, 1e20, 1e20]");
+    assert_eq!(non_finite_pixels(&format!("{light}{sphere}"), false, 4), 0);
+    let far = CAMERA.replace("[2.0, 2.0, 2.0]", "[1e9, 4.0, 3.0]");
+    assert_eq!(
+        non_finite_pixels(&format!("{far}{sphere}"), false, 1),
+        0,
+        "light at 1e9"
+    );
+    let e = load_err(&CAMERA.replace("[10.0, 10.0, 10.0]", "[1e21, 0.0, 0.0]"));
+    assert!(e.contains("light[0].intensity"), "{e}");
+}
