@@ -8,6 +8,7 @@ pub mod demo;
 pub mod eval;
 pub mod furnace;
 pub mod material_desc;
+pub mod memory;
 pub mod mesh;
 pub mod objcheck;
 pub mod output;

@@ -5,7 +5,7 @@ use image::ImageFormat;
 use specula::render::{depth_aov, id_aov, normal_aov, render_scene, RenderSettings};
 use specula::scene::load_scene;
 use specula::validate::truncate_lines;
-use specula::{demo, output, outputs};
+use specula::{demo, memory, output, outputs};
 use specula_raster::frame::ShadePath;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -95,6 +95,10 @@ struct RenderArgs {
     /// Render the loaded scene N times, timing each frame (load and encode excluded).
     #[arg(long, default_value_t = 1)]
     repeat: u32,
+    /// Refuse scenes and images estimated to need more memory than this
+    /// (e.g. 4G, 512M; default: 3/4 of the machine's or cgroup's memory).
+    #[arg(long, value_name = "SIZE", value_parser = specula::memory::parse_size)]
+    max_memory: Option<u64>,
 }
 
 enum Aov {
@@ -118,12 +122,19 @@ fn parse_aov(s: &str) -> Result<Aov, String> {
     }
 }
 
+/// Whether the main output's name asks for an HDR format (for the memory
+/// estimate; the format itself is checked with the other outputs).
+fn is_hdr_name(p: &Path) -> bool {
+    ImageFormat::from_path(p).is_ok_and(output::is_hdr)
+}
+
 fn run_render(a: RenderArgs) -> Result<(), String> {
     let aovs: Vec<Aov> = a
         .aov
         .iter()
         .map(|s| parse_aov(s))
         .collect::<Result<_, _>>()?;
+    memory::set_limit(a.max_memory.unwrap_or_else(memory::default_limit));
     let t = Instant::now();
     let scene = load_scene(&a.scene).map_err(|e| e.to_string())?;
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
@@ -161,6 +172,16 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
             from(a.ssaa, "ssaa")
         )
     })?;
+    let (w, h, ss) = (
+        settings.width as u64,
+        settings.height as u64,
+        settings.ssaa as u64,
+    );
+    let hdr_images = a.exr.is_some() as u64 + is_hdr_name(&a.output) as u64;
+    memory::reserve(
+        &format!("a {w}×{h} image with ssaa {ss}"),
+        memory::image_bytes(w * h * ss * ss, w * h, aovs.len() as u64, hdr_images),
+    )?;
     let mut outs: Vec<(&str, &Path)> = vec![("-o", &a.output)];
     outs.extend(a.exr.as_deref().map(|p| ("--exr", p)));
     outs.extend(aovs.iter().map(|v| match v {

@@ -4,6 +4,7 @@
 //! file and the line (TOML syntax, unknown fields) or the field.
 
 use crate::material_desc::MaterialDesc;
+use crate::memory;
 use crate::mesh::{self, MeshData};
 use crate::validate::{check_extent, check_point, MAX_FOV_Y_DEG, MAX_WORLD, MIN_FOV_Y_DEG};
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
@@ -535,6 +536,11 @@ pub fn load_scene_str(
         let mesh: MeshData = if let Some(p) = &md.obj {
             let bytes = read(p)
                 .map_err(|e| err(format!("{field}.obj: cannot read {}: {e}", p.display())))?;
+            memory::reserve(
+                &format!("{field}.obj ({} bytes)", bytes.len()),
+                memory::obj_bytes(bytes.len() as u64),
+            )
+            .map_err(&err)?;
             inputs.push(p.clone());
             let m =
                 mesh::load_obj(p, &bytes, read).map_err(|e| err(format!("{field}.obj: {e}")))?;
@@ -557,17 +563,35 @@ pub fn load_scene_str(
             check_segments(&format!("{field}.sphere.segments"), s.segments, 3).map_err(&err)?;
             check_segments(&format!("{field}.sphere.rings"), s.rings, 2).map_err(&err)?;
             check_extent(&format!("{field}.sphere.radius"), s.radius).map_err(&err)?;
+            let (u, v) = (s.segments as u64, s.rings as u64);
+            memory::reserve(
+                &format!("{field}.sphere ({u} segments × {v} rings)"),
+                memory::mesh_bytes((u + 1) * (v + 1), 2 * u * v),
+            )
+            .map_err(&err)?;
             mesh::sphere(s.radius, s.segments, s.rings)
         } else if let Some(p) = &md.plane {
             for (k, v) in p.segments.iter().enumerate() {
                 check_segments(&format!("{field}.plane.segments[{k}]"), *v, 1).map_err(&err)?;
                 check_extent(&format!("{field}.plane.size[{k}]"), p.size[k]).map_err(&err)?;
             }
+            let (u, v) = (p.segments[0] as u64, p.segments[1] as u64);
+            memory::reserve(
+                &format!("{field}.plane ({u} × {v} segments)"),
+                memory::mesh_bytes((u + 1) * (v + 1), 2 * u * v),
+            )
+            .map_err(&err)?;
             mesh::plane(p.size, p.segments)
         } else {
             let c = md.cube.as_ref().expect("one shape is set");
             check_segments(&format!("{field}.cube.segments"), c.segments, 1).map_err(&err)?;
             check_extent(&format!("{field}.cube.size"), c.size).map_err(&err)?;
+            let n = c.segments as u64;
+            memory::reserve(
+                &format!("{field}.cube ({n} segments)"),
+                memory::mesh_bytes(6 * (n + 1) * (n + 1), 12 * n * n),
+            )
+            .map_err(&err)?;
             mesh::cube(c.size, c.segments)
         };
 

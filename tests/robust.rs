@@ -681,3 +681,72 @@ fn huge_radiometric_values_are_refused_and_the_largest_accepted_stay_finite() {
     let e = load_err(&CAMERA.replace("[10.0, 10.0, 10.0]", "[1e21, 0.0, 0.0]"));
     assert!(e.contains("light[0].intensity"), "{e}");
 }
+
+#[test]
+fn memory_estimates_refuse_what_exceeds_the_limit() {
+    let cube = format!("{CAMERA}\n[[mesh]]\ncube = {{ size = 1.0, segments = 4096 }}\n");
+    expect_error(
+        "robust-mem-cube",
+        &[("scene.toml", cube.as_bytes())],
+        &[
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--max-memory",
+            "4G",
+        ],
+        &[
+            "scene.toml",
+            "mesh[0].cube (4096 segments)",
+            "limit of 4.0 GB",
+            "--max-memory",
+        ],
+    );
+    let scene = sphere_scene();
+    expect_error(
+        "robust-mem-image",
+        &[("scene.toml", scene.as_bytes())],
+        &[
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--width",
+            "16384",
+            "--height",
+            "16384",
+            "--max-memory",
+            "4G",
+        ],
+        &["16384×16384 image", "limit of 4.0 GB"],
+    );
+    let (out, _) = run_in(
+        "robust-mem-bad-size",
+        &[("scene.toml", scene.as_bytes())],
+        &[
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--max-memory",
+            "4X",
+        ],
+    );
+    assert!(!out.status.success());
+    assert!(stderr(&out).contains("--max-memory") && stderr(&out).contains("unit"));
+    // Within the limit: renders.
+    let (out, _) = run_in(
+        "robust-mem-ok",
+        &[("scene.toml", scene.as_bytes())],
+        &[
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--max-memory",
+            "256M",
+        ],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+}
