@@ -114,7 +114,11 @@ pub fn eval_line(line: &str, lineno: usize, cache: &mut Cache) -> String {
             }
             answer.to_string()
         }
-        Err(e) => serde_json::json!({ "error": format!("line {lineno}: {e}") }).to_string(),
+        // Errors may quote the input (an unknown variant's name): cut long ones.
+        Err(e) => serde_json::json!({
+            "error": format!("line {lineno}: {}", crate::validate::truncate_echo(&e, 1000))
+        })
+        .to_string(),
     }
 }
 

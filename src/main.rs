@@ -252,7 +252,8 @@ fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
     }
     print!("{}", specula::furnace::table(&curves));
     if let Some(p) = &a.output {
-        let plan = outputs::plan(&[("-o", p)], &[], Some("-o"))?;
+        // Not `-`: the table already goes to standard output.
+        let plan = outputs::plan(&[("-o", p)], &[], None)?;
         if plan[0].image_format(ImageFormat::Png)? != ImageFormat::Png {
             return Err(format!(
                 "-o {}: the plot is written as PNG; give the name a .png extension",

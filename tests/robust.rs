@@ -552,6 +552,15 @@ fn a_huge_bad_value_is_not_echoed_whole() {
         &["scene.toml", "tonemap"],
     );
     assert!(err.len() < 20_000, "stderr is {} bytes", err.len());
+    let line = format!("{{\"material\":{{\"model\":\"{big}\"}},\"wi\":[0,0,1],\"wo\":[0,0,1]}}\n");
+    let (ok, lines) = eval_bytes(line.as_bytes());
+    assert!(ok);
+    let e = lines[0]["error"].as_str().unwrap();
+    assert!(
+        e.starts_with("line 1:") && e.len() < 5_000,
+        "{} bytes",
+        e.len()
+    );
 }
 
 /// Renders `toml` through the library (SIMD or scalar path) and counts the
