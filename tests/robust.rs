@@ -634,14 +634,17 @@ fn extreme_materials_render_finite_or_are_refused() {
 }
 
 #[test]
-fn eval_is_finite_for_nearly_opposite_grazing_directions() {
+fn eval_is_finite_for_extreme_gamma_and_nearly_opposite_grazing_directions() {
     let materials = [
         r#"{"model":"microfacet","ndf":"ggx","alpha":0.5,"fresnel":{"type":"schlick","f0":[1,1,1]}}"#,
         r#"{"model":"microfacet","ndf":"beckmann","alpha":0.5,"smith":"separable","fresnel":{"type":"dielectric","ior":1.5}}"#,
         r#"{"model":"microfacet","ndf":"gtr","gamma":1e6,"alpha":0.5,"fresnel":{"type":"conductor","eta":[0.2,0.9,1.1],"k":[3,2.5,2.2]}}"#,
+        r#"{"model":"microfacet","ndf":"gtr","gamma":500,"alpha":0.5,"fresnel":{"type":"schlick","f0":[1,1,1]}}"#,
+        r#"{"model":"microfacet","ndf":"gtr","gamma":40,"alpha":0.01,"fresnel":{"type":"schlick","f0":[1,1,1]}}"#,
         r#"{"model":"metallic_roughness","base_color":[1,0.5,0.2],"roughness":0.5,"metallic":1}"#,
     ];
     let dirs = [
+        ("[0.3, 0, 1]", "[-0.2, 0.1, 1]"),
         ("[1, 0, 1e-155]", "[-1, 0, 1e-155]"),
         ("[1, 0, 1e-300]", "[-1, 1e-300, 1e-300]"),
         ("[1, 0, 1e-20]", "[-1, 0, 1e-20]"),
