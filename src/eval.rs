@@ -8,7 +8,8 @@
 //! (no cosine; 0 when either direction is at or below the horizon),
 //! evaluated in f64 (`unlit` adds `"emission": [r, g, b]`, its radiance
 //! toward `wo`, and reflects nothing); or `{"error": "line N: ..."}`, and
-//! the run goes on.
+//! the run goes on, for any bytes (a line that is not UTF-8 is a bad line).
+//! A material adjusted while building (a clamped alpha) adds `"warning"`.
 //! Material objects use the scene files' field names.
 //!
 //! A line may give `"light"` instead of `"wi"`: `{"material": {...}, "wo":
@@ -57,7 +58,8 @@ enum Method {
 /// sweep directions over few materials).
 #[derive(Default)]
 pub struct Cache {
-    built: HashMap<String, Shading>,
+    /// The built material and what building it adjusted (a clamped alpha).
+    built: HashMap<String, (Shading, Vec<String>)>,
 }
 
 /// Most materials kept; the cache is cleared when full.
@@ -77,12 +79,15 @@ fn unit(field: &str, v: [f64; 3]) -> Result<V3<f64>, String> {
 struct Answer {
     f: [f64; 3],
     emission: Option<[f64; 3]>,
+    /// Adjustments made to the material (e.g. a clamped alpha), joined.
+    warning: Option<String>,
 }
 
 /// What a line answers.
 enum Reply {
     Brdf(Answer),
-    Light(LightAnswer),
+    /// With the material's adjustments, as for BRDF lines.
+    Light(LightAnswer, Option<String>),
 }
 
 /// A `"light"` line's answer: reflected radiance, and the reference's
@@ -201,31 +206,37 @@ fn eval(line: &str, cache: &mut Cache) -> Result<Reply, String> {
     if !cache.built.contains_key(&key) {
         let desc: MaterialDesc =
             serde_json::from_value(q.material).map_err(|e| format!("material: {e}"))?;
+        let mut notes = Vec::new();
         let (m, _) = desc
-            .build_shading(Tables::Skip, &mut Vec::new())
+            .build_shading(Tables::Skip, &mut notes)
             .map_err(|e| format!("material.{e}"))?;
         if cache.built.len() >= CACHE_MAX {
             cache.built.clear();
         }
-        cache.built.insert(key.clone(), m);
+        let notes = notes.into_iter().map(|n| format!("material.{n}")).collect();
+        cache.built.insert(key.clone(), (m, notes));
     }
+    let (shading, notes) = &cache.built[&key];
+    let warning = (!notes.is_empty()).then(|| notes.join("; "));
     let Some(wi) = wi else {
         let light = q.light.as_ref().expect("checked above");
         let method = q.method.unwrap_or(Method::Ltc);
-        return Ok(Reply::Light(match &cache.built[&key] {
+        let answer = match shading {
             Shading::Lit(model) => eval_light(model, wo, light, method)?,
             Shading::Unlit(_) => LightAnswer {
                 radiance: [0.0; 3],
                 error: (method == Method::Reference).then_some([0.0; 3]),
             },
-        }));
+        };
+        return Ok(Reply::Light(answer, warning));
     };
-    Ok(Reply::Brdf(match &cache.built[&key] {
+    Ok(Reply::Brdf(match shading {
         Shading::Lit(model) => {
             let f = model.f(V3::new(0.0, 0.0, 1.0), wi, wo);
             Answer {
                 f: [f.x, f.y, f.z],
                 emission: None,
+                warning,
             }
         }
         // No reflection; emits toward every direction above the horizon.
@@ -236,6 +247,7 @@ fn eval(line: &str, cache: &mut Cache) -> Result<Reply, String> {
             } else {
                 [0.0; 3]
             }),
+            warning,
         },
     }))
 }
@@ -243,29 +255,58 @@ fn eval(line: &str, cache: &mut Cache) -> Result<Reply, String> {
 /// The output line (without newline) for input line `lineno` (1-based).
 pub fn eval_line(line: &str, lineno: usize, cache: &mut Cache) -> String {
     match eval(line, cache) {
-        Ok(Reply::Brdf(Answer { f, emission: None })) => serde_json::json!({ "f": f }).to_string(),
-        Ok(Reply::Brdf(Answer {
-            f,
-            emission: Some(e),
-        })) => serde_json::json!({ "f": f, "emission": e }).to_string(),
-        Ok(Reply::Light(LightAnswer {
-            radiance,
-            error: None,
-        })) => serde_json::json!({ "radiance": radiance }).to_string(),
-        Ok(Reply::Light(LightAnswer {
-            radiance,
-            error: Some(e),
-        })) => serde_json::json!({ "radiance": radiance, "error": e }).to_string(),
-        Err(e) => serde_json::json!({ "error": format!("line {lineno}: {e}") }).to_string(),
+        Ok(reply) => {
+            let (mut answer, warning) = match reply {
+                Reply::Brdf(Answer {
+                    f,
+                    emission,
+                    warning,
+                }) => {
+                    let mut answer = serde_json::json!({ "f": f });
+                    if let Some(e) = emission {
+                        answer["emission"] = serde_json::json!(e);
+                    }
+                    (answer, warning)
+                }
+                Reply::Light(LightAnswer { radiance, error }, warning) => {
+                    let mut answer = serde_json::json!({ "radiance": radiance });
+                    if let Some(e) = error {
+                        answer["error"] = serde_json::json!(e);
+                    }
+                    (answer, warning)
+                }
+            };
+            if let Some(w) = warning {
+                answer["warning"] = serde_json::json!(w);
+            }
+            answer.to_string()
+        }
+        // Errors may quote the input (an unknown variant's name): cut long ones.
+        Err(e) => serde_json::json!({
+            "error": format!("line {lineno}: {}", crate::validate::truncate_echo(&e, 1000))
+        })
+        .to_string(),
     }
 }
 
-/// Runs the contract over `input`, writing to `output`. Fails only on I/O.
+/// Runs the contract over `input`, writing to `output`. Fails only on I/O:
+/// any bytes make lines (split at `\n`, a trailing `\r` dropped), and a
+/// line that is not UTF-8 is answered with an error like any bad line.
 pub fn run(input: impl BufRead, mut output: impl Write) -> std::io::Result<()> {
     let mut cache = Cache::default();
-    for (i, line) in input.lines().enumerate() {
-        let line = line?;
-        writeln!(output, "{}", eval_line(&line, i + 1, &mut cache))?;
+    for (i, line) in input.split(b'\n').enumerate() {
+        let mut line = line?;
+        if line.last() == Some(&b'\r') {
+            line.pop();
+        }
+        let answer = match std::str::from_utf8(&line) {
+            Ok(text) => eval_line(text, i + 1, &mut cache),
+            Err(e) => {
+                serde_json::json!({ "error": format!("line {}: not UTF-8 text: {e}", i + 1) })
+                    .to_string()
+            }
+        };
+        writeln!(output, "{answer}")?;
     }
     output.flush()
 }

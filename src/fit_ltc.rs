@@ -311,9 +311,14 @@ pub fn run(out: &std::path::Path) -> Result<(), String> {
         summary,
     ];
     let bytes = specula_core::ltc::ggx::encode(&cells, &comments);
-    crate::output::write_atomic(out, |tmp| {
-        std::fs::write(tmp, &bytes).map_err(|e| e.to_string())
-    })?;
+    // Checked and written like every output (outputs.rs): no device or
+    // link is replaced, the write is atomic.
+    let sink = crate::outputs::Output {
+        flag: "--output".into(),
+        path: out.to_path_buf(),
+        sink: crate::outputs::resolve(out, false)?,
+    };
+    sink.write(&bytes)?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }

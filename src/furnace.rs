@@ -7,7 +7,10 @@ use specula_core::{Model, V3};
 
 /// Albedo curves of one α: (μo, E without, E with compensation), RGB.
 pub struct FurnaceCurve {
+    /// The α the curve was computed at (after clamping into [1e-3, 1]).
     pub alpha: f32,
+    /// What building the material adjusted (a clamped α), for stderr.
+    pub notes: Vec<String>,
     pub points: Vec<(f64, [f64; 3], [f64; 3])>,
 }
 
@@ -36,22 +39,33 @@ pub fn furnace(material_json: &str, alphas: &[f32]) -> Result<Vec<FurnaceCurve>,
     };
     let mut curves = Vec::new();
     for &alpha in alphas {
-        let build = |ec: bool| -> Result<Model, String> {
+        let mut notes = Vec::new();
+        let mut build = |ec: bool| -> Result<Model, String> {
             let mut d = base.clone();
             d.alpha = alpha;
             d.energy_compensation = ec;
-            match MaterialDesc::Microfacet(d).build_shading(Tables::Build, &mut Vec::new()) {
+            match MaterialDesc::Microfacet(d).build_shading(Tables::Build, &mut notes) {
                 Ok((Shading::Lit(m), _)) => Ok(m),
                 Ok(_) => unreachable!("a microfacet description builds a model"),
+                Err(e) if e.starts_with("alpha") => Err(format!("--alpha {alpha}: {e}")),
                 Err(e) => Err(format!("--material.{e}")),
             }
         };
         let (plain, comp) = (build(false)?, build(true)?);
+        notes.dedup();
+        let Model::Microfacet(m) = &plain else {
+            unreachable!("a microfacet description builds a microfacet model")
+        };
+        let alpha = m.params.alpha;
         let points = mus()
             .into_iter()
             .map(|mu| (mu, albedo(&plain, mu), albedo(&comp, mu)))
             .collect();
-        curves.push(FurnaceCurve { alpha, points });
+        curves.push(FurnaceCurve {
+            alpha,
+            notes,
+            points,
+        });
     }
     Ok(curves)
 }

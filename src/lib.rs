@@ -10,12 +10,16 @@ pub mod eval;
 pub mod fit_ltc;
 pub mod furnace;
 pub mod material_desc;
+pub mod memory;
 pub mod mesh;
+pub mod objcheck;
 pub mod output;
+pub mod outputs;
 pub mod polygon_light;
 pub mod render;
 pub mod scene;
 pub mod textures;
+pub mod validate;
 
 pub use specula_core as core;
 pub use specula_raster as raster;

@@ -1,13 +1,19 @@
 //! The `specula` command line.
 
 use clap::{Parser, Subcommand};
+use image::ImageFormat;
 use specula::render::{depth_aov, id_aov, normal_aov, render_scene, RenderSettings};
-use specula::scene::{load_scene, LoadedScene};
-use specula::{demo, output};
+use specula::scene::load_scene;
+use specula::validate::truncate_lines;
+use specula::{demo, memory, output, outputs};
 use specula_raster::frame::ShadePath;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
+
+/// Longest line of an error or warning printed: messages may quote input
+/// (a TOML error shows the offending line), which may be megabytes long.
+const MESSAGE_LINE_MAX: usize = 1000;
 
 #[derive(Parser)]
 #[command(
@@ -85,7 +91,8 @@ struct FurnaceArgs {
 struct RenderArgs {
     /// Scene file (TOML).
     scene: PathBuf,
-    /// Output image: PNG, or OpenEXR (linear HDR) if it ends in .exr.
+    /// Output image, its format from the extension: .png, .exr (linear HDR)
+    /// or another format the image crate writes; `-` writes PNG to stdout.
     #[arg(short, long)]
     output: PathBuf,
     /// Image width in pixels (overrides the scene).
@@ -120,6 +127,10 @@ struct RenderArgs {
     /// Render the loaded scene N times, timing each frame (load and encode excluded).
     #[arg(long, default_value_t = 1)]
     repeat: u32,
+    /// Refuse scenes and images estimated to need more memory than this
+    /// (e.g. 4G, 512M; default: 3/4 of the machine's or cgroup's memory).
+    #[arg(long, value_name = "SIZE", value_parser = specula::memory::parse_size)]
+    max_memory: Option<u64>,
 }
 
 enum Aov {
@@ -143,22 +154,10 @@ fn parse_aov(s: &str) -> Result<Aov, String> {
     }
 }
 
-/// Refuses outputs that would overwrite one of the scene's input files.
-fn check_not_input(out: &Path, scene: &LoadedScene) -> Result<(), String> {
-    let canon = |p: &Path| std::fs::canonicalize(p).ok();
-    if let Some(o) = canon(out) {
-        if scene.inputs.iter().any(|i| canon(i).as_ref() == Some(&o)) {
-            return Err(format!(
-                "{}: is an input of the scene; refusing to overwrite it",
-                out.display()
-            ));
-        }
-    }
-    Ok(())
-}
-
-fn is_exr(p: &Path) -> bool {
-    p.extension().is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+/// Whether the main output's name asks for an HDR format (for the memory
+/// estimate; the format itself is checked with the other outputs).
+fn is_hdr_name(p: &Path) -> bool {
+    ImageFormat::from_path(p).is_ok_and(output::is_hdr)
 }
 
 fn run_render(a: RenderArgs) -> Result<(), String> {
@@ -167,11 +166,12 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
         .iter()
         .map(|s| parse_aov(s))
         .collect::<Result<_, _>>()?;
+    memory::set_limit(a.max_memory.unwrap_or_else(memory::default_limit));
     let t = Instant::now();
     let scene = load_scene(&a.scene).map_err(|e| e.to_string())?;
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     for w in &scene.warnings {
-        eprintln!("warning: {w}");
+        eprintln!("warning: {}", truncate_lines(w, MESSAGE_LINE_MAX));
     }
     let mut settings = RenderSettings::from_scene(&scene);
     settings.width = a.width.unwrap_or(settings.width);
@@ -191,56 +191,109 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
             Aov::Id(_) => settings.buffers.id = true,
         }
     }
-    settings.target()?;
-    let mut outs: Vec<&Path> = vec![&a.output];
-    outs.extend(a.exr.as_deref());
+    settings.target().map_err(|e| {
+        // The scene's own sizes were checked at load: name where each came from.
+        let from = |flag: Option<u32>, name: &str| match flag {
+            Some(v) => format!("--{name} {v}"),
+            None => format!("{}: output.{name}", a.scene.display()),
+        };
+        format!(
+            "{e} (width from {}, height from {}, ssaa from {})",
+            from(a.width, "width"),
+            from(a.height, "height"),
+            from(a.ssaa, "ssaa")
+        )
+    })?;
+    let (w, h, ss) = (
+        settings.width as u64,
+        settings.height as u64,
+        settings.ssaa as u64,
+    );
+    let hdr_images = a.exr.is_some() as u64 + is_hdr_name(&a.output) as u64;
+    memory::reserve(
+        &format!("a {w}×{h} image with ssaa {ss}"),
+        memory::image_bytes(w * h * ss * ss, w * h, aovs.len() as u64, hdr_images),
+    )?;
+    let mut outs: Vec<(&str, &Path)> = vec![("-o", &a.output)];
+    outs.extend(a.exr.as_deref().map(|p| ("--exr", p)));
     outs.extend(aovs.iter().map(|v| match v {
-        Aov::Depth(p) | Aov::Normal(p) | Aov::Id(p) => p.as_path(),
+        Aov::Depth(p) => ("--aov depth", p.as_path()),
+        Aov::Normal(p) => ("--aov normal", p.as_path()),
+        Aov::Id(p) => ("--aov id", p.as_path()),
     }));
-    outs.extend(a.stats_json.as_deref());
-    for o in &outs {
-        check_not_input(o, &scene)?;
+    outs.extend(a.stats_json.as_deref().map(|p| ("--stats-json", p)));
+    let plan = outputs::plan(&outs, &scene.inputs, Some("-o"))?;
+    let main_format = plan[0].image_format(ImageFormat::Png)?;
+    for o in &plan[1..] {
+        if o.flag != "--aov id"
+            && o.flag != "--stats-json"
+            && o.image_format(ImageFormat::OpenExr)? != ImageFormat::OpenExr
+        {
+            return Err(format!(
+                "{} {}: this output is OpenEXR; give the name a .exr extension",
+                o.flag,
+                o.path.display()
+            ));
+        }
     }
+    let by_flag = |f: &str| plan.iter().find(|o| o.flag == f).expect("planned");
 
     let mut r = render_scene(&scene, &settings, load_ms)?;
     let t = Instant::now();
-    if is_exr(&a.output) {
-        output::write_exr(&a.output, r.width, r.height, &r.hdr())?;
+    let main_bytes = if output::is_hdr(main_format) {
+        output::encode_hdr(r.width, r.height, &r.hdr(), main_format)?
     } else {
-        output::write_png(&a.output, r.width, r.height, std::mem::take(&mut r.ldr))?;
-    }
-    if let Some(p) = &a.exr {
-        output::write_exr(p, r.width, r.height, &r.hdr())?;
+        output::encode_ldr(r.width, r.height, std::mem::take(&mut r.ldr), main_format)?
+    };
+    plan[0].write(&main_bytes)?;
+    if a.exr.is_some() {
+        let bytes = output::encode_hdr(r.width, r.height, &r.hdr(), ImageFormat::OpenExr)?;
+        by_flag("--exr").write(&bytes)?;
     }
     let (tw, th) = (r.frame.target.width, r.frame.target.height);
+    let exr = |rgb: &[[f32; 3]]| output::encode_hdr(tw, th, rgb, ImageFormat::OpenExr);
     for aov in &aovs {
         match aov {
-            Aov::Depth(p) => output::write_exr(p, tw, th, &depth_aov(&r.frame)?)?,
-            Aov::Normal(p) => output::write_exr(p, tw, th, &normal_aov(&r.frame)?)?,
-            Aov::Id(p) => output::write_ids(p, tw, th, id_aov(&r.frame)?)?,
+            Aov::Depth(_) => by_flag("--aov depth").write(&exr(&depth_aov(&r.frame)?)?)?,
+            Aov::Normal(_) => by_flag("--aov normal").write(&exr(&normal_aov(&r.frame)?)?)?,
+            Aov::Id(_) => {
+                by_flag("--aov id").write(&output::encode_ids(tw, th, id_aov(&r.frame)?))?
+            }
         }
     }
     r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
     if a.stats {
-        print!("{}", r.stats.report());
+        // With the image on standard output, the report goes to stderr.
+        if plan[0].sink == outputs::Sink::Stdout {
+            eprint!("{}", r.stats.report());
+        } else {
+            print!("{}", r.stats.report());
+        }
     }
-    if let Some(p) = &a.stats_json {
+    if a.stats_json.is_some() {
         let json = serde_json::to_string_pretty(&r.stats).map_err(|e| e.to_string())?;
-        output::write_atomic(p, |tmp| {
-            std::fs::write(tmp, json.as_bytes()).map_err(|e| e.to_string())
-        })?;
+        by_flag("--stats-json").write(json.as_bytes())?;
     }
     Ok(())
 }
 
 fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
     let curves = specula::furnace::furnace(&a.material, &a.alpha)?;
+    for n in curves.iter().flat_map(|c| &c.notes) {
+        eprintln!("warning: --material.{n}");
+    }
     print!("{}", specula::furnace::table(&curves));
     if let Some(p) = &a.output {
+        // Not `-`: the table already goes to standard output.
+        let plan = outputs::plan(&[("-o", p)], &[], None)?;
+        if plan[0].image_format(ImageFormat::Png)? != ImageFormat::Png {
+            return Err(format!(
+                "-o {}: the plot is written as PNG; give the name a .png extension",
+                p.display()
+            ));
+        }
         let png = specula::furnace::plot_png(&curves)?;
-        output::write_atomic(p, |tmp| {
-            std::fs::write(tmp, &png).map_err(|e| e.to_string())
-        })?;
+        plan[0].write(&png)?;
         eprint!("{}", specula::furnace::legend(&curves));
         eprintln!("wrote {}", p.display());
     }
@@ -268,10 +321,16 @@ fn run_demo() -> Result<(), String> {
     let scene = demo::demo_scene().map_err(|e| e.to_string())?;
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     let settings = RenderSettings::from_scene(&scene);
-    let mut r = render_scene(&scene, &settings, load_ms)?;
     let out = PathBuf::from("specula-demo.png");
+    let plan = outputs::plan(&[("demo", &out)], &[], None)?;
+    let mut r = render_scene(&scene, &settings, load_ms)?;
     let t = Instant::now();
-    output::write_png(&out, r.width, r.height, std::mem::take(&mut r.ldr))?;
+    plan[0].write(&output::encode_ldr(
+        r.width,
+        r.height,
+        std::mem::take(&mut r.ldr),
+        ImageFormat::Png,
+    )?)?;
     r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
     print!("{}", r.stats.report());
     let shown = std::fs::canonicalize(&out).unwrap_or(out);
@@ -296,7 +355,7 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
-            eprintln!("error: {e}");
+            eprintln!("error: {}", truncate_lines(&e, MESSAGE_LINE_MAX));
             ExitCode::FAILURE
         }
     }

@@ -223,10 +223,28 @@ fn check_positive(field: &str, v: f32) -> Result<(), String> {
     }
 }
 
+/// Largest accepted η, κ or ior. The conductor Fresnel squares η² − κ²,
+/// so (1e4)⁴ = 1e16 keeps it inside f32 (3.4e38); real materials stay
+/// below about 100.
+const MAX_IOR: f32 = 1e4;
+
+fn check_ior(field: &str, v: f32, zero_ok: bool) -> Result<(), String> {
+    let low_ok = if zero_ok { v >= 0.0 } else { v > 0.0 };
+    if low_ok && v <= MAX_IOR {
+        Ok(())
+    } else {
+        let low = if zero_ok { "[0" } else { "(0" };
+        Err(format!("{field}: must be in {low}, 1e4], got {v}"))
+    }
+}
+
 impl MicrofacetDesc {
     fn params(&self, warnings: &mut Vec<String>) -> Result<MicrofacetParams, String> {
-        if !self.alpha.is_finite() {
-            return Err(format!("alpha: must be finite, got {}", self.alpha));
+        if !(self.alpha.is_finite() && self.alpha >= 0.0) {
+            return Err(format!(
+                "alpha: must be a finite number ≥ 0 (values outside [1e-3, 1] are clamped into it), got {}",
+                self.alpha
+            ));
         }
         let (alpha, clamped) = clamp_alpha(self.alpha);
         if clamped {
@@ -246,14 +264,16 @@ impl MicrofacetDesc {
                 Fresnel::Schlick { f0: *f0 }
             }
             FresnelDesc::Dielectric { ior } => {
-                check_positive("fresnel.ior", *ior)?;
+                check_ior("fresnel.ior", *ior, false)?;
                 Fresnel::Dielectric { ior: *ior }
             }
             FresnelDesc::Conductor { eta, k } => {
                 for (c, v) in eta.iter().enumerate() {
-                    check_positive(&format!("fresnel.eta[{c}]"), *v)?;
+                    check_ior(&format!("fresnel.eta[{c}]"), *v, false)?;
                 }
-                check_color("fresnel.k", *k)?;
+                for (c, v) in k.iter().enumerate() {
+                    check_ior(&format!("fresnel.k[{c}]"), *v, true)?;
+                }
                 Fresnel::Conductor { eta: *eta, k: *k }
             }
         };

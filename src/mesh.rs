@@ -17,6 +17,10 @@ pub struct MeshData {
     pub material_names: Vec<Option<String>>,
     /// Materials defined by the mesh's MTL files.
     pub mtl: Vec<tobj::Material>,
+    /// The MTL files read (as passed to `read`): inputs, never outputs.
+    pub mtl_files: Vec<std::path::PathBuf>,
+    /// Things the loader dropped or changed that the user should hear of.
+    pub warnings: Vec<String>,
 }
 
 impl MeshData {
@@ -137,6 +141,64 @@ fn smooth_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
         .collect()
 }
 
+/// Splits tobj's faces (indices with `face_arities`; none means all
+/// triangles) into triangles appended to `out`, offset by `base`. A polygon
+/// of four or more corners is ear-clipped in its own plane (earcut), so a
+/// concave one keeps its notch; every triangle is wound like the polygon
+/// (counter-clockwise about its Newell normal). A polygon with no plane
+/// (collinear corners) gives no triangles: it has no area.
+fn triangulate(mesh: &tobj::Mesh, out: &mut Vec<[u32; 3]>, base: u32) {
+    let idx = &mesh.indices;
+    if mesh.face_arities.is_empty() {
+        out.extend(
+            idx.chunks_exact(3)
+                .map(|t| [base + t[0], base + t[1], base + t[2]]),
+        );
+        return;
+    }
+    let pos = |i: u32| {
+        let p = &mesh.positions[3 * i as usize..3 * i as usize + 3];
+        [p[0] as f64, p[1] as f64, p[2] as f64]
+    };
+    let mut earcut = earcut::Earcut::new();
+    let (mut flat, mut ears) = (Vec::new(), Vec::<u32>::new());
+    let mut start = 0usize;
+    for &n in &mesh.face_arities {
+        let face = &idx[start..start + n as usize];
+        start += n as usize;
+        if face.len() < 3 {
+            continue;
+        }
+        if face.len() == 3 {
+            out.push([base + face[0], base + face[1], base + face[2]]);
+            continue;
+        }
+        let corners: Vec<[f64; 3]> = face.iter().map(|&i| pos(i)).collect();
+        // Newell normal: the polygon's area vector, robust for any shape.
+        let mut normal = Vec3::ZERO.as_dvec3();
+        for (k, a) in corners.iter().enumerate() {
+            let b = corners[(k + 1) % corners.len()];
+            normal += glam::DVec3::from(*a).cross(glam::DVec3::from(b));
+        }
+        if !earcut::utils3d::project3d_to_2d(&corners, corners.len(), &mut flat) {
+            continue;
+        }
+        earcut.earcut(flat.iter().copied(), &[] as &[u32], &mut ears);
+        for t in ears.chunks_exact(3) {
+            let [a, b, c] = [t[0], t[1], t[2]].map(|k| k as usize);
+            let (pa, pb, pc) = (corners[a], corners[b], corners[c]);
+            let n = (glam::DVec3::from(pb) - glam::DVec3::from(pa))
+                .cross(glam::DVec3::from(pc) - glam::DVec3::from(pa));
+            let tri = if n.dot(normal) < 0.0 {
+                [face[a], face[c], face[b]]
+            } else {
+                [face[a], face[b], face[c]]
+            };
+            out.push(tri.map(|i| base + i));
+        }
+    }
+}
+
 /// Finds the line a tobj error most likely refers to, for the message: the
 /// first line of the kind the error names that does not parse.
 fn locate_obj_error(text: &str, err: tobj::LoadError) -> Option<usize> {
@@ -201,20 +263,49 @@ pub fn load_obj(
     bytes: &[u8],
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<MeshData, String> {
-    let text = std::str::from_utf8(bytes)
-        .map_err(|e| format!("{}: not UTF-8 text: {e}", path.display()))?;
+    // tobj reports errors without a line and can panic on bad indices:
+    // check every line first; faces it would mishandle are blanked out.
+    let scan = crate::objcheck::check_obj(path, bytes)?;
+    let text = scan.text.as_str();
+    let bytes = text.as_bytes();
+    let mut warnings = Vec::new();
+    if scan.dropped_faces > 0 {
+        warnings.push(format!(
+            "{}: {} faces with fewer than 3 corners (first at line {}) dropped: a point or a line is not a surface",
+            path.display(),
+            scan.dropped_faces,
+            scan.first_dropped.unwrap_or(0)
+        ));
+    }
+    if scan.polylines > 0 {
+        warnings.push(format!(
+            "{}: {} polylines (l lines) skipped: only faces are rendered",
+            path.display(),
+            scan.polylines
+        ));
+    }
     let opts = tobj::LoadOptions {
-        triangulate: true,
+        // Polygons are triangulated here (ear clipping), not as tobj's fans.
+        triangulate: false,
         single_index: true,
         ignore_points: true,
         ignore_lines: true,
     };
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let mtl_errors = std::cell::RefCell::new(Vec::new());
+    let mtl_files = std::cell::RefCell::new(Vec::new());
     let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |mtl: &Path| {
         let p = dir.join(mtl);
+        mtl_files.borrow_mut().push(p.clone());
         match read(&p) {
-            Ok(b) => tobj::load_mtl_buf(&mut std::io::Cursor::new(b)),
+            // tobj panics on some malformed MTL lines: check first.
+            Ok(b) => match crate::objcheck::check_mtl(&p, &b) {
+                Ok(()) => tobj::load_mtl_buf(&mut std::io::Cursor::new(b)),
+                Err(e) => {
+                    mtl_errors.borrow_mut().push(e);
+                    Err(tobj::LoadError::MaterialParseError)
+                }
+            },
             Err(e) => {
                 mtl_errors
                     .borrow_mut()
@@ -247,6 +338,8 @@ pub fn load_obj(
     let mut m = MeshData {
         material_names: materials.iter().map(|mt| Some(mt.name.clone())).collect(),
         mtl: materials,
+        mtl_files: mtl_files.into_inner(),
+        warnings,
         ..Default::default()
     };
     let no_material = m.material_names.len() as u32;
@@ -283,10 +376,10 @@ pub fn load_obj(
             m.uvs.extend(std::iter::repeat_n(Vec2::ZERO, nv));
         }
         let mat = mesh.material_id.map(|i| i as u32).unwrap_or(no_material);
-        for t in mesh.indices.chunks_exact(3) {
-            m.triangles.push([base + t[0], base + t[1], base + t[2]]);
-            m.tri_material.push(mat);
-        }
+        let before = m.triangles.len();
+        triangulate(mesh, &mut m.triangles, base);
+        let added = m.triangles.len() - before;
+        m.tri_material.extend(std::iter::repeat_n(mat, added));
     }
     if !any_uv {
         m.uvs.clear();
@@ -363,5 +456,53 @@ mod tests {
         })
         .unwrap_err();
         assert!(err.contains("line 2"), "{err}");
+    }
+
+    /// A concave pentagon (a square with a notch cut into its top edge),
+    /// listed from the notch's corner so that a fan would cover the notch.
+    #[test]
+    fn concave_polygons_keep_their_notch() {
+        let obj = b"v 2 2 0\nv 1 1 0\nv 0 2 0\nv 0 0 0\nv 2 0 0\nf 1 2 3 4 5\n";
+        let m = load_obj(Path::new("c.obj"), obj, &|_| {
+            Err(std::io::ErrorKind::NotFound.into())
+        })
+        .unwrap();
+        assert_eq!(m.triangles.len(), 3, "n − 2 ears");
+        let mut area = 0.0;
+        for t in &m.triangles {
+            let [a, b, c] = t.map(|i| m.positions[i as usize]);
+            let n = (b - a).cross(c - a);
+            assert!(
+                n.z > 0.0,
+                "wound like the polygon (counter-clockwise about +z)"
+            );
+            area += n.z / 2.0;
+            // The notch's inside, (1, 1.6), lies in no triangle.
+            let p = Vec3::new(1.0, 1.6, 0.0);
+            let inside = [(a, b), (b, c), (c, a)]
+                .iter()
+                .all(|(u, v)| (*v - *u).cross(p - *u).z > 0.0);
+            assert!(!inside, "triangle {t:?} covers the notch");
+        }
+        assert!(
+            (area - 3.0).abs() < 1e-5,
+            "square 4 minus notch 1, got {area}"
+        );
+    }
+
+    #[test]
+    fn faces_with_fewer_than_three_corners_are_counted() {
+        let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2\nf 3\nf 1 2 3\n";
+        let m = load_obj(Path::new("p.obj"), obj, &|_| {
+            Err(std::io::ErrorKind::NotFound.into())
+        })
+        .unwrap();
+        assert_eq!(m.triangles.len(), 1);
+        assert!(
+            m.warnings.iter().any(|w| w.contains("p.obj")
+                && w.contains("2 faces with fewer than 3 corners (first at line 4)")),
+            "{:?}",
+            m.warnings
+        );
     }
 }

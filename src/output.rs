@@ -1,59 +1,71 @@
 //! Writing images: PNG (tone-mapped sRGB), OpenEXR (linear HDR) and AOVs.
-//! Every file is written to a temporary name in the same folder and renamed
-//! into place, so a failed run never leaves a half-written image.
+//! Encoders produce bytes in memory; [`crate::outputs`] decides where they
+//! go (temporary file + rename, a device written through, or stdout).
 
 use image::{ImageFormat, Rgb32FImage, RgbImage};
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 /// Magic of the raw triangle-id AOV; see `write_ids`.
 pub const ID_MAGIC: &[u8; 8] = b"SPCLID01";
 
-fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    path.with_file_name(format!(".{name}.{}.tmp", std::process::id()))
-}
-
-/// Writes through `write` to a temporary file, then renames it to `path`.
-pub fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&Path) -> Result<(), String>,
-) -> Result<(), String> {
-    if path.file_name().is_none() {
-        return Err(format!("{}: not a file path", path.display()));
-    }
-    let tmp = temp_path(path);
-    let result = write(&tmp).and_then(|()| std::fs::rename(&tmp, path).map_err(|e| e.to_string()));
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    result.map_err(|e| format!("{}: cannot write: {e}", path.display()))
-}
-
-pub fn write_png(path: &Path, width: u32, height: u32, rgb8: Vec<u8>) -> Result<(), String> {
+/// Encodes 8-bit sRGB in `format` (PNG, or whatever the name asked for).
+pub fn encode_ldr(
+    width: u32,
+    height: u32,
+    rgb8: Vec<u8>,
+    format: ImageFormat,
+) -> Result<Vec<u8>, String> {
     let img = RgbImage::from_raw(width, height, rgb8).ok_or("image buffer has the wrong size")?;
-    write_atomic(path, |tmp| {
-        img.save_with_format(tmp, ImageFormat::Png)
-            .map_err(|e| e.to_string())
-    })
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, format)
+        .map_err(|e| format!("cannot encode {format:?}: {e}"))?;
+    Ok(bytes.into_inner())
 }
 
-pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<(), String> {
+/// Encodes linear RGB in an HDR `format` (OpenEXR, Radiance HDR).
+pub fn encode_hdr(
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+    format: ImageFormat,
+) -> Result<Vec<u8>, String> {
     let flat: Vec<f32> = rgb.iter().flatten().copied().collect();
     let img =
         Rgb32FImage::from_raw(width, height, flat).ok_or("image buffer has the wrong size")?;
-    write_atomic(path, |tmp| {
-        img.save_with_format(tmp, ImageFormat::OpenExr)
-            .map_err(|e| e.to_string())
-    })
+    let mut bytes = std::io::Cursor::new(Vec::new());
+    img.write_to(&mut bytes, format)
+        .map_err(|e| format!("cannot encode {format:?}: {e}"))?;
+    Ok(bytes.into_inner())
+}
+
+/// Whether `format` stores linear floating-point colour.
+pub fn is_hdr(format: ImageFormat) -> bool {
+    matches!(format, ImageFormat::OpenExr | ImageFormat::Hdr)
+}
+
+/// Writes `bytes` to `path` as [`crate::outputs`] resolves it.
+fn write_path(path: &Path, bytes: &[u8]) -> Result<(), String> {
+    let sink = crate::outputs::resolve(path, false)?;
+    crate::outputs::Output {
+        flag: String::new(),
+        path: path.to_path_buf(),
+        sink,
+    }
+    .write(bytes)
+}
+
+pub fn write_png(path: &Path, width: u32, height: u32, rgb8: Vec<u8>) -> Result<(), String> {
+    write_path(path, &encode_ldr(width, height, rgb8, ImageFormat::Png)?)
+}
+
+pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<(), String> {
+    write_path(path, &encode_hdr(width, height, rgb, ImageFormat::OpenExr)?)
 }
 
 /// Raw triangle-id AOV, lossless: the 8 bytes `SPCLID01`, width and height as
 /// little-endian u32, then width × height little-endian u32 ids, row-major,
 /// top row first. 0xFFFFFFFF marks pixels no triangle covers.
-pub fn write_ids(path: &Path, width: u32, height: u32, ids: &[u32]) -> Result<(), String> {
+pub fn encode_ids(width: u32, height: u32, ids: &[u32]) -> Vec<u8> {
     let mut bytes = Vec::with_capacity(16 + ids.len() * 4);
     bytes.extend_from_slice(ID_MAGIC);
     bytes.extend_from_slice(&width.to_le_bytes());
@@ -61,9 +73,11 @@ pub fn write_ids(path: &Path, width: u32, height: u32, ids: &[u32]) -> Result<()
     for id in ids {
         bytes.extend_from_slice(&id.to_le_bytes());
     }
-    write_atomic(path, |tmp| {
-        std::fs::write(tmp, &bytes).map_err(|e| e.to_string())
-    })
+    bytes
+}
+
+pub fn write_ids(path: &Path, width: u32, height: u32, ids: &[u32]) -> Result<(), String> {
+    write_path(path, &encode_ids(width, height, ids))
 }
 
 /// Reads an id AOV written by [`write_ids`]: (width, height, ids).

@@ -4,7 +4,9 @@
 //! file and the line (TOML syntax, unknown fields) or the field.
 
 use crate::material_desc::MaterialDesc;
+use crate::memory;
 use crate::mesh::{self, MeshData};
+use crate::validate::{check_extent, check_point, MAX_FOV_Y_DEG, MAX_WORLD, MIN_FOV_Y_DEG};
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
 use serde::Deserialize;
 use specula_core::light::Light;
@@ -273,7 +275,8 @@ impl std::error::Error for SceneError {}
 pub struct LoadedScene {
     pub data: SceneData,
     pub output: OutputDesc,
-    /// Files the scene was read from (the scene file, OBJs, MTLs): outputs
+    /// Files the scene was read from (the scene file, OBJs, MTLs; relative
+    /// ones against the scene's folder): outputs
     /// must never overwrite them.
     pub inputs: Vec<PathBuf>,
     /// Things worth telling the user that did not stop the load.
@@ -310,13 +313,61 @@ fn check_finite(field: &str, v: &[f32]) -> Result<(), String> {
     }
 }
 
+/// Largest accepted radiometric value (radiance, intensity, irradiance).
+/// A pixel sums lights × BRDF (up to ~3e5 at α = 1e-3) over up to 256
+/// supersamples: 1e20 · 3e5 · 256 ≈ 8e27 leaves f32 (3.4e38) room for many
+/// lights; a uniform environment of 3e38 overflowed at ssaa 4.
+const MAX_RADIOMETRIC: f32 = 1e20;
+
 fn check_radiometric(field: &str, v: [f32; 3]) -> Result<(), String> {
     check_finite(field, &v)?;
-    if v.iter().all(|x| *x >= 0.0) {
+    if v.iter().all(|x| (0.0..=MAX_RADIOMETRIC).contains(x)) {
         Ok(())
     } else {
-        Err(format!("{field}: must be ≥ 0, got {v:?}"))
+        Err(format!(
+            "{field}: every component must be in [0, {MAX_RADIOMETRIC:e}], got {v:?}"
+        ))
     }
+}
+
+/// The accepted |scale| per axis: their ratio (≤ 1e24) keeps the normal
+/// matrix finite in f32.
+const MIN_SCALE: f32 = 1e-12;
+const MAX_SCALE: f32 = 1e12;
+
+/// Checks that a mesh's transform keeps its (finite, in-range) vertices
+/// inside ±MAX_WORLD.
+fn check_transform(field: &str, positions: &[Vec3], model: &Mat4) -> Result<(), String> {
+    let inside = |p: Vec3| p.is_finite() && p.abs().max_element() <= MAX_WORLD;
+    if let Some(p) = positions
+        .iter()
+        .find(|p| inside(**p) && !inside(model.transform_point3(**p)))
+    {
+        return Err(format!(
+            "{field}.translate / scale: move vertex {p} to {}, outside ±{MAX_WORLD:e} (the world's extent)",
+            model.transform_point3(*p)
+        ));
+    }
+    Ok(())
+}
+
+/// The image size and supersampling: each side, supersampled, within the
+/// render target's limit.
+fn check_output_size(o: &OutputDesc) -> Result<(), String> {
+    let max = specula_raster::target::MAX_DIM;
+    if !(1..=16).contains(&o.ssaa) {
+        return Err(format!("output.ssaa: must be in 1..=16, got {}", o.ssaa));
+    }
+    for (field, v) in [("output.width", o.width), ("output.height", o.height)] {
+        let limit = max / o.ssaa;
+        if !(1..=limit).contains(&v) {
+            return Err(format!(
+                "{field}: must be in 1..={limit} (at most {max} after ssaa {}), got {v}",
+                o.ssaa
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Largest segment count a procedural mesh accepts (per axis).
@@ -425,9 +476,11 @@ pub fn load_scene_str(
     ] {
         check_finite(f, v).map_err(&err)?;
     }
-    if !(c.fov_y > 0.0 && c.fov_y < 180.0) {
+    check_point("camera.eye", c.eye).map_err(&err)?;
+    check_point("camera.target", c.target).map_err(&err)?;
+    if !(MIN_FOV_Y_DEG..=MAX_FOV_Y_DEG).contains(&c.fov_y) {
         return Err(err(format!(
-            "camera.fov_y: must be in (0, 180) degrees, got {}",
+            "camera.fov_y: must be in [{MIN_FOV_Y_DEG}, {MAX_FOV_Y_DEG}] degrees, got {}",
             c.fov_y
         )));
     }
@@ -451,6 +504,7 @@ pub fn load_scene_str(
     };
 
     let o = &desc.output;
+    check_output_size(o).map_err(&err)?;
     check_radiometric("output.background", o.background).map_err(&err)?;
     if !o.exposure.is_finite() {
         return Err(err("output.exposure: must be finite".into()));
@@ -512,9 +566,16 @@ pub fn load_scene_str(
         let mesh: MeshData = if let Some(p) = &md.obj {
             let bytes = read(p)
                 .map_err(|e| err(format!("{field}.obj: cannot read {}: {e}", p.display())))?;
+            memory::reserve(
+                &format!("{field}.obj ({} bytes)", bytes.len()),
+                memory::obj_bytes(bytes.len() as u64),
+            )
+            .map_err(&err)?;
             inputs.push(p.clone());
             let m =
                 mesh::load_obj(p, &bytes, read).map_err(|e| err(format!("{field}.obj: {e}")))?;
+            inputs.extend(m.mtl_files.iter().cloned());
+            warnings.extend(m.warnings.iter().cloned());
             let limit = specula_raster::setup::MAX_CLIP_COORD as f32;
             let bad = m
                 .positions
@@ -531,15 +592,36 @@ pub fn load_scene_str(
         } else if let Some(s) = &md.sphere {
             check_segments(&format!("{field}.sphere.segments"), s.segments, 3).map_err(&err)?;
             check_segments(&format!("{field}.sphere.rings"), s.rings, 2).map_err(&err)?;
+            check_extent(&format!("{field}.sphere.radius"), s.radius).map_err(&err)?;
+            let (u, v) = (s.segments as u64, s.rings as u64);
+            memory::reserve(
+                &format!("{field}.sphere ({u} segments × {v} rings)"),
+                memory::mesh_bytes((u + 1) * (v + 1), 2 * u * v),
+            )
+            .map_err(&err)?;
             mesh::sphere(s.radius, s.segments, s.rings)
         } else if let Some(p) = &md.plane {
             for (k, v) in p.segments.iter().enumerate() {
                 check_segments(&format!("{field}.plane.segments[{k}]"), *v, 1).map_err(&err)?;
+                check_extent(&format!("{field}.plane.size[{k}]"), p.size[k]).map_err(&err)?;
             }
+            let (u, v) = (p.segments[0] as u64, p.segments[1] as u64);
+            memory::reserve(
+                &format!("{field}.plane ({u} × {v} segments)"),
+                memory::mesh_bytes((u + 1) * (v + 1), 2 * u * v),
+            )
+            .map_err(&err)?;
             mesh::plane(p.size, p.segments)
         } else {
             let c = md.cube.as_ref().expect("one shape is set");
             check_segments(&format!("{field}.cube.segments"), c.segments, 1).map_err(&err)?;
+            check_extent(&format!("{field}.cube.size"), c.size).map_err(&err)?;
+            let n = c.segments as u64;
+            memory::reserve(
+                &format!("{field}.cube ({n} segments)"),
+                memory::mesh_bytes(6 * (n + 1) * (n + 1), 12 * n * n),
+            )
+            .map_err(&err)?;
             mesh::cube(c.size, c.segments)
         };
 
@@ -600,16 +682,22 @@ pub fn load_scene_str(
         };
         check_finite(&format!("{field}.translate"), &md.translate).map_err(&err)?;
         check_finite(&format!("{field}.rotate"), &md.rotate).map_err(&err)?;
-        if !scale.is_finite() || scale.cmpeq(Vec3::ZERO).any() {
+        if !(scale.abs().cmpge(Vec3::splat(MIN_SCALE)) & scale.abs().cmple(Vec3::splat(MAX_SCALE)))
+            .all()
+        {
             return Err(err(format!(
-                "{field}.scale: must be finite and non-zero, got {scale}"
+                "{field}.scale: every component must be a number with {MIN_SCALE:e} ≤ |s| ≤ {MAX_SCALE:e}, got {scale}"
             )));
         }
         let r = md.rotate.map(f32::to_radians);
         let rot = Quat::from_euler(EulerRot::ZYX, r[2], r[1], r[0]);
         let model = Mat4::from_scale_rotation_translation(scale, rot, md.translate.into());
-        let normal_m = Mat3::from_mat4(model).inverse().transpose();
+        // (R·S)⁻ᵀ = R·S⁻¹, scaled by the smallest |s| so no entry overflows
+        // (normals are renormalized anyway).
+        let normal_m = Mat3::from_quat(rot)
+            * Mat3::from_diagonal(Vec3::splat(scale.abs().min_element()) / scale);
         let flip = model.determinant() < 0.0;
+        check_transform(&field, &mesh.positions, &model).map_err(&err)?;
 
         let base = data.positions.len() as u32;
         data.positions
@@ -652,7 +740,7 @@ pub fn load_scene_str(
                 position,
                 intensity,
             } => {
-                check_finite(&format!("{field}.position"), position).map_err(&err)?;
+                check_point(&format!("{field}.position"), *position).map_err(&err)?;
                 check_radiometric(&format!("{field}.intensity"), *intensity).map_err(&err)?;
                 Light::Point {
                     position: *position,
@@ -664,12 +752,8 @@ pub fn load_scene_str(
                 irradiance,
             } => {
                 check_radiometric(&format!("{field}.irradiance"), *irradiance).map_err(&err)?;
-                let d = Vec3::from(*direction);
-                let Some(d) = d.try_normalize() else {
-                    return Err(err(format!(
-                        "{field}.direction: must be a finite non-zero vector, got {direction:?}"
-                    )));
-                };
+                let d = crate::validate::direction(&format!("{field}.direction"), *direction)
+                    .map_err(&err)?;
                 Light::Directional {
                     to_light: (-d).to_array(),
                     irradiance: *irradiance,

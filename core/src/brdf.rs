@@ -114,8 +114,9 @@ pub struct HalfAngles<R: Real> {
     pub sin2_h: R,
     /// cos θd = wi·h, the Fresnel angle.
     pub cos_d: R,
-    /// The unnormalized half vector s = wi + wo (local) and 1/|s|², for
-    /// models that need h's direction (anisotropic NDFs: h = s/|s|).
+    /// The unnormalized half vector s ∝ wi + wo (local; rescaled when tiny,
+    /// see `new`) and 1/|s|², for models that need h's direction
+    /// (anisotropic NDFs: h = s/|s|).
     pub s: V3<R>,
     pub inv_len2: R,
 }
@@ -130,6 +131,15 @@ impl<R: Real> HalfAngles<R> {
         // excludes. For unit wi, wo: |s|² = 2 (1 + wi·wo), so
         // cos θd = wi·s / |s| = |s| / 2 — no normalized h needed.
         let s = wi + o.wo;
+        // A nearly opposite grazing pair (wi = [1, 0, 1e-155], wo = [−1, 0,
+        // 1e-155] in f64) makes |s|² underflow and 1/|s|² infinite. The
+        // angles depend only on s's direction, so such an s is first scaled
+        // by 1/max|sₖ| (other lanes are untouched: the factor is exactly 1).
+        let len2 = s.length_squared();
+        let m = s.x.abs().max(s.y.abs()).max(s.z.abs());
+        let tiny = len2.lt(R::splat(1e-20)) & m.gt(R::ZERO);
+        let (scale, unscale) = (R::select(tiny, m.rcp(), R::ONE), R::select(tiny, m, R::ONE));
+        let s = s * scale;
         let len2 = s.length_squared();
         let inv_len2 = len2.rcp();
         HalfAngles {
@@ -138,7 +148,7 @@ impl<R: Real> HalfAngles<R> {
             above,
             cos2_h: s.z * s.z * inv_len2,
             sin2_h: s.x.mul_add(s.x, s.y * s.y) * inv_len2,
-            cos_d: len2 * len2.rsqrt() * R::HALF,
+            cos_d: len2 * len2.rsqrt() * R::HALF * unscale,
             s,
             inv_len2,
         }

@@ -1,0 +1,347 @@
+//! Where output files go, checked before any work is done.
+//!
+//! Every output path of a run is resolved once ([`plan`]): a regular file
+//! (or a name that does not exist yet) is written to a temporary file in the
+//! same folder and renamed into place, so a failed run never leaves a
+//! half-written file; a device or FIFO (`/dev/null`, `/dev/stdout`, a named
+//! pipe) is written through, never replaced; a symlink is followed and its
+//! target handled the same way, so the link stays; `-` is standard output.
+//! Folders and sockets are refused. Two outputs naming the same file, or an
+//! output naming one of the run's input files, are refused, and the folder
+//! of each new file is checked to be writable, all before rendering.
+
+use image::ImageFormat;
+use std::fs::{File, OpenOptions};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// Where one output's bytes go.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum Sink {
+    /// Standard output (`-`).
+    Stdout,
+    /// An existing device or FIFO, opened and written in place.
+    Direct(PathBuf),
+    /// A regular file (existing or new): temporary file + rename.
+    Atomic(PathBuf),
+}
+
+/// One output of a run: the flag that named it (for messages), the path as
+/// given, and where it resolves to.
+#[derive(Clone, Debug)]
+pub struct Output {
+    pub flag: String,
+    pub path: PathBuf,
+    pub sink: Sink,
+}
+
+impl Output {
+    /// Writes `bytes` to the output.
+    pub fn write(&self, bytes: &[u8]) -> Result<(), String> {
+        write_sink(&self.sink, bytes)
+            .map_err(|e| format!("{}: cannot write: {e}", self.path.display()))
+    }
+
+    /// The image format its name asks for (`-`, devices and FIFOs without an
+    /// extension get `default`); refuses names this build cannot write.
+    pub fn image_format(&self, default: ImageFormat) -> Result<ImageFormat, String> {
+        let Some(ext) = self.path.extension() else {
+            return match self.sink {
+                Sink::Atomic(_) => Err(format!(
+                    "{} {}: no file extension to tell the image format (use .png or .exr)",
+                    self.flag,
+                    self.path.display()
+                )),
+                _ => Ok(default),
+            };
+        };
+        match ImageFormat::from_extension(ext) {
+            Some(f) if f.writing_enabled() => Ok(f),
+            _ => Err(format!(
+                "{} {}: cannot write {:?} images (writable: {})",
+                self.flag,
+                self.path.display(),
+                ext.to_string_lossy(),
+                writable_extensions().join(", ")
+            )),
+        }
+    }
+}
+
+/// Extensions of every image format this build can write.
+pub fn writable_extensions() -> Vec<&'static str> {
+    ImageFormat::all()
+        .filter(|f| f.writing_enabled())
+        .filter_map(|f| f.extensions_str().first().copied())
+        .collect()
+}
+
+/// `path`'s folder, `.` for a bare file name.
+fn folder(path: &Path) -> &Path {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    }
+}
+
+/// Resolves an output path to where its bytes will go.
+pub fn resolve(path: &Path, allow_stdout: bool) -> Result<Sink, String> {
+    let shown = path.display();
+    if path.as_os_str() == "-" {
+        return if allow_stdout {
+            Ok(Sink::Stdout)
+        } else {
+            Err("-: standard output is only available for the main image (-o -)".into())
+        };
+    }
+    if path.file_name().is_none() {
+        return Err(format!("{shown}: not a file path"));
+    }
+    let meta = match std::fs::symlink_metadata(path) {
+        Ok(m) => m,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => {
+            let dir = folder(path);
+            return match std::fs::metadata(dir) {
+                Ok(m) if m.is_dir() => {
+                    let dir = std::fs::canonicalize(dir)
+                        .map_err(|e| format!("{}: {e}", dir.display()))?;
+                    Ok(Sink::Atomic(dir.join(path.file_name().expect("checked"))))
+                }
+                Ok(_) => Err(format!("{shown}: {} is not a folder", dir.display())),
+                Err(e) => Err(format!("{shown}: cannot write into {}: {e}", dir.display())),
+            };
+        }
+        Err(e) => return Err(format!("{shown}: {e}")),
+    };
+    let ft = meta.file_type();
+    if ft.is_symlink() {
+        // Follow the link and write its target; the link itself stays.
+        let target = std::fs::canonicalize(path)
+            .map_err(|e| format!("{shown}: a symbolic link whose target cannot be used: {e}"))?;
+        return resolve(&target, false);
+    }
+    if ft.is_dir() {
+        return Err(format!("{shown}: is a folder"));
+    }
+    if ft.is_file() {
+        return Ok(Sink::Atomic(
+            std::fs::canonicalize(path).map_err(|e| format!("{shown}: {e}"))?,
+        ));
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::FileTypeExt;
+        if ft.is_char_device() || ft.is_block_device() || ft.is_fifo() {
+            return Ok(Sink::Direct(path.to_path_buf()));
+        }
+    }
+    Err(format!(
+        "{shown}: not a regular file, device or pipe; refusing to write it"
+    ))
+}
+
+/// Resolves every `(flag, path)` of a run and checks them together: no two
+/// name the same file, none is one of `inputs`, and each new file's folder
+/// takes a file. `allow_stdout` is the flag that may be `-`.
+pub fn plan(
+    outputs: &[(&str, &Path)],
+    inputs: &[PathBuf],
+    allow_stdout: Option<&str>,
+) -> Result<Vec<Output>, String> {
+    let inputs: Vec<PathBuf> = inputs
+        .iter()
+        .filter_map(|p| std::fs::canonicalize(p).ok())
+        .collect();
+    let mut planned: Vec<Output> = Vec::new();
+    for &(flag, path) in outputs {
+        let sink = resolve(path, allow_stdout == Some(flag)).map_err(|e| format!("{flag} {e}"))?;
+        if let Sink::Direct(p) | Sink::Atomic(p) = &sink {
+            let canon = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
+            if inputs.contains(&canon) {
+                return Err(format!(
+                    "{flag} {}: is an input of the scene; refusing to overwrite it",
+                    path.display()
+                ));
+            }
+        }
+        if let Some(prev) = planned.iter().find(|o| o.sink == sink) {
+            return Err(format!(
+                "{flag} {}: the same file as {} {}; give each output its own path",
+                path.display(),
+                prev.flag,
+                prev.path.display()
+            ));
+        }
+        if let Sink::Atomic(p) = &sink {
+            // Fails now, not after rendering, if the folder takes no files.
+            TempFile::create(p)
+                .map_err(|e| format!("{flag} {}: cannot write: {e}", path.display()))?;
+        }
+        planned.push(Output {
+            flag: flag.to_string(),
+            path: path.to_path_buf(),
+            sink,
+        });
+    }
+    Ok(planned)
+}
+
+/// A temporary file beside its destination, removed when dropped unless
+/// renamed into place: no error path (or panic) leaves it behind.
+struct TempFile {
+    path: PathBuf,
+    file: Option<File>,
+}
+
+impl TempFile {
+    fn create(dest: &Path) -> std::io::Result<TempFile> {
+        let name = dest
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let path = dest.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
+        let file = OpenOptions::new()
+            .write(true)
+            .create(true)
+            .truncate(true)
+            .open(&path)?;
+        Ok(TempFile {
+            path,
+            file: Some(file),
+        })
+    }
+
+    /// Writes all of `bytes`, makes sure they reached the disk (a full disk
+    /// may only show at sync), and renames the file to `dest`.
+    fn persist(mut self, bytes: &[u8], dest: &Path) -> std::io::Result<()> {
+        let mut f = self.file.take().expect("open until persisted");
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        drop(f);
+        std::fs::rename(&self.path, dest)?;
+        self.path = PathBuf::new();
+        Ok(())
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        self.file.take();
+        if !self.path.as_os_str().is_empty() {
+            let _ = std::fs::remove_file(&self.path);
+        }
+    }
+}
+
+fn write_sink(sink: &Sink, bytes: &[u8]) -> std::io::Result<()> {
+    match sink {
+        Sink::Stdout => {
+            let mut out = std::io::stdout().lock();
+            out.write_all(bytes)?;
+            out.flush()
+        }
+        Sink::Direct(p) => {
+            let mut f = OpenOptions::new().write(true).open(p)?;
+            f.write_all(bytes)?;
+            f.flush()
+        }
+        Sink::Atomic(p) => TempFile::create(p)?.persist(bytes, p),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn dir(name: &str) -> PathBuf {
+        let d = std::env::temp_dir().join(format!("specula-outputs-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&d);
+        std::fs::create_dir_all(&d).unwrap();
+        d
+    }
+
+    #[test]
+    fn devices_are_written_through_and_a_full_disk_is_reported() {
+        let sink = resolve(Path::new("/dev/null"), false).unwrap();
+        assert_eq!(sink, Sink::Direct("/dev/null".into()));
+        write_sink(&sink, b"x").unwrap();
+        if Path::new("/dev/full").exists() {
+            let e = write_sink(&resolve(Path::new("/dev/full"), false).unwrap(), b"x").unwrap_err();
+            assert_eq!(e.raw_os_error(), Some(28), "ENOSPC, got {e}");
+        }
+    }
+
+    #[test]
+    fn symlinks_are_followed_and_kept() {
+        let d = dir("link");
+        std::fs::write(d.join("real.png"), b"old").unwrap();
+        std::os::unix::fs::symlink(d.join("real.png"), d.join("link.png")).unwrap();
+        let plan = plan(&[("-o", &d.join("link.png"))], &[], None).unwrap();
+        plan[0].write(b"new").unwrap();
+        assert!(std::fs::symlink_metadata(d.join("link.png"))
+            .unwrap()
+            .is_symlink());
+        assert_eq!(std::fs::read(d.join("real.png")).unwrap(), b"new");
+        let names: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 2, "no temporary file is left: {names:?}");
+    }
+
+    #[test]
+    fn duplicates_inputs_and_missing_folders_are_refused() {
+        let d = dir("dup");
+        let a = d.join("a.exr");
+        let e = plan(
+            &[("-o", &a), ("--exr", &d.join(".").join("a.exr"))],
+            &[],
+            None,
+        )
+        .unwrap_err();
+        assert!(
+            e.contains("--exr") && e.contains("the same file as -o"),
+            "{e}"
+        );
+        std::fs::write(d.join("m.mtl"), b"").unwrap();
+        let e = plan(
+            &[("--stats-json", &d.join("m.mtl"))],
+            &[d.join("m.mtl")],
+            None,
+        )
+        .unwrap_err();
+        assert!(e.contains("input"), "{e}");
+        let e = plan(
+            &[("--stats-json", Path::new("/nonexistent/s.json"))],
+            &[],
+            None,
+        )
+        .unwrap_err();
+        assert!(
+            e.contains("--stats-json") && e.contains("/nonexistent"),
+            "{e}"
+        );
+        let e = plan(&[("-o", &d)], &[], None).unwrap_err();
+        assert!(e.contains("folder"), "{e}");
+        assert!(
+            std::fs::read_dir(&d).unwrap().count() == 1,
+            "the probe left nothing"
+        );
+    }
+
+    #[test]
+    fn a_temporary_file_never_outlives_a_failed_write() {
+        let d = dir("tmp");
+        // Renaming onto a non-empty folder fails after the bytes are written.
+        std::fs::create_dir_all(d.join("busy.png").join("x")).unwrap();
+        let e = write_sink(&Sink::Atomic(d.join("busy.png")), b"bytes").unwrap_err();
+        assert!(e.to_string().to_lowercase().contains("directory"), "{e}");
+        let names: Vec<_> = std::fs::read_dir(&d)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names, vec![std::ffi::OsString::from("busy.png")]);
+        drop(TempFile::create(&d.join("a.png")).unwrap());
+        assert_eq!(std::fs::read_dir(&d).unwrap().count(), 1);
+    }
+}
