@@ -13,7 +13,7 @@
 
 use crate::material_desc::{MaterialDesc, Shading, Tables};
 use serde::Deserialize;
-use specula_core::V3;
+use specula_core::{ShadingFrame, V3};
 use std::collections::HashMap;
 use std::io::{BufRead, Write};
 
@@ -69,7 +69,14 @@ fn eval(line: &str, cache: &mut Cache) -> Result<Answer, String> {
     }
     Ok(match &cache.built[&key] {
         Shading::Lit(model) => {
-            let f = model.f(V3::new(0.0, 0.0, 1.0), wi, wo);
+            // The identity frame: tangent +X, bitangent +Y, normal +Z
+            // (anisotropic models read the tangent).
+            let frame = ShadingFrame {
+                t: V3::new(1.0, 0.0, 0.0),
+                b: V3::new(0.0, 1.0, 0.0),
+                n: V3::new(0.0, 0.0, 1.0),
+            };
+            let f = model.f_in(&frame, wi, wo);
             Answer {
                 f: [f.x, f.y, f.z],
                 emission: None,
