@@ -6,8 +6,8 @@ use serde::Deserialize;
 use specula_core::kulla_conty::KcColor;
 use specula_core::models::microfacet::clamp_alpha;
 use specula_core::models::{
-    Disney, DisneyParams, Fresnel, Lambert, MetallicRoughness, Microfacet, MicrofacetParams, Ndf,
-    Smith,
+    Disney, DisneyParams, Fresnel, GtrLambda, Lambert, MetallicRoughness, Microfacet,
+    MicrofacetParams, Ndf, Smith,
 };
 use specula_core::Model;
 use specula_raster::{Lit, Material, Unlit};
@@ -62,6 +62,17 @@ pub enum FresnelDesc {
     Conductor { eta: [f32; 3], k: [f32; 3] },
 }
 
+/// Which Smith Λ `ndf = "gtr"` uses.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum GtrLambdaDesc {
+    /// GGX's Λ at the same α.
+    #[default]
+    Ggx,
+    /// The GTR distribution's own Λ, tabulated per material.
+    Exact,
+}
+
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum KcColorDesc {
@@ -85,6 +96,9 @@ pub struct MicrofacetDesc {
     /// GTR exponent (ignored by the other NDFs).
     #[serde(default = "two")]
     pub gamma: f32,
+    /// Smith Λ of GTR (`ndf = "gtr"` only).
+    #[serde(default)]
+    pub gtr_lambda: GtrLambdaDesc,
     pub alpha: f32,
     #[serde(default)]
     pub smith: SmithDesc,
@@ -300,6 +314,16 @@ impl MicrofacetDesc {
             ));
         }
         check_positive("gamma", self.gamma)?;
+        let gtr_lambda = match (self.ndf, self.gtr_lambda) {
+            (_, GtrLambdaDesc::Ggx) => GtrLambda::Ggx,
+            (NdfDesc::Gtr, GtrLambdaDesc::Exact) => GtrLambda::exact(self.gamma, alpha),
+            (_, GtrLambdaDesc::Exact) => {
+                return Err(
+                    "gtr_lambda: \"exact\" applies to ndf = \"gtr\" only (GGX and Beckmann always use their exact Λ)"
+                        .into(),
+                )
+            }
+        };
         check_color("diffuse", self.diffuse)?;
         let fresnel = match &self.fresnel {
             FresnelDesc::Schlick { f0 } => {
@@ -334,6 +358,7 @@ impl MicrofacetDesc {
             },
             fresnel,
             diffuse: self.diffuse,
+            gtr_lambda,
         })
     }
 }

@@ -38,6 +38,7 @@ pub fn benchmark_scene_microfacet() -> LoadedScene {
                     k: [3.42, 2.35, 1.77],
                 },
                 diffuse: mr.diffuse_color(),
+                gtr_lambda: Default::default(),
             };
             let model = Model::Microfacet(Microfacet::new(params, None));
             *m = specula_raster::Material::new(&m.name, Lit { model }, m.double_sided);

@@ -43,7 +43,7 @@ use crate::diffuse::{f_subsurface_burley, fd_burley, sheen_burley};
 use crate::fresnel::{f_schlick, schlick_weight};
 use crate::kulla_conty::KcColor;
 use crate::masking::{g1_smith, lambda_ggx, lambda_ggx_aniso};
-use crate::models::microfacet::{Compensation, Fresnel, MicrofacetParams, Ndf, Smith};
+use crate::models::microfacet::{Compensation, Fresnel, GtrLambda, MicrofacetParams, Ndf, Smith};
 use crate::ndf::{d_ggx_aniso, d_gtr};
 use crate::quadrature::GaussLegendre;
 use crate::real::Real;
@@ -272,6 +272,7 @@ impl Disney {
                     f0: d.cspec0.map(|c| c as f32),
                 },
                 diffuse: [0.0; 3],
+                gtr_lambda: GtrLambda::Ggx,
             };
             Compensation::new(&p, KcColor::KullaConty)
         });

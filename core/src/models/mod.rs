@@ -9,4 +9,4 @@ pub mod microfacet;
 pub use disney::{Disney, DisneyParams};
 pub use lambert::Lambert;
 pub use metallic_roughness::MetallicRoughness;
-pub use microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
+pub use microfacet::{Fresnel, GtrLambda, Microfacet, MicrofacetParams, Ndf, Smith};
