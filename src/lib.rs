@@ -2,11 +2,13 @@
 //! core. This facade ties the crates together: scene files (`scene`), meshes
 //! (`mesh`), the material contract shared by scenes and `specula eval`
 //! (`material_desc`), rendering with statistics (`render`) and image output
-//! (`output`). The built-in demo lives in `demo`.
+//! (`output`), text labels on images (`label`). The built-in demo lives in
+//! `demo`.
 
 pub mod demo;
 pub mod eval;
 pub mod furnace;
+pub mod label;
 pub mod material_desc;
 pub mod mesh;
 pub mod output;
