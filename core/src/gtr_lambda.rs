@@ -46,7 +46,7 @@ pub const N_X: usize = 2048;
 /// Smallest μ of the table, relative to α.
 const MU_MIN_OVER_ALPHA: f64 = 1e-5;
 /// Panels and Gauss–Legendre points per panel of the θ integral.
-const PANELS: usize = 32;
+const PANELS: usize = 16;
 const POINTS: usize = 8;
 
 /// Λ of one GTR(γ, α), tabulated (module docs).

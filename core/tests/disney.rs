@@ -355,6 +355,31 @@ fn lobe_albedo(m: &Disney, wo: [f64; 3], which: Which, width: f64) -> [f64; 3] {
     acc
 }
 
+/// ∫ (f_comp − f_plain) μi dωi of the specular lobes of two models that
+/// differ only in compensation: the Kulla–Conty lobe, smooth in wi, so
+/// Gauss–Legendre in μi (8 panels × 12) × midpoint in φi (128).
+fn ms_albedo(comp: &Disney, plain: &Disney, wo: [f64; 3]) -> f64 {
+    let gl = GaussLegendre::new(12);
+    let (pc, pp): (DisneyPrepared<f64>, DisneyPrepared<f64>) =
+        (comp.prepare(v64(wo)), plain.prepare(v64(wo)));
+    let mut acc = 0.0;
+    let n_phi = 128;
+    for k in 0..n_phi {
+        let phi = 2.0 * PI * (k as f64 + 0.5) / n_phi as f64;
+        for j in 0..8 {
+            let (a, b) = (j as f64 / 8.0, (j + 1) as f64 / 8.0);
+            for (x, w) in gl.nodes_weights() {
+                let mu = 0.5 * (a + b) + 0.5 * (b - a) * x;
+                let s = (1.0 - mu * mu).sqrt();
+                let wi = v64([s * phi.cos(), s * phi.sin(), mu]);
+                let d = comp.lobes(&pc, wi).0.specular.x - plain.lobes(&pp, wi).0.specular.x;
+                acc += d * mu * 0.5 * (b - a) * w * 2.0 * PI / n_phi as f64;
+            }
+        }
+    }
+    acc
+}
+
 /// ρ(wo) of the whole model by [`lobe_albedo`].
 fn albedo(m: &Disney, p: &DisneyParams, wo: [f64; 3]) -> [f64; 3] {
     let (ax, ay) = p.alphas();
@@ -460,11 +485,15 @@ fn albedo_table_matches_quadrature() {
 /// metallic = 1 with a white base: F = 1 everywhere, so the specular lobe
 /// is the single-scattering white furnace: never above 1, and with
 /// compensation 1 (isotropic: the Kulla–Conty table is exact up to its
-/// interpolation; anisotropic: indexed at √(αx αy), measured and printed).
+/// interpolation; anisotropic: indexed at √(αx αy), its error measured and
+/// printed, per case with DISNEY_VERBOSE=1).
+/// Indexing at the RMS α √((αx² + αy²)/2) instead was closer on average
+/// but overshot to 1.08 (roughness 0.3, anisotropic 1, μo 0.3, φo = π/2).
 #[test]
 fn metallic_white_furnace_bounds() {
     let mut worst_iso = 0.0f64;
     let mut worst_aniso = 0.0f64;
+    let mut worst_over = 0.0f64;
     for r in [0.1f32, 0.3, 0.5, 0.7, 1.0] {
         for an in [0.0f32, 0.5, 1.0] {
             let p = DisneyParams {
@@ -481,8 +510,26 @@ fn metallic_white_furnace_bounds() {
                 for phi in [0.0, 0.7, std::f64::consts::FRAC_PI_2] {
                     let wo = view(mu, phi);
                     let e = lobe_albedo(&plain, wo, Which::Specular, (ax * ay).sqrt())[0];
-                    let ec = lobe_albedo(&comp, wo, Which::Specular, (ax * ay).sqrt())[0];
+                    // The compensation lobe is broad and smooth: integrated
+                    // over wi (the half-vector warp of a narrow lobe
+                    // under-resolves it by up to 1.4e-3).
+                    let ec = e + ms_albedo(&comp, &plain, wo);
+                    if std::env::var("DISNEY_VERBOSE").is_ok() {
+                        eprintln!("  r {r} anisotropic {an} μo {mu} φo {phi:.2}: E {e:.4}, compensated {ec:.4}");
+                    }
                     assert!(e <= 1.0 + 1e-4, "r {r} an {an} μ {mu}: E = {e}");
+                    // Indexed at √(αx αy), the compensation under-corrects
+                    // most anisotropic lobes (by up to 0.41) and
+                    // over-corrects some views by up to 2.2e-2 (roughness
+                    // 0.3, anisotropic 1, μo 0.1, φo = π/2): the isotropic
+                    // table cannot follow the view's azimuth. Bounded here
+                    // at what was measured, so a change that makes it worse
+                    // fails.
+                    assert!(
+                        ec <= 1.0 + 2.5e-2,
+                        "r {r} an {an} μ {mu}: compensated E = {ec}"
+                    );
+                    worst_over = worst_over.max(ec - 1.0);
                     if an == 0.0 {
                         worst_iso = worst_iso.max((ec - 1.0).abs());
                     } else {
@@ -492,7 +539,7 @@ fn metallic_white_furnace_bounds() {
             }
         }
     }
-    eprintln!("compensated white furnace |E − 1|: isotropic {worst_iso:.2e}, anisotropic {worst_aniso:.2e}");
+    eprintln!("compensated white furnace |E − 1|: isotropic {worst_iso:.2e}, anisotropic {worst_aniso:.2e}; largest excess over 1 {worst_over:.2e}");
     assert!(worst_iso < 5e-3, "{worst_iso}");
 }
 

@@ -123,10 +123,10 @@ fn white(gamma: f32, alpha: f32, exact: bool) -> MicrofacetParams {
 #[test]
 fn white_furnace_never_exceeds_one() {
     let mut worst = 0.0f64;
-    for gamma in [1.0f32, 1.25, 1.5, 2.0, 3.0, 5.0, 10.0] {
-        for alpha in [0.05f32, 0.15, 0.3, 0.6, 1.0] {
+    for gamma in [1.0f32, 1.5, 3.0, 10.0] {
+        for alpha in [0.05f32, 0.15, 0.5, 1.0] {
             let p = white(gamma, alpha, true);
-            for mu in [0.02, 0.05, 0.1, 0.2, 0.4, 0.7, 1.0] {
+            for mu in [0.02, 0.1, 0.3, 0.7, 1.0] {
                 let e = p.specular_albedo(mu)[0];
                 worst = worst.max(e);
                 // The albedo quadrature is good to ~1e-5.
@@ -145,8 +145,10 @@ fn white_furnace_never_exceeds_one() {
 #[test]
 fn white_furnace_with_compensation_reaches_one() {
     let mut worst = 0.0f64;
-    for gamma in [1.0f32, 1.5, 3.0, 10.0] {
-        for alpha in [0.1f32, 0.3, 0.6, 1.0] {
+    // Each γ builds its own Kulla–Conty table (N_MU × N_ALPHA albedos with
+    // the exact Λ): the ends and the middle of γ ∈ [1, 10].
+    for gamma in [1.0f32, 3.0, 10.0] {
+        for alpha in [0.1f32, 0.4, 1.0] {
             let m = Microfacet::new(white(gamma, alpha, true), Some(KcColor::KullaConty));
             for mu in [0.05f32, 0.1, 0.2, 0.4, 0.7, 1.0] {
                 let e = m.albedo_at(mu)[0] as f64;
