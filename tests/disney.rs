@@ -94,3 +94,44 @@ fn bad_fields_are_errors_and_wide_ones_warnings() {
     }
     assert!(load("").expect("defaults").warnings.is_empty());
 }
+
+/// A mesh without uvs has no tangent direction: anisotropic Disney falls
+/// back to the frame around the normal alone, and still shades every pixel
+/// finite, with SIMD and scalar agreeing.
+#[test]
+fn anisotropic_disney_on_a_mesh_without_uvs() {
+    let toml = "[camera]\neye = [0, 0.4, 3]\ntarget = [0, 0.4, 0]\nfov_y = 30\nnear = 0.5\nfar = 10\n\
+                [output]\nwidth = 160\nheight = 120\n\
+                [environment]\nuniform = [0.2, 0.2, 0.2]\n\
+                [[light]]\ntype = \"point\"\nposition = [2, 3, 3]\nintensity = [20, 20, 20]\n\
+                [[mesh]]\nobj = \"bunny.obj\"\nmaterial = \"brushed\"\n\
+                [materials.brushed]\nmodel = \"disney\"\nmetallic = 1\nroughness = 0.4\nanisotropic = 1\nclearcoat = 1\n";
+    let bunny = std::fs::read(fixtures().join("models/bunny.obj")).unwrap();
+    let read = move |p: &Path| -> std::io::Result<Vec<u8>> {
+        if p == Path::new("bunny.obj") {
+            Ok(bunny.clone())
+        } else {
+            Err(std::io::ErrorKind::NotFound.into())
+        }
+    };
+    let scene = load_scene_str(Path::new("nouv.toml"), toml, &read).expect("scene");
+    assert!(scene.data.uvs.is_empty(), "the bunny has no uvs");
+    let mut s = RenderSettings::from_scene(&scene);
+    let simd = render_scene(&scene, &s, 0.0).expect("simd");
+    s.path = ShadePath::Scalar;
+    let scalar = render_scene(&scene, &s, 0.0).expect("scalar");
+    assert!(simd.stats.pixels_shaded > 1000);
+    let (a, b) = (&simd.frame.buffers.color, &scalar.frame.buffers.color);
+    for (x, y) in
+        a.r.iter()
+            .chain(&a.g)
+            .chain(&a.b)
+            .zip(b.r.iter().chain(&b.g).chain(&b.b))
+    {
+        assert!(x.is_finite() && *x >= 0.0);
+        assert!(
+            (x - y).abs() <= 1e-5 * x.abs().max(y.abs()).max(1e-3),
+            "{x} vs {y}"
+        );
+    }
+}
