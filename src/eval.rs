@@ -24,7 +24,7 @@ use crate::material_desc::{MaterialDesc, Shading, Tables};
 use serde::Deserialize;
 use specula_core::light::{PolygonLocal, MAX_POLYGON_VERTICES};
 use specula_core::ltc::reference::{integrate_polygon, Tolerance};
-use specula_core::{Brdf, BrdfVisitor, Model, V3};
+use specula_core::{Brdf, BrdfVisitor, Model, ShadingFrame, V3};
 use std::collections::HashMap;
 use std::io::{BufRead, Write};
 
@@ -232,7 +232,14 @@ fn eval(line: &str, cache: &mut Cache) -> Result<Reply, String> {
     };
     Ok(Reply::Brdf(match shading {
         Shading::Lit(model) => {
-            let f = model.f(V3::new(0.0, 0.0, 1.0), wi, wo);
+            // The identity frame: tangent +X, bitangent +Y, normal +Z
+            // (anisotropic models read the tangent).
+            let frame = ShadingFrame {
+                t: V3::new(1.0, 0.0, 0.0),
+                b: V3::new(0.0, 1.0, 0.0),
+                n: V3::new(0.0, 0.0, 1.0),
+            };
+            let f = model.f_in(&frame, wi, wo);
             Answer {
                 f: [f.x, f.y, f.z],
                 emission: None,

@@ -55,6 +55,7 @@ fn ggx(alpha: f64, f0: f32) -> MicrofacetParams {
         smith: Smith::HeightCorrelated,
         fresnel: Fresnel::Schlick { f0: [f0; 3] },
         diffuse: [0.0; 3],
+        gtr_lambda: Default::default(),
     }
 }
 

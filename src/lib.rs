@@ -2,13 +2,14 @@
 //! core. This facade ties the crates together: scene files (`scene`), meshes
 //! (`mesh`), the material contract shared by scenes and `specula eval`
 //! (`material_desc`), rendering with statistics (`render`) and image output
-//! (`output`), image files as textures (`textures`). The built-in demo
-//! lives in `demo`.
+//! (`output`), image files as textures (`textures`), text labels on images
+//! (`label`). The built-in demo lives in `demo`.
 
 pub mod demo;
 pub mod eval;
 pub mod fit_ltc;
 pub mod furnace;
+pub mod label;
 pub mod material_desc;
 pub mod memory;
 pub mod mesh;

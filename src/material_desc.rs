@@ -6,7 +6,8 @@ use serde::Deserialize;
 use specula_core::kulla_conty::KcColor;
 use specula_core::models::microfacet::clamp_alpha;
 use specula_core::models::{
-    Fresnel, Lambert, MetallicRoughness, Microfacet, MicrofacetParams, Ndf, Smith,
+    Disney, DisneyParams, Fresnel, GtrLambda, Lambert, MetallicRoughness, Microfacet,
+    MicrofacetParams, Ndf, Smith,
 };
 use specula_core::Model;
 use specula_npr::hatching::{builtin_tam, Hatching};
@@ -28,6 +29,7 @@ pub enum MaterialDesc {
     Lambert(LambertDesc),
     MetallicRoughness(MetallicRoughnessDesc),
     Microfacet(MicrofacetDesc),
+    Disney(DisneyDesc),
     Unlit(UnlitDesc),
     Toon(ToonDesc),
     Hatching(HatchingDesc),
@@ -127,6 +129,17 @@ pub enum FresnelDesc {
     Conductor { eta: [f32; 3], k: [f32; 3] },
 }
 
+/// Which Smith Λ `ndf = "gtr"` uses.
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
+#[serde(rename_all = "snake_case")]
+pub enum GtrLambdaDesc {
+    /// GGX's Λ at the same α.
+    #[default]
+    Ggx,
+    /// The GTR distribution's own Λ, tabulated per material.
+    Exact,
+}
+
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum KcColorDesc {
@@ -150,6 +163,9 @@ pub struct MicrofacetDesc {
     /// GTR exponent (ignored by the other NDFs).
     #[serde(default = "two")]
     pub gamma: f32,
+    /// Smith Λ of GTR (`ndf = "gtr"` only).
+    #[serde(default)]
+    pub gtr_lambda: GtrLambdaDesc,
     pub alpha: f32,
     #[serde(default)]
     pub smith: SmithDesc,
@@ -187,6 +203,141 @@ pub struct MetallicRoughnessDesc {
     pub base_color_texture: Option<PathBuf>,
     #[serde(default)]
     pub double_sided: bool,
+}
+
+/// Burley's principled BRDF (core::models::disney); field names and
+/// defaults are the `specula eval` contract (README).
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct DisneyDesc {
+    pub base_color: [f32; 3],
+    pub metallic: f32,
+    pub subsurface: f32,
+    pub specular: f32,
+    pub specular_tint: f32,
+    pub roughness: f32,
+    pub anisotropic: f32,
+    pub sheen: f32,
+    pub sheen_tint: f32,
+    pub clearcoat: f32,
+    pub clearcoat_gloss: f32,
+    pub energy_compensation: bool,
+    pub double_sided: bool,
+}
+
+impl Default for DisneyDesc {
+    fn default() -> DisneyDesc {
+        let p = DisneyParams::default();
+        DisneyDesc {
+            base_color: p.base_color,
+            metallic: p.metallic,
+            subsurface: p.subsurface,
+            specular: p.specular,
+            specular_tint: p.specular_tint,
+            roughness: p.roughness,
+            anisotropic: p.anisotropic,
+            sheen: p.sheen,
+            sheen_tint: p.sheen_tint,
+            clearcoat: p.clearcoat,
+            clearcoat_gloss: p.clearcoat_gloss,
+            energy_compensation: false,
+            double_sided: false,
+        }
+    }
+}
+
+/// Largest `specular`: 0.08 specular is the dielectric's F0, which cannot
+/// exceed 1.
+const DISNEY_SPECULAR_MAX: f32 = 12.5;
+
+impl DisneyDesc {
+    /// Every field checked. Burley's parameters live in [0, 1]; beyond it:
+    /// - accepted with a warning where the formula still means something:
+    ///   `base_color` components above 1 (albedo > 1), `specular` in
+    ///   (1, 12.5] (F0 = 0.08 specular up to 1: IORs above 1.8),
+    ///   `roughness` above 1 (α = roughness² > 1, a valid but flatter
+    ///   lobe), `sheen` and `clearcoat` above 1 (stronger lobes);
+    /// - errors elsewhere: NaN or infinite values, negatives, and values
+    ///   above 1 of `metallic`, `subsurface`, `specular_tint`, `sheen_tint`
+    ///   and `anisotropic` (mixing weights: past 1 the blends extrapolate
+    ///   to negative reflectance; aspect = √(1 − 0.9 anisotropic) turns
+    ///   imaginary past 1.11) and of `clearcoat_gloss` (α of the coat < 0).
+    fn params(&self, warnings: &mut Vec<String>) -> Result<DisneyParams, String> {
+        check_color("base_color", self.base_color)?;
+        if self.base_color.iter().any(|c| *c > 1.0) {
+            warnings.push(format!(
+                "base_color {:?} has components above 1: the material reflects more than it receives",
+                self.base_color
+            ));
+        }
+        let finite_nonneg = |field: &str, v: f32| -> Result<(), String> {
+            if v.is_finite() && v >= 0.0 {
+                Ok(())
+            } else {
+                Err(format!("{field}: must be finite and ≥ 0, got {v}"))
+            }
+        };
+        for (field, v) in [
+            ("metallic", self.metallic),
+            ("subsurface", self.subsurface),
+            ("specular_tint", self.specular_tint),
+            ("anisotropic", self.anisotropic),
+            ("sheen_tint", self.sheen_tint),
+            ("clearcoat_gloss", self.clearcoat_gloss),
+        ] {
+            finite_nonneg(field, v)?;
+            check_unit(field, v)?;
+        }
+        for (field, v, max, why) in [
+            (
+                "specular",
+                self.specular,
+                DISNEY_SPECULAR_MAX,
+                "F0 = 0.08 specular above the 0.08 of IOR 1.8",
+            ),
+            (
+                "roughness",
+                self.roughness,
+                f32::INFINITY,
+                "α = roughness² above 1",
+            ),
+            (
+                "sheen",
+                self.sheen,
+                f32::INFINITY,
+                "a sheen stronger than Burley's range",
+            ),
+            (
+                "clearcoat",
+                self.clearcoat,
+                f32::INFINITY,
+                "a clearcoat stronger than Burley's range",
+            ),
+        ] {
+            finite_nonneg(field, v)?;
+            if v > max {
+                return Err(format!("{field}: must be ≤ {max}, got {v}"));
+            }
+            if v > 1.0 {
+                warnings.push(format!(
+                    "{field} {v} is beyond Burley's range [0, 1] ({why})"
+                ));
+            }
+        }
+        Ok(DisneyParams {
+            base_color: self.base_color,
+            metallic: self.metallic,
+            subsurface: self.subsurface,
+            specular: self.specular,
+            specular_tint: self.specular_tint,
+            roughness: self.roughness,
+            anisotropic: self.anisotropic,
+            sheen: self.sheen,
+            sheen_tint: self.sheen_tint,
+            clearcoat: self.clearcoat,
+            clearcoat_gloss: self.clearcoat_gloss,
+        })
+    }
 }
 
 fn check_color(field: &str, c: [f32; 3]) -> Result<(), String> {
@@ -254,6 +405,16 @@ impl MicrofacetDesc {
             ));
         }
         check_positive("gamma", self.gamma)?;
+        let gtr_lambda = match (self.ndf, self.gtr_lambda) {
+            (_, GtrLambdaDesc::Ggx) => GtrLambda::Ggx,
+            (NdfDesc::Gtr, GtrLambdaDesc::Exact) => GtrLambda::exact(self.gamma, alpha),
+            (_, GtrLambdaDesc::Exact) => {
+                return Err(
+                    "gtr_lambda: \"exact\" applies to ndf = \"gtr\" only (GGX and Beckmann always use their exact Λ)"
+                        .into(),
+                )
+            }
+        };
         check_color("diffuse", self.diffuse)?;
         let fresnel = match &self.fresnel {
             FresnelDesc::Schlick { f0 } => {
@@ -290,6 +451,7 @@ impl MicrofacetDesc {
             },
             fresnel,
             diffuse: self.diffuse,
+            gtr_lambda,
         })
     }
 }
@@ -456,6 +618,14 @@ impl MaterialDesc {
                     Tables::Skip => Microfacet::new_without_table(params, kc),
                 };
                 (Model::Microfacet(m), d.double_sided)
+            }
+            MaterialDesc::Disney(d) => {
+                let params = d.params(warnings)?;
+                let m = match tables {
+                    Tables::Build => Disney::new(params, d.energy_compensation),
+                    Tables::Skip => Disney::new_without_table(params, d.energy_compensation),
+                };
+                (Model::Disney(m), d.double_sided)
             }
         };
         Ok((Shading::Lit(model), double_sided))

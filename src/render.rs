@@ -197,7 +197,16 @@ pub fn render_scene(
             });
             last = Some((ldr, frame));
         }
-        let (ldr, frame) = last.ok_or("no frame rendered")?;
+        let (mut ldr, frame) = last.ok_or("no frame rendered")?;
+        // Labels are placed in the scene's own pixels; --width rescales.
+        let scale = settings.width as f32 / scene.output.width.max(1) as f32;
+        crate::label::draw_labels(
+            &mut ldr,
+            settings.width,
+            settings.height,
+            &scene.output.labels,
+            scale,
+        );
         let frame_ms: Vec<f64> = frames.iter().map(|f| f.frame).collect();
         let stats = run_stats(
             &frame.stats,

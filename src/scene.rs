@@ -105,6 +105,9 @@ pub struct OutputDesc {
     pub exposure: f32,
     /// Radiance of uncovered pixels when there is no environment.
     pub background: [f32; 3],
+    /// Text written on the image (`[[output.label]]`, label.rs).
+    #[serde(rename = "label")]
+    pub labels: Vec<crate::label::LabelDesc>,
 }
 
 impl Default for OutputDesc {
@@ -116,6 +119,7 @@ impl Default for OutputDesc {
             tonemap: TonemapDesc::Clamp,
             exposure: 0.0,
             background: [0.0; 3],
+            labels: Vec::new(),
         }
     }
 }
@@ -508,6 +512,10 @@ pub fn load_scene_str(
     check_radiometric("output.background", o.background).map_err(&err)?;
     if !o.exposure.is_finite() {
         return Err(err("output.exposure: must be finite".into()));
+    }
+    for (i, l) in o.labels.iter().enumerate() {
+        l.validate()
+            .map_err(|e| err(format!("output.label[{i}].{e}")))?;
     }
 
     // Materials: scene materials first, so they win over MTL ones of the same name.

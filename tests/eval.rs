@@ -124,3 +124,75 @@ fn unlit_reflects_nothing_and_emits_its_radiance_above_the_horizon() {
     let err = out[2]["error"].as_str().unwrap();
     assert!(err.starts_with("line 3: material.intensity"), "{err}");
 }
+
+/// `"model": "disney"` end to end: defaults, the anisotropic tangent frame
+/// (+X is the tangent), and errors naming the field. Expected values from
+/// the BRDF Explorer's formulas written out here.
+#[test]
+fn disney_values_frame_and_errors() {
+    use std::f64::consts::PI;
+    let out = eval(concat!(
+        // 1: defaults, mirror configuration at normal incidence: h = n.
+        r#"{"material":{"model":"disney"},"wi":[0,0,1],"wo":[0,0,1]}"#,
+        "\n",
+        // 2, 3: metal, anisotropic, the same pair rotated by 90° about n.
+        r#"{"material":{"model":"disney","metallic":1,"base_color":[1,1,1],"anisotropic":1,"roughness":0.5},"wi":[0.6,0,0.8],"wo":[-0.6,0,0.8]}"#,
+        "\n",
+        r#"{"material":{"model":"disney","metallic":1,"base_color":[1,1,1],"anisotropic":1,"roughness":0.5},"wi":[0,0.6,0.8],"wo":[0,-0.6,0.8]}"#,
+        "\n",
+        // 4: NaN cannot be written in JSON; a negative roughness is an error.
+        r#"{"material":{"model":"disney","roughness":-0.1},"wi":[0,0,1],"wo":[0,0,1]}"#,
+        "\n",
+        // 5: a mixing weight past 1.
+        r#"{"material":{"model":"disney","sheen_tint":1.5},"wi":[0,0,1],"wo":[0,0,1]}"#,
+        "\n",
+        // 6: accepted beyond [0, 1] (with a warning in scenes).
+        r#"{"material":{"model":"disney","specular":2,"sheen":3},"wi":[0,0,1],"wo":[0,0,1]}"#,
+        "\n",
+        // 7: an unknown field.
+        r#"{"material":{"model":"disney","glossiness":1},"wi":[0,0,1],"wo":[0,0,1]}"#,
+        "\n",
+    ));
+    assert_eq!(out.len(), 7, "{out:?}");
+
+    // 1: μ = 1, cos θd = 1: F_d = 1, F_H = 0 (no sheen), F_s = C_spec0 = 0.04;
+    // D(n) = 1/(π α²) with α = 0.25, G = 1.
+    let base = [0.82, 0.67, 0.16];
+    let d = 1.0 / (PI * 0.25f64.powi(2));
+    for (c, g) in f(&out[0]).iter().enumerate() {
+        let want = base[c] / PI + 0.04 * d / 4.0;
+        assert!((g - want).abs() < 1e-6 * want, "{g} vs {want}");
+    }
+
+    // 2, 3: h = n, cos θd = 0.8, F = 1 (white metal); D(n) = 1/(π αx αy);
+    // G1 = 2μ / (μ + √(μ² + αx² x² + αy² y²)): the elongated axis is x, so
+    // G1 along x (line 2) is smaller than along y (line 3).
+    let aspect = 0.1f64.sqrt();
+    let (ax, ay) = (0.25 / aspect, 0.25 * aspect);
+    let g1 = |a: f64| 2.0 * 0.8 / (0.8 + (0.64 + a * a * 0.36).sqrt());
+    let dn = 1.0 / (PI * ax * ay);
+    let along_x = dn * g1(ax).powi(2) / (4.0 * 0.64);
+    let along_y = dn * g1(ay).powi(2) / (4.0 * 0.64);
+    assert!(
+        (f(&out[1])[0] - along_x).abs() < 1e-6 * along_x,
+        "{:?} vs {along_x}",
+        out[1]
+    );
+    assert!(
+        (f(&out[2])[0] - along_y).abs() < 1e-6 * along_y,
+        "{:?} vs {along_y}",
+        out[2]
+    );
+
+    for (i, field) in [
+        (3, "material.roughness"),
+        (4, "material.sheen_tint"),
+        (6, "glossiness"),
+    ] {
+        let e = out[i]["error"]
+            .as_str()
+            .unwrap_or_else(|| panic!("line {}: expected an error, got {}", i + 1, out[i]));
+        assert!(e.contains(field), "{e}");
+    }
+    assert!(f(&out[5])[0] > 0.0);
+}

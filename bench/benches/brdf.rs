@@ -43,6 +43,7 @@ fn benches(c: &mut Criterion) {
             f0: [0.9, 0.6, 0.3],
         },
         diffuse: [0.0; 3],
+        gtr_lambda: Default::default(),
     };
     let mut g = c.benchmark_group("brdf");
     g.throughput(Throughput::Elements(N as u64));

@@ -38,8 +38,41 @@ pub fn benchmark_scene_microfacet() -> LoadedScene {
                     k: [3.42, 2.35, 1.77],
                 },
                 diffuse: mr.diffuse_color(),
+                gtr_lambda: Default::default(),
             };
             let model = Model::Microfacet(Microfacet::new(params, None));
+            *m = specula_raster::Material::new(&m.name, Lit { model }, m.double_sided);
+        }
+    }
+    s
+}
+
+/// The benchmark scene with every sphere's metallic-roughness material
+/// replaced by the Disney model with every lobe on: the same base colour,
+/// roughness and metallic, plus subsurface 0.3, anisotropic 0.5, sheen 0.5,
+/// clearcoat 0.5 (so no lobe is skipped by a zero weight; the kernels
+/// evaluate every lobe anyway).
+pub fn benchmark_scene_disney() -> LoadedScene {
+    use specula_core::models::{Disney, DisneyParams};
+    use specula_core::Model;
+    use specula_raster::Lit;
+    let mut s = benchmark_scene();
+    for m in &mut s.data.materials {
+        let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() else {
+            continue;
+        };
+        if let Model::MetallicRoughness(mr) = &lit.model {
+            let params = DisneyParams {
+                base_color: mr.base_color,
+                roughness: mr.roughness,
+                metallic: mr.metallic,
+                subsurface: 0.3,
+                anisotropic: 0.5,
+                sheen: 0.5,
+                clearcoat: 0.5,
+                ..DisneyParams::default()
+            };
+            let model = Model::Disney(Disney::new(params, false));
             *m = specula_raster::Material::new(&m.name, Lit { model }, m.double_sided);
         }
     }

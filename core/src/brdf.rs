@@ -15,7 +15,7 @@
 //!    polygon ([`Brdf::polygon_local`], where the model has one).
 
 use crate::light::PolygonLocal;
-use crate::models::{Lambert, MetallicRoughness, Microfacet};
+use crate::models::{Disney, Lambert, MetallicRoughness, Microfacet};
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
 
@@ -231,6 +231,7 @@ pub enum Model {
     Lambert(Lambert),
     MetallicRoughness(MetallicRoughness),
     Microfacet(Microfacet),
+    Disney(Disney),
 }
 
 /// Code generic over the model: `Model::visit` calls `visit` with the concrete
@@ -248,6 +249,7 @@ impl Model {
             Model::Lambert(m) => v.visit(m),
             Model::MetallicRoughness(m) => v.visit(m),
             Model::Microfacet(m) => v.visit(m),
+            Model::Disney(m) => v.visit(m),
         }
     }
 
@@ -287,6 +289,7 @@ impl Model {
             Model::Lambert(_) => "lambert",
             Model::MetallicRoughness(_) => "metallic_roughness",
             Model::Microfacet(_) => "microfacet",
+            Model::Disney(_) => "disney",
         }
     }
 }

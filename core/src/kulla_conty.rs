@@ -36,7 +36,7 @@
 //! quadrature of the BRDF.
 
 use crate::brdf::ALPHA_MIN;
-use crate::models::microfacet::{Fresnel, MicrofacetParams, Ndf, Smith};
+use crate::models::microfacet::{Fresnel, GtrLambda, MicrofacetParams, Ndf, Smith};
 use crate::real::Real;
 use crate::table::{Axis, Nodes, Table1, Table2, Warp};
 use std::collections::HashMap;
@@ -52,8 +52,9 @@ pub enum KcColor {
     Notes,
 }
 
-/// (NDF kind, GTR γ bits, separable Smith): what a table depends on.
-type TableKey = (u8, u32, bool);
+/// (NDF kind, GTR γ bits, separable Smith, exact GTR Λ): what a table
+/// depends on.
+type TableKey = (u8, u32, bool, bool);
 
 /// The μ axis of E: see the module docs.
 pub const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Sqrt, Nodes::Ends).linear_between_nodes();
@@ -67,14 +68,20 @@ pub struct KcTable {
 }
 
 impl KcTable {
-    fn build(ndf: Ndf, smith: Smith) -> KcTable {
+    fn build(ndf: Ndf, smith: Smith, exact_gtr: bool) -> KcTable {
         let e = Table2::build(MU_AXIS, ALPHA_AXIS, |mu, alpha| {
+            let alpha = (alpha as f32).max(ALPHA_MIN);
+            let gtr_lambda = match ndf {
+                Ndf::Gtr { gamma } if exact_gtr => GtrLambda::exact(gamma, alpha),
+                _ => GtrLambda::Ggx,
+            };
             let p = MicrofacetParams {
                 ndf,
-                alpha: (alpha as f32).max(ALPHA_MIN),
+                alpha,
                 smith,
                 fresnel: Fresnel::Schlick { f0: [1.0; 3] },
                 diffuse: [0.0; 3],
+                gtr_lambda,
             };
             // E(0) = 0 is the limit; E ≤ 1 up to quadrature error.
             [if mu == 0.0 {
@@ -86,20 +93,28 @@ impl KcTable {
         KcTable { e }
     }
 
-    /// The cached table of an (NDF, Smith) pair, built on first use.
+    /// The cached table of an (NDF, Smith) pair, built on first use (GTR
+    /// with GGX's Λ).
     pub fn get(ndf: Ndf, smith: Smith) -> Arc<KcTable> {
+        KcTable::get_with(ndf, smith, false)
+    }
+
+    /// [`KcTable::get`], for GTR with its exact Λ when `exact_gtr`
+    /// (ignored by the other NDFs).
+    pub fn get_with(ndf: Ndf, smith: Smith, exact_gtr: bool) -> Arc<KcTable> {
         static CACHE: OnceLock<Mutex<HashMap<TableKey, Arc<KcTable>>>> = OnceLock::new();
+        let sep = smith == Smith::Separable;
         let key = match ndf {
-            Ndf::Ggx => (0, 0, smith == Smith::Separable),
-            Ndf::Beckmann => (1, 0, smith == Smith::Separable),
-            Ndf::Gtr { gamma } => (2, gamma.to_bits(), smith == Smith::Separable),
+            Ndf::Ggx => (0, 0, sep, false),
+            Ndf::Beckmann => (1, 0, sep, false),
+            Ndf::Gtr { gamma } => (2, gamma.to_bits(), sep, exact_gtr),
         };
         let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
         if let Some(t) = cache.lock().expect("table cache").get(&key) {
             return t.clone();
         }
         // Built outside the lock; two threads may both build, one wins.
-        let t = Arc::new(KcTable::build(ndf, smith));
+        let t = Arc::new(KcTable::build(ndf, smith, key.3));
         cache
             .lock()
             .expect("table cache")
@@ -163,6 +178,7 @@ pub fn f_avg(fresnel: &Fresnel) -> [f64; 3] {
         smith: Smith::HeightCorrelated,
         fresnel: *fresnel,
         diffuse: [0.0; 3],
+        gtr_lambda: GtrLambda::Ggx,
     };
     // Composite midpoint with 4096 panels: |error| < 1e-8 for these curves.
     let n = 4096;

@@ -9,6 +9,7 @@ pub mod albedo_tables;
 pub mod brdf;
 pub mod diffuse;
 pub mod fresnel;
+pub mod gtr_lambda;
 pub mod kulla_conty;
 pub mod light;
 pub mod ltc;

@@ -93,3 +93,18 @@ pub fn g2_separable<R: Real>(lambda_i: R, lambda_o: R) -> R {
 pub fn g2_height_correlated<R: Real>(lambda_i: R, lambda_o: R) -> R {
     R::ONE / (R::ONE + lambda_i + lambda_o)
 }
+
+/// Smith Λ for anisotropic GGX [Heitz14, eq. 86]: with the projected
+/// roughness α(φ)² = αx² cos²φ + αy² sin²φ,
+///
+/// Λ(v) = (−1 + √(1 + α(φ)² tan²θ)) / 2 = (√(vz² + αx² vx² + αy² vy²) / vz − 1) / 2
+///
+/// for a unit local v (tangent x, bitangent y, normal z); the second form
+/// avoids tan²θ (it overflows as vz → 0). `cos_theta` = vz must be > 0
+/// (callers pass the floored cosine).
+#[inline(always)]
+pub fn lambda_ggx_aniso<R: Real>(alpha_x: R, alpha_y: R, vx: R, vy: R, cos_theta: R) -> R {
+    let (ax, ay) = (alpha_x * vx, alpha_y * vy);
+    let s = ax.mul_add(ax, ay.mul_add(ay, cos_theta * cos_theta)).sqrt();
+    (s / cos_theta - R::ONE) * R::HALF
+}

@@ -113,3 +113,17 @@ pub fn d_gtr<R: Real>(alpha: R, gamma: f64, cos2_theta_m: R, sin2_theta_m: R) ->
     };
     peak * p * frac * (-R::splat(gamma)).mul_add(e, R::ONE)
 }
+
+/// Anisotropic GGX (Burley's GTR2 with two roughnesses) along the tangent
+/// frame: D(m) = 1 / (π αx αy (mx²/αx² + my²/αy² + mz²)²)   [Burley12, App. B; Heitz14]
+///
+/// Takes the squared local components of the unit microfacet normal m
+/// (tangent x, bitangent y, normal z): the caller forms them from an
+/// unnormalized half vector s as s_k² / |s|² (see the module docs). With
+/// αx = αy = α it is [`d_ggx`]. The base is ≥ mz² + (mx² + my²) / max(α)²,
+/// > 0 for any unit m and finite α > 0.
+#[inline(always)]
+pub fn d_ggx_aniso<R: Real>(alpha_x: R, alpha_y: R, mx2: R, my2: R, mz2: R) -> R {
+    let t = (mx2 / (alpha_x * alpha_x)).mul_add(R::ONE, my2 / (alpha_y * alpha_y)) + mz2;
+    R::ONE / (R::PI * alpha_x * alpha_y * t * t)
+}

@@ -89,6 +89,11 @@ impl GaussLegendre {
         GaussLegendre { nodes, weights }
     }
 
+    /// The (node, weight) pairs on [−1, 1].
+    pub fn nodes_weights(&self) -> impl Iterator<Item = (f64, f64)> + '_ {
+        self.nodes.iter().copied().zip(self.weights.iter().copied())
+    }
+
     /// ∫ₐᵇ f, per channel.
     pub fn integrate<const C: usize>(
         &self,

@@ -79,6 +79,7 @@ fn params(ndf: Ndf, smith: Smith, alpha: f32, f0: f32) -> MicrofacetParams {
         smith,
         fresnel: Fresnel::Schlick { f0: [f0; 3] },
         diffuse: [0.0; 3],
+        gtr_lambda: Default::default(),
     }
 }
 

@@ -35,6 +35,7 @@ fn ggx(alpha: f32, f0: [f32; 3]) -> Microfacet {
             smith: Smith::HeightCorrelated,
             fresnel: Fresnel::Schlick { f0 },
             diffuse: [0.0; 3],
+            gtr_lambda: Default::default(),
         },
         None,
     )
@@ -267,6 +268,7 @@ fn ltc_error_of_the_lobes_that_share_the_ggx_fit() {
                     smith,
                     fresnel: Fresnel::Schlick { f0: [1.0; 3] },
                     diffuse: [0.0; 3],
+                    gtr_lambda: Default::default(),
                 },
                 None,
             )

@@ -411,6 +411,7 @@ fn ggx(alpha: f32, f0: f32, diffuse: f32) -> Microfacet {
             smith: Smith::HeightCorrelated,
             fresnel: Fresnel::Schlick { f0: [f0, 0.5, 1.0] },
             diffuse: [diffuse; 3],
+            gtr_lambda: Default::default(),
         },
         None,
     )

@@ -28,6 +28,7 @@ fn params(ndf: Ndf, alpha: f32) -> MicrofacetParams {
         smith: Smith::HeightCorrelated,
         fresnel: Fresnel::Schlick { f0: [1.0; 3] },
         diffuse: [0.0; 3],
+        gtr_lambda: Default::default(),
     }
 }
 
@@ -133,6 +134,7 @@ fn random_params(rng: &mut impl Rng) -> MicrofacetParams {
         },
         fresnel,
         diffuse: std::array::from_fn(|_| rng.random_range(0.0..0.5)),
+        gtr_lambda: Default::default(),
     }
 }
 

@@ -3,9 +3,10 @@
 //! f(i, o) = F(i·h) G2(i, o) D(h) / (4 (n·i)(n·o)) + ρd / π
 //!
 //! D: GGX, Beckmann or GTR(γ); G2: separable or height-correlated Smith
-//! with the NDF's Λ (GTR with γ ≠ 2 uses the GGX Λ at the same α: GTR has
-//! no closed-form Λ; the mismatch lets γ < 2 lobes reflect more than they
-//! receive at grazing angles, E(0.1) = 1.21 at γ = 1.5, α = 0.15); F: Schlick (F0), exact dielectric (IOR) or exact
+//! with the NDF's Λ (GTR has no closed-form Λ: by default it uses the GGX
+//! Λ at the same α, whose mismatch lets γ < 2 lobes reflect more than they
+//! receive at grazing angles, E(0.1) = 1.21 at γ = 1.5, α = 0.15;
+//! [`GtrLambda::Exact`] tabulates GTR's own Λ, gtr_lambda.rs); F: Schlick (F0), exact dielectric (IOR) or exact
 //! conductor (η, κ per channel); an optional Lambertian base ρd is added
 //! (not weighted: the notes' "microfacet + diffuse" sum).
 //!
@@ -14,6 +15,7 @@
 
 use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::fresnel::{f_conductor, f_dielectric, f_schlick, r0_from_ior};
+use crate::gtr_lambda::GtrLambdaTable;
 use crate::kulla_conty::{color_factor, f_avg, KcColor, KcSlice, KcTable};
 use crate::light::PolygonLocal;
 use crate::ltc::form_factor;
@@ -24,6 +26,7 @@ use crate::quadrature::{adaptive_simpson, simpson};
 use crate::real::Real;
 use crate::table::{Axis, Nodes, Table1, Warp};
 use crate::vec3::{Rgb, V3};
+use std::sync::Arc;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Ndf {
@@ -58,6 +61,25 @@ pub enum Fresnel {
     },
 }
 
+/// Which Smith Λ a GTR distribution uses (the other NDFs ignore it).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum GtrLambda {
+    /// GGX's Λ at the same α: cheap, exact at γ = 2, and for γ < 2 a lobe
+    /// that reflects more than it receives at grazing angles (module docs).
+    #[default]
+    Ggx,
+    /// The distribution's own Λ, tabulated at the material's (γ, α)
+    /// (gtr_lambda.rs).
+    Exact(Arc<GtrLambdaTable>),
+}
+
+impl GtrLambda {
+    /// The exact Λ of GTR(γ, α), tabulated now (~1e5 evaluations of D).
+    pub fn exact(gamma: f32, alpha: f32) -> GtrLambda {
+        GtrLambda::Exact(Arc::new(GtrLambdaTable::new(gamma as f64, alpha as f64)))
+    }
+}
+
 /// Parameters of the model; see the module docs. Build with
 /// [`Microfacet::new`], which validates α and tabulates the albedo.
 #[derive(Clone, Debug, PartialEq)]
@@ -69,6 +91,9 @@ pub struct MicrofacetParams {
     pub fresnel: Fresnel,
     /// Lambertian albedo added to the specular lobe.
     pub diffuse: [f32; 3],
+    /// Smith Λ of GTR: GGX's (default) or the exact one, tabulated for
+    /// this γ and α (build it with [`GtrLambda::exact`] at the same values).
+    pub gtr_lambda: GtrLambda,
 }
 
 /// Directional albedo E(μo) per channel at `N_MU` texel centres
@@ -104,7 +129,8 @@ pub struct Compensation {
 
 impl Compensation {
     pub fn new(p: &MicrofacetParams, mode: KcColor) -> Compensation {
-        let slice = KcTable::get(p.ndf, p.smith).slice(p.alpha as f64);
+        let exact = matches!(p.gtr_lambda, GtrLambda::Exact(_));
+        let slice = KcTable::get_with(p.ndf, p.smith, exact).slice(p.alpha as f64);
         let fa = f_avg(&p.fresnel);
         let factor = fa.map(|f| color_factor(f, slice.e_avg, mode));
         let k = 1.0 / (std::f64::consts::PI * (1.0 - slice.e_avg).max(1e-6));
@@ -142,13 +168,14 @@ impl MicrofacetParams {
         }
     }
 
-    /// Smith Λ matching the NDF (GGX's for GTR).
+    /// Smith Λ matching the NDF (for GTR: GGX's, or the exact table).
     #[inline(always)]
     pub fn lambda<R: Real>(&self, cos: R) -> R {
         let alpha = R::splat(self.alpha as f64);
-        match self.ndf {
-            Ndf::Beckmann => lambda_beckmann(alpha, cos),
-            Ndf::Ggx | Ndf::Gtr { .. } => lambda_ggx(alpha, cos),
+        match (self.ndf, &self.gtr_lambda) {
+            (Ndf::Beckmann, _) => lambda_beckmann(alpha, cos),
+            (Ndf::Gtr { .. }, GtrLambda::Exact(t)) => t.lambda(cos),
+            (Ndf::Ggx | Ndf::Gtr { .. }, _) => lambda_ggx(alpha, cos),
         }
     }
 

@@ -1,10 +1,12 @@
 //! Whole material models: compositions of the term functions in `fresnel`,
 //! `ndf`, `masking` and `diffuse`. A model adds no formula of its own.
 
+pub mod disney;
 pub mod lambert;
 pub mod metallic_roughness;
 pub mod microfacet;
 
+pub use disney::{Disney, DisneyParams};
 pub use lambert::Lambert;
 pub use metallic_roughness::MetallicRoughness;
-pub use microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
+pub use microfacet::{Fresnel, GtrLambda, Microfacet, MicrofacetParams, Ndf, Smith};
