@@ -3,17 +3,8 @@
 
 mod common;
 
-use common::temp_dir;
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
-
-fn specula(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_specula"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run specula")
-}
+use common::{specula, temp_dir};
+use std::path::PathBuf;
 
 const GOOD: &str = r#"
 [camera]

@@ -4,17 +4,9 @@
 
 mod common;
 
-use common::temp_dir;
+use common::{specula, temp_dir};
 use std::path::Path;
 use std::process::{Command, Output};
-
-fn specula(args: &[&str], dir: &Path) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_specula"))
-        .args(args)
-        .current_dir(dir)
-        .output()
-        .expect("run specula")
-}
 
 const CAMERA: &str = r#"
 [camera]

@@ -3,6 +3,7 @@
 
 use specula::scene::{load_scene_str, LoadedScene};
 use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
 
 /// Loads a scene from TOML text; `files` supplies the files it names.
 pub fn scene(toml: &str, files: &[(&str, &str)]) -> LoadedScene {
@@ -30,4 +31,13 @@ pub fn temp_dir(name: &str) -> PathBuf {
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("temp dir");
     d
+}
+
+/// Runs the `specula` binary of this build with `args` in `dir`.
+pub fn specula(args: &[&str], dir: &Path) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_specula"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .expect("run specula")
 }
