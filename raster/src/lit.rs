@@ -56,12 +56,20 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
                     let f_cos = brdf.f_cos_local(&prepared, wi);
                     acc += f_cos.mul_elem(V3::from_f32(*irradiance));
                 }
-                Light::Polygon { .. } => {
+                Light::Polygon {
+                    vertices,
+                    radiance,
+                    two_sided,
+                    method,
+                } => {
                     // Only models with B::POLYGON_LIGHTS meet one
                     // (`check_lights`); the constant folds this arm away
                     // for the others.
                     if B::POLYGON_LIGHTS {
-                        acc += polygon_light(brdf, &prepared, frag, frame, light);
+                        let e = polygon_light(
+                            brdf, &prepared, frag, frame, vertices, *two_sided, *method,
+                        );
+                        acc += e.mul_elem(V3::from_f32(*radiance));
                     }
                 }
             }
@@ -73,10 +81,10 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
     }
 }
 
-/// A polygon light's reflected radiance. Out of line: inlined into the
-/// light loop, its clipping and reference integration made the register
-/// allocator spill the point-light path (+10 % instructions in the
-/// shading pass of a scene without polygon lights).
+/// A polygon light's reflected radiance per unit radiance. Out of line:
+/// inlined into the light loop, its clipping and reference integration made
+/// the register allocator spill the point-light path (+10 % instructions in
+/// the shading pass of a scene without polygon lights).
 #[inline(never)]
 #[cold]
 fn polygon_light<B: Brdf, R: Real>(
@@ -84,30 +92,22 @@ fn polygon_light<B: Brdf, R: Real>(
     prepared: &B::Prepared<R>,
     frag: &Fragment<R>,
     frame: &ShadingFrame<R>,
-    light: &Light,
+    vertices: &[[f32; 3]],
+    two_sided: bool,
+    method: AreaMethod,
 ) -> Rgb<R> {
-    let Light::Polygon {
-        vertices,
-        radiance,
-        two_sided,
-        method,
-    } = light
-    else {
-        return Rgb::zero();
-    };
     let mut poly = PolygonLocal {
         vertices: [V3::zero(); MAX_POLYGON_VERTICES],
         len: vertices.len(),
-        two_sided: *two_sided,
+        two_sided,
     };
     for (v, p) in poly.vertices.iter_mut().zip(vertices) {
         *v = frame.to_local(V3::from_f32(*p) - frag.p);
     }
-    let e = match method {
+    match method {
         AreaMethod::Ltc => brdf.polygon_local(prepared, &poly),
         AreaMethod::Reference => polygon_reference_lanes(brdf, frame.to_local(frag.wo), &poly),
-    };
-    e.mul_elem(V3::from_f32(*radiance))
+    }
 }
 
 impl PacketShader for Lit {
