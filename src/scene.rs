@@ -488,9 +488,12 @@ pub fn load_scene_str(
             c.fov_y
         )));
     }
-    if !(c.near > 0.0 && c.far > c.near && c.far.is_finite()) {
+    // Depth is reversed (camera.rs), so any near/far ratio keeps its
+    // precision; only the near plane must be a positive finite distance.
+    // `far = inf` (TOML's infinity) is an infinite far plane.
+    if !(c.near > 0.0 && c.near.is_finite() && c.far > c.near) {
         return Err(err(format!(
-            "camera.near / camera.far: need 0 < near < far < inf, got {} and {}",
+            "camera.near / camera.far: need 0 < near < far (far may be inf), got {} and {}",
             c.near, c.far
         )));
     }

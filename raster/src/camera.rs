@@ -1,6 +1,13 @@
-//! The pinhole camera: look-at placement, perspective projection with clip
-//! depth in [0, 1] (right-handed view space looking down −z), and the mapping
+//! The pinhole camera: look-at placement, perspective projection with
+//! reversed clip depth (right-handed view space looking down −z; NDC depth 1
+//! at the near plane, 0 at the far plane or at infinity), and the mapping
 //! from clip space to pixels (row 0 at the top, pixel centres at +0.5).
+//!
+//! Why reversed: NDC depth is A + B/w. With the near plane at 1 it is about
+//! near/w, a small number that f32 stores with full relative precision at
+//! any distance. The conventional mapping (near at 0) stores 1 − near/w,
+//! which rounds to 1 once near/w drops below 6e-8: with near = 1e-7 a floor
+//! 2 m away landed exactly on the cleared far value and vanished.
 
 use glam::{Mat4, Vec3, Vec4};
 
@@ -12,6 +19,7 @@ pub struct Camera {
     /// Vertical field of view in degrees.
     pub fov_y_deg: f32,
     pub near: f32,
+    /// May be `f32::INFINITY`: an infinite far plane.
     pub far: f32,
 }
 
@@ -52,14 +60,21 @@ impl Camera {
                 1.0,
             ),
         );
-        // View → clip, depth in [0, 1]: z_v = −near ↦ 0, z_v = −far ↦ w (1),
-        // w = −z_v.
-        let (n, f) = (self.near, self.far);
+        // View → clip with w = −z_v and z = A·w + B, so NDC depth z/w = A + B/w
+        // is 1 at w = near and 0 at w = far: B = near·far/(far − near),
+        // A = −near/(far − near); for an infinite far plane A = 0, B = near.
+        // Computed in f64 so that near/far ratios like 1e-9 keep their digits.
+        let (n, f) = (self.near as f64, self.far as f64);
+        let (a, b) = if f.is_finite() {
+            (-n / (f - n), n * f / (f - n))
+        } else {
+            (0.0, n)
+        };
         let proj = Mat4::from_cols(
             Vec4::new(1.0 / (tan_y * aspect), 0.0, 0.0, 0.0),
             Vec4::new(0.0, 1.0 / tan_y, 0.0, 0.0),
-            Vec4::new(0.0, 0.0, f / (n - f), -1.0),
-            Vec4::new(0.0, 0.0, n * f / (n - f), 0.0),
+            Vec4::new(0.0, 0.0, -a as f32, -1.0),
+            Vec4::new(0.0, 0.0, b as f32, 0.0),
         );
         View {
             view_proj: proj * view,

@@ -1,11 +1,12 @@
 //! Clipping in homogeneous clip space (f64).
 //!
-//! Always against the near plane (z ≥ 0, D3D depth range), which also keeps
-//! w > 0 for every vertex that reaches projection. Against x/y only at the
+//! Always against the near plane (z ≤ w: reversed depth puts the near plane
+//! at NDC depth 1, see `camera.rs`), which also keeps w > 0 for every vertex
+//! that reaches projection. Against x/y only at the
 //! guard band |x|, |y| ≤ K·w, far outside the image, so that ordinary
 //! triangles never pay for it and snapped coordinates fit the fixed-point
 //! range (see `fixed.rs`). The far plane needs no clipping: the depth buffer
-//! is cleared to 1 and the test is z < depth.
+//! is cleared to 0 (the far plane) and the test is z > depth.
 //!
 //! Watertightness: a clipped edge's new vertex is always computed from its
 //! inside end toward its outside end, so two triangles that share the edge
@@ -45,7 +46,7 @@ impl GuardBand {
     fn distances(&self, v: &ClipVertex) -> [f64; 5] {
         let [x, y, z, w] = *v;
         [
-            z,
+            w - z,
             self.kx * w - x,
             self.kx * w + x,
             self.ky * w - y,
@@ -125,9 +126,9 @@ mod tests {
     #[test]
     fn near_plane_cuts_a_triangle_into_a_quad() {
         let gb = GuardBand::for_image(100, 100);
-        // One vertex behind the camera (z < 0), two in front.
+        // One vertex in front of the near plane (z > w), two beyond it.
         let tri = [
-            [0.0, 0.0, -1.0, 0.5],
+            [0.0, 0.0, 1.0, 0.5],
             [1.0, 0.0, 1.0, 2.0],
             [0.0, 1.0, 1.0, 2.0],
         ];
@@ -135,7 +136,7 @@ mod tests {
         let p = gb.clip(&tri);
         assert_eq!(p.len, 4);
         for v in &p.v[..p.len] {
-            assert!(v[2] >= -1e-12, "vertex behind near plane: {v:?}");
+            assert!(v[2] <= v[3] + 1e-12, "vertex before the near plane: {v:?}");
             assert!(v[3] > 0.0);
         }
     }
@@ -143,15 +144,15 @@ mod tests {
     #[test]
     fn shared_edge_gives_identical_clip_vertices() {
         let gb = GuardBand::for_image(100, 100);
-        let a = [0.3, -0.2, -0.7, 0.4];
-        let b = [0.1, 0.9, 2.0, 3.0];
+        let a = [0.3, -0.2, 1.1, 0.4];
+        let b = [0.1, 0.9, 1.0, 3.0];
         let t1 = gb.clip(&[a, b, [1.0, 1.0, 1.0, 2.0]]);
         let t2 = gb.clip(&[b, a, [-1.0, 1.0, 1.0, 2.0]]);
         let on_ab = |p: &Polygon| {
             p.v[..p.len]
                 .iter()
                 .copied()
-                .filter(|v| v[2].abs() < 1e-12)
+                .filter(|v| (v[3] - v[2]).abs() < 1e-12)
                 .map(|v| v.map(f64::to_bits))
                 .collect::<Vec<_>>()
         };

@@ -93,7 +93,7 @@ pub fn visibility_into(
         geometry_pass(scene, target, pass, i == 0, out, stats);
     }
     if scene.geometry.is_empty() {
-        out.vis.depth.fill(1.0);
+        out.vis.depth.fill(0.0);
         out.vis.id.fill(MISS);
     }
 }
@@ -178,7 +178,7 @@ fn geometry_pass(
         .for_each(|(tile, (depth, ids))| {
             if first {
                 // Cleared here, while the tile is about to be in cache anyway.
-                depth.fill(1.0);
+                depth.fill(0.0);
                 ids.fill(MISS);
             }
             rasterize_tile(target, tile, &chunks, planes, depth, ids)

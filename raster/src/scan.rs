@@ -87,7 +87,7 @@ pub fn covered_groups(
 }
 
 /// Writes `rt` into one tile with origin (tx, ty): the covered pixels of
-/// each row, depth-tested 8 at a time (z < depth; ties keep the earlier
+/// each row, depth-tested 8 at a time (z > depth, reversed depth; ties keep the earlier
 /// triangle).
 pub fn scan_triangle(
     rt: &RasterTri,
@@ -115,7 +115,7 @@ pub fn scan_triangle(
         let z = (lane_x + f32x8::splat(gx as f32)).mul_add(za8, f32x8::splat(row_z));
         let at = (y - ty) as usize * TILE + (gx - tx) as usize;
         let d_old = f32x8::load(&depth[at..at + 8]);
-        let pass = f32x8::mask_from_bits(mask) & z.lt(d_old);
+        let pass = f32x8::mask_from_bits(mask) & z.gt(d_old);
         if pass.any() {
             pass.select(z, d_old).store(&mut depth[at..at + 8]);
             let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");

@@ -141,8 +141,8 @@ fn outcode(v: &ClipVertex) -> u8 {
         | ((x > w) as u8) << 1
         | ((y < -w) as u8) << 2
         | ((y > w) as u8) << 3
-        | ((z < 0.0) as u8) << 4
-        | ((z > w) as u8) << 5
+        | ((z > w) as u8) << 4
+        | ((z < 0.0) as u8) << 5
 }
 
 fn cross3(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {

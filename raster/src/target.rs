@@ -106,7 +106,7 @@ pub struct VisBuffer {
 impl VisBuffer {
     pub fn new(t: &Target) -> VisBuffer {
         VisBuffer {
-            depth: vec![1.0; t.buffer_len()],
+            depth: vec![0.0; t.buffer_len()],
             id: vec![MISS; t.buffer_len()],
         }
     }
