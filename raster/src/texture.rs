@@ -398,20 +398,64 @@ impl Texture {
         ([at(xa, ya), at(xb, ya), at(xa, yb), at(xb, yb)], fx, fy)
     }
 
+    /// Index of channel 0 of the level-0 texel holding reduced (u, v).
     #[inline(always)]
-    fn bilinear<R: Real>(&self, s: &Sampler, lv: &LevelLanes<R>, u: R, v: R, ch: R) -> R {
-        let (t, fx, fy) = self.taps(s, lv, u, v);
-        let g = |i: R| R::gather(&self.data, i + ch);
-        lerp(lerp(g(t[0]), g(t[1]), fx), lerp(g(t[2]), g(t[3]), fx), fy)
-    }
-
-    #[inline(always)]
-    fn nearest<R: Real>(&self, s: &Sampler, u: R, v: R, ch: R) -> R {
+    fn nearest<R: Real>(&self, s: &Sampler, u: R, v: R) -> R {
         let lv = self.level0::<R>();
         let x = wrap_index(s.wrap_u, (u * lv.width).floor(), lv.width);
         let y = wrap_index(s.wrap_v, (v * lv.height).floor(), lv.height);
-        let i = (y * lv.width + x).mul_add(R::splat(self.channels as f64), ch);
-        R::gather(&self.data, i)
+        (y * lv.width + x) * R::splat(self.channels as f64)
+    }
+
+    /// `fetch` bilinearly filtered over the four taps of `lv` at (u, v).
+    #[inline(always)]
+    fn quad<R: Real, T: Copy>(
+        &self,
+        s: &Sampler,
+        lv: &LevelLanes<R>,
+        u: R,
+        v: R,
+        fetch: &impl Fn(R) -> T,
+        mix: &impl Fn(T, T, R) -> T,
+    ) -> T {
+        let (t, fx, fy) = self.taps(s, lv, u, v);
+        mix(
+            mix(fetch(t[0]), fetch(t[1]), fx),
+            mix(fetch(t[2]), fetch(t[3]), fx),
+            fy,
+        )
+    }
+
+    /// The one filter walk every lookup shares: `fetch` reads whatever a
+    /// texel holds from its channel-0 index (one channel, two blended, or
+    /// C of them), `mix` interpolates two such values. Nearest fetches one
+    /// texel, bilinear four, trilinear four on each of the two levels
+    /// around `lod` (clamped here to the levels there are).
+    #[inline(always)]
+    fn filtered<R: Real, T: Copy>(
+        &self,
+        s: &Sampler,
+        uv: [R; 2],
+        lod: R,
+        fetch: impl Fn(R) -> T,
+        mix: impl Fn(T, T, R) -> T,
+    ) -> T {
+        let u = reduce(s.wrap_u, uv[0]);
+        let v = reduce(s.wrap_v, uv[1]);
+        let quad = |lv: &LevelLanes<R>| self.quad(s, lv, u, v, &fetch, &mix);
+        match s.filter {
+            Filter::Nearest => fetch(self.nearest(s, u, v)),
+            Filter::Bilinear => quad(&self.level0()),
+            Filter::Trilinear => {
+                let last = R::splat((self.levels.len() - 1) as f64);
+                let lod = lod.clamp(R::ZERO, last);
+                let l0 = lod.floor();
+                let l1 = (l0 + R::ONE).min(last);
+                let a = quad(&self.level_lanes(l0));
+                let b = quad(&self.level_lanes(l1));
+                mix(a, b, lod - l0)
+            }
+        }
     }
 
     /// The value of each lane's channel `ch` (integral lane values, clamped
@@ -420,22 +464,7 @@ impl Texture {
     #[inline(always)]
     pub fn sample_channel<R: Real>(&self, s: &Sampler, uv: [R; 2], lod: R, ch: R) -> R {
         let ch = ch.clamp(R::ZERO, R::splat((self.channels - 1) as f64));
-        let u = reduce(s.wrap_u, uv[0]);
-        let v = reduce(s.wrap_v, uv[1]);
-        match s.filter {
-            Filter::Nearest => self.nearest(s, u, v, ch),
-            Filter::Bilinear => self.bilinear(s, &self.level0(), u, v, ch),
-            Filter::Trilinear => {
-                let last = R::splat((self.levels.len() - 1) as f64);
-                let lod = lod.clamp(R::ZERO, last);
-                let l0 = lod.floor();
-                let t = lod - l0;
-                let l1 = (l0 + R::ONE).min(last);
-                let a = self.bilinear(s, &self.level_lanes(l0), u, v, ch);
-                let b = self.bilinear(s, &self.level_lanes(l1), u, v, ch);
-                lerp(a, b, t)
-            }
-        }
+        self.filtered(s, uv, lod, |i| R::gather(&self.data, i + ch), lerp)
     }
 
     /// (1 − w)·channel `ch` + w·channel `ch + 1` per lane: two channels
@@ -446,33 +475,14 @@ impl Texture {
         let top = R::splat((self.channels - 1) as f64);
         let c0 = ch.clamp(R::ZERO, top);
         let c1 = (ch + R::ONE).clamp(R::ZERO, top);
-        let u = reduce(s.wrap_u, uv[0]);
-        let v = reduce(s.wrap_v, uv[1]);
-        let bilinear = |t: &[R; 4], fx: R, fy: R| {
-            let g = |i: R| {
-                let a = R::gather(&self.data, i + c0);
-                let b = R::gather(&self.data, i + c1);
-                lerp(a, b, w)
-            };
-            lerp(lerp(g(t[0]), g(t[1]), fx), lerp(g(t[2]), g(t[3]), fx), fy)
+        let fetch = |i: R| {
+            lerp(
+                R::gather(&self.data, i + c0),
+                R::gather(&self.data, i + c1),
+                w,
+            )
         };
-        match s.filter {
-            Filter::Nearest => lerp(self.nearest(s, u, v, c0), self.nearest(s, u, v, c1), w),
-            Filter::Bilinear => {
-                let (t, fx, fy) = self.taps(s, &self.level0(), u, v);
-                bilinear(&t, fx, fy)
-            }
-            Filter::Trilinear => {
-                let last = R::splat((self.levels.len() - 1) as f64);
-                let lod = lod.clamp(R::ZERO, last);
-                let l0 = lod.floor();
-                let t = lod - l0;
-                let l1 = (l0 + R::ONE).min(last);
-                let (ta, fxa, fya) = self.taps(s, &self.level_lanes(l0), u, v);
-                let (tb, fxb, fyb) = self.taps(s, &self.level_lanes(l1), u, v);
-                lerp(bilinear(&ta, fxa, fya), bilinear(&tb, fxb, fyb), t)
-            }
-        }
+        self.filtered(s, uv, lod, fetch, lerp)
     }
 
     /// Channels 0..C (C ≤ [`Texture::channels`]; later ones repeat the
@@ -495,43 +505,10 @@ impl Texture {
     /// [`Texture::sample`] at a given level of detail.
     #[inline(always)]
     pub fn sample_lod<R: Real, const C: usize>(&self, s: &Sampler, uv: [R; 2], lod: R) -> [R; C] {
-        let u = reduce(s.wrap_u, uv[0]);
-        let v = reduce(s.wrap_v, uv[1]);
-        let ch = |c: usize| R::splat(c.min(self.channels - 1) as f64);
-        match s.filter {
-            Filter::Nearest => core::array::from_fn(|c| self.nearest(s, u, v, ch(c))),
-            Filter::Bilinear => {
-                let lv = self.level0();
-                let (t, fx, fy) = self.taps(s, &lv, u, v);
-                core::array::from_fn(|c| {
-                    let g = |i: R| R::gather(&self.data, i + ch(c));
-                    lerp(lerp(g(t[0]), g(t[1]), fx), lerp(g(t[2]), g(t[3]), fx), fy)
-                })
-            }
-            Filter::Trilinear => {
-                let last = R::splat((self.levels.len() - 1) as f64);
-                let lod = lod.clamp(R::ZERO, last);
-                let l0 = lod.floor();
-                let t = lod - l0;
-                let l1 = (l0 + R::ONE).min(last);
-                let (ta, fxa, fya) = self.taps(s, &self.level_lanes(l0), u, v);
-                let (tb, fxb, fyb) = self.taps(s, &self.level_lanes(l1), u, v);
-                core::array::from_fn(|c| {
-                    let g = |i: R| R::gather(&self.data, i + ch(c));
-                    let a = lerp(
-                        lerp(g(ta[0]), g(ta[1]), fxa),
-                        lerp(g(ta[2]), g(ta[3]), fxa),
-                        fya,
-                    );
-                    let b = lerp(
-                        lerp(g(tb[0]), g(tb[1]), fxb),
-                        lerp(g(tb[2]), g(tb[3]), fxb),
-                        fyb,
-                    );
-                    lerp(a, b, t)
-                })
-            }
-        }
+        let ch: [R; C] = core::array::from_fn(|c| R::splat(c.min(self.channels - 1) as f64));
+        let fetch = |i: R| ch.map(|c| R::gather(&self.data, i + c));
+        let mix = |a: [R; C], b: [R; C], t: R| core::array::from_fn(|c| lerp(a[c], b[c], t));
+        self.filtered(s, uv, lod, fetch, mix)
     }
 }
 
