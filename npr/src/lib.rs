@@ -10,9 +10,12 @@
 //! and by image (Sobel on depth, normals, ids and colour); stroke overlays
 //! of silhouette, crease and boundary edges.
 
+pub mod extrude;
 pub mod hatching;
 pub mod lights;
+pub mod outline;
 pub mod plot;
 pub mod posterize;
+pub mod sobel;
 pub mod tam;
 pub mod toon;
