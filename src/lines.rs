@@ -233,9 +233,11 @@ impl OutlineDesc {
                 let threshold = match &self.threshold {
                     None => 0.25,
                     Some(ThresholdDesc::All(t)) => *t,
-                    Some(ThresholdDesc::PerSource(_)) => return Err(format!(
+                    Some(ThresholdDesc::PerSource(_)) => {
+                        return Err(format!(
                         "{field}.threshold: method \"shading\" takes one number (n·v), not a table"
-                    )),
+                    ))
+                    }
                 };
                 // n·v of a visible surface is in [0, 1]; 1 would darken all.
                 if !(threshold > 0.0 && threshold < 1.0) {
