@@ -365,6 +365,8 @@ pub struct LineStages {
     pub post: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
     /// Extrusion vertex stages: the renderer tells them the supersampling.
     pub extrusions: Vec<std::sync::Arc<specula_npr::extrude::Extrude>>,
+    /// The stroke overlay (also among `post`), for `--svg-lines`.
+    pub strokes: Option<std::sync::Arc<specula_npr::overlay::Strokes>>,
 }
 
 /// The radiance an unlit outline material needs for its pixels to come out
@@ -394,6 +396,7 @@ fn radiance_for(
 pub fn build(
     data: &mut specula_raster::SceneData,
     outlines: &[OutlineSpec],
+    strokes: Option<&StrokesSpec>,
     output: &crate::scene::OutputDesc,
 ) -> LineStages {
     use specula_npr::outline::{Selection, ShadingOutline};
@@ -490,5 +493,47 @@ pub fn build(
             }
         }
     }
+    if let Some(st) = strokes {
+        use specula_npr::edges::{EdgeKind, MeshEdges};
+        let kinds: Vec<EdgeKind> = st
+            .edges
+            .iter()
+            .map(|k| match k {
+                EdgeKindDesc::Silhouette => EdgeKind::Silhouette,
+                EdgeKindDesc::Crease => EdgeKind::Crease,
+                EdgeKindDesc::Boundary => EdgeKind::Boundary,
+                EdgeKindDesc::Material => EdgeKind::Material,
+            })
+            .collect();
+        let stage = Arc::new(specula_npr::overlay::Strokes {
+            edges: MeshEdges::from_scene(data, &kinds, st.crease_angle),
+            camera: data.camera.clone(),
+            style: st.style(),
+        });
+        out.post.push(stage.clone());
+        out.strokes = Some(stage);
+    }
     out
+}
+
+impl StrokesSpec {
+    /// The overlay's drawing style.
+    pub fn style(&self) -> specula_npr::overlay::StrokeStyle {
+        use specula_npr::overlay::{LineCap, LineJoin};
+        specula_npr::overlay::StrokeStyle {
+            width: self.width,
+            color: self.color,
+            taper: self.taper,
+            join: match self.join {
+                JoinDesc::Round => LineJoin::Round,
+                JoinDesc::Miter => LineJoin::Miter,
+                JoinDesc::Bevel => LineJoin::Bevel,
+            },
+            cap: match self.cap {
+                CapDesc::Round => LineCap::Round,
+                CapDesc::Butt => LineCap::Butt,
+                CapDesc::Square => LineCap::Square,
+            },
+        }
+    }
 }

@@ -164,7 +164,7 @@ pub fn render_scene(
         .build()
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
     let repeat = settings.repeat.max(1);
-    for e in &scene.extrusions {
+    for e in &scene.lines.extrusions {
         e.set_ssaa(settings.ssaa);
     }
     let post = settings.post();

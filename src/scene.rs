@@ -295,9 +295,9 @@ pub struct LoadedScene {
     /// The checked `[[outline]]` tables, in order, and `[strokes]` (lines.rs).
     pub outlines: Vec<crate::lines::OutlineSpec>,
     pub strokes: Option<crate::lines::StrokesSpec>,
-    /// The extrusion outlines' vertex stages (told the supersampling by
-    /// the renderer).
-    pub extrusions: Vec<std::sync::Arc<specula_npr::extrude::Extrude>>,
+    /// The extrusion outlines' vertex stages and the stroke overlay
+    /// (lines.rs), for the renderer and `--svg-lines`.
+    pub lines: crate::lines::LineStages,
 }
 
 /// Reads a scene file from disk; relative paths resolve against its folder.
@@ -834,7 +834,7 @@ pub fn load_scene_str(
         .map_err(&err)?;
     data.materials = materials;
     data.geometry = vec![GeometryPass::main(data.triangles.len())];
-    let lines = crate::lines::build(&mut data, &outlines, &desc.output);
+    let mut lines = crate::lines::build(&mut data, &outlines, strokes.as_ref(), &desc.output);
     data.validate().map_err(err)?;
     let mut post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>> = Vec::new();
     if let Some(p) = &desc.posterize {
@@ -846,7 +846,7 @@ pub fn load_scene_str(
         let stage = Posterize::new(p.levels, mode).map_err(|e| err(format!("posterize.{e}")))?;
         post_stages.push(std::sync::Arc::new(stage));
     }
-    post_stages.extend(lines.post);
+    post_stages.extend(std::mem::take(&mut lines.post));
     Ok(LoadedScene {
         data,
         output: desc.output,
@@ -855,6 +855,6 @@ pub fn load_scene_str(
         post_stages,
         outlines,
         strokes,
-        extrusions: lines.extrusions,
+        lines,
     })
 }

@@ -387,3 +387,330 @@ irradiance = [3.0, 3.0, 3.0]
         "cube pixels next to the background: {touching:?}"
     );
 }
+
+use specula_npr::edges::{chain, EdgeKind, MeshEdges, Piece};
+
+fn edges_of(mesh: &specula::mesh::MeshData, kinds: &[EdgeKind], crease: f32) -> MeshEdges {
+    MeshEdges::new(
+        &mesh.positions,
+        &mesh.triangles,
+        &mesh.tri_material,
+        kinds,
+        crease,
+    )
+}
+
+fn count(es: &[(u32, u32, EdgeKind)], k: EdgeKind) -> usize {
+    es.iter().filter(|e| e.2 == k).count()
+}
+
+#[test]
+fn edge_extraction_on_a_cube_and_a_plane() {
+    let eye = glam::Vec3::new(3.0, 2.5, 2.0);
+    // A cube's 12 edges are 90° creases; its 6 face diagonals are flat.
+    let cube = specula::mesh::cube(1.0, 1);
+    let e = edges_of(&cube, &[EdgeKind::Crease], 60.0);
+    assert_eq!(e.edge_count(), 18);
+    assert_eq!(count(&e.classify(eye), EdgeKind::Crease), 12);
+    assert_eq!(
+        edges_of(&cube, &[EdgeKind::Crease], 95.0)
+            .classify(eye)
+            .len(),
+        0
+    );
+    // Subdivided, the cube still has 12 creases, cut into 3 edges each.
+    let cube3 = specula::mesh::cube(1.0, 3);
+    assert_eq!(
+        count(
+            &edges_of(&cube3, &[EdgeKind::Crease], 60.0).classify(eye),
+            EdgeKind::Crease
+        ),
+        36
+    );
+
+    // From a corner, three faces look at the eye and three away: the
+    // silhouette is the hexagon between them, one closed loop of 6 edges.
+    let e = edges_of(&cube, &[EdgeKind::Silhouette], 60.0);
+    let sil = e.classify(eye);
+    assert_eq!(count(&sil, EdgeKind::Silhouette), 6);
+    let pieces: Vec<Piece> = sil
+        .iter()
+        .map(|&(a, b, kind)| {
+            let s = |v: u32| [e.points[v as usize].x, e.points[v as usize].y];
+            Piece {
+                kind,
+                a: s(a),
+                b: s(b),
+                ends: Some((a, b)),
+            }
+        })
+        .collect();
+    let lines = chain(&pieces, &e.points);
+    assert_eq!(lines.len(), 1, "{lines:?}");
+    assert!(lines[0].closed && lines[0].points.len() == 6);
+
+    // A plane has 4 boundary edges; a 3 × 2 grid of cells 10.
+    let plane = specula::mesh::plane([1.0, 1.0], [1, 1]);
+    let e = edges_of(&plane, &[EdgeKind::Boundary, EdgeKind::Crease], 60.0);
+    assert_eq!(count(&e.classify(eye), EdgeKind::Boundary), 4);
+    assert_eq!(e.classify(eye).len(), 4);
+    let grid = specula::mesh::plane([1.0, 1.0], [3, 2]);
+    assert_eq!(
+        count(
+            &edges_of(&grid, &[EdgeKind::Boundary], 60.0).classify(eye),
+            EdgeKind::Boundary
+        ),
+        10
+    );
+}
+
+const STROKE_SPHERE: &str =
+    "[strokes]\nedges = [\"silhouette\"]\nwidth = 2.0\ncolor = [0.0, 0.0, 1.0]\n";
+
+#[test]
+fn uv_sphere_silhouette_is_one_closed_polyline_and_the_svg_matches_the_png() {
+    let s = common::scene(&sphere_scene(1.0, 4.0, 160, STROKE_SPHERE), &[]);
+    let settings = RenderSettings::from_scene(&s);
+    let r = render_scene(&s, &settings, 0.0).unwrap();
+    let st = s.lines.strokes.as_ref().unwrap();
+    let lines = st.polylines(&r.frame.buffers, 1);
+    assert_eq!(
+        lines.len(),
+        1,
+        "{:?}",
+        lines.iter().map(|l| l.points.len()).collect::<Vec<_>>()
+    );
+    assert!(lines[0].closed && lines[0].points.len() > 100);
+    // Each point lies on the exact sphere's outline, radius f·tan(asin(1/4)).
+    let f = 80.0 / 20f64.to_radians().tan();
+    let r_exact = f * 0.25f64.asin().tan();
+    for p in &lines[0].points {
+        let d = ((p[0] as f64 - 80.0).powi(2) + (p[1] as f64 - 80.0).powi(2)).sqrt();
+        assert!((d - r_exact).abs() < 0.5, "{p:?} at {d} vs {r_exact}");
+    }
+
+    let doc = specula_npr::overlay::svg(&lines, &st.style, r.width, r.height);
+    let xml = roxmltree::Document::parse(&doc).expect("SVG parses");
+    let root = xml.root_element();
+    assert_eq!(root.tag_name().name(), "svg");
+    assert_eq!(root.attribute("width"), Some("160"));
+    let groups: Vec<_> = root.children().filter(|n| n.has_tag_name("g")).collect();
+    assert_eq!(groups.len(), 1);
+    assert_eq!(groups[0].attribute("id"), Some("silhouette"));
+    let paths: Vec<_> = groups[0]
+        .children()
+        .filter(|n| n.has_tag_name("path"))
+        .collect();
+    assert_eq!(paths.len(), 1);
+    // The path's vertices fall on stroke-coloured (blue) pixels of the PNG.
+    let d = paths[0].attribute("d").unwrap();
+    let nums: Vec<f32> = d
+        .split(|c: char| c == ' ' || c.is_ascii_alphabetic())
+        .filter(|t| !t.is_empty())
+        .map(|t| t.parse().unwrap())
+        .collect();
+    assert!(d.ends_with('Z') && nums.len() == 2 * lines[0].points.len());
+    for xy in nums.chunks(2) {
+        let (x, y) = (xy[0] as usize, xy[1] as usize);
+        let px = &r.ldr[(y * 160 + x) * 3..][..3];
+        assert!(
+            px[2] > 200 && px[0] < 80 && px[1] < 80,
+            "({x}, {y}): {px:?}"
+        );
+    }
+}
+
+#[test]
+fn an_edge_behind_another_object_is_dropped_and_one_in_front_kept() {
+    let text = r#"
+[camera]
+eye = [0.0, 0.0, 6.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 100.0
+
+[output]
+width = 160
+height = 160
+
+[[mesh]]
+sphere = { radius = 1.0, segments = 64, rings = 32 }
+
+# Behind the sphere, hidden by it.
+[[mesh]]
+plane = { size = [0.4, 0.4] }
+rotate = [90.0, 0.0, 0.0]
+translate = [0.0, 0.0, -3.0]
+
+# In front of it, seen.
+[[mesh]]
+plane = { size = [0.4, 0.4] }
+rotate = [90.0, 0.0, 0.0]
+translate = [0.0, 0.5, 2.0]
+
+[[light]]
+type = "directional"
+direction = [0.0, 0.0, -1.0]
+irradiance = [3.0, 3.0, 3.0]
+
+[strokes]
+edges = ["boundary"]
+"#;
+    let s = common::scene(text, &[]);
+    let r = render_scene(&s, &RenderSettings::from_scene(&s), 0.0).unwrap();
+    let lines = s
+        .lines
+        .strokes
+        .as_ref()
+        .unwrap()
+        .polylines(&r.frame.buffers, 1);
+    // Project a world point as the camera does (independently, f64).
+    let f = 80.0 / 20f64.to_radians().tan();
+    let proj = |p: [f64; 3]| {
+        [
+            80.0 + f * p[0] / (6.0 - p[2]),
+            80.0 - f * p[1] / (6.0 - p[2]),
+        ]
+    };
+    let near = |q: [f32; 2], p: [f64; 2]| {
+        ((q[0] as f64 - p[0]).abs() < 1.0) && ((q[1] as f64 - p[1]).abs() < 1.0)
+    };
+    let front: Vec<[f64; 2]> = [[-0.2, 0.3], [0.2, 0.3], [0.2, 0.7], [-0.2, 0.7]]
+        .map(|[x, y]| proj([x, y, 2.0]))
+        .to_vec();
+    let back: Vec<[f64; 2]> = [[-0.2, -0.2], [0.2, -0.2], [0.2, 0.2], [-0.2, 0.2]]
+        .map(|[x, y]| proj([x, y, -3.0]))
+        .to_vec();
+    let all: Vec<[f32; 2]> = lines.iter().flat_map(|l| l.points.clone()).collect();
+    // The front square: one closed polyline through its four corners.
+    assert!(lines.iter().any(|l| l.closed
+        && l.points.len() == 4
+        && front.iter().all(|c| l.points.iter().any(|q| near(*q, *c)))));
+    // Nothing of the hidden square (its corners project inside the sphere).
+    for c in &back {
+        assert!(
+            !all.iter().any(|q| near(*q, *c)),
+            "hidden corner {c:?} drawn"
+        );
+    }
+    // A cube resting on a floor: its bottom front edge touches the floor,
+    // whose depth there equals the edge's; the bias must not eat it.
+    let text = r#"
+[camera]
+eye = [0.0, 2.0, 6.0]
+target = [0.0, 0.3, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 100.0
+
+[output]
+width = 160
+height = 160
+
+[[mesh]]
+plane = { size = [20.0, 20.0] }
+
+[[mesh]]
+cube = { size = 1.0 }
+translate = [0.0, 0.5, 0.0]
+
+[[light]]
+type = "directional"
+direction = [0.0, -1.0, -1.0]
+irradiance = [3.0, 3.0, 3.0]
+
+[strokes]
+edges = ["crease"]
+"#;
+    let s = common::scene(text, &[]);
+    let r = render_scene(&s, &RenderSettings::from_scene(&s), 0.0).unwrap();
+    let lines = s
+        .lines
+        .strokes
+        .as_ref()
+        .unwrap()
+        .polylines(&r.frame.buffers, 1);
+    let view = s.data.camera.view(160, 160);
+    let proj = |p: glam::Vec3| {
+        let c = view.view_proj * p.extend(1.0);
+        [
+            (c.x / c.w * 0.5 + 0.5) * 160.0,
+            (0.5 - c.y / c.w * 0.5) * 160.0,
+        ]
+    };
+    // Points every 0.05 along the bottom front edge are each within a
+    // pixel of a drawn segment.
+    let seg_dist = |p: [f32; 2], a: [f32; 2], b: [f32; 2]| {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let t = (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / (dx * dx + dy * dy).max(1e-12))
+            .clamp(0.0, 1.0);
+        ((a[0] + t * dx - p[0]).powi(2) + (a[1] + t * dy - p[1]).powi(2)).sqrt()
+    };
+    for k in 0..=20 {
+        let p = proj(glam::Vec3::new(-0.5 + k as f32 * 0.05, 0.0, 0.5));
+        let d = lines
+            .iter()
+            .flat_map(|l| {
+                let n = l.points.len();
+                let segs = if l.closed { n } else { n - 1 };
+                (0..segs).map(move |i| (l.points[i], l.points[(i + 1) % n]))
+            })
+            .map(|(a, b)| seg_dist(p, a, b))
+            .fold(f32::INFINITY, f32::min);
+        assert!(
+            d < 1.0,
+            "contact edge point {k} at {p:?}: nearest line {d} px"
+        );
+    }
+}
+
+#[test]
+fn svg_lines_flag_writes_the_overlay_and_refuses_scenes_without_strokes() {
+    let dir = common::temp_dir("svg-lines");
+    std::fs::write(
+        dir.join("s.toml"),
+        sphere_scene(1.0, 4.0, 64, STROKE_SPHERE),
+    )
+    .unwrap();
+    std::fs::write(dir.join("plain.toml"), sphere_scene(1.0, 4.0, 64, "")).unwrap();
+    let out = common::specula(
+        &["render", "s.toml", "-o", "s.png", "--svg-lines", "s.svg"],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let doc = std::fs::read_to_string(dir.join("s.svg")).unwrap();
+    let xml = roxmltree::Document::parse(&doc).unwrap();
+    assert_eq!(
+        xml.descendants().filter(|n| n.has_tag_name("path")).count(),
+        1
+    );
+    let out = common::specula(
+        &[
+            "render",
+            "plain.toml",
+            "-o",
+            "p.png",
+            "--svg-lines",
+            "p.svg",
+        ],
+        &dir,
+    );
+    assert!(!out.status.success());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--svg-lines") && err.contains("[strokes]"),
+        "{err}"
+    );
+    assert!(!dir.join("p.png").exists());
+    // An output naming the scene itself is refused like any other output.
+    let out = common::specula(
+        &["render", "s.toml", "-o", "t.png", "--svg-lines", "s.toml"],
+        &dir,
+    );
+    assert!(!out.status.success());
+}

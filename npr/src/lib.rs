@@ -10,10 +10,12 @@
 //! and by image (Sobel on depth, normals, ids and colour); stroke overlays
 //! of silhouette, crease and boundary edges.
 
+pub mod edges;
 pub mod extrude;
 pub mod hatching;
 pub mod lights;
 pub mod outline;
+pub mod overlay;
 pub mod plot;
 pub mod posterize;
 pub mod sobel;
