@@ -294,7 +294,7 @@ fn extrusion_ring_has_the_requested_width_all_around_at_three_distances() {
         for (k, (ri, ro)) in rings.iter().enumerate() {
             let ring = (ro - ri) / ssaa as f64;
             assert!(
-                (ring - width as f64).abs() <= 0.5,
+                (ring - width).abs() <= 0.5,
                 "distance {distance} ssaa {ssaa} sector {k}: ring {ring:.3} px (inner {ri:.2}, exact {r_exact:.2})"
             );
             assert!(
@@ -713,4 +713,53 @@ fn svg_lines_flag_writes_the_overlay_and_refuses_scenes_without_strokes() {
         &dir,
     );
     assert!(!out.status.success());
+}
+
+#[test]
+fn outline_and_stroke_scenes_bytes_do_not_depend_on_the_thread_count() {
+    let dir = common::fixtures().join("scenes");
+    for (file, w, h, ssaa) in [
+        ("npr-outlines.toml", 480, 270, 2),
+        ("npr-strokes.toml", 320, 180, 2),
+    ] {
+        let s = specula::scene::load_scene(&dir.join(file)).unwrap_or_else(|e| panic!("{e}"));
+        let mut images = Vec::new();
+        let mut svgs = Vec::new();
+        for threads in [1, 2, 8] {
+            let mut settings = RenderSettings::from_scene(&s);
+            settings.width = w;
+            settings.height = h;
+            settings.ssaa = ssaa;
+            settings.threads = Some(threads);
+            let r = render_scene(&s, &settings, 0.0).expect("render");
+            if let Some(st) = &s.lines.strokes {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let lines = pool.install(|| st.polylines(&r.frame.buffers, ssaa as usize));
+                assert!(lines.len() > 10, "{file}: {} polylines", lines.len());
+                svgs.push(specula_npr::overlay::svg(&lines, &st.style, w, h));
+            }
+            images.push(r.ldr);
+        }
+        // Lines were drawn: the line colour (near black) is in the image.
+        let dark = images[0]
+            .chunks(3)
+            .filter(|p| p.iter().all(|&c| c < 90))
+            .count();
+        assert!(dark > 200, "{file}: {dark} dark pixels");
+        for (i, im) in images.iter().enumerate().skip(1) {
+            assert!(
+                im == &images[0],
+                "{file}: bytes differ between 1 thread and run {i}"
+            );
+        }
+        for (i, sv) in svgs.iter().enumerate().skip(1) {
+            assert!(
+                sv == &svgs[0],
+                "{file}: SVG differs between 1 thread and run {i}"
+            );
+        }
+    }
 }

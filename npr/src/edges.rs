@@ -14,7 +14,8 @@
 //! - Visibility ([`visible_pieces`]): points every sample along the
 //!   projected edge are compared with the depth buffer; a point is seen
 //!   when its view depth is at most (1 + [`DEPTH_BIAS`]) times the largest
-//!   depth of the 3×3 samples around it. The largest of the neighbourhood,
+//!   depth of the samples within one output pixel (ssaa samples) around it
+//!   (3×3 without supersampling). The largest of the neighbourhood,
 //!   not the sample's own, is what keeps a silhouette (whose neighbours
 //!   show the background) and an edge where two objects touch (whose
 //!   neighbours show the edge's own faces) from being eaten by the bias.
@@ -261,10 +262,10 @@ impl DepthView<'_> {
         if !(sx >= 0.0 && sy >= 0.0 && sx < self.width as f32 && sy < self.height as f32) {
             return false;
         }
-        let (x, y) = (sx as usize, sy as usize);
+        let (x, y, r) = (sx as usize, sy as usize, self.ssaa.max(1));
         let mut dmax = 0.0f32;
-        for yy in y.saturating_sub(1)..(y + 2).min(self.height) {
-            for xx in x.saturating_sub(1)..(x + 2).min(self.width) {
+        for yy in y.saturating_sub(r)..(y + r + 1).min(self.height) {
+            for xx in x.saturating_sub(r)..(x + r + 1).min(self.width) {
                 dmax = dmax.max(self.depth[yy * self.width + xx]);
             }
         }
@@ -388,10 +389,7 @@ pub fn chain(pieces: &[Piece], points3: &[Vec3]) -> Vec<Polyline> {
         rest.sort_unstable();
         starts.extend(rest);
         for s in starts {
-            loop {
-                let Some(&(first, _)) = at[&s].iter().find(|(i, _)| !used[*i]) else {
-                    break;
-                };
+            while let Some(&(first, _)) = at[&s].iter().find(|(i, _)| !used[*i]) {
                 let mut points = vec![screen(ps[first], s)];
                 let (mut cur, mut piece) = (s, first);
                 loop {

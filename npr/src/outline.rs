@@ -21,6 +21,7 @@
 //! outline colour over the tone-mapped image in linear values:
 //! `c = c·(1 − a) + colour·a`.
 
+use rayon::prelude::*;
 use specula_raster::geometry::IdMap;
 use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::target::MISS;
@@ -89,20 +90,25 @@ pub fn composite(img: &mut HdrImage, frame: &FrameBuffers, coverage: &[f32], col
     let (w, sw) = (img.width as usize, frame.width as usize);
     let inv = 1.0 / (ssaa * ssaa) as f32;
     let p = &mut img.rgb;
-    for i in 0..p.r.len() {
-        let (x, y) = (i % w, i / w);
-        let mut a = 0.0;
-        for sy in 0..ssaa {
-            let row = (y * ssaa + sy) * sw + x * ssaa;
-            a += coverage[row..row + ssaa].iter().sum::<f32>();
-        }
-        let a = a * inv;
-        if a > 0.0 {
-            p.r[i] = p.r[i] * (1.0 - a) + color[0] * a;
-            p.g[i] = p.g[i] * (1.0 - a) + color[1] * a;
-            p.b[i] = p.b[i] * (1.0 - a) + color[2] * a;
-        }
-    }
+    p.r.par_chunks_mut(w.max(1))
+        .zip(p.g.par_chunks_mut(w.max(1)))
+        .zip(p.b.par_chunks_mut(w.max(1)))
+        .enumerate()
+        .for_each(|(y, ((r, g), b))| {
+            for x in 0..r.len() {
+                let mut a = 0.0;
+                for sy in 0..ssaa {
+                    let row = (y * ssaa + sy) * sw + x * ssaa;
+                    a += coverage[row..row + ssaa].iter().sum::<f32>();
+                }
+                let a = a * inv;
+                if a > 0.0 {
+                    r[x] = r[x] * (1.0 - a) + color[0] * a;
+                    g[x] = g[x] * (1.0 - a) + color[1] * a;
+                    b[x] = b[x] * (1.0 - a) + color[2] * a;
+                }
+            }
+        });
 }
 
 /// Outline by shading (module docs): coverage 1 where n·v ≤ t − s/2, 0
@@ -142,19 +148,24 @@ impl ShadingOutline {
         let (w, h) = (frame.width as usize, frame.height as usize);
         let view = self.camera.view(frame.width, frame.height);
         let mut out = vec![0.0f32; w * h];
-        for (i, c) in out.iter_mut().enumerate() {
-            let n = frame.normal.get(i);
-            let id = frame.id.get(i).copied().unwrap_or(0);
-            if n == [0.0; 3] || !self.selection.contains(id) {
-                continue;
-            }
-            let (x, y) = ((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-            let (nx, ny) = (2.0 * x / w as f32 - 1.0, 1.0 - 2.0 * y / h as f32);
-            let d = view.forward + view.right * (nx * view.tan_x) + view.up * (ny * view.tan_y);
-            let wo = -d.normalize();
-            let ndv = n[0] * wo.x + n[1] * wo.y + n[2] * wo.z;
-            *c = self.coverage(ndv);
-        }
+        out.par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(y, row)| {
+                for (x, c) in row.iter_mut().enumerate() {
+                    let i = y * w + x;
+                    let n = frame.normal.get(i);
+                    let id = frame.id.get(i).copied().unwrap_or(0);
+                    if n == [0.0; 3] || !self.selection.contains(id) {
+                        continue;
+                    }
+                    let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+                    let (nx, ny) = (2.0 * px / w as f32 - 1.0, 1.0 - 2.0 * py / h as f32);
+                    let d =
+                        view.forward + view.right * (nx * view.tan_x) + view.up * (ny * view.tan_y);
+                    let wo = -d.normalize();
+                    *c = self.coverage(n[0] * wo.x + n[1] * wo.y + n[2] * wo.z);
+                }
+            });
         out
     }
 }

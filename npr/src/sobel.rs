@@ -81,8 +81,9 @@ pub fn id_materials(scene: &specula_raster::SceneData) -> Vec<u32> {
 pub struct EdgeInput<'a> {
     pub width: usize,
     pub height: usize,
-    /// View depth, +inf where nothing is hit (or empty if not a source).
-    pub depth: &'a [f32],
+    /// 1/w of the view depth w, 0 where nothing is hit ([`inverse_depth`];
+    /// empty if depth is not a source).
+    pub inv_depth: &'a [f32],
     pub normal: [&'a [f32]; 3],
     /// Material per sample, u32::MAX where nothing is hit.
     pub material: &'a [u32],
@@ -91,6 +92,21 @@ pub struct EdgeInput<'a> {
 }
 
 const W: [f32; 3] = [0.25, 0.5, 0.25];
+
+/// q = 1/w per sample, 0 where nothing is hit (w infinite, NaN or ≤ 0).
+pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
+    depth
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&d| {
+            if d.is_finite() && d > 0.0 {
+                1.0 / d
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
 
 /// Marks edge samples (1) in a `width × height` mask; see the module docs.
 /// `keep(i)` says whether sample i may carry a line (material selection).
@@ -126,12 +142,12 @@ fn at(input: &EdgeInput, x: usize, y: usize, dx: isize, dy: isize) -> usize {
 /// Sobel gradient (Gx, Gy) of `f` at (x, y), weights (1, 2, 1)/4 across:
 /// a step of Δ gives Δ.
 #[inline]
-fn gradient(input: &EdgeInput, f: &dyn Fn(usize) -> f32, x: usize, y: usize) -> (f32, f32) {
+fn gradient(input: &EdgeInput, f: &[f32], x: usize, y: usize) -> (f32, f32) {
     let (mut gx, mut gy) = (0.0, 0.0);
-    for k in 0..3 {
+    for (k, wk) in W.iter().enumerate() {
         let o = k as isize - 1;
-        gx += W[k] * (f(at(input, x, y, 1, o)) - f(at(input, x, y, -1, o)));
-        gy += W[k] * (f(at(input, x, y, o, 1)) - f(at(input, x, y, o, -1)));
+        gx += wk * (f[at(input, x, y, 1, o)] - f[at(input, x, y, -1, o)]);
+        gy += wk * (f[at(input, x, y, o, 1)] - f[at(input, x, y, o, -1)]);
     }
     (gx, gy)
 }
@@ -140,19 +156,12 @@ fn gradient(input: &EdgeInput, f: &dyn Fn(usize) -> f32, x: usize, y: usize) -> 
 pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
     match s {
         Source::Depth => {
-            let q = |i: usize| {
-                let d = input.depth[i];
-                if d.is_finite() && d > 0.0 {
-                    1.0 / d
-                } else {
-                    0.0
-                }
-            };
+            let q = |i: usize| input.inv_depth[i];
             let (mut dxx, mut dyy, mut qmax) = (0.0f32, 0.0f32, 0.0f32);
-            for k in 0..3 {
+            for (k, wk) in W.iter().enumerate() {
                 let o = k as isize - 1;
                 let c = q(at(input, x, y, o, 0));
-                dxx += W[k]
+                dxx += wk
                     * (q(at(input, x, y, 1, o)) + q(at(input, x, y, -1, o))
                         - 2.0 * q(at(input, x, y, 0, o)));
                 dyy += W[k] * (q(at(input, x, y, o, 1)) + q(at(input, x, y, o, -1)) - 2.0 * c);
@@ -169,8 +178,7 @@ pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
         Source::Normal => {
             let mut g2 = 0.0;
             for c in 0..3 {
-                let p = input.normal[c];
-                let (gx, gy) = gradient(input, &|i| p[i], x, y);
+                let (gx, gy) = gradient(input, input.normal[c], x, y);
                 g2 += gx * gx + gy * gy;
             }
             g2.sqrt()
@@ -192,7 +200,7 @@ pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
             f / 12.0
         }
         Source::Color => {
-            let (gx, gy) = gradient(input, &|i| input.luma[i], x, y);
+            let (gx, gy) = gradient(input, input.luma, x, y);
             (gx * gx + gy * gy).sqrt()
         }
     }
@@ -329,10 +337,15 @@ impl Sobel {
         } else {
             Vec::new()
         };
+        let inv_depth = if self.has(Source::Depth) {
+            inverse_depth(&frame.depth)
+        } else {
+            Vec::new()
+        };
         let input = EdgeInput {
             width: w,
             height: h,
-            depth: &frame.depth,
+            inv_depth: &inv_depth,
             normal: [&frame.normal.r, &frame.normal.g, &frame.normal.b],
             material: &material,
             luma: &luma,
@@ -380,10 +393,11 @@ mod tests {
     }
 
     fn edges_of_depth(depth: &[f32], w: usize, h: usize, t: f32) -> Vec<bool> {
+        let inv = inverse_depth(depth);
         let input = EdgeInput {
             width: w,
             height: h,
-            depth,
+            inv_depth: &inv,
             normal: [&[], &[], &[]],
             material: &[],
             luma: &[],
@@ -452,7 +466,7 @@ mod tests {
         let input = EdgeInput {
             width: w,
             height: h,
-            depth: &[],
+            inv_depth: &[],
             normal: [&nx, &ny, &nz],
             material: &mat,
             luma: &[],
@@ -470,7 +484,7 @@ mod tests {
         let (w, h) = (37, 23);
         let mask: Vec<bool> = (0..w * h).map(|i| (i * 7919) % 97 == 3).collect();
         let d = distance(&mask, w, h);
-        for i in 0..w * h {
+        for (i, di) in d.iter().enumerate() {
             let (x, y) = ((i % w) as f32, (i / w) as f32);
             let best = (0..w * h)
                 .filter(|&j| mask[j])
@@ -479,7 +493,7 @@ mod tests {
                     ((x - a).powi(2) + (y - b).powi(2)).sqrt()
                 })
                 .fold(f32::INFINITY, f32::min);
-            assert!((d[i] - best).abs() < 1e-4, "{i}: {} vs {best}", d[i]);
+            assert!((di - best).abs() < 1e-4, "{i}: {di} vs {best}");
         }
     }
 
