@@ -763,3 +763,74 @@ fn outline_and_stroke_scenes_bytes_do_not_depend_on_the_thread_count() {
         }
     }
 }
+
+#[test]
+fn sobel_outline_leaves_a_slanted_floor_clean_and_outlines_a_box_on_it() {
+    let scene = |with_box: bool| {
+        format!(
+            r#"
+[camera]
+eye = [0.0, 1.0, 6.0]
+target = [0.0, 0.4, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 100.0
+
+[output]
+width = 160
+height = 120
+
+[[mesh]]
+plane = {{ size = [200.0, 200.0] }}
+rotate = [0.0, 30.0, 0.0]
+
+{}
+
+[[light]]
+type = "directional"
+direction = [-0.3, -1.0, -0.4]
+irradiance = [1.0, 1.0, 1.0]
+
+[[outline]]
+method = "sobel"
+width = 1.5
+color = [1.0, 0.0, 0.0]
+sources = ["depth", "normal", "id"]
+threshold = {{ depth = 0.05, normal = 0.2, id = 0.3 }}
+"#,
+            if with_box {
+                "[[mesh]]\ncube = { size = 1.0 }\ntranslate = [0.0, 0.5, 0.0]\nmaterial = \"box\"\n\n[materials.box]\nmodel = \"lambert\"\nbase_color = [0.2, 0.2, 0.8]"
+            } else {
+                ""
+            }
+        )
+    };
+    let red = |px: &[u8]| px[0] > 150 && px[1] < 60 && px[2] < 60;
+    // The floor alone: from a grazing 9.5° its depth runs from ~6 to ~100
+    // down the image, but it is a plane: no line below its horizon.
+    let s = common::scene(&scene(false), &[]);
+    let r = render_scene(&s, &RenderSettings::from_scene(&s), 0.0).unwrap();
+    let horizon = (0..120)
+        .find(|y| r.frame.buffers.depth[y * 160 + 80].is_finite())
+        .unwrap();
+    assert!(horizon > 20 && horizon < 70, "horizon row {horizon}");
+    let lines_below: usize = (horizon + 3..120)
+        .map(|y| {
+            (0..160)
+                .filter(|x| red(&r.ldr[(y * 160 + x) * 3..][..3]))
+                .count()
+        })
+        .sum();
+    assert_eq!(lines_below, 0);
+    // With a box standing on it: its outline is drawn.
+    let s = common::scene(&scene(true), &[]);
+    let r = render_scene(&s, &RenderSettings::from_scene(&s), 0.0).unwrap();
+    let lines: usize = (horizon + 3..120)
+        .map(|y| {
+            (0..160)
+                .filter(|x| red(&r.ldr[(y * 160 + x) * 3..][..3]))
+                .count()
+        })
+        .sum();
+    assert!(lines > 50, "{lines} line pixels");
+}
