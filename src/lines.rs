@@ -24,6 +24,8 @@ pub struct OutlineDesc {
     /// Only pixels (shading, sobel) or triangles (extrusion) of these
     /// materials; default all.
     materials: Option<Vec<String>>,
+    /// sobel only: soft line edges (default true).
+    antialias: Option<bool>,
 }
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
@@ -148,6 +150,7 @@ pub enum OutlineSpec {
         /// (source, threshold), sorted by source, no repeats.
         sources: Vec<(SourceDesc, f32)>,
         materials: Option<Vec<String>>,
+        antialias: bool,
     },
 }
 
@@ -225,6 +228,9 @@ impl OutlineDesc {
         };
         if self.sources.is_some() && self.method != MethodDesc::Sobel {
             return Err(unused("sources"));
+        }
+        if self.antialias.is_some() && self.method != MethodDesc::Sobel {
+            return Err(unused("antialias"));
         }
         let materials = self.materials.clone();
         let color = self.color;
@@ -316,6 +322,7 @@ impl OutlineDesc {
                     width,
                     sources,
                     materials,
+                    antialias: self.antialias.unwrap_or(true),
                 })
             }
         }
@@ -466,6 +473,7 @@ pub fn build(
                 width,
                 sources,
                 materials,
+                antialias,
             } => {
                 let selection = match index(data, materials) {
                     Some(m) => Selection::materials(data, &m),
@@ -486,7 +494,7 @@ pub fn build(
                         .collect(),
                     width: *width,
                     color: *color,
-                    antialias: true,
+                    antialias: *antialias,
                     id_material: (*id_material).clone(),
                     selection,
                 }));

@@ -112,6 +112,8 @@ fn every_line_field_is_checked_and_named() {
         ("[[outline]]\nmethod = \"sobel\"\nmaterials = [\"paper\"]\n", "outline[0].materials: no material named \"paper\""),
         ("[[outline]]\nmethod = \"sobel\"\nmaterials = []\n", "outline[0].materials"),
         ("[[outline]]\nmethod = \"sobel\"\n[[outline]]\nmethod = \"shading\"\nthreshold = 0.0\n", "outline[1].threshold"),
+        ("[[outline]]\nmethod = \"shading\"\nantialias = false\n", "outline[0].antialias: not used"),
+        ("[[outline]]\nmethod = \"sobel\"\nantialias = 1\n", "antialias"),
         ("[strokes]\nedges = []\n", "strokes.edges"),
         ("[strokes]\nedges = [\"crease\", \"crease\"]\n", "strokes.edges"),
         ("[strokes]\nedges = [\"ridge\"]\n", "unknown variant `ridge`"),
@@ -833,4 +835,72 @@ threshold = {{ depth = 0.05, normal = 0.2, id = 0.3 }}
         })
         .sum();
     assert!(lines > 50, "{lines} line pixels");
+}
+
+#[test]
+fn outline_materials_limit_each_method_to_their_objects() {
+    // Two spheres side by side, materials "a" (left) and "b" (right); each
+    // outline names "a" only.
+    let two = |outline: &str| {
+        format!(
+            r#"
+[camera]
+eye = [0.0, 0.0, 6.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 100.0
+
+[output]
+width = 160
+height = 96
+
+[[mesh]]
+sphere = {{ radius = 0.8, segments = 64, rings = 32 }}
+translate = [-1.2, 0.0, 0.0]
+material = "a"
+
+[[mesh]]
+sphere = {{ radius = 0.8, segments = 64, rings = 32 }}
+translate = [1.2, 0.0, 0.0]
+material = "b"
+
+[materials.a]
+model = "unlit"
+color = [1.0, 1.0, 1.0]
+
+[materials.b]
+model = "unlit"
+color = [1.0, 1.0, 1.0]
+
+[environment]
+uniform = [1.0, 1.0, 1.0]
+
+[[outline]]
+{outline}
+color = [0.0, 0.0, 0.0]
+materials = ["a"]
+"#
+        )
+    };
+    for method in [
+        "method = \"extrusion\"\nwidth = 2.0",
+        "method = \"sobel\"\nwidth = 2.0",
+        "method = \"shading\"\nthreshold = 0.4",
+    ] {
+        let s = common::scene(&two(method), &[]);
+        let r = render_scene(&s, &RenderSettings::from_scene(&s), 0.0).unwrap();
+        // White everywhere but the lines: count dark pixels per half.
+        let dark = |x0: usize, x1: usize| {
+            (0..96)
+                .flat_map(|y| (x0..x1).map(move |x| (x, y)))
+                .filter(|(x, y)| r.ldr[(y * 160 + x) * 3] < 128)
+                .count()
+        };
+        let (left, right) = (dark(0, 80), dark(80, 160));
+        assert!(
+            left > 60 && right == 0,
+            "{method}: {left} left, {right} right"
+        );
+    }
 }
