@@ -131,43 +131,43 @@ pub fn detect_edges(
     out
 }
 
-/// Sample index of (x + dx, y + dy), clamped to the image.
+/// Sample indices of the 3×3 neighbourhood of (x, y), `[dy + 1][dx + 1]`,
+/// clamped to the image.
 #[inline]
-fn at(input: &EdgeInput, x: usize, y: usize, dx: isize, dy: isize) -> usize {
-    let xx = (x as isize + dx).clamp(0, input.width as isize - 1) as usize;
-    let yy = (y as isize + dy).clamp(0, input.height as isize - 1) as usize;
-    yy * input.width + xx
+fn neighbours(input: &EdgeInput, x: usize, y: usize) -> [[usize; 3]; 3] {
+    let w = input.width;
+    let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
+    let ys = [y.saturating_sub(1), y, (y + 1).min(input.height - 1)];
+    ys.map(|yy| xs.map(|xx| yy * w + xx))
 }
 
-/// Sobel gradient (Gx, Gy) of `f` at (x, y), weights (1, 2, 1)/4 across:
-/// a step of Δ gives Δ.
+/// Sobel gradient (Gx, Gy) of `f` over the neighbourhood `nb`, weights
+/// (1, 2, 1)/4 across: a step of Δ gives Δ.
 #[inline]
-fn gradient(input: &EdgeInput, f: &[f32], x: usize, y: usize) -> (f32, f32) {
+fn gradient(f: &[f32], nb: &[[usize; 3]; 3]) -> (f32, f32) {
     let (mut gx, mut gy) = (0.0, 0.0);
     for (k, wk) in W.iter().enumerate() {
-        let o = k as isize - 1;
-        gx += wk * (f[at(input, x, y, 1, o)] - f[at(input, x, y, -1, o)]);
-        gy += wk * (f[at(input, x, y, o, 1)] - f[at(input, x, y, o, -1)]);
+        gx += wk * (f[nb[k][2]] - f[nb[k][0]]);
+        gy += wk * (f[nb[2][k]] - f[nb[0][k]]);
     }
     (gx, gy)
 }
 
 /// The measure of one source at (x, y); see the module docs.
 pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
+    measure_at(input, s, &neighbours(input, x, y))
+}
+
+#[inline]
+fn measure_at(input: &EdgeInput, s: Source, nb: &[[usize; 3]; 3]) -> f32 {
     match s {
         Source::Depth => {
-            let q = |i: usize| input.inv_depth[i];
+            let q = input.inv_depth;
             let (mut dxx, mut dyy, mut qmax) = (0.0f32, 0.0f32, 0.0f32);
             for (k, wk) in W.iter().enumerate() {
-                let o = k as isize - 1;
-                let c = q(at(input, x, y, o, 0));
-                dxx += wk
-                    * (q(at(input, x, y, 1, o)) + q(at(input, x, y, -1, o))
-                        - 2.0 * q(at(input, x, y, 0, o)));
-                dyy += W[k] * (q(at(input, x, y, o, 1)) + q(at(input, x, y, o, -1)) - 2.0 * c);
-                for j in -1..=1 {
-                    qmax = qmax.max(q(at(input, x, y, o, j)));
-                }
+                dxx += wk * (q[nb[k][2]] + q[nb[k][0]] - 2.0 * q[nb[k][1]]);
+                dyy += wk * (q[nb[2][k]] + q[nb[0][k]] - 2.0 * q[nb[1][k]]);
+                qmax = qmax.max(q[nb[k][0]]).max(q[nb[k][1]]).max(q[nb[k][2]]);
             }
             if qmax > 0.0 {
                 dxx.abs().max(dyy.abs()) / qmax
@@ -177,22 +177,21 @@ pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
         }
         Source::Normal => {
             let mut g2 = 0.0;
-            for c in 0..3 {
-                let (gx, gy) = gradient(input, input.normal[c], x, y);
+            for c in input.normal {
+                let (gx, gy) = gradient(c, nb);
                 g2 += gx * gx + gy * gy;
             }
             g2.sqrt()
         }
         Source::Id => {
-            let m = input.material[y * input.width + x];
+            let mat = input.material;
+            let m = mat[nb[1][1]];
             let mut f = 0.0;
-            for dy in -1..=1isize {
-                for dx in -1..=1isize {
-                    if (dx, dy) == (0, 0) {
-                        continue;
-                    }
-                    let weight = if dx == 0 || dy == 0 { 2.0 } else { 1.0 };
-                    if input.material[at(input, x, y, dx, dy)] != m {
+            for (r, row) in nb.iter().enumerate() {
+                for (c, &i) in row.iter().enumerate() {
+                    // Sides weigh 2, corners 1 (the centre never differs).
+                    let weight = if r == 1 || c == 1 { 2.0 } else { 1.0 };
+                    if mat[i] != m {
                         f += weight;
                     }
                 }
@@ -200,7 +199,7 @@ pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
             f / 12.0
         }
         Source::Color => {
-            let (gx, gy) = gradient(input, input.luma, x, y);
+            let (gx, gy) = gradient(input.luma, nb);
             (gx * gx + gy * gy).sqrt()
         }
     }
@@ -208,19 +207,23 @@ pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
 
 /// Squared distance transform in one dimension [Felzenszwalb12]: d[q] =
 /// min_p (q − p)² + f[p], by the lower envelope of parabolas.
-fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
+///
+/// The parabola intersections are in f64: q² of a supersampled row
+/// (7680² at 1920 × ssaa 4) is past f32's exact integers.
+fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f64]) {
     let n = f.len();
     if n == 0 {
         return;
     }
     let mut k = 0;
     v[0] = 0;
-    z[0] = f32::NEG_INFINITY;
-    z[1] = f32::INFINITY;
+    z[0] = f64::NEG_INFINITY;
+    z[1] = f64::INFINITY;
     for q in 1..n {
         loop {
             let p = v[k];
-            let s = ((f[q] + (q * q) as f32) - (f[p] + (p * p) as f32)) / (2.0 * (q - p) as f32);
+            let s = ((f[q] as f64 + (q * q) as f64) - (f[p] as f64 + (p * p) as f64))
+                / (2.0 * (q - p) as f64);
             if s <= z[k] && k > 0 {
                 k -= 1;
                 continue;
@@ -228,25 +231,25 @@ fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f32]) {
             if s <= z[k] {
                 // k == 0 and the new parabola is below everywhere left.
                 v[0] = q;
-                z[0] = f32::NEG_INFINITY;
-                z[1] = f32::INFINITY;
+                z[0] = f64::NEG_INFINITY;
+                z[1] = f64::INFINITY;
                 break;
             }
             k += 1;
             v[k] = q;
             z[k] = s;
-            z[k + 1] = f32::INFINITY;
+            z[k + 1] = f64::INFINITY;
             break;
         }
     }
     k = 0;
     for (q, dq) in d.iter_mut().enumerate() {
-        while z[k + 1] < q as f32 {
+        while z[k + 1] < q as f64 {
             k += 1;
         }
         let p = v[k];
-        let dx = q as f32 - p as f32;
-        *dq = dx * dx + f[p];
+        let dx = q as f64 - p as f64;
+        *dq = (dx * dx + f[p] as f64) as f32;
     }
 }
 
@@ -258,7 +261,7 @@ const FAR2: f32 = 1e20;
 pub fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
     let mut cols = vec![0.0f32; w * h]; // column-major
     cols.par_chunks_mut(h.max(1)).enumerate().for_each_init(
-        || (vec![0.0f32; h], vec![0usize; h], vec![0.0f32; h + 1]),
+        || (vec![0.0f32; h], vec![0usize; h], vec![0.0f64; h + 1]),
         |(f, v, z), (x, out)| {
             for y in 0..h {
                 f[y] = if mask[y * w + x] { 0.0 } else { FAR2 };
@@ -268,7 +271,7 @@ pub fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
     );
     let mut d = vec![0.0f32; w * h];
     d.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-        || (vec![0.0f32; w], vec![0usize; w], vec![0.0f32; w + 1]),
+        || (vec![0.0f32; w], vec![0usize; w], vec![0.0f64; w + 1]),
         |(f, v, z), (y, out)| {
             for x in 0..w {
                 f[x] = cols[x * h + y];
