@@ -259,16 +259,29 @@ const FAR2: f32 = 1e20;
 /// Euclidean distance from every sample to the nearest marked one
 /// (`FAR2.sqrt()` when there is none): columns, then rows.
 pub fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
+    // Columns: the mask is binary, so its 1-D transform is the squared
+    // distance to the nearest mark above or below (two sweeps).
     let mut cols = vec![0.0f32; w * h]; // column-major
-    cols.par_chunks_mut(h.max(1)).enumerate().for_each_init(
-        || (vec![0.0f32; h], vec![0usize; h], vec![0.0f64; h + 1]),
-        |(f, v, z), (x, out)| {
-            for y in 0..h {
-                f[y] = if mask[y * w + x] { 0.0 } else { FAR2 };
+    cols.par_chunks_mut(h.max(1))
+        .enumerate()
+        .for_each(|(x, out)| {
+            let mut last: Option<usize> = None;
+            for (y, o) in out.iter_mut().enumerate() {
+                if mask[y * w + x] {
+                    last = Some(y);
+                }
+                *o = last.map_or(FAR2, |l| ((y - l) as f32).powi(2));
             }
-            edt_1d(f, out, v, z);
-        },
-    );
+            let mut next: Option<usize> = None;
+            for (y, o) in out.iter_mut().enumerate().rev() {
+                if mask[y * w + x] {
+                    next = Some(y);
+                }
+                if let Some(n) = next {
+                    *o = o.min(((n - y) as f32).powi(2));
+                }
+            }
+        });
     let mut d = vec![0.0f32; w * h];
     d.par_chunks_mut(w.max(1)).enumerate().for_each_init(
         || (vec![0.0f32; w], vec![0usize; w], vec![0.0f64; w + 1]),
