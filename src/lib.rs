@@ -10,6 +10,7 @@ pub mod eval;
 pub mod fit_ltc;
 pub mod furnace;
 pub mod label;
+pub mod lines;
 pub mod material_desc;
 pub mod memory;
 pub mod mesh;

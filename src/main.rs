@@ -115,6 +115,10 @@ struct RenderArgs {
     /// (raw u32 triangle ids, see README).
     #[arg(long, value_name = "NAME=PATH")]
     aov: Vec<String>,
+    /// Also write the scene's stroke overlay (`[strokes]`) as SVG: one
+    /// <path> per polyline, grouped by edge kind.
+    #[arg(long, value_name = "PATH")]
+    svg_lines: Option<PathBuf>,
     /// Print per-pass times and triangle counts.
     #[arg(long)]
     stats: bool,
@@ -222,11 +226,19 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
         Aov::Id(p) => ("--aov id", p.as_path()),
     }));
     outs.extend(a.stats_json.as_deref().map(|p| ("--stats-json", p)));
+    if a.svg_lines.is_some() && scene.lines.strokes.is_none() {
+        return Err(format!(
+            "--svg-lines: {} has no [strokes] table to draw",
+            a.scene.display()
+        ));
+    }
+    outs.extend(a.svg_lines.as_deref().map(|p| ("--svg-lines", p)));
     let plan = outputs::plan(&outs, &scene.inputs, Some("-o"))?;
     let main_format = plan[0].image_format(ImageFormat::Png)?;
     for o in &plan[1..] {
         if o.flag != "--aov id"
             && o.flag != "--stats-json"
+            && o.flag != "--svg-lines"
             && o.image_format(ImageFormat::OpenExr)? != ImageFormat::OpenExr
         {
             return Err(format!(
@@ -260,6 +272,11 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
                 by_flag("--aov id").write(&output::encode_ids(tw, th, id_aov(&r.frame)?))?
             }
         }
+    }
+    if let (Some(_), Some(st)) = (&a.svg_lines, &scene.lines.strokes) {
+        let lines = st.polylines(&r.frame.buffers, r.ssaa as usize);
+        let doc = specula_npr::overlay::svg(&lines, &st.style, r.width, r.height);
+        by_flag("--svg-lines").write(doc.as_bytes())?;
     }
     r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
     if a.stats {

@@ -164,6 +164,9 @@ pub fn render_scene(
         .build()
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
     let repeat = settings.repeat.max(1);
+    for e in &scene.lines.extrusions {
+        e.set_ssaa(settings.ssaa);
+    }
     let post = settings.post();
     post.validate(target.width, target.height)?;
     let buffers = settings.buffers.union(post.buffers());

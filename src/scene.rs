@@ -35,6 +35,10 @@ struct SceneFile {
     posterize: Option<PosterizeDesc>,
     #[serde(default)]
     render: RenderDesc,
+    /// `[[outline]]` and `[strokes]` (lines.rs).
+    #[serde(default, rename = "outline")]
+    outlines: Vec<crate::lines::OutlineDesc>,
+    strokes: Option<crate::lines::StrokesDesc>,
 }
 
 /// `[posterize]`: quantize the tone-mapped image (npr/src/posterize.rs).
@@ -288,6 +292,12 @@ pub struct LoadedScene {
     /// Image-space stages the scene asks for, run after the tone map and
     /// before the encode (`[posterize]`).
     pub post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
+    /// The checked `[[outline]]` tables, in order, and `[strokes]` (lines.rs).
+    pub outlines: Vec<crate::lines::OutlineSpec>,
+    pub strokes: Option<crate::lines::StrokesSpec>,
+    /// The extrusion outlines' vertex stages and the stroke overlay
+    /// (lines.rs), for the renderer and `--svg-lines`.
+    pub lines: crate::lines::LineStages,
 }
 
 /// Reads a scene file from disk; relative paths resolve against its folder.
@@ -812,8 +822,22 @@ pub fn load_scene_str(
         check_radiometric("environment.uniform", e.uniform).map_err(&err)?;
         data.environment = Some(e.uniform);
     }
+    let outlines = desc
+        .outlines
+        .iter()
+        .enumerate()
+        .map(|(i, o)| o.check(&format!("outline[{i}]"), &|n| by_name.contains_key(n)))
+        .collect::<Result<Vec<_>, _>>()
+        .map_err(&err)?;
+    let strokes = desc
+        .strokes
+        .as_ref()
+        .map(|s| s.check())
+        .transpose()
+        .map_err(&err)?;
     data.materials = materials;
     data.geometry = vec![GeometryPass::main(data.triangles.len())];
+    let mut lines = crate::lines::build(&mut data, &outlines, strokes.as_ref(), &desc.output);
     data.validate().map_err(err)?;
     let mut post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>> = Vec::new();
     if let Some(p) = &desc.posterize {
@@ -825,11 +849,15 @@ pub fn load_scene_str(
         let stage = Posterize::new(p.levels, mode).map_err(|e| err(format!("posterize.{e}")))?;
         post_stages.push(std::sync::Arc::new(stage));
     }
+    post_stages.extend(std::mem::take(&mut lines.post));
     Ok(LoadedScene {
         data,
         output: desc.output,
         inputs,
         warnings,
         post_stages,
+        outlines,
+        strokes,
+        lines,
     })
 }

@@ -1,0 +1,114 @@
+//! NPR line passes on the benchmark frame (fixtures/scenes/sphere-grid.toml,
+//! 1920×1080, 194k triangles), each next to what it adds to:
+//! - `lines/visibility/{plain,extrusion}`: the geometry passes without and
+//!   with the extrusion outline pass (back faces pushed 2 px);
+//! - `lines/sobel`: the Sobel outline stage (depth, normal, id; edge
+//!   detection, distance-transform dilation, blend) on the frame buffers;
+//! - `lines/strokes`: silhouette + crease + boundary extraction for the
+//!   view, visibility against the depth buffer, chaining and tiny-skia
+//!   drawing; `lines/strokes_topology` the once-per-scene edge table.
+//!
+//! The aim is each pass at most 15 % of the benchmark frame's time
+//! (`frame` in `cargo bench -p specula-bench`). Run:
+//! `cargo bench -p specula-bench --bench lines`.
+
+use criterion::{criterion_group, criterion_main, Criterion};
+use specula_bench::{benchmark_scene, pool};
+use specula_npr::edges::{EdgeKind, MeshEdges};
+use specula_npr::extrude::{extrusion_passes, Extrude};
+use specula_npr::outline::Selection;
+use specula_npr::overlay::{draw, LineCap, LineJoin, StrokeStyle, Strokes};
+use specula_npr::sobel::{id_materials, Sobel, Source};
+use specula_raster::frame::{render_with, visibility, FrameStats, ShadePath};
+use specula_raster::post::{HdrImage, PostStage};
+use specula_raster::{BufferSet, Material, Target, Unlit};
+use std::sync::Arc;
+
+fn benches(c: &mut Criterion) {
+    let scene = benchmark_scene();
+    let plain = scene.data.clone();
+    let mut outlined = scene.data.clone();
+    let m = outlined.materials.len() as u32;
+    outlined.materials.push(Material::new(
+        "outline",
+        Unlit {
+            color: [0.0; 3],
+            intensity: 1.0,
+        },
+        true,
+    ));
+    let stage = Arc::new(Extrude::new(&outlined, 2.0));
+    let base = outlined.triangles.len() as u32;
+    let passes = extrusion_passes(&outlined, stage, m, base, &|_| true);
+    outlined.geometry.extend(passes);
+    outlined.validate().expect("outlined scene");
+    let target = Target::new(1920, 1080).expect("1080p");
+    let p = pool(2);
+
+    let mut g = c.benchmark_group("lines");
+    g.sample_size(10);
+    for (name, data) in [("plain", &plain), ("extrusion", &outlined)] {
+        g.bench_function(format!("visibility/{name}"), |b| {
+            b.iter(|| p.install(|| visibility(data, &target, &mut FrameStats::default())))
+        });
+    }
+
+    let set = BufferSet {
+        depth: true,
+        normal: true,
+        id: true,
+    };
+    let frame = p.install(|| render_with(&plain, target, ShadePath::Simd, set));
+    let img = HdrImage {
+        width: 1920,
+        height: 1080,
+        rgb: frame.buffers.color.clone(),
+    };
+    let sobel = Sobel {
+        sources: vec![
+            (Source::Depth, 0.1),
+            (Source::Normal, 0.4),
+            (Source::Id, 0.3),
+        ],
+        width: 2.0,
+        color: [0.0; 3],
+        antialias: true,
+        id_material: id_materials(&plain),
+        selection: Selection::all(),
+    };
+    g.bench_function("sobel", |b| {
+        b.iter(|| {
+            let mut im = img.clone();
+            p.install(|| sobel.apply(&mut im, &frame.buffers));
+            im
+        })
+    });
+
+    let kinds = [EdgeKind::Silhouette, EdgeKind::Crease, EdgeKind::Boundary];
+    g.bench_function("strokes_topology", |b| {
+        b.iter(|| MeshEdges::from_scene(&plain, &kinds, 60.0))
+    });
+    let strokes = Strokes {
+        edges: MeshEdges::from_scene(&plain, &kinds, 60.0),
+        camera: plain.camera.clone(),
+        style: StrokeStyle {
+            width: 1.5,
+            color: [0.0; 3],
+            taper: 0.0,
+            join: LineJoin::Round,
+            cap: LineCap::Round,
+        },
+    };
+    g.bench_function("strokes", |b| {
+        b.iter(|| {
+            p.install(|| {
+                let lines = strokes.polylines(&frame.buffers, 1);
+                draw(&lines, &strokes.style, 1920, 1080)
+            })
+        })
+    });
+    g.finish();
+}
+
+criterion_group!(lines, benches);
+criterion_main!(lines);

@@ -1,0 +1,439 @@
+//! Line extraction from mesh topology, for stroke overlays: which edges to
+//! draw (silhouette, crease, boundary, material), which parts of them the
+//! eye sees (the depth buffer), and how they chain into polylines.
+//!
+//! - Topology ([`MeshEdges::new`], once per scene): vertices are welded by
+//!   position (quantized to 1e-6 of the scene's extent, so split normals
+//!   and uv seams do not cut the mesh), each undirected edge records its
+//!   faces. Triangles that weld to zero area are left out.
+//! - Kinds: **boundary** (one face), **material** (two faces of different
+//!   materials), **crease** (face normals more than `crease_angle` apart),
+//!   all fixed; **silhouette** (one face toward the eye, the other away)
+//!   per view. An edge that is several kinds is drawn once, as the first
+//!   of silhouette, boundary, material, crease that is asked for.
+//! - Visibility ([`visible_pieces`]): points every sample along the
+//!   projected edge are compared with the depth buffer; a point is seen
+//!   when its view depth is at most (1 + [`DEPTH_BIAS`]) times the largest
+//!   depth of the samples within one output pixel (ssaa samples) around it
+//!   (3×3 without supersampling). The largest of the neighbourhood,
+//!   not the sample's own, is what keeps a silhouette (whose neighbours
+//!   show the background) and an edge where two objects touch (whose
+//!   neighbours show the edge's own faces) from being eaten by the bias.
+//! - Chaining ([`chain`]): wholly visible edges of one kind are joined at
+//!   shared vertices into polylines, going on through a vertex along the
+//!   unused edge that turns least; a chain that comes back to its start is
+//!   closed. Partly visible edges are polylines of their own.
+
+use glam::{Vec3, Vec4};
+use rayon::prelude::*;
+use specula_raster::camera::View;
+use specula_raster::SceneData;
+use std::collections::HashMap;
+
+/// What an edge is drawn as; the order is the drawing and SVG group order.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum EdgeKind {
+    Silhouette,
+    Boundary,
+    Material,
+    Crease,
+}
+
+impl EdgeKind {
+    pub const ALL: [EdgeKind; 4] = [
+        EdgeKind::Silhouette,
+        EdgeKind::Boundary,
+        EdgeKind::Material,
+        EdgeKind::Crease,
+    ];
+
+    pub fn name(self) -> &'static str {
+        match self {
+            EdgeKind::Silhouette => "silhouette",
+            EdgeKind::Boundary => "boundary",
+            EdgeKind::Material => "material",
+            EdgeKind::Crease => "crease",
+        }
+    }
+}
+
+/// Relative depth tolerance of the visibility test (module docs).
+pub const DEPTH_BIAS: f32 = 0.01;
+
+const NO_FACE: u32 = u32::MAX;
+
+#[derive(Clone, Copy, Debug)]
+struct Edge {
+    /// Welded vertex indices, a < b.
+    a: u32,
+    b: u32,
+    faces: [u32; 2],
+    /// The fixed kind (boundary, material, crease) asked for, if any.
+    fixed: Option<EdgeKind>,
+}
+
+/// The scene's edges, welded; see the module docs.
+#[derive(Clone, Debug)]
+pub struct MeshEdges {
+    /// Welded vertex positions.
+    pub points: Vec<Vec3>,
+    edges: Vec<Edge>,
+    face_normal: Vec<Vec3>,
+    face_point: Vec<Vec3>,
+    silhouettes: bool,
+}
+
+impl MeshEdges {
+    /// Topology of `triangles` (indices into `positions`) with per-triangle
+    /// `materials`; `kinds` are the kinds to draw, `crease_angle_deg` the
+    /// crease threshold.
+    pub fn new(
+        positions: &[Vec3],
+        triangles: &[[u32; 3]],
+        materials: &[u32],
+        kinds: &[EdgeKind],
+        crease_angle_deg: f32,
+    ) -> MeshEdges {
+        // Weld on a grid of 1e-6 of the extent.
+        let extent = positions
+            .iter()
+            .filter(|p| p.is_finite())
+            .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        let q = (extent * 1e-6).max(f32::MIN_POSITIVE);
+        let mut index: HashMap<[i64; 3], u32> = HashMap::new();
+        let mut points = Vec::new();
+        let mut weld = vec![u32::MAX; positions.len()];
+        for (i, p) in positions.iter().enumerate() {
+            if !p.is_finite() {
+                continue;
+            }
+            let key = (*p / q).round().to_array().map(|c| c as i64);
+            weld[i] = *index.entry(key).or_insert_with(|| {
+                points.push(*p);
+                points.len() as u32 - 1
+            });
+        }
+        let mut face_normal = Vec::with_capacity(triangles.len());
+        let mut face_point = Vec::with_capacity(triangles.len());
+        let mut map: HashMap<(u32, u32), usize> = HashMap::new();
+        let mut edges: Vec<Edge> = Vec::new();
+        let mut extra_faces = vec![0u8; 0];
+        for (f, t) in triangles.iter().enumerate() {
+            let w = t.map(|v| weld.get(v as usize).copied().unwrap_or(u32::MAX));
+            let ok = !w.contains(&u32::MAX) && w[0] != w[1] && w[1] != w[2] && w[0] != w[2];
+            let n = if ok {
+                let [a, b, c] = w.map(|v| points[v as usize]);
+                (b - a).cross(c - a).try_normalize()
+            } else {
+                None
+            };
+            face_normal.push(n.unwrap_or(Vec3::ZERO));
+            face_point.push(positions[t[0] as usize]);
+            if n.is_none() {
+                continue;
+            }
+            for k in 0..3 {
+                let (u, v) = (w[k], w[(k + 1) % 3]);
+                let key = (u.min(v), u.max(v));
+                match map.get(&key) {
+                    Some(&e) => {
+                        if edges[e].faces[1] == NO_FACE {
+                            edges[e].faces[1] = f as u32;
+                        } else {
+                            // A third face: a non-manifold edge; drawn as a
+                            // boundary (it bounds a sheet).
+                            extra_faces[e] = 1;
+                        }
+                    }
+                    None => {
+                        map.insert(key, edges.len());
+                        edges.push(Edge {
+                            a: key.0,
+                            b: key.1,
+                            faces: [f as u32, NO_FACE],
+                            fixed: None,
+                        });
+                        extra_faces.push(0);
+                    }
+                }
+            }
+        }
+        let cos_crease = crease_angle_deg.to_radians().cos();
+        for (e, extra) in edges.iter_mut().zip(&extra_faces) {
+            let [f0, f1] = e.faces;
+            let boundary = f1 == NO_FACE || *extra > 0;
+            let (material, crease) = if boundary {
+                (false, false)
+            } else {
+                let (f0, f1) = (f0 as usize, f1 as usize);
+                (
+                    materials[f0] != materials[f1],
+                    face_normal[f0].dot(face_normal[f1]) < cos_crease,
+                )
+            };
+            // The first kind asked for, in priority order, that applies.
+            e.fixed = [
+                (EdgeKind::Boundary, boundary),
+                (EdgeKind::Material, material),
+                (EdgeKind::Crease, crease),
+            ]
+            .into_iter()
+            .find(|(k, on)| *on && kinds.contains(k))
+            .map(|(k, _)| k);
+        }
+        MeshEdges {
+            points,
+            edges,
+            face_normal,
+            face_point,
+            silhouettes: kinds.contains(&EdgeKind::Silhouette),
+        }
+    }
+
+    /// The scene's main-pass triangles (the ones the scene's meshes made).
+    pub fn from_scene(scene: &SceneData, kinds: &[EdgeKind], crease_angle_deg: f32) -> MeshEdges {
+        MeshEdges::new(
+            &scene.positions,
+            &scene.triangles,
+            &scene.tri_material,
+            kinds,
+            crease_angle_deg,
+        )
+    }
+
+    pub fn edge_count(&self) -> usize {
+        self.edges.len()
+    }
+
+    /// Every edge drawn from `eye`, with its kind: (welded a, welded b, kind).
+    pub fn classify(&self, eye: Vec3) -> Vec<(u32, u32, EdgeKind)> {
+        self.edges
+            .par_iter()
+            .with_min_len(4096)
+            .filter_map(|e| self.kind(e, eye).map(|k| (e.a, e.b, k)))
+            .collect()
+    }
+
+    fn kind(&self, e: &Edge, eye: Vec3) -> Option<EdgeKind> {
+        if self.silhouettes && e.faces[1] != NO_FACE {
+            let facing = |f: u32| {
+                let f = f as usize;
+                self.face_normal[f].dot(eye - self.face_point[f]) > 0.0
+            };
+            if facing(e.faces[0]) != facing(e.faces[1]) {
+                return Some(EdgeKind::Silhouette);
+            }
+        }
+        e.fixed
+    }
+}
+
+/// A polyline in output pixels (x right, y down, pixel centres at +½).
+#[derive(Clone, Debug, PartialEq)]
+pub struct Polyline {
+    pub kind: EdgeKind,
+    pub points: Vec<[f32; 2]>,
+    /// The last point joins the first.
+    pub closed: bool,
+}
+
+/// A visible stretch of one edge: its points in output pixels and, when
+/// the whole edge is visible, its welded end vertices (for chaining).
+#[derive(Clone, Debug)]
+pub struct Piece {
+    pub kind: EdgeKind,
+    pub a: [f32; 2],
+    pub b: [f32; 2],
+    pub ends: Option<(u32, u32)>,
+}
+
+/// Depth-buffer view for [`visible_pieces`]: view depth per sample, +inf
+/// where nothing is hit, at `width × height` samples; `ssaa` samples per
+/// output pixel side.
+pub struct DepthView<'a> {
+    pub depth: &'a [f32],
+    pub width: usize,
+    pub height: usize,
+    pub ssaa: usize,
+}
+
+impl DepthView<'_> {
+    fn seen(&self, sx: f32, sy: f32, w: f32) -> bool {
+        if !(sx >= 0.0 && sy >= 0.0 && sx < self.width as f32 && sy < self.height as f32) {
+            return false;
+        }
+        let (x, y, r) = (sx as usize, sy as usize, self.ssaa.max(1));
+        let mut dmax = 0.0f32;
+        for yy in y.saturating_sub(r)..(y + r + 1).min(self.height) {
+            for xx in x.saturating_sub(r)..(x + r + 1).min(self.width) {
+                dmax = dmax.max(self.depth[yy * self.width + xx]);
+            }
+        }
+        w <= dmax * (1.0 + DEPTH_BIAS)
+    }
+}
+
+/// The visible pieces of `edges` (module docs), in edge order.
+pub fn visible_pieces(
+    mesh: &MeshEdges,
+    edges: &[(u32, u32, EdgeKind)],
+    view: &View,
+    near: f32,
+    depth: &DepthView,
+) -> Vec<Piece> {
+    let m = view.view_proj;
+    let (sw, sh) = (depth.width as f32, depth.height as f32);
+    let inv_ss = 1.0 / depth.ssaa as f32;
+    let pieces: Vec<Vec<Piece>> = edges
+        .par_iter()
+        .with_min_len(256)
+        .map(|&(a, b, kind)| {
+            let mut out = Vec::new();
+            let ca = m * Vec4::from((mesh.points[a as usize], 1.0));
+            let cb = m * Vec4::from((mesh.points[b as usize], 1.0));
+            // Keep the part in front of the near plane (clip space is
+            // linear along the edge).
+            let (mut t0, mut t1) = (0.0f32, 1.0f32);
+            if ca.w < near && cb.w < near {
+                return out;
+            }
+            if ca.w < near {
+                t0 = (near - ca.w) / (cb.w - ca.w);
+            } else if cb.w < near {
+                t1 = (near - ca.w) / (cb.w - ca.w);
+            }
+            let at = |t: f32| {
+                let c = ca + (cb - ca) * t;
+                let (sx, sy) = ((c.x / c.w * 0.5 + 0.5) * sw, (0.5 - c.y / c.w * 0.5) * sh);
+                (sx, sy, c.w)
+            };
+            let (p0, p1) = (at(t0), at(t1));
+            let len = ((p1.0 - p0.0).powi(2) + (p1.1 - p0.1).powi(2)).sqrt();
+            if !len.is_finite() {
+                return out;
+            }
+            // One test per sample along the edge; edges far off screen are
+            // capped (their points outside the image are hidden anyway).
+            let n = (len.ceil() as usize).clamp(1, 4 * (depth.width + depth.height)) + 1;
+            let mut run: Option<(usize, (f32, f32))> = None;
+            let whole = t0 == 0.0 && t1 == 1.0;
+            let mut close = |start: (usize, (f32, f32)), end: (usize, (f32, f32))| {
+                let full = whole && start.0 == 0 && end.0 == n - 1;
+                out.push(Piece {
+                    kind,
+                    a: [start.1 .0 * inv_ss, start.1 .1 * inv_ss],
+                    b: [end.1 .0 * inv_ss, end.1 .1 * inv_ss],
+                    ends: full.then_some((a, b)),
+                });
+            };
+            let mut last = (0usize, (0.0f32, 0.0f32));
+            for i in 0..n {
+                // Perspective-correct: the clip-space point at parameter t.
+                let t = t0 + (t1 - t0) * i as f32 / (n - 1) as f32;
+                let (sx, sy, w) = at(t);
+                let seen = depth.seen(sx, sy, w);
+                match (seen, run) {
+                    (true, None) => run = Some((i, (sx, sy))),
+                    (false, Some(start)) => {
+                        if last.0 > start.0 {
+                            close(start, last);
+                        }
+                        run = None;
+                    }
+                    _ => {}
+                }
+                last = (i, (sx, sy));
+            }
+            if let Some(start) = run {
+                if last.0 > start.0 {
+                    close(start, last);
+                }
+            }
+            out
+        })
+        .collect();
+    pieces.into_iter().flatten().collect()
+}
+
+/// Chains pieces into polylines (module docs), kinds in [`EdgeKind`]
+/// order; deterministic for a given piece order.
+pub fn chain(pieces: &[Piece], points3: &[Vec3]) -> Vec<Polyline> {
+    let mut out = Vec::new();
+    for kind in EdgeKind::ALL {
+        let ps: Vec<&Piece> = pieces.iter().filter(|p| p.kind == kind).collect();
+        // Vertex → (piece, other end) of the whole pieces at it.
+        let mut at: HashMap<u32, Vec<(usize, u32)>> = HashMap::new();
+        for (i, p) in ps.iter().enumerate() {
+            if let Some((a, b)) = p.ends {
+                at.entry(a).or_default().push((i, b));
+                at.entry(b).or_default().push((i, a));
+            }
+        }
+        let mut used = vec![false; ps.len()];
+        let screen = |p: &Piece, v: u32| {
+            let (a, _) = p.ends.expect("whole piece");
+            if v == a {
+                p.a
+            } else {
+                p.b
+            }
+        };
+        // Open chains first (from vertices of odd degree), then loops.
+        let mut starts: Vec<u32> = at
+            .iter()
+            .filter(|(_, l)| l.len() % 2 == 1)
+            .map(|(v, _)| *v)
+            .collect();
+        starts.sort_unstable();
+        let mut rest: Vec<u32> = at.keys().copied().collect();
+        rest.sort_unstable();
+        starts.extend(rest);
+        for s in starts {
+            while let Some(&(first, _)) = at[&s].iter().find(|(i, _)| !used[*i]) {
+                let mut points = vec![screen(ps[first], s)];
+                let (mut cur, mut piece) = (s, first);
+                loop {
+                    used[piece] = true;
+                    let (a, b) = ps[piece].ends.expect("whole piece");
+                    let next = if cur == a { b } else { a };
+                    points.push(screen(ps[piece], next));
+                    let prev = std::mem::replace(&mut cur, next);
+                    if cur == s {
+                        break;
+                    }
+                    // Go on along the unused edge that turns least.
+                    let dir = (points3[cur as usize] - points3[prev as usize]).normalize_or_zero();
+                    let cand = at[&cur].iter().filter(|(i, _)| !used[*i]).max_by(|x, y| {
+                        let d = |v: u32| {
+                            (points3[v as usize] - points3[cur as usize])
+                                .normalize_or_zero()
+                                .dot(dir)
+                        };
+                        d(x.1).total_cmp(&d(y.1)).then(y.0.cmp(&x.0))
+                    });
+                    match cand {
+                        Some(&(i, _)) => piece = i,
+                        None => break,
+                    }
+                }
+                let closed = cur == s && points.len() > 2;
+                if closed {
+                    points.pop();
+                }
+                out.push(Polyline {
+                    kind,
+                    points,
+                    closed,
+                });
+            }
+        }
+        for p in ps.iter().filter(|p| p.ends.is_none()) {
+            out.push(Polyline {
+                kind,
+                points: vec![p.a, p.b],
+                closed: false,
+            });
+        }
+    }
+    out
+}

@@ -1,0 +1,531 @@
+//! Outline by image: edges in the frame buffers (`detect_edges`), widened
+//! to the line width by a Euclidean distance transform (`dilate`), and
+//! blended over the image ([`crate::outline::composite`]).
+//!
+//! Each source has its own measure and threshold; a sample is on an edge
+//! when any source's measure exceeds its threshold. With the Sobel weights
+//! w = (1, 2, 1)/4 across the derivative's direction:
+//! - **depth**: the Sobel-smoothed *second* difference of q = 1/w (0 where
+//!   nothing is hit), divided by the largest q of the 3×3 neighbourhood:
+//!   max(|Σ w_k (q(x+1) + q(x−1) − 2q(x))|, the same along y) / q_max.
+//!   1/w is affine in screen space across any plane, so a flat floor
+//!   however slanted gives 0 (the first derivative, plain Sobel, is
+//!   constant and non-zero there and would draw it); a step from depth w₁
+//!   to w₂ > w₁ gives 1 − w₁/w₂ on both sides of the step.
+//! - **normal**: Sobel gradient of the three normal components,
+//!   √(Σ Gx² + Gy²); two faces at angle θ give 2 sin(θ/2) along their
+//!   edge (0.25 ≈ 14°), a surface against the background 1.
+//! - **id**: material edges. Ids are labels, whose gradient means nothing:
+//!   the measure is the Sobel-weighted fraction (corner 1, side 2, of 12)
+//!   of the eight neighbours showing another material (or nothing): 1/3
+//!   along a straight boundary.
+//! - **color**: Sobel gradient magnitude of the luminance of the linear
+//!   colour clamped to [0, 1]; a step of Δ gives Δ.
+//!
+//! A step marks the samples on both sides, a band two samples wide whose
+//! middle is the step. The line of width W (output pixels × ssaa samples)
+//! covers the samples within W/2 of that middle: coverage
+//! clamp(W/2 − d, 0, 1) with d the distance to the nearest marked sample
+//! (anti-aliased), or 1 where d ≤ W/2 − ½ (aliased). Every stage works on
+//! rows or columns in parallel, each written by one task, so the result
+//! does not depend on the thread count.
+
+use crate::outline::{composite, ssaa_of, Selection};
+use rayon::prelude::*;
+use specula_raster::post::{HdrImage, PostStage};
+use specula_raster::target::MISS;
+use specula_raster::{BufferSet, FrameBuffers};
+
+/// What a Sobel outline looks at.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Source {
+    Depth,
+    Normal,
+    Id,
+    Color,
+}
+
+/// The post stage.
+#[derive(Clone, Debug)]
+pub struct Sobel {
+    /// Each source with its threshold.
+    pub sources: Vec<(Source, f32)>,
+    /// Line width in output pixels.
+    pub width: f32,
+    pub color: [f32; 3],
+    pub antialias: bool,
+    /// Material of each visibility-buffer id (for the id source).
+    pub id_material: Vec<u32>,
+    pub selection: Selection,
+}
+
+/// Material index of every id the scene's passes write (index = id).
+pub fn id_materials(scene: &specula_raster::SceneData) -> Vec<u32> {
+    let end = scene
+        .geometry
+        .iter()
+        .map(|p| p.ids().end)
+        .max()
+        .unwrap_or(0) as usize;
+    let map = specula_raster::geometry::IdMap::new(&scene.geometry);
+    let mut out = vec![u32::MAX; end];
+    for p in &scene.geometry {
+        for id in p.ids() {
+            out[id as usize] = map.look_up(id as u32, &scene.tri_material).1;
+        }
+    }
+    out
+}
+
+/// Read-only views of the buffers a detection reads, at frame size.
+pub struct EdgeInput<'a> {
+    pub width: usize,
+    pub height: usize,
+    /// 1/w of the view depth w, 0 where nothing is hit ([`inverse_depth`];
+    /// empty if depth is not a source).
+    pub inv_depth: &'a [f32],
+    pub normal: [&'a [f32]; 3],
+    /// Material per sample, u32::MAX where nothing is hit.
+    pub material: &'a [u32],
+    /// Luminance per sample.
+    pub luma: &'a [f32],
+}
+
+const W: [f32; 3] = [0.25, 0.5, 0.25];
+
+/// q = 1/w per sample, 0 where nothing is hit (w infinite, NaN or ≤ 0).
+pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
+    depth
+        .par_iter()
+        .with_min_len(4096)
+        .map(|&d| {
+            if d.is_finite() && d > 0.0 {
+                1.0 / d
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+/// Marks edge samples (1) in a `width × height` mask; see the module docs.
+/// `keep(i)` says whether sample i may carry a line (material selection).
+pub fn detect_edges(
+    input: &EdgeInput,
+    sources: &[(Source, f32)],
+    keep: &(dyn Fn(usize) -> bool + Sync),
+) -> Vec<bool> {
+    let (w, h) = (input.width, input.height);
+    let mut out = vec![false; w * h];
+    out.par_chunks_mut(w.max(1))
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, o) in row.iter_mut().enumerate() {
+                let i = y * w + x;
+                if !keep(i) {
+                    continue;
+                }
+                *o = sources.iter().any(|&(s, t)| measure(input, s, x, y) > t);
+            }
+        });
+    out
+}
+
+/// Sample indices of the 3×3 neighbourhood of (x, y), `[dy + 1][dx + 1]`,
+/// clamped to the image.
+#[inline]
+fn neighbours(input: &EdgeInput, x: usize, y: usize) -> [[usize; 3]; 3] {
+    let w = input.width;
+    let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
+    let ys = [y.saturating_sub(1), y, (y + 1).min(input.height - 1)];
+    ys.map(|yy| xs.map(|xx| yy * w + xx))
+}
+
+/// Sobel gradient (Gx, Gy) of `f` over the neighbourhood `nb`, weights
+/// (1, 2, 1)/4 across: a step of Δ gives Δ.
+#[inline]
+fn gradient(f: &[f32], nb: &[[usize; 3]; 3]) -> (f32, f32) {
+    let (mut gx, mut gy) = (0.0, 0.0);
+    for (k, wk) in W.iter().enumerate() {
+        gx += wk * (f[nb[k][2]] - f[nb[k][0]]);
+        gy += wk * (f[nb[2][k]] - f[nb[0][k]]);
+    }
+    (gx, gy)
+}
+
+/// The measure of one source at (x, y); see the module docs.
+pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
+    measure_at(input, s, &neighbours(input, x, y))
+}
+
+#[inline]
+fn measure_at(input: &EdgeInput, s: Source, nb: &[[usize; 3]; 3]) -> f32 {
+    match s {
+        Source::Depth => {
+            let q = input.inv_depth;
+            let (mut dxx, mut dyy, mut qmax) = (0.0f32, 0.0f32, 0.0f32);
+            for (k, wk) in W.iter().enumerate() {
+                dxx += wk * (q[nb[k][2]] + q[nb[k][0]] - 2.0 * q[nb[k][1]]);
+                dyy += wk * (q[nb[2][k]] + q[nb[0][k]] - 2.0 * q[nb[1][k]]);
+                qmax = qmax.max(q[nb[k][0]]).max(q[nb[k][1]]).max(q[nb[k][2]]);
+            }
+            if qmax > 0.0 {
+                dxx.abs().max(dyy.abs()) / qmax
+            } else {
+                0.0
+            }
+        }
+        Source::Normal => {
+            let mut g2 = 0.0;
+            for c in input.normal {
+                let (gx, gy) = gradient(c, nb);
+                g2 += gx * gx + gy * gy;
+            }
+            g2.sqrt()
+        }
+        Source::Id => {
+            let mat = input.material;
+            let m = mat[nb[1][1]];
+            let mut f = 0.0;
+            for (r, row) in nb.iter().enumerate() {
+                for (c, &i) in row.iter().enumerate() {
+                    // Sides weigh 2, corners 1 (the centre never differs).
+                    let weight = if r == 1 || c == 1 { 2.0 } else { 1.0 };
+                    if mat[i] != m {
+                        f += weight;
+                    }
+                }
+            }
+            f / 12.0
+        }
+        Source::Color => {
+            let (gx, gy) = gradient(input.luma, nb);
+            (gx * gx + gy * gy).sqrt()
+        }
+    }
+}
+
+/// Squared distance transform in one dimension [Felzenszwalb12]: d[q] =
+/// min_p (q − p)² + f[p], by the lower envelope of parabolas.
+///
+/// The parabola intersections are in f64: q² of a supersampled row
+/// (7680² at 1920 × ssaa 4) is past f32's exact integers.
+fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f64]) {
+    let n = f.len();
+    if n == 0 {
+        return;
+    }
+    let mut k = 0;
+    v[0] = 0;
+    z[0] = f64::NEG_INFINITY;
+    z[1] = f64::INFINITY;
+    for q in 1..n {
+        loop {
+            let p = v[k];
+            let s = ((f[q] as f64 + (q * q) as f64) - (f[p] as f64 + (p * p) as f64))
+                / (2.0 * (q - p) as f64);
+            if s <= z[k] && k > 0 {
+                k -= 1;
+                continue;
+            }
+            if s <= z[k] {
+                // k == 0 and the new parabola is below everywhere left.
+                v[0] = q;
+                z[0] = f64::NEG_INFINITY;
+                z[1] = f64::INFINITY;
+                break;
+            }
+            k += 1;
+            v[k] = q;
+            z[k] = s;
+            z[k + 1] = f64::INFINITY;
+            break;
+        }
+    }
+    k = 0;
+    for (q, dq) in d.iter_mut().enumerate() {
+        while z[k + 1] < q as f64 {
+            k += 1;
+        }
+        let p = v[k];
+        let dx = q as f64 - p as f64;
+        *dq = (dx * dx + f[p] as f64) as f32;
+    }
+}
+
+/// "Infinitely" far, squared: finite so the parabola algebra stays finite.
+const FAR2: f32 = 1e20;
+
+/// Euclidean distance from every sample to the nearest marked one
+/// (`FAR2.sqrt()` when there is none): columns, then rows.
+pub fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
+    // Columns: the mask is binary, so its 1-D transform is the squared
+    // distance to the nearest mark above or below (two sweeps).
+    let mut cols = vec![0.0f32; w * h]; // column-major
+    cols.par_chunks_mut(h.max(1))
+        .enumerate()
+        .for_each(|(x, out)| {
+            let mut last: Option<usize> = None;
+            for (y, o) in out.iter_mut().enumerate() {
+                if mask[y * w + x] {
+                    last = Some(y);
+                }
+                *o = last.map_or(FAR2, |l| ((y - l) as f32).powi(2));
+            }
+            let mut next: Option<usize> = None;
+            for (y, o) in out.iter_mut().enumerate().rev() {
+                if mask[y * w + x] {
+                    next = Some(y);
+                }
+                if let Some(n) = next {
+                    *o = o.min(((n - y) as f32).powi(2));
+                }
+            }
+        });
+    let mut d = vec![0.0f32; w * h];
+    d.par_chunks_mut(w.max(1)).enumerate().for_each_init(
+        || (vec![0.0f32; w], vec![0usize; w], vec![0.0f64; w + 1]),
+        |(f, v, z), (y, out)| {
+            for x in 0..w {
+                f[x] = cols[x * h + y];
+            }
+            edt_1d(f, out, v, z);
+            for o in out.iter_mut() {
+                *o = o.sqrt();
+            }
+        },
+    );
+    d
+}
+
+/// Coverage of a line `width` samples wide around the marked band (module
+/// docs).
+pub fn dilate(mask: &[bool], w: usize, h: usize, width: f32, antialias: bool) -> Vec<f32> {
+    let d = distance(mask, w, h);
+    let half = width * 0.5;
+    d.into_par_iter()
+        .map(|d| {
+            if antialias {
+                (half - d).clamp(0.0, 1.0)
+            } else if d <= (half - 0.5).max(0.0) {
+                1.0
+            } else {
+                0.0
+            }
+        })
+        .collect()
+}
+
+impl Sobel {
+    fn has(&self, s: Source) -> bool {
+        self.sources.iter().any(|(t, _)| *t == s)
+    }
+
+    /// Per-sample coverage over `frame` for a stage at supersampling `ssaa`.
+    pub fn coverage_map(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<f32> {
+        let (w, h) = (frame.width as usize, frame.height as usize);
+        let material: Vec<u32> = if self.has(Source::Id) {
+            frame
+                .id
+                .iter()
+                .map(|&id| {
+                    if id == MISS {
+                        u32::MAX
+                    } else {
+                        self.id_material
+                            .get(id as usize)
+                            .copied()
+                            .unwrap_or(u32::MAX)
+                    }
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let luma: Vec<f32> = if self.has(Source::Color) {
+            let c = &frame.color;
+            (0..c.len())
+                .map(|i| {
+                    let [r, g, b] = c.get(i).map(|v| if v > 0.0 { v.min(1.0) } else { 0.0 });
+                    0.2126 * r + 0.7152 * g + 0.0722 * b
+                })
+                .collect()
+        } else {
+            Vec::new()
+        };
+        let inv_depth = if self.has(Source::Depth) {
+            inverse_depth(&frame.depth)
+        } else {
+            Vec::new()
+        };
+        let input = EdgeInput {
+            width: w,
+            height: h,
+            inv_depth: &inv_depth,
+            normal: [&frame.normal.r, &frame.normal.g, &frame.normal.b],
+            material: &material,
+            luma: &luma,
+        };
+        let ids = &frame.id;
+        let keep = |i: usize| !self.selection.needs_ids() || self.selection.contains(ids[i]);
+        let mask = detect_edges(&input, &self.sources, &keep);
+        dilate(&mask, w, h, self.width * ssaa as f32, self.antialias)
+    }
+}
+
+impl PostStage for Sobel {
+    fn name(&self) -> &str {
+        "outline-sobel"
+    }
+
+    fn buffers(&self) -> BufferSet {
+        BufferSet {
+            depth: self.has(Source::Depth),
+            normal: self.has(Source::Normal),
+            id: self.has(Source::Id) || self.selection.needs_ids(),
+        }
+    }
+
+    fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
+        let cov = self.coverage_map(frame, ssaa_of(img, frame));
+        composite(img, frame, &cov, self.color);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Depth of a plane seen by a pinhole camera at pixel (x, y): the ray
+    /// through the pixel centre hits n·p = c at t, w = t · (ray · forward),
+    /// written here independently of the detector.
+    fn plane_depth(x: usize, y: usize, w: usize, h: usize, n: [f64; 3], c: f64) -> f32 {
+        let tan = (30f64.to_radians()).tan();
+        let nx = (2.0 * (x as f64 + 0.5) / w as f64 - 1.0) * tan * w as f64 / h as f64;
+        let ny = (1.0 - 2.0 * (y as f64 + 0.5) / h as f64) * tan;
+        let d = [nx, ny, -1.0]; // camera at the origin looking down −z
+        let t = c / (n[0] * d[0] + n[1] * d[1] + n[2] * d[2]);
+        t as f32 // w = t · (d · forward) with d · forward = 1
+    }
+
+    fn edges_of_depth(depth: &[f32], w: usize, h: usize, t: f32) -> Vec<bool> {
+        let inv = inverse_depth(depth);
+        let input = EdgeInput {
+            width: w,
+            height: h,
+            inv_depth: &inv,
+            normal: [&[], &[], &[]],
+            material: &[],
+            luma: &[],
+        };
+        detect_edges(&input, &[(Source::Depth, t)], &|_| true)
+    }
+
+    #[test]
+    fn a_slanted_floor_gives_no_depth_line_and_a_step_does() {
+        let (w, h) = (96, 64);
+        // A floor y = −1 seen at a grazing angle: depth from ~1 at the
+        // bottom rows to ~60 near the horizon, its first derivative large.
+        let n = [0.02, 1.0, 0.0f64];
+        let n_len = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        let n = n.map(|v| v / n_len);
+        let floor: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                if y < h / 2 + 2 {
+                    f32::INFINITY // sky above the horizon
+                } else {
+                    plane_depth(x, y, w, h, n, -1.0 / n_len)
+                }
+            })
+            .collect();
+        assert!(floor[(h - 1) * w] < 2.0 && floor[(h / 2 + 2) * w] > 10.0);
+        // Plain Sobel's first derivative of depth is large on the floor.
+        let first = (floor[(h / 2 + 6) * w + 5] - floor[(h / 2 + 8) * w + 5]).abs();
+        assert!(first > 1.0, "{first}");
+        let e = edges_of_depth(&floor, w, h, 0.05);
+        let on_floor = (h / 2 + 4..h).flat_map(|y| (0..w).map(move |x| (x, y)));
+        let lines: Vec<_> = on_floor.filter(|(x, y)| e[y * w + x]).collect();
+        assert!(lines.is_empty(), "lines on the floor at {lines:?}");
+
+        // A box in front of a wall: depth 2 inside x in [30, 60), 4 outside.
+        let step: Vec<f32> = (0..w * h)
+            .map(|i| {
+                if (30..60).contains(&(i % w)) {
+                    2.0
+                } else {
+                    4.0
+                }
+            })
+            .collect();
+        let e = edges_of_depth(&step, w, h, 0.25);
+        for y in 0..h {
+            let row: Vec<usize> = (0..w).filter(|x| e[y * w + x]).collect();
+            // 1 − 2/4 = 0.5 > 0.25 on both sides of each step; nothing else.
+            assert_eq!(row, vec![29, 30, 59, 60], "row {y}");
+        }
+        // Above the measure (0.5), the step draws nothing.
+        assert!(!edges_of_depth(&step, w, h, 0.55).contains(&true));
+    }
+
+    #[test]
+    fn normal_and_id_measures_match_their_formulas() {
+        let (w, h) = (20, 10);
+        // Two faces meeting at x = 10 with normals 90° apart.
+        let s = std::f32::consts::FRAC_1_SQRT_2;
+        let nx: Vec<f32> = (0..w * h)
+            .map(|i| if i % w < 10 { -s } else { s })
+            .collect();
+        let ny = vec![0.0; w * h];
+        let nz = vec![s; w * h];
+        let mat: Vec<u32> = (0..w * h).map(|i| (i % w >= 10) as u32).collect();
+        let input = EdgeInput {
+            width: w,
+            height: h,
+            inv_depth: &[],
+            normal: [&nx, &ny, &nz],
+            material: &mat,
+            luma: &[],
+        };
+        let want = 2.0 * (std::f32::consts::FRAC_PI_4).sin(); // 2 sin(θ/2)
+        assert!((measure(&input, Source::Normal, 9, 5) - want).abs() < 1e-6);
+        assert!((measure(&input, Source::Normal, 10, 5) - want).abs() < 1e-6);
+        assert_eq!(measure(&input, Source::Normal, 8, 5), 0.0);
+        assert!((measure(&input, Source::Id, 9, 5) - 1.0 / 3.0).abs() < 1e-6);
+        assert_eq!(measure(&input, Source::Id, 3, 5), 0.0);
+    }
+
+    #[test]
+    fn distance_transform_equals_brute_force() {
+        let (w, h) = (37, 23);
+        let mask: Vec<bool> = (0..w * h).map(|i| (i * 7919) % 97 == 3).collect();
+        let d = distance(&mask, w, h);
+        for (i, di) in d.iter().enumerate() {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            let best = (0..w * h)
+                .filter(|&j| mask[j])
+                .map(|j| {
+                    let (a, b) = ((j % w) as f32, (j / w) as f32);
+                    ((x - a).powi(2) + (y - b).powi(2)).sqrt()
+                })
+                .fold(f32::INFINITY, f32::min);
+            assert!((di - best).abs() < 1e-4, "{i}: {di} vs {best}");
+        }
+    }
+
+    #[test]
+    fn a_dilated_line_has_the_requested_width() {
+        // A vertical step marked on columns 49 and 50: the line of width W
+        // is centred on x = 50 (between them) and its ink sums to W per row.
+        let (w, h) = (100, 8);
+        let mask: Vec<bool> = (0..w * h).map(|i| i % w == 49 || i % w == 50).collect();
+        for width in [2.0f32, 3.0, 4.5, 8.0] {
+            let c = dilate(&mask, w, h, width, true);
+            let ink: f32 = c[3 * w..4 * w].iter().sum();
+            assert!((ink - width).abs() < 1e-5, "width {width}: {ink}");
+            let hard = dilate(&mask, w, h, width, false);
+            let ink: f32 = hard[3 * w..4 * w].iter().sum();
+            assert!((ink - width).abs() <= 1.0, "width {width} aliased: {ink}");
+        }
+    }
+}

@@ -1,0 +1,547 @@
+//! The scene file's line tables: `[[outline]]` (any number, drawn in
+//! order) and `[strokes]` (npr/src/outline.rs, sobel.rs, extrude.rs,
+//! edges.rs, overlay.rs). Parsed with serde like the rest of the scene,
+//! every field checked once here with a message naming it; the checked
+//! description then becomes post stages and geometry passes.
+
+use serde::Deserialize;
+use std::collections::BTreeMap;
+
+/// One `[[outline]]` table as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct OutlineDesc {
+    method: MethodDesc,
+    /// Line width in output pixels (extrusion, sobel).
+    width: Option<f32>,
+    #[serde(default)]
+    color: [f32; 3],
+    /// shading: n·v below which the surface is darkened; sobel: gradient
+    /// magnitude, one number for every source or a table per source.
+    threshold: Option<ThresholdDesc>,
+    /// sobel only: the buffers searched for edges.
+    sources: Option<Vec<SourceDesc>>,
+    /// Only pixels (shading, sobel) or triangles (extrusion) of these
+    /// materials; default all.
+    materials: Option<Vec<String>>,
+    /// sobel only: soft line edges (default true).
+    antialias: Option<bool>,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum MethodDesc {
+    Shading,
+    Extrusion,
+    Sobel,
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum SourceDesc {
+    Depth,
+    Normal,
+    Id,
+    Color,
+}
+
+impl SourceDesc {
+    fn name(self) -> &'static str {
+        match self {
+            SourceDesc::Depth => "depth",
+            SourceDesc::Normal => "normal",
+            SourceDesc::Id => "id",
+            SourceDesc::Color => "color",
+        }
+    }
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(untagged)]
+enum ThresholdDesc {
+    All(f32),
+    PerSource(BTreeMap<String, f32>),
+}
+
+/// `[strokes]` as written.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StrokesDesc {
+    #[serde(default = "all_edges")]
+    edges: Vec<EdgeKindDesc>,
+    /// Degrees: an edge whose faces' normals differ by more is a crease.
+    #[serde(default = "sixty")]
+    crease_angle: f32,
+    #[serde(default = "one")]
+    width: f32,
+    #[serde(default)]
+    color: [f32; 3],
+    /// 0: constant width; 1: the width falls to 0 at both ends.
+    #[serde(default)]
+    taper: f32,
+    #[serde(default)]
+    join: JoinDesc,
+    #[serde(default)]
+    cap: CapDesc,
+}
+
+fn all_edges() -> Vec<EdgeKindDesc> {
+    vec![
+        EdgeKindDesc::Silhouette,
+        EdgeKindDesc::Crease,
+        EdgeKindDesc::Boundary,
+        EdgeKindDesc::Material,
+    ]
+}
+fn sixty() -> f32 {
+    60.0
+}
+fn one() -> f32 {
+    1.0
+}
+
+#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, PartialOrd, Ord)]
+#[serde(rename_all = "snake_case")]
+pub enum EdgeKindDesc {
+    Silhouette,
+    Crease,
+    Boundary,
+    Material,
+}
+
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum JoinDesc {
+    #[default]
+    Round,
+    Miter,
+    Bevel,
+}
+
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub enum CapDesc {
+    #[default]
+    Round,
+    Butt,
+    Square,
+}
+
+/// Widest accepted line, in output pixels (the extrusion and the dilation
+/// work in supersamples: 64 × ssaa 16 = 1024 samples stays cheap).
+pub const MAX_WIDTH: f32 = 64.0;
+
+/// A checked `[[outline]]`.
+#[derive(Clone, Debug, PartialEq)]
+pub enum OutlineSpec {
+    Shading {
+        color: [f32; 3],
+        threshold: f32,
+        materials: Option<Vec<String>>,
+    },
+    Extrusion {
+        color: [f32; 3],
+        width: f32,
+        materials: Option<Vec<String>>,
+    },
+    Sobel {
+        color: [f32; 3],
+        width: f32,
+        /// (source, threshold), sorted by source, no repeats.
+        sources: Vec<(SourceDesc, f32)>,
+        materials: Option<Vec<String>>,
+        antialias: bool,
+    },
+}
+
+/// A checked `[strokes]`.
+#[derive(Clone, Debug, PartialEq)]
+pub struct StrokesSpec {
+    pub edges: Vec<EdgeKindDesc>,
+    pub crease_angle: f32,
+    pub width: f32,
+    pub color: [f32; 3],
+    pub taper: f32,
+    pub join: JoinDesc,
+    pub cap: CapDesc,
+}
+
+fn check_color(field: &str, c: [f32; 3]) -> Result<(), String> {
+    if c.iter().all(|v| (0.0..=1.0).contains(v)) {
+        Ok(())
+    } else {
+        Err(format!(
+            "{field}: every component must be in [0, 1], got {c:?}"
+        ))
+    }
+}
+
+fn check_width(field: &str, w: f32) -> Result<(), String> {
+    // `contains` is false for NaN.
+    if w > 0.0 && w <= MAX_WIDTH {
+        Ok(())
+    } else {
+        Err(format!(
+            "{field}: must be a number in (0, {MAX_WIDTH}] pixels, got {w}"
+        ))
+    }
+}
+
+fn check_materials(
+    field: &str,
+    m: &Option<Vec<String>>,
+    known: &dyn Fn(&str) -> bool,
+) -> Result<(), String> {
+    let Some(list) = m else { return Ok(()) };
+    if list.is_empty() {
+        return Err(format!(
+            "{field}: name at least one material (or leave the field out for all)"
+        ));
+    }
+    for n in list {
+        if !known(n) {
+            return Err(format!("{field}: no material named {n:?} in the scene"));
+        }
+    }
+    Ok(())
+}
+
+impl OutlineDesc {
+    /// Checks the table (`field` is e.g. `outline[2]`); `known` says
+    /// whether a material name exists in the scene.
+    pub fn check(&self, field: &str, known: &dyn Fn(&str) -> bool) -> Result<OutlineSpec, String> {
+        check_color(&format!("{field}.color"), self.color)?;
+        check_materials(&format!("{field}.materials"), &self.materials, known)?;
+        let method = match self.method {
+            MethodDesc::Shading => "shading",
+            MethodDesc::Extrusion => "extrusion",
+            MethodDesc::Sobel => "sobel",
+        };
+        let unused = |name: &str| format!("{field}.{name}: not used by method {method:?}");
+        let width = match (self.method, self.width) {
+            (MethodDesc::Shading, Some(_)) => return Err(unused("width")),
+            (_, Some(w)) => {
+                check_width(&format!("{field}.width"), w)?;
+                w
+            }
+            (_, None) => 1.0,
+        };
+        if self.sources.is_some() && self.method != MethodDesc::Sobel {
+            return Err(unused("sources"));
+        }
+        if self.antialias.is_some() && self.method != MethodDesc::Sobel {
+            return Err(unused("antialias"));
+        }
+        let materials = self.materials.clone();
+        let color = self.color;
+        match self.method {
+            MethodDesc::Shading => {
+                let threshold = match &self.threshold {
+                    None => 0.25,
+                    Some(ThresholdDesc::All(t)) => *t,
+                    Some(ThresholdDesc::PerSource(_)) => {
+                        return Err(format!(
+                        "{field}.threshold: method \"shading\" takes one number (n·v), not a table"
+                    ))
+                    }
+                };
+                // n·v of a visible surface is in [0, 1]; 1 would darken all.
+                if !(threshold > 0.0 && threshold < 1.0) {
+                    return Err(format!(
+                        "{field}.threshold: n·v threshold must be in (0, 1), got {threshold}"
+                    ));
+                }
+                Ok(OutlineSpec::Shading {
+                    color,
+                    threshold,
+                    materials,
+                })
+            }
+            MethodDesc::Extrusion => {
+                if self.threshold.is_some() {
+                    return Err(unused("threshold"));
+                }
+                Ok(OutlineSpec::Extrusion {
+                    color,
+                    width,
+                    materials,
+                })
+            }
+            MethodDesc::Sobel => {
+                let list = self.sources.clone().unwrap_or(vec![
+                    SourceDesc::Depth,
+                    SourceDesc::Normal,
+                    SourceDesc::Id,
+                ]);
+                if list.is_empty() {
+                    return Err(format!(
+                        "{field}.sources: name at least one source (depth, normal, id, color)"
+                    ));
+                }
+                let mut sorted = list.clone();
+                sorted.sort();
+                if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
+                    return Err(format!(
+                        "{field}.sources: {:?} is listed twice",
+                        w[0].name()
+                    ));
+                }
+                let default = 0.25;
+                let mut sources = Vec::new();
+                for s in sorted {
+                    let (t, tf) = match &self.threshold {
+                        None => (default, format!("{field}.threshold")),
+                        Some(ThresholdDesc::All(t)) => (*t, format!("{field}.threshold")),
+                        Some(ThresholdDesc::PerSource(m)) => (
+                            m.get(s.name()).copied().unwrap_or(default),
+                            format!("{field}.threshold.{}", s.name()),
+                        ),
+                    };
+                    if !(t > 0.0 && t.is_finite()) {
+                        return Err(format!("{tf}: must be a finite number > 0, got {t}"));
+                    }
+                    sources.push((s, t));
+                }
+                if let Some(ThresholdDesc::PerSource(m)) = &self.threshold {
+                    if let Some(k) = m
+                        .keys()
+                        .find(|k| !sources.iter().any(|(s, _)| s.name() == *k))
+                    {
+                        return Err(format!(
+                            "{field}.threshold.{k}: not one of this outline's sources ({})",
+                            sources
+                                .iter()
+                                .map(|(s, _)| s.name())
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ));
+                    }
+                }
+                Ok(OutlineSpec::Sobel {
+                    color,
+                    width,
+                    sources,
+                    materials,
+                    antialias: self.antialias.unwrap_or(true),
+                })
+            }
+        }
+    }
+}
+
+impl StrokesDesc {
+    pub fn check(&self) -> Result<StrokesSpec, String> {
+        let f = "strokes";
+        if self.edges.is_empty() {
+            return Err(format!(
+                "{f}.edges: name at least one kind (silhouette, crease, boundary, material)"
+            ));
+        }
+        let mut edges = self.edges.clone();
+        edges.sort();
+        if let Some(w) = edges.windows(2).find(|w| w[0] == w[1]) {
+            return Err(format!("{f}.edges: {:?} is listed twice", w[0]));
+        }
+        if !(self.crease_angle > 0.0 && self.crease_angle < 180.0) {
+            return Err(format!(
+                "{f}.crease_angle: must be in (0, 180) degrees, got {}",
+                self.crease_angle
+            ));
+        }
+        check_width(&format!("{f}.width"), self.width)?;
+        check_color(&format!("{f}.color"), self.color)?;
+        if !(0.0..=1.0).contains(&self.taper) {
+            return Err(format!("{f}.taper: must be in [0, 1], got {}", self.taper));
+        }
+        Ok(StrokesSpec {
+            edges,
+            crease_angle: self.crease_angle,
+            width: self.width,
+            color: self.color,
+            taper: self.taper,
+            join: self.join,
+            cap: self.cap,
+        })
+    }
+}
+
+/// What the line tables add to a loaded scene.
+#[derive(Default)]
+pub struct LineStages {
+    /// Post stages, in the tables' order (after the tone map).
+    pub post: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
+    /// Extrusion vertex stages: the renderer tells them the supersampling.
+    pub extrusions: Vec<std::sync::Arc<specula_npr::extrude::Extrude>>,
+    /// The stroke overlay (also among `post`), for `--svg-lines`.
+    pub strokes: Option<std::sync::Arc<specula_npr::overlay::Strokes>>,
+}
+
+/// The radiance an unlit outline material needs for its pixels to come out
+/// as `color` (display-linear, [0, 1]) after exposure and the tone map:
+/// the tone curve inverted by bisection (all three curves increase).
+fn radiance_for(
+    color: [f32; 3],
+    tonemap: specula_raster::post::Tonemap,
+    exposure: f32,
+) -> [f32; 3] {
+    color.map(|c| {
+        let (mut lo, mut hi) = (0.0f32, 1e6f32);
+        for _ in 0..80 {
+            let mid = 0.5 * (lo + hi);
+            if tonemap.apply(mid) < c {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        hi * (-exposure).exp2()
+    })
+}
+
+/// Builds the checked outlines into `data` (extrusion passes and their
+/// materials) and post stages; `camera` for the shading outline.
+pub fn build(
+    data: &mut specula_raster::SceneData,
+    outlines: &[OutlineSpec],
+    strokes: Option<&StrokesSpec>,
+    output: &crate::scene::OutputDesc,
+) -> LineStages {
+    use specula_npr::outline::{Selection, ShadingOutline};
+    use specula_npr::sobel::{id_materials, Sobel, Source};
+    use std::sync::Arc;
+    let index = |data: &specula_raster::SceneData, names: &Option<Vec<String>>| {
+        names.as_ref().map(|list| {
+            list.iter()
+                .filter_map(|n| data.materials.iter().position(|m| &m.name == n))
+                .map(|i| i as u32)
+                .collect::<Vec<u32>>()
+        })
+    };
+    let mut out = LineStages::default();
+    // Extrusion passes first: the other stages' id tables must know them.
+    for (k, o) in outlines.iter().enumerate() {
+        if let OutlineSpec::Extrusion {
+            color,
+            width,
+            materials,
+        } = o
+        {
+            let sel = index(data, materials);
+            let radiance = radiance_for(*color, output.tonemap.into(), output.exposure);
+            let m = data.materials.len() as u32;
+            data.materials.push(specula_raster::Material::new(
+                &format!("outline[{k}]"),
+                specula_raster::Unlit {
+                    color: radiance,
+                    intensity: 1.0,
+                },
+                true,
+            ));
+            let stage = Arc::new(specula_npr::extrude::Extrude::new(data, *width));
+            stage.set_ssaa(output.ssaa);
+            let id_base = data.geometry.iter().map(|p| p.ids().end).max().unwrap_or(0) as u32;
+            let passes =
+                specula_npr::extrude::extrusion_passes(data, stage.clone(), m, id_base, &|mat| {
+                    sel.as_ref().is_none_or(|s| s.contains(&mat))
+                });
+            data.geometry.extend(passes);
+            out.extrusions.push(stage);
+        }
+    }
+    let id_material = Arc::new(id_materials(data));
+    for o in outlines {
+        match o {
+            OutlineSpec::Extrusion { .. } => {}
+            OutlineSpec::Shading {
+                color,
+                threshold,
+                materials,
+            } => {
+                let selection = match index(data, materials) {
+                    Some(m) => Selection::materials(data, &m),
+                    None => Selection::all(),
+                };
+                out.post.push(Arc::new(ShadingOutline::new(
+                    data.camera.clone(),
+                    *threshold,
+                    *color,
+                    selection,
+                )));
+            }
+            OutlineSpec::Sobel {
+                color,
+                width,
+                sources,
+                materials,
+                antialias,
+            } => {
+                let selection = match index(data, materials) {
+                    Some(m) => Selection::materials(data, &m),
+                    None => Selection::all(),
+                };
+                out.post.push(Arc::new(Sobel {
+                    sources: sources
+                        .iter()
+                        .map(|(s, t)| {
+                            let s = match s {
+                                SourceDesc::Depth => Source::Depth,
+                                SourceDesc::Normal => Source::Normal,
+                                SourceDesc::Id => Source::Id,
+                                SourceDesc::Color => Source::Color,
+                            };
+                            (s, *t)
+                        })
+                        .collect(),
+                    width: *width,
+                    color: *color,
+                    antialias: *antialias,
+                    id_material: (*id_material).clone(),
+                    selection,
+                }));
+            }
+        }
+    }
+    if let Some(st) = strokes {
+        use specula_npr::edges::{EdgeKind, MeshEdges};
+        let kinds: Vec<EdgeKind> = st
+            .edges
+            .iter()
+            .map(|k| match k {
+                EdgeKindDesc::Silhouette => EdgeKind::Silhouette,
+                EdgeKindDesc::Crease => EdgeKind::Crease,
+                EdgeKindDesc::Boundary => EdgeKind::Boundary,
+                EdgeKindDesc::Material => EdgeKind::Material,
+            })
+            .collect();
+        let stage = Arc::new(specula_npr::overlay::Strokes {
+            edges: MeshEdges::from_scene(data, &kinds, st.crease_angle),
+            camera: data.camera.clone(),
+            style: st.style(),
+        });
+        out.post.push(stage.clone());
+        out.strokes = Some(stage);
+    }
+    out
+}
+
+impl StrokesSpec {
+    /// The overlay's drawing style.
+    pub fn style(&self) -> specula_npr::overlay::StrokeStyle {
+        use specula_npr::overlay::{LineCap, LineJoin};
+        specula_npr::overlay::StrokeStyle {
+            width: self.width,
+            color: self.color,
+            taper: self.taper,
+            join: match self.join {
+                JoinDesc::Round => LineJoin::Round,
+                JoinDesc::Miter => LineJoin::Miter,
+                JoinDesc::Bevel => LineJoin::Bevel,
+            },
+            cap: match self.cap {
+                CapDesc::Round => LineCap::Round,
+                CapDesc::Butt => LineCap::Butt,
+                CapDesc::Square => LineCap::Square,
+            },
+        }
+    }
+}
