@@ -20,6 +20,7 @@ pub mod outputs;
 pub mod polygon_light;
 pub mod render;
 pub mod scene;
+pub mod table_cache;
 pub mod textures;
 pub mod validate;
 

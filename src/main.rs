@@ -357,6 +357,7 @@ fn run_demo() -> Result<(), String> {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    specula::table_cache::install();
     let result = match cli.command {
         None => run_demo(),
         Some(Command::Render(a)) => run_render(a),

@@ -34,6 +34,22 @@
 //! quadratures of `MicrofacetParams::specular_albedo` with F = 1 (~1e-5).
 //! `core/tests/kulla_conty.rs` measures all of this against brute-force
 //! quadrature of the BRDF.
+//!
+//! **GTR and γ.** E depends on GTR's γ too, and γ is a per-material
+//! number (eval scripts sweep it), so one table per γ would cost a build
+//! per material. Instead GTR takes E from node tables on a γ axis:
+//! x = log₂ γ over [−2, 7] (γ ∈ [¼, 128]), a node every third of an
+//! octave ([`GAMMA_AXIS`]), each node an ordinary table at that γ, built
+//! on first use (rows spread over the cores: ~0.3 s per node on two
+//! cores). A material's slice ([`slice_for`]) takes the α slice of the
+//! four nearest nodes and a Catmull–Rom cubic in log₂ γ through them;
+//! E_avg is then integrated from that slice as above. Against a table
+//! built at the material's own γ, half-way between nodes
+//! (`gtr_gamma_axis_matches_tables_built_at_that_gamma`): |ΔE| ≤ 1.3e-3
+//! for μ ≥ 0.05 and 1 − E_avg within 1.0%. E is stored unclamped (GTR with
+//! GGX's Λ exceeds 1 at grazing angles for some γ; a clamp would put a
+//! kink in E along γ, which took the cubic's error to 6e-3) and clamped
+//! to [0, 1] in the slice. γ outside [¼, 128] gets a table of its own.
 
 use crate::brdf::ALPHA_MIN;
 use crate::models::microfacet::{Fresnel, GtrLambda, MicrofacetParams, Ndf, Smith};
@@ -61,6 +77,68 @@ pub const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Sqrt, Nodes::Ends).lin
 /// The α axis of E: see the module docs.
 pub const ALPHA_AXIS: Axis = Axis::new(N_ALPHA, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
 
+/// GTR's γ axis: x = log₂ γ over [GAMMA_LOG2_LO, GAMMA_LOG2_HI], nodes on
+/// both ends, one every third of an octave (module docs, "GTR and γ").
+pub const GAMMA_LOG2_LO: f64 = -2.0;
+pub const GAMMA_LOG2_HI: f64 = 7.0;
+pub const N_GAMMA: usize = 28;
+pub const GAMMA_AXIS: Axis = Axis::new(
+    N_GAMMA,
+    GAMMA_LOG2_LO,
+    GAMMA_LOG2_HI,
+    Warp::Linear,
+    Nodes::Ends,
+);
+
+thread_local! {
+    /// Tables built by this thread (diagnostics and tests).
+    static BUILDS: std::cell::Cell<usize> = const { std::cell::Cell::new(0) };
+}
+
+/// How many E tables the calling thread has built so far (each costs
+/// N_MU × N_ALPHA albedo quadratures): a test can check that a sweep of
+/// GTR materials builds none beyond the γ nodes.
+pub fn tables_built_on_this_thread() -> usize {
+    BUILDS.with(|b| b.get())
+}
+
+/// Somewhere to keep built tables between runs (the CLI keeps them in
+/// the user's cache folder, src/table_cache.rs; core itself does no I/O).
+/// A table is its N_MU × N_ALPHA node values, α rows in order, under a
+/// name that says everything it depends on, [`TABLE_VERSION`] included.
+pub trait TableStore: Send + Sync {
+    fn load(&self, name: &str) -> Option<Vec<f32>>;
+    fn save(&self, name: &str, values: &[f32]);
+}
+
+/// Part of every stored table's name: bump it whenever what a table holds
+/// changes (axes, quadrature, clamping), so old stored tables are ignored.
+pub const TABLE_VERSION: u32 = 2;
+
+static STORE: OnceLock<Box<dyn TableStore>> = OnceLock::new();
+
+/// Installs the store tables are loaded from and saved to (once per
+/// process; later calls are ignored).
+pub fn set_table_store(store: Box<dyn TableStore>) {
+    let _ = STORE.set(store);
+}
+
+fn table_key(ndf: Ndf, smith: Smith, exact_gtr: bool) -> TableKey {
+    let sep = smith == Smith::Separable;
+    match ndf {
+        Ndf::Ggx => (0, 0, sep, false),
+        Ndf::Beckmann => (1, 0, sep, false),
+        Ndf::Gtr { gamma } => (2, gamma.to_bits(), sep, exact_gtr),
+    }
+}
+
+fn table_name(key: TableKey) -> String {
+    format!(
+        "kc-v{TABLE_VERSION}-{N_MU}x{N_ALPHA}-ndf{}-g{:08x}-sep{}-exact{}",
+        key.0, key.1, key.2 as u8, key.3 as u8
+    )
+}
+
 /// E(μ, α) for one (NDF, Smith) pair; see the module docs.
 #[derive(Debug)]
 pub struct KcTable {
@@ -68,9 +146,14 @@ pub struct KcTable {
 }
 
 impl KcTable {
+    /// Evaluates E at every node: one α row per task, the rows spread over
+    /// the machine's cores (each node is independent, so the values do not
+    /// depend on the thread count). The per-row parameters, GTR's exact Λ
+    /// table included, are formed once per row.
     fn build(ndf: Ndf, smith: Smith, exact_gtr: bool) -> KcTable {
-        let e = Table2::build(MU_AXIS, ALPHA_AXIS, |mu, alpha| {
-            let alpha = (alpha as f32).max(ALPHA_MIN);
+        BUILDS.with(|b| b.set(b.get() + 1));
+        let row = |j: usize| -> Vec<[f32; 1]> {
+            let alpha = (ALPHA_AXIS.node(j) as f32).max(ALPHA_MIN);
             let gtr_lambda = match ndf {
                 Ndf::Gtr { gamma } if exact_gtr => GtrLambda::exact(gamma, alpha),
                 _ => GtrLambda::Ggx,
@@ -83,14 +166,80 @@ impl KcTable {
                 diffuse: [0.0; 3],
                 gtr_lambda,
             };
-            // E(0) = 0 is the limit; E ≤ 1 up to quadrature error.
-            [if mu == 0.0 {
-                0.0
-            } else {
-                p.specular_albedo(mu)[0].min(1.0)
-            }]
+            (0..N_MU)
+                .map(|i| {
+                    let mu = MU_AXIS.node(i);
+                    // E(0) = 0 is the limit. E is stored unclamped: GTR
+                    // with GGX's Λ exceeds 1 at grazing angles for some γ,
+                    // and a clamp here would put a kink into E along α
+                    // and γ, which the cubics interpolate badly; slices
+                    // clamp to [0, 1] after interpolating.
+                    [if mu == 0.0 {
+                        0.0
+                    } else {
+                        p.specular_albedo(mu)[0] as f32
+                    }]
+                })
+                .collect()
+        };
+        let threads = std::thread::available_parallelism()
+            .map_or(1, |n| n.get())
+            .clamp(1, N_ALPHA);
+        let mut rows: Vec<Vec<[f32; 1]>> = vec![Vec::new(); N_ALPHA];
+        std::thread::scope(|s| {
+            let row = &row;
+            let workers: Vec<_> = (0..threads)
+                .map(|t| {
+                    s.spawn(move || {
+                        (t..N_ALPHA)
+                            .step_by(threads)
+                            .map(|j| (j, row(j)))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            for w in workers {
+                for (j, r) in w.join().expect("table row worker") {
+                    rows[j] = r;
+                }
+            }
         });
-        KcTable { e }
+        KcTable {
+            e: Table2::from_rows(MU_AXIS, ALPHA_AXIS, rows),
+        }
+    }
+
+    /// The table from the store when it holds a valid one (the right
+    /// length, finite values), else built and saved there.
+    fn load_or_build(ndf: Ndf, smith: Smith, key: TableKey) -> KcTable {
+        let name = table_name(key);
+        let store = STORE.get();
+        if let Some(v) = store.and_then(|s| s.load(&name)) {
+            if v.len() == N_MU * N_ALPHA && v.iter().all(|x| x.is_finite()) {
+                let rows = v
+                    .chunks(N_MU)
+                    .map(|r| r.iter().map(|&x| [x]).collect())
+                    .collect();
+                return KcTable {
+                    e: Table2::from_rows(MU_AXIS, ALPHA_AXIS, rows),
+                };
+            }
+        }
+        let t = KcTable::build(ndf, smith, key.3);
+        if let Some(s) = store {
+            let v: Vec<f32> = (0..N_ALPHA)
+                .flat_map(|j| (0..N_MU).map(move |i| (i, j)))
+                .map(|(i, j)| t.e.node_value(i, j)[0])
+                .collect();
+            s.save(&name, &v);
+        }
+        t
+    }
+
+    /// The name the table of (NDF, Smith, exact GTR Λ) has in a
+    /// [`TableStore`].
+    pub fn store_name(ndf: Ndf, smith: Smith, exact_gtr: bool) -> String {
+        table_name(table_key(ndf, smith, exact_gtr))
     }
 
     /// The cached table of an (NDF, Smith) pair, built on first use (GTR
@@ -103,18 +252,13 @@ impl KcTable {
     /// (ignored by the other NDFs).
     pub fn get_with(ndf: Ndf, smith: Smith, exact_gtr: bool) -> Arc<KcTable> {
         static CACHE: OnceLock<Mutex<HashMap<TableKey, Arc<KcTable>>>> = OnceLock::new();
-        let sep = smith == Smith::Separable;
-        let key = match ndf {
-            Ndf::Ggx => (0, 0, sep, false),
-            Ndf::Beckmann => (1, 0, sep, false),
-            Ndf::Gtr { gamma } => (2, gamma.to_bits(), sep, exact_gtr),
-        };
+        let key = table_key(ndf, smith, exact_gtr);
         let cache = CACHE.get_or_init(|| Mutex::new(HashMap::new()));
         if let Some(t) = cache.lock().expect("table cache").get(&key) {
             return t.clone();
         }
         // Built outside the lock; two threads may both build, one wins.
-        let t = Arc::new(KcTable::build(ndf, smith, key.3));
+        let t = Arc::new(KcTable::load_or_build(ndf, smith, key));
         cache
             .lock()
             .expect("table cache")
@@ -131,10 +275,62 @@ impl KcTable {
         let nodes = (0..N_MU)
             .map(|j| cubic.node_value(j).map(|v| v.clamp(0.0, 1.0)))
             .collect();
-        let e = Table1::from_nodes(MU_AXIS, nodes);
-        let [e_avg] = e.integrate(|mu| 2.0 * mu);
-        KcSlice { e, e_avg }
+        KcSlice::from_e(Table1::from_nodes(MU_AXIS, nodes))
     }
+}
+
+/// The compensation slice of a material: for GTR with γ inside the γ
+/// axis, interpolated from the node tables (module docs, "GTR and γ");
+/// otherwise the α slice of the (NDF, Smith) table.
+pub fn slice_for(ndf: Ndf, smith: Smith, exact_gtr: bool, alpha: f64) -> KcSlice {
+    let gamma = match ndf {
+        Ndf::Gtr { gamma } => gamma as f64,
+        _ => return KcTable::get_with(ndf, smith, exact_gtr).slice(alpha),
+    };
+    let x = gamma.log2();
+    if !(GAMMA_LOG2_LO..=GAMMA_LOG2_HI).contains(&x) {
+        return KcTable::get_with(ndf, smith, exact_gtr).slice(alpha);
+    }
+    let (j, w) = GAMMA_AXIS.locate(x);
+    let j = j as usize;
+    let node = |k: isize| {
+        let k = (j as isize + k).clamp(0, N_GAMMA as isize - 1) as usize;
+        let gamma = gamma_node(k);
+        KcTable::get_with(Ndf::Gtr { gamma }, smith, exact_gtr)
+            .e
+            .slice_y_cubic(alpha)
+    };
+    if w == 0.0 {
+        // On a node: exactly that node's table.
+        return KcTable::get_with(
+            Ndf::Gtr {
+                gamma: gamma_node(j),
+            },
+            smith,
+            exact_gtr,
+        )
+        .slice(alpha);
+    }
+    let (v0, v1, v2, v3) = (node(-1), node(0), node(1), node(2));
+    let nodes = (0..N_MU)
+        .map(|i| {
+            let [p0, p1, p2, p3] = [&v0, &v1, &v2, &v3].map(|t| t.node_value(i)[0] as f64);
+            [catmull_rom(p0, p1, p2, p3, w).clamp(0.0, 1.0) as f32]
+        })
+        .collect();
+    KcSlice::from_e(Table1::from_nodes(MU_AXIS, nodes))
+}
+
+/// γ of node k of [`GAMMA_AXIS`], as materials store it (f32).
+pub fn gamma_node(k: usize) -> f32 {
+    GAMMA_AXIS.node(k).exp2() as f32
+}
+
+/// The Catmull–Rom cubic through p0..p3 at w ∈ [0, 1] between p1 and p2
+/// (as [`Table2::slice_y_cubic`]).
+fn catmull_rom(p0: f64, p1: f64, p2: f64, p3: f64, w: f64) -> f64 {
+    let t = 3.0 * (p1 - p2) + p3 - p0;
+    p1 + 0.5 * w * (p2 - p0 + w * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3 + w * t))
 }
 
 /// E(μ) at one α, and its E_avg: what one material needs at shading time.
@@ -145,6 +341,12 @@ pub struct KcSlice {
 }
 
 impl KcSlice {
+    /// A slice from its E(μ) nodes: E_avg integrated from its interpolant.
+    fn from_e(e: Table1<1>) -> KcSlice {
+        let [e_avg] = e.integrate(|mu| 2.0 * mu);
+        KcSlice { e, e_avg }
+    }
+
     /// E(μ), linear in μ between the nodes ([`KcSlice::e_lanes`] in f64).
     pub fn e_at(&self, mu: f64) -> f64 {
         self.e_lanes(mu)

@@ -16,7 +16,7 @@
 use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::fresnel::{f_conductor, f_dielectric, f_schlick, r0_from_ior};
 use crate::gtr_lambda::GtrLambdaTable;
-use crate::kulla_conty::{color_factor, f_avg, KcColor, KcSlice, KcTable};
+use crate::kulla_conty::{color_factor, f_avg, slice_for, KcColor, KcSlice};
 use crate::light::PolygonLocal;
 use crate::ltc::form_factor;
 use crate::ltc::ggx::LtcGgx;
@@ -130,7 +130,7 @@ pub struct Compensation {
 impl Compensation {
     pub fn new(p: &MicrofacetParams, mode: KcColor) -> Compensation {
         let exact = matches!(p.gtr_lambda, GtrLambda::Exact(_));
-        let slice = KcTable::get_with(p.ndf, p.smith, exact).slice(p.alpha as f64);
+        let slice = slice_for(p.ndf, p.smith, exact, p.alpha as f64);
         let fa = f_avg(&p.fresnel);
         let factor = fa.map(|f| color_factor(f, slice.e_avg, mode));
         let k = 1.0 / (std::f64::consts::PI * (1.0 - slice.e_avg).max(1e-6));

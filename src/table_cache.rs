@@ -1,0 +1,94 @@
+//! The user's table cache: Kulla–Conty E tables (core::kulla_conty) kept
+//! between runs, so a GTR sweep pays for its γ node tables once per
+//! machine, not once per run.
+//!
+//! Folder: `$SPECULA_CACHE_DIR` when set (empty: no cache), else
+//! `$XDG_CACHE_HOME/specula`, else `$HOME/.cache/specula`. One file per
+//! table, `<name>.f32`: its node values as f32 little-endian, the name
+//! carrying everything the table depends on and the table format's
+//! version. A file of the wrong length or with non-finite values is
+//! ignored and rebuilt; files are written to a temporary name and renamed,
+//! so a reader never sees half a file. The cache is an optimisation only:
+//! any I/O error leaves the table built in memory, silently. Deleting the
+//! folder is always safe.
+
+use specula_core::kulla_conty::{set_table_store, TableStore};
+use std::path::PathBuf;
+
+/// The cache folder (module docs), or None when disabled or unknown.
+pub fn cache_dir() -> Option<PathBuf> {
+    if let Some(d) = std::env::var_os("SPECULA_CACHE_DIR") {
+        return (!d.is_empty()).then(|| PathBuf::from(d));
+    }
+    if let Some(d) = std::env::var_os("XDG_CACHE_HOME").filter(|d| !d.is_empty()) {
+        return Some(PathBuf::from(d).join("specula"));
+    }
+    std::env::var_os("HOME")
+        .filter(|d| !d.is_empty())
+        .map(|h| PathBuf::from(h).join(".cache").join("specula"))
+}
+
+/// Tables as files in one folder.
+pub struct DirStore {
+    pub dir: PathBuf,
+}
+
+impl TableStore for DirStore {
+    fn load(&self, name: &str) -> Option<Vec<f32>> {
+        let bytes = std::fs::read(self.dir.join(format!("{name}.f32"))).ok()?;
+        if bytes.len() % 4 != 0 {
+            return None;
+        }
+        Some(
+            bytes
+                .chunks_exact(4)
+                .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+                .collect(),
+        )
+    }
+
+    fn save(&self, name: &str, values: &[f32]) {
+        let bytes: Vec<u8> = values.iter().flat_map(|v| v.to_le_bytes()).collect();
+        let path = self.dir.join(format!("{name}.f32"));
+        let tmp = self.dir.join(format!(".{name}.{}.tmp", std::process::id()));
+        let ok = std::fs::create_dir_all(&self.dir).is_ok()
+            && std::fs::write(&tmp, bytes).is_ok()
+            && std::fs::rename(&tmp, &path).is_ok();
+        if !ok {
+            let _ = std::fs::remove_file(&tmp);
+        }
+    }
+}
+
+/// Installs the user's cache folder as core's table store (no-op when
+/// disabled).
+pub fn install() {
+    if let Some(dir) = cache_dir() {
+        set_table_store(Box::new(DirStore { dir }));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn round_trip_and_bad_files() {
+        let dir = std::env::temp_dir().join(format!("specula-cache-test-{}", std::process::id()));
+        let s = DirStore { dir: dir.clone() };
+        assert_eq!(s.load("t"), None);
+        let v = [0.25f32, -1.5, 3.0e-7, 1.0];
+        s.save("t", &v);
+        assert_eq!(s.load("t").as_deref(), Some(&v[..]));
+        // A truncated file is not a table.
+        std::fs::write(dir.join("u.f32"), [0u8; 6]).unwrap();
+        assert_eq!(s.load("u"), None);
+        // No temporary files stay behind.
+        let names: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        assert_eq!(names.len(), 2, "{names:?}");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
+}
