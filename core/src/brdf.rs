@@ -200,9 +200,34 @@ pub trait Brdf: Send + Sync {
     /// per unit radiance of a polygon light (vertices in the local frame,
     /// relative to the shading point). Called only for models whose
     /// [`Brdf::POLYGON_LIGHTS`] is true: scenes are checked when they load,
-    /// and a polygon light on any other model is an error there.
+    /// and a polygon light on any other model is an error there. One
+    /// light's shorthand for [`Brdf::prepare_polygons`] then
+    /// [`Brdf::polygon_local_with`].
     #[inline(always)]
-    fn polygon_local<R: Real>(&self, _p: &Self::Prepared<R>, _poly: &PolygonLocal<R>) -> Rgb<R> {
+    fn polygon_local<R: Real>(&self, p: &Self::Prepared<R>, poly: &PolygonLocal<R>) -> Rgb<R> {
+        self.polygon_local_with(p, &self.prepare_polygons(p), poly)
+    }
+
+    /// What the model computes once per pixel for all of its polygon
+    /// lights (LTC table lookups, albedo factors); `()` for models without
+    /// polygon lights.
+    type PolygonPrepared<R: Real>: Copy;
+
+    /// The per-pixel state of polygon lights, from the prepared view.
+    /// Separate from [`Brdf::prepare`] so that pixels lit only by point
+    /// lights never pay for it: the light loop calls it once per packet,
+    /// and only when the scene has polygon lights.
+    fn prepare_polygons<R: Real>(&self, p: &Self::Prepared<R>) -> Self::PolygonPrepared<R>;
+
+    /// [`Brdf::polygon_local`] from the state [`Brdf::prepare_polygons`]
+    /// made for this pixel.
+    #[inline(always)]
+    fn polygon_local_with<R: Real>(
+        &self,
+        _p: &Self::Prepared<R>,
+        _pp: &Self::PolygonPrepared<R>,
+        _poly: &PolygonLocal<R>,
+    ) -> Rgb<R> {
         Rgb::zero()
     }
 

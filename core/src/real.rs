@@ -76,6 +76,12 @@ pub trait Real:
     const HALF: Self;
     const PI: Self;
     const FRAC_1_PI: Self;
+    /// The tests' reference precision (f64): a kernel with a cheaper
+    /// approximate form uses its exact form where this is true, so f64
+    /// stays the oracle the lanes are measured against (ltc/polygon.rs:
+    /// the edge integral's θ by atan2 in f64, by a polynomial in f32 and
+    /// f32x8, which agree with each other bit for bit).
+    const EXACT: bool;
 
     /// Every lane set to `v` (rounded to the lane precision).
     fn splat(v: f64) -> Self;
@@ -193,10 +199,11 @@ fn recip_estimate_f32(x: f32) -> f32 {
 }
 
 macro_rules! scalar_real {
-    ($t:ty, $pi:expr, $inv_pi:expr, $rsqrt:expr, $recip:expr) => {
+    ($t:ty, $exact:expr, $pi:expr, $inv_pi:expr, $rsqrt:expr, $recip:expr) => {
         impl Real for $t {
             type Mask = bool;
             const LANES: usize = 1;
+            const EXACT: bool = $exact;
             const ZERO: Self = 0.0;
             const ONE: Self = 1.0;
             const HALF: Self = 0.5;
@@ -325,6 +332,7 @@ macro_rules! scalar_real {
 
 scalar_real!(
     f32,
+    false,
     core::f32::consts::PI,
     core::f32::consts::FRAC_1_PI,
     |x: f32| newton_rsqrt(x, rsqrt_estimate_f32(x)),
@@ -332,6 +340,7 @@ scalar_real!(
 );
 scalar_real!(
     f64,
+    true,
     core::f64::consts::PI,
     core::f64::consts::FRAC_1_PI,
     |x: f64| 1.0 / x.sqrt(),
@@ -341,6 +350,7 @@ scalar_real!(
 impl Real for f32x8 {
     type Mask = f32x8;
     const LANES: usize = 8;
+    const EXACT: bool = false;
     const ZERO: Self = f32x8::splat(0.0);
     const ONE: Self = f32x8::splat(1.0);
     const HALF: Self = f32x8::splat(0.5);

@@ -35,44 +35,19 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
         let (frag, frame) = (self.input.frag, &self.input.frame());
         let prepared = brdf.prepare(frame.to_local(frag.wo));
         let mut acc = Rgb::zero();
-        for light in self.env.lights {
-            match light {
-                Light::Point {
-                    position,
-                    intensity,
-                } => {
-                    let to_light = V3::from_f32(*position) - frag.p;
-                    let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
-                    let inv_d = d2.rsqrt();
-                    let wi = frame.to_local(to_light * inv_d);
-                    let f_cos = brdf.f_cos_local(&prepared, wi);
-                    acc += f_cos.mul_elem(V3::from_f32(*intensity)) * (inv_d * inv_d);
-                }
-                Light::Directional {
-                    to_light,
-                    irradiance,
-                } => {
-                    let wi = frame.to_local(V3::from_f32(*to_light));
-                    let f_cos = brdf.f_cos_local(&prepared, wi);
-                    acc += f_cos.mul_elem(V3::from_f32(*irradiance));
-                }
-                Light::Polygon {
-                    vertices,
-                    radiance,
-                    two_sided,
-                    method,
-                } => {
-                    // Only models with B::POLYGON_LIGHTS meet one
-                    // (`check_lights`); the constant folds this arm away
-                    // for the others.
-                    if B::POLYGON_LIGHTS {
-                        let e = polygon_light(
-                            brdf, &prepared, frag, frame, vertices, *two_sided, *method,
-                        );
-                        acc += e.mul_elem(V3::from_f32(*radiance));
-                    }
-                }
+        let mut rest = self.env.lights;
+        while let [light, tail @ ..] = rest {
+            // Only models with B::POLYGON_LIGHTS meet polygon lights
+            // (`check_lights`); the constant folds this test away for the
+            // others. The first one hands the rest of the list to an
+            // out-of-line loop that makes the polygons' per-pixel state
+            // once for all of them.
+            if B::POLYGON_LIGHTS && matches!(light, Light::Polygon { .. }) {
+                acc += lights_from_polygon(brdf, &prepared, frag, frame, rest);
+                break;
             }
+            acc += delta_light(brdf, &prepared, frag, frame, light);
+            rest = tail;
         }
         if let Some(env) = self.env.environment {
             acc += brdf.albedo_local(&prepared).mul_elem(V3::from_f32(env));
@@ -81,33 +56,90 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
     }
 }
 
-/// A polygon light's reflected radiance per unit radiance. Out of line:
-/// inlined into the light loop, its clipping and reference integration made
-/// the register allocator spill the point-light path (+10 % instructions in
-/// the shading pass of a scene without polygon lights).
-#[inline(never)]
-#[cold]
-fn polygon_light<B: Brdf, R: Real>(
+/// A point or directional light's reflected radiance (zero for a polygon
+/// light, which [`lights_from_polygon`] shades).
+#[inline(always)]
+fn delta_light<B: Brdf, R: Real>(
     brdf: &B,
     prepared: &B::Prepared<R>,
     frag: &Fragment<R>,
     frame: &ShadingFrame<R>,
-    vertices: &[[f32; 3]],
-    two_sided: bool,
-    method: AreaMethod,
+    light: &Light,
+) -> Rgb<R> {
+    match light {
+        Light::Point {
+            position,
+            intensity,
+        } => {
+            let to_light = V3::from_f32(*position) - frag.p;
+            let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
+            let inv_d = d2.rsqrt();
+            let wi = frame.to_local(to_light * inv_d);
+            let f_cos = brdf.f_cos_local(prepared, wi);
+            f_cos.mul_elem(V3::from_f32(*intensity)) * (inv_d * inv_d)
+        }
+        Light::Directional {
+            to_light,
+            irradiance,
+        } => {
+            let wi = frame.to_local(V3::from_f32(*to_light));
+            let f_cos = brdf.f_cos_local(prepared, wi);
+            f_cos.mul_elem(V3::from_f32(*irradiance))
+        }
+        Light::Polygon { .. } => Rgb::zero(),
+    }
+}
+
+/// The reflected radiance of `lights`, from the scene's first polygon
+/// light on (delta lights among them through [`delta_light`]). Out of
+/// line: inlined into the light loop, its clipping and reference
+/// integration made the register allocator spill the point-light path
+/// (+10 % instructions in the shading pass of a scene without polygon
+/// lights). The model's per-pixel state for polygon lights
+/// ([`Brdf::prepare_polygons`]: the LTC lookup) is made here, once for all
+/// of them, so pixels lit only by point lights never pay for it.
+#[inline(never)]
+#[cold]
+fn lights_from_polygon<B: Brdf, R: Real>(
+    brdf: &B,
+    prepared: &B::Prepared<R>,
+    frag: &Fragment<R>,
+    frame: &ShadingFrame<R>,
+    lights: &[Light],
 ) -> Rgb<R> {
     let mut poly = PolygonLocal {
         vertices: [V3::zero(); MAX_POLYGON_VERTICES],
-        len: vertices.len(),
-        two_sided,
+        len: 0,
+        two_sided: false,
     };
-    for (v, p) in poly.vertices.iter_mut().zip(vertices) {
-        *v = frame.to_local(V3::from_f32(*p) - frag.p);
+    let mut per_pixel = None;
+    let mut acc = Rgb::zero();
+    for light in lights {
+        let Light::Polygon {
+            vertices,
+            radiance,
+            two_sided,
+            method,
+        } = light
+        else {
+            acc += delta_light(brdf, prepared, frag, frame, light);
+            continue;
+        };
+        poly.len = vertices.len();
+        poly.two_sided = *two_sided;
+        for (v, p) in poly.vertices.iter_mut().zip(vertices) {
+            *v = frame.to_local(V3::from_f32(*p) - frag.p);
+        }
+        let e = match method {
+            AreaMethod::Ltc => {
+                let pp = per_pixel.get_or_insert_with(|| brdf.prepare_polygons(prepared));
+                brdf.polygon_local_with(prepared, pp, &poly)
+            }
+            AreaMethod::Reference => polygon_reference_lanes(brdf, frame.to_local(frag.wo), &poly),
+        };
+        acc += e.mul_elem(V3::from_f32(*radiance));
     }
-    match method {
-        AreaMethod::Ltc => brdf.polygon_local(prepared, &poly),
-        AreaMethod::Reference => polygon_reference_lanes(brdf, frame.to_local(frag.wo), &poly),
-    }
+    acc
 }
 
 impl PacketShader for Lit {

@@ -46,8 +46,8 @@
 //!   nodes as any others.
 
 use crate::brdf::ALPHA_MIN;
-use crate::light::{PolygonLocal, MAX_POLYGON_VERTICES};
-use crate::ltc::polygon::form_factor;
+use crate::light::PolygonLocal;
+use crate::ltc::polygon::{form_factor_signed_mapped, sided};
 use crate::real::Real;
 use crate::table::{Axis, Nodes, Table2, Warp};
 use crate::vec3::V3;
@@ -170,20 +170,18 @@ pub fn table() -> &'static Table2<CHANNELS> {
     T.get_or_init(|| decode(DATA).expect("core/data/ltc_ggx.bin is malformed"))
 }
 
-/// What a GGX material looks up once per pixel: M⁻¹'s entries, the
-/// magnitude and the Schlick part, and the rotation taking the view into
-/// the xz-plane.
+/// What a GGX material looks up once per pixel (once for all of its
+/// polygon lights): the map from local coordinates into the cosine's,
+/// M⁻¹ R(−φo) (the rotation taking the view into the xz-plane, then M⁻¹),
+/// as three rows, and the magnitude and Schlick part.
 #[derive(Clone, Copy, Debug)]
 pub struct LtcGgx<R> {
-    pub m00: R,
-    pub m02: R,
-    pub m20: R,
-    pub m22: R,
+    /// Rows of M⁻¹ R(−φo): X = rx·v, Y = ry·v, Z = rz·v.
+    pub rx: V3<R>,
+    pub ry: V3<R>,
+    pub rz: V3<R>,
     pub n: R,
     pub n_w: R,
-    /// cos φo and sin φo of the view's azimuth (1, 0 at the normal).
-    pub cos_phi: R,
-    pub sin_phi: R,
 }
 
 impl<R: Real> LtcGgx<R> {
@@ -195,19 +193,28 @@ impl<R: Real> LtcGgx<R> {
         let x = alpha.max(R::ZERO).sqrt();
         let y = (R::ONE - mu).sqrt();
         let [m00, m02, m20, m22, n, n_w] = table().lookup(x, y);
+        // cos φo, sin φo of the view's azimuth (1, 0 at the normal).
         let r2 = wo.x.mul_add(wo.x, wo.y * wo.y);
         let ok = r2.gt(R::splat(1e-20));
         let inv = r2.max(R::splat(1e-20)).rsqrt();
+        let (c, s) = (
+            R::select(ok, wo.x * inv, R::ONE),
+            R::select(ok, wo.y * inv, R::ZERO),
+        );
+        // R(−φo) v = (c x + s y, c y − s x, z); then M⁻¹ (m11 = 1).
         LtcGgx {
-            m00,
-            m02,
-            m20,
-            m22,
+            rx: V3::new(m00 * c, m00 * s, m02),
+            ry: V3::new(-s, c, R::ZERO),
+            rz: V3::new(m20 * c, m20 * s, m22),
             n,
             n_w,
-            cos_phi: R::select(ok, wo.x * inv, R::ONE),
-            sin_phi: R::select(ok, wo.y * inv, R::ZERO),
         }
+    }
+
+    /// `v` (local) in the cosine's coordinates.
+    #[inline(always)]
+    pub fn map(&self, v: V3<R>) -> V3<R> {
+        V3::new(self.rx.dot(v), self.ry.dot(v), self.rz.dot(v))
     }
 
     /// ∫ D over the polygon (module docs): the LTC's share of the lobe
@@ -215,18 +222,10 @@ impl<R: Real> LtcGgx<R> {
     /// determinant, so the polygon keeps its orientation (its front).
     #[inline(always)]
     pub fn integral(&self, poly: &PolygonLocal<R>) -> R {
-        let mut w = [V3::new(R::ZERO, R::ZERO, R::ZERO); MAX_POLYGON_VERTICES];
-        for (t, v) in w.iter_mut().zip(poly.vertices()) {
-            // Into the view's frame (rotate by −φo about z), then M⁻¹.
-            let x = v.x.mul_add(self.cos_phi, v.y * self.sin_phi);
-            let y = v.y.mul_add(self.cos_phi, -(v.x * self.sin_phi));
-            *t = V3::new(
-                self.m00.mul_add(x, self.m02 * v.z),
-                y,
-                self.m20.mul_add(x, self.m22 * v.z),
-            );
-        }
-        form_factor(&w[..poly.len], poly.two_sided)
+        sided(
+            form_factor_signed_mapped(poly.vertices(), |v| self.map(v)),
+            poly.two_sided,
+        )
     }
 
     /// F0 (n − n_w) + n_w: the lobe's albedo under Schlick's F.

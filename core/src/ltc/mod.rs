@@ -10,4 +10,7 @@ pub mod ggx;
 pub mod polygon;
 pub mod reference;
 
-pub use polygon::{edge_integral, form_factor, form_factor_signed};
+pub use polygon::{
+    edge_integral, form_factor, form_factor_signed, form_factor_signed_mapped, sided,
+    theta_over_sin,
+};

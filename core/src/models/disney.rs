@@ -482,6 +482,7 @@ fn azimuth_dir(mu: f64, c2: f64) -> V3<f64> {
 
 impl Brdf for Disney {
     type Prepared<R: Real> = DisneyPrepared<R>;
+    type PolygonPrepared<R: Real> = ();
 
     const ANISOTROPIC: bool = true;
 
@@ -500,6 +501,9 @@ impl Brdf for Disney {
             o,
         }
     }
+
+    #[inline(always)]
+    fn prepare_polygons<R: Real>(&self, _p: &DisneyPrepared<R>) {}
 
     #[inline(always)]
     fn f_local<R: Real>(&self, p: &DisneyPrepared<R>, wi: V3<R>) -> Rgb<R> {

@@ -15,6 +15,7 @@ pub struct Lambert {
 
 impl Brdf for Lambert {
     type Prepared<R: Real> = Outgoing<R>;
+    type PolygonPrepared<R: Real> = Rgb<R>;
     const POLYGON_LIGHTS: bool = true;
 
     #[inline(always)]
@@ -38,11 +39,21 @@ impl Brdf for Lambert {
         Rgb::select(p.above, Rgb::from_f32(self.base_color), Rgb::zero())
     }
 
+    /// ρ where the view is above the horizon, else 0.
+    #[inline(always)]
+    fn prepare_polygons<R: Real>(&self, p: &Outgoing<R>) -> Rgb<R> {
+        Rgb::select(p.above, Rgb::from_f32(self.base_color), Rgb::zero())
+    }
+
     /// ∫ (ρ/π) cos θi dωi over the polygon = ρ F, F the exact form factor
     /// (ltc/polygon.rs): the LTC of a Lambertian lobe is the identity.
     #[inline(always)]
-    fn polygon_local<R: Real>(&self, p: &Outgoing<R>, poly: &PolygonLocal<R>) -> Rgb<R> {
-        let f = form_factor(poly.vertices(), poly.two_sided);
-        Rgb::select(p.above, Rgb::from_f32(self.base_color) * f, Rgb::zero())
+    fn polygon_local_with<R: Real>(
+        &self,
+        _p: &Outgoing<R>,
+        rho: &Rgb<R>,
+        poly: &PolygonLocal<R>,
+    ) -> Rgb<R> {
+        *rho * form_factor(poly.vertices(), poly.two_sided)
     }
 }

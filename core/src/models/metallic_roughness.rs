@@ -63,6 +63,7 @@ pub struct MetallicRoughnessPrepared<R: Real> {
 
 impl Brdf for MetallicRoughness {
     type Prepared<R: Real> = MetallicRoughnessPrepared<R>;
+    type PolygonPrepared<R: Real> = MetallicRoughnessPolygons<R>;
     const POLYGON_LIGHTS: bool = true;
 
     #[inline(always)]
@@ -121,28 +122,54 @@ impl Brdf for MetallicRoughness {
         Rgb::select(o.above, spec + diff, Rgb::zero())
     }
 
-    /// Specular by the GGX LTC (ltc/ggx.rs) with Schlick's split at F0;
-    /// diffuse as the split sum's (1 − F0) ρd (1 − C(μo)) times the form
-    /// factor (the (1 − F) weight replaced by its hemispherical mean).
+    /// The GGX LTC lookup and the split sum's C(μo), with the factors of
+    /// [`Brdf::polygon_local_with`] below folded per channel (zero where
+    /// the view is below the horizon).
     #[inline(always)]
-    fn polygon_local<R: Real>(
+    fn prepare_polygons<R: Real>(
         &self,
         p: &MetallicRoughnessPrepared<R>,
-        poly: &PolygonLocal<R>,
-    ) -> Rgb<R> {
+    ) -> MetallicRoughnessPolygons<R> {
         let o = &p.o;
         let ltc = LtcGgx::new(R::splat(self.alpha() as f64), o.wo);
-        let spec = ltc.integral(poly);
         let f0: Rgb<R> = Rgb::from_f32(self.f0());
         let specular = Rgb::new(
             ltc.schlick_albedo(f0.x),
             ltc.schlick_albedo(f0.y),
             ltc.schlick_albedo(f0.z),
-        ) * spec;
+        );
         let t = AlbedoTables::get().ggx_schlick(self.alpha(), o.wo.z.max(R::ZERO));
-        let ff = form_factor(poly.vertices(), poly.two_sided);
         let diffuse: Rgb<R> = Rgb::from_f32(self.diffuse_color());
-        let diff = (Rgb::splat(R::ONE) - f0).mul_elem(diffuse) * ((R::ONE - t.c) * ff);
-        Rgb::select(o.above, specular + diff, Rgb::zero())
+        let diffuse = (Rgb::splat(R::ONE) - f0).mul_elem(diffuse) * (R::ONE - t.c);
+        MetallicRoughnessPolygons {
+            ltc,
+            specular: Rgb::select(o.above, specular, Rgb::zero()),
+            diffuse: Rgb::select(o.above, diffuse, Rgb::zero()),
+        }
     }
+
+    /// Specular by the GGX LTC (ltc/ggx.rs) with Schlick's split at F0;
+    /// diffuse as the split sum's (1 − F0) ρd (1 − C(μo)) times the form
+    /// factor (the (1 − F) weight replaced by its hemispherical mean).
+    #[inline(always)]
+    fn polygon_local_with<R: Real>(
+        &self,
+        _p: &MetallicRoughnessPrepared<R>,
+        pp: &MetallicRoughnessPolygons<R>,
+        poly: &PolygonLocal<R>,
+    ) -> Rgb<R> {
+        let spec = pp.ltc.integral(poly);
+        let ff = form_factor(poly.vertices(), poly.two_sided);
+        pp.specular * spec + pp.diffuse * ff
+    }
+}
+
+/// A metallic-roughness material's per-pixel state for polygon lights.
+#[derive(Clone, Copy)]
+pub struct MetallicRoughnessPolygons<R: Real> {
+    pub ltc: LtcGgx<R>,
+    /// F0 (n − n_w) + n_w per channel: the specular lobe's albedo.
+    pub specular: Rgb<R>,
+    /// (1 − F0) ρd (1 − C(μo)): what multiplies the form factor.
+    pub diffuse: Rgb<R>,
 }

@@ -387,6 +387,7 @@ pub struct MicrofacetPrepared<R: Real> {
 
 impl Brdf for Microfacet {
     type Prepared<R: Real> = MicrofacetPrepared<R>;
+    type PolygonPrepared<R: Real> = MicrofacetPolygons<R>;
     const POLYGON_LIGHTS: bool = true;
 
     #[inline(always)]
@@ -419,6 +420,30 @@ impl Brdf for Microfacet {
         Rgb::select(p.o.above, Rgb::new(r, g, b), Rgb::zero())
     }
 
+    /// The GGX LTC lookup at this α and the view, with the factors of
+    /// [`Brdf::polygon_local_with`] below folded per channel (zero where
+    /// the view is below the horizon).
+    #[inline(always)]
+    fn prepare_polygons<R: Real>(&self, p: &MicrofacetPrepared<R>) -> MicrofacetPolygons<R> {
+        let params = &self.params;
+        let ltc = LtcGgx::new(R::splat(params.alpha as f64), p.o.wo);
+        let f0 = params.f0().map(|c| R::splat(c as f64));
+        let specular = Rgb::new(
+            ltc.schlick_albedo(f0[0]),
+            ltc.schlick_albedo(f0[1]),
+            ltc.schlick_albedo(f0[2]),
+        );
+        let mut diffuse = Rgb::from_f32(params.diffuse);
+        if let Some(k) = &self.kc {
+            diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
+        }
+        MicrofacetPolygons {
+            ltc,
+            specular: Rgb::select(p.o.above, specular, Rgb::zero()),
+            diffuse: Rgb::select(p.o.above, diffuse, Rgb::zero()),
+        }
+    }
+
     /// The specular lobe by the GGX LTC at this α (ltc/ggx.rs; separable
     /// Smith uses the height-correlated fit, measured p90 1.3 %, max 9 %;
     /// Beckmann and GTR lobes would get the GGX fit at the same α, off by
@@ -429,23 +454,27 @@ impl Brdf for Microfacet {
     /// factor (1 − E(μo)) times the form factor (exact when 1 − E(μi) is
     /// replaced by its cosine-weighted mean 1 − E_avg).
     #[inline(always)]
-    fn polygon_local<R: Real>(&self, p: &MicrofacetPrepared<R>, poly: &PolygonLocal<R>) -> Rgb<R> {
-        let params = &self.params;
-        let ltc = LtcGgx::new(R::splat(params.alpha as f64), p.o.wo);
-        let spec = ltc.integral(poly);
-        let f0 = params.f0().map(|c| R::splat(c as f64));
-        let mut out = Rgb::new(
-            ltc.schlick_albedo(f0[0]),
-            ltc.schlick_albedo(f0[1]),
-            ltc.schlick_albedo(f0[2]),
-        ) * spec;
+    fn polygon_local_with<R: Real>(
+        &self,
+        _p: &MicrofacetPrepared<R>,
+        pp: &MicrofacetPolygons<R>,
+        poly: &PolygonLocal<R>,
+    ) -> Rgb<R> {
+        let spec = pp.ltc.integral(poly);
         let ff = form_factor(poly.vertices(), poly.two_sided);
-        out += Rgb::from_f32(params.diffuse) * ff;
-        if let Some(k) = &self.kc {
-            out += Rgb::from_f32(k.factor) * (p.one_minus_e_o * ff);
-        }
-        Rgb::select(p.o.above, out, Rgb::zero())
+        pp.specular * spec + pp.diffuse * ff
     }
+}
+
+/// A microfacet material's per-pixel state for polygon lights.
+#[derive(Clone, Copy)]
+pub struct MicrofacetPolygons<R: Real> {
+    pub ltc: LtcGgx<R>,
+    /// F0 (n − n_w) + n_w per channel: the specular lobe's albedo.
+    pub specular: Rgb<R>,
+    /// ρd, plus the compensation lobe's factor · (1 − E(μo)): what
+    /// multiplies the form factor.
+    pub diffuse: Rgb<R>,
 }
 
 /// α clamped into [ALPHA_MIN, 1], and whether that changed it.
