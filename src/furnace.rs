@@ -95,11 +95,44 @@ const PALETTE: [[u8; 3]; 6] = [
 ];
 
 /// PNG bytes of the plot: E(μo) of channel mean, dashed without and solid
-/// with compensation, one colour per α; y from 0 to 1.1.
+/// with compensation, one colour per α; y from 0 to 1.1. Tick values, axis
+/// labels and the legend are drawn in the image (src/label.rs).
 pub fn plot_png(curves: &[FurnaceCurve]) -> Result<Vec<u8>, String> {
-    use specula_npr::plot::{line_plot, Curve};
+    plot_png_with(curves, true)
+}
+
+/// [`plot_png`], with or without its text (the test compares the two).
+fn plot_png_with(curves: &[FurnaceCurve], with_text: bool) -> Result<Vec<u8>, String> {
+    let PlotImage {
+        width, height, rgb, ..
+    } = plot_rgb8(curves, with_text)?;
+    let (w, h) = (width, height);
+    let mut png = Vec::new();
+    image::RgbImage::from_raw(w, h, rgb)
+        .ok_or("plot buffer size")?
+        .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+        .map_err(|e| e.to_string())?;
+    Ok(png)
+}
+
+/// The plot as row-major RGB8, with where its text went.
+struct PlotImage {
+    width: u32,
+    height: u32,
+    rgb: Vec<u8>,
+    /// Each text as drawn (top-left corner) and its width in pixels.
+    #[cfg_attr(not(test), allow(dead_code))]
+    labels: Vec<(crate::label::LabelDesc, f32)>,
+    #[cfg_attr(not(test), allow(dead_code))]
+    frame: specula_npr::plot::Frame,
+}
+
+fn plot_rgb8(curves: &[FurnaceCurve], with_text: bool) -> Result<PlotImage, String> {
+    use crate::label::{draw_labels, text_width, LabelDesc};
+    use specula_npr::plot::{line_plot, Align, Curve, LegendEntry, PlotSpec};
     let mean = |e: &[f64; 3]| ((e[0] + e[1] + e[2]) / 3.0) as f32;
     let mut lines = Vec::new();
+    let mut legend = Vec::new();
     for (i, c) in curves.iter().enumerate() {
         let rgb = PALETTE[i % PALETTE.len()];
         for (dashed, pick) in [(true, 0usize), (false, 1)] {
@@ -114,12 +147,73 @@ pub fn plot_png(curves: &[FurnaceCurve]) -> Result<Vec<u8>, String> {
                 dashed,
             });
         }
+        legend.push(LegendEntry {
+            text: format!("α = {}", c.alpha),
+            rgb,
+            dashed: false,
+        });
     }
-    let pm = line_plot(900, 600, 0.0, 1.1, 0.1, &lines).ok_or("cannot allocate the plot")?;
-    pm.encode_png().map_err(|e| e.to_string())
+    for (dashed, text) in [(true, "single scattering"), (false, "compensated")] {
+        legend.push(LegendEntry {
+            text: text.into(),
+            rgb: [90, 90, 90],
+            dashed,
+        });
+    }
+    let spec = PlotSpec {
+        width: 900,
+        height: 600,
+        y_min: 0.0,
+        y_max: 1.1,
+        y_step: 0.1,
+        x_label: "μo = cos θo",
+        y_label: "E(μo), channel mean",
+        curves: &lines,
+        legend: &legend,
+    };
+    let plot = line_plot(&spec).ok_or("cannot allocate the plot")?;
+    let (w, h) = (plot.pixmap.width(), plot.pixmap.height());
+    // Opaque (a white background), so premultiplied RGBA is plain RGBA.
+    let mut rgb: Vec<u8> = plot
+        .pixmap
+        .data()
+        .chunks_exact(4)
+        .flat_map(|p| [p[0], p[1], p[2]])
+        .collect();
+    let labels: Vec<(LabelDesc, f32)> = plot
+        .texts
+        .iter()
+        .map(|t| {
+            let width = text_width(&t.text, t.size);
+            let shift = match t.align {
+                Align::Left => 0.0,
+                Align::Centre => 0.5 * width,
+                Align::Right => width,
+            };
+            let label = LabelDesc {
+                text: t.text.clone(),
+                at: [t.x - shift, t.y],
+                size: t.size,
+                color: [0.1; 3],
+            };
+            (label, width)
+        })
+        .collect();
+    if with_text {
+        let only: Vec<LabelDesc> = labels.iter().map(|(l, _)| l.clone()).collect();
+        draw_labels(&mut rgb, w, h, &only, 1.0);
+    }
+    Ok(PlotImage {
+        width: w,
+        height: h,
+        rgb,
+        labels,
+        frame: plot.frame,
+    })
 }
 
-/// The legend printed beside the plot (it has no text of its own).
+/// The legend in words, printed beside the plot for logs (the image has
+/// its own).
 pub fn legend(curves: &[FurnaceCurve]) -> String {
     let names = ["blue", "orange", "green", "red", "purple", "brown"];
     let mut s = String::from("plot: x = mu_o in [0, 1], y = E in [0, 1.1], grid 0.1; dashed = single scattering, solid = compensated\n");
@@ -127,4 +221,70 @@ pub fn legend(curves: &[FurnaceCurve]) -> String {
         s += &format!("  {}: alpha {}\n", names[i % names.len()], c.alpha);
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn curve(alpha: f32) -> FurnaceCurve {
+        FurnaceCurve {
+            alpha,
+            notes: vec![],
+            points: mus()
+                .into_iter()
+                .map(|mu| (mu, [0.5 + 0.4 * mu; 3], [1.0; 3]))
+                .collect(),
+        }
+    }
+
+    /// Every tick value, axis label and legend line is drawn where the
+    /// plot placed it: its box holds dark text pixels in the labelled
+    /// image and none in the same plot drawn without text (so the pixels
+    /// are the text's, not grid or curves). Tick values sit outside the
+    /// data frame, and the legend holds one line per α plus two styles.
+    #[test]
+    fn plot_draws_ticks_labels_and_legend() {
+        let curves = [curve(0.2), curve(0.6), curve(1.0)];
+        let with = plot_rgb8(&curves, true).unwrap();
+        let without = plot_rgb8(&curves, false).unwrap();
+        let w = with.width as usize;
+        let dark = |img: &PlotImage, x0: f32, y0: f32, x1: f32, y1: f32| -> usize {
+            let (xa, xb) = (x0.max(0.0) as usize, (x1.ceil() as usize).min(w));
+            let (ya, yb) = (
+                y0.max(0.0) as usize,
+                (y1.ceil() as usize).min(img.height as usize),
+            );
+            (ya..yb)
+                .flat_map(|y| (xa..xb).map(move |x| (y * w + x) * 3))
+                .filter(|&k| img.rgb[k..k + 3].iter().all(|&c| c < 128))
+                .count()
+        };
+        let f = with.frame;
+        // 11 x ticks, 12 y ticks (0.0 … 1.1), 2 axis labels, 3 + 2 legend lines.
+        assert_eq!(with.labels.len(), 11 + 12 + 2 + 5);
+        for (l, width) in &with.labels {
+            let (x0, y0) = (l.at[0], l.at[1]);
+            let (x1, y1) = (x0 + width, y0 + l.size * 1.2);
+            let n = dark(&with, x0, y0, x1, y1);
+            assert!(n >= 10, "{:?}: {n} text pixels at {:?}", l.text, l.at);
+            assert_eq!(dark(&without, x0, y0, x1, y1), 0, "{:?}", l.text);
+            let inside = x1 > f.x0 && x0 < f.x1 && y1 > f.y1 && y0 < f.y0;
+            assert!(!inside, "{:?} overlaps the data frame", l.text);
+        }
+        for t in [
+            "0.0",
+            "0.5",
+            "1.0",
+            "1.1",
+            "α = 0.6",
+            "single scattering",
+            "compensated",
+        ] {
+            assert!(with.labels.iter().any(|(l, _)| l.text == t), "no {t:?}");
+        }
+        // The x tick "0.5" is centred under the frame's middle.
+        let (half, wd) = with.labels.iter().find(|(l, _)| l.text == "0.5").unwrap();
+        assert!((half.at[0] + wd / 2.0 - (f.x0 + f.x1) / 2.0).abs() < 1.0);
+    }
 }

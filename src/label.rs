@@ -66,6 +66,25 @@ impl LabelDesc {
     }
 }
 
+/// Width in pixels of `text` set at line height `size` (advances and
+/// kerning, as [`draw_labels`] places the glyphs): for centring or
+/// right-aligning a label.
+pub fn text_width(text: &str, size: f32) -> f32 {
+    let font = FontRef::try_from_slice(FONT).expect("the bundled font parses");
+    let scaled = font.as_scaled(PxScale::from(size));
+    let mut prev = None;
+    let mut w = 0.0;
+    for ch in text.chars() {
+        let id = font.glyph_id(ch);
+        if let Some(p) = prev {
+            w += scaled.kern(p, id);
+        }
+        w += scaled.h_advance(id);
+        prev = Some(id);
+    }
+    w
+}
+
 /// Draws `labels` onto the row-major RGB8 image `rgb8` (width × height),
 /// with positions and sizes multiplied by `scale` (output size over the
 /// scene's). Pixels outside the image are skipped; labels are validated.

@@ -1,5 +1,7 @@
 //! The `specula` command line.
 
+mod cpu_check;
+
 use clap::{Parser, Subcommand};
 use image::ImageFormat;
 use specula::render::{depth_aov, id_aov, normal_aov, render_scene, RenderSettings};
