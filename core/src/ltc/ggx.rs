@@ -47,7 +47,7 @@
 
 use crate::brdf::ALPHA_MIN;
 use crate::light::PolygonLocal;
-use crate::ltc::polygon::{form_factor_signed_mapped, sided};
+use crate::ltc::polygon::{form_factor_pair_signed, form_factor_signed_mapped, sided};
 use crate::real::Real;
 use crate::table::{Axis, Nodes, Table2, Warp};
 use crate::vec3::V3;
@@ -226,6 +226,15 @@ impl<R: Real> LtcGgx<R> {
             form_factor_signed_mapped(poly.vertices(), |v| self.map(v)),
             poly.two_sided,
         )
+    }
+
+    /// The polygon's form factor (sided) and [`LtcGgx::integral`], in
+    /// one pass where the polygon needs no clipping
+    /// ([`form_factor_pair_signed`]).
+    #[inline(always)]
+    pub fn form_factor_and_integral(&self, poly: &PolygonLocal<R>) -> (R, R) {
+        let (ff, spec) = form_factor_pair_signed(poly.vertices(), |v| self.map(v));
+        (sided(ff, poly.two_sided), sided(spec, poly.two_sided))
     }
 
     /// F0 (n − n_w) + n_w: the lobe's albedo under Schlick's F.

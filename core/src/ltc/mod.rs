@@ -11,6 +11,6 @@ pub mod polygon;
 pub mod reference;
 
 pub use polygon::{
-    edge_integral, form_factor, form_factor_signed, form_factor_signed_mapped, sided,
-    theta_over_sin,
+    edge_integral, form_factor, form_factor_pair_signed, form_factor_signed,
+    form_factor_signed_mapped, sided, theta_over_sin,
 };

@@ -210,16 +210,23 @@ pub fn form_factor_signed_mapped<R: Real>(vertices: &[V3<R>], map: impl Fn(V3<R>
         for &v in vertices {
             let b = map(v);
             let (above_a, above_b) = (a.z.ge(R::ZERO), b.z.ge(R::ZERO));
-            let p = horizon_crossing(a, b);
-            let start = V3::select(above_a, a, p);
-            let end = V3::select(above_b, b, p);
             let part = above_a | above_b;
-            let e = edge_integral(end, start);
+            // The crossing only where some lane's edge crosses the horizon.
+            let crosses = (above_a & !above_b) | (above_b & !above_a);
+            let (start, end) = if crosses.any() {
+                let p = horizon_crossing(a, b);
+                (V3::select(above_a, a, p), V3::select(above_b, b, p))
+            } else {
+                (a, b)
+            };
+            sum += R::select(part, edge_integral(end, start), R::ZERO);
             // Join along the horizon from the previous part's end to this
-            // start (both on the horizon whenever they differ; equal points
-            // give 0).
-            let j = horizon_integral(start, last);
-            sum += R::select(part, e, R::ZERO) + R::select(part & have, j, R::ZERO);
+            // start, where this part starts at a crossing (elsewhere the
+            // previous part ended at this start, a zero join).
+            let join = part & have & !above_a;
+            if join.any() {
+                sum += R::select(join, horizon_integral(start, last), R::ZERO);
+            }
             first = V3::select(part & !have, start, first);
             last = V3::select(part, end, last);
             have = have | part;
@@ -228,6 +235,51 @@ pub fn form_factor_signed_mapped<R: Real>(vertices: &[V3<R>], map: impl Fn(V3<R>
         sum += R::select(have, horizon_integral(first, last), R::ZERO);
     }
     sum * R::splat(0.5 * core::f64::consts::FRAC_1_PI)
+}
+
+/// ([`form_factor_signed`], [`form_factor_signed_mapped`]) of the same
+/// polygon in one pass over its vertices where neither needs clipping in
+/// any lane (each lane sees each whole or not at all), which shares the
+/// loop and the vertex loads; otherwise the two apart. What a GGX
+/// material under a polygon light needs: the diffuse form factor and the
+/// LTC integral.
+#[inline(always)]
+pub fn form_factor_pair_signed<R: Real>(
+    vertices: &[V3<R>],
+    map: impl Fn(V3<R>) -> V3<R>,
+) -> (R, R) {
+    let t: R::Mask = R::ZERO.le(R::ZERO);
+    let (mut all, mut any, mut all_m, mut any_m) = (t, !t, t, !t);
+    for &v in vertices {
+        let (above, above_m) = (v.z.ge(R::ZERO), map(v).z.ge(R::ZERO));
+        all = all & above;
+        any = any | above;
+        all_m = all_m & above_m;
+        any_m = any_m | above_m;
+    }
+    if !((all | !any) & (all_m | !any_m)).all() {
+        return (
+            form_factor_signed(vertices),
+            form_factor_signed_mapped(vertices, map),
+        );
+    }
+    if !(any | any_m).any() {
+        return (R::ZERO, R::ZERO);
+    }
+    let (mut sum, mut sum_m) = (R::ZERO, R::ZERO);
+    let mut a = vertices[vertices.len() - 1];
+    let mut a_m = map(a);
+    for &b in vertices {
+        let b_m = map(b);
+        sum += edge_integral(b, a);
+        sum_m += edge_integral(b_m, a_m);
+        (a, a_m) = (b, b_m);
+    }
+    let k = R::splat(0.5 * core::f64::consts::FRAC_1_PI);
+    (
+        R::select(all, sum, R::ZERO) * k,
+        R::select(all_m, sum_m, R::ZERO) * k,
+    )
 }
 
 /// The form factor of a polygon light: of its front only

@@ -11,7 +11,6 @@ use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::diffuse::f_lambert;
 use crate::fresnel::f_schlick;
 use crate::light::PolygonLocal;
-use crate::ltc::form_factor;
 use crate::ltc::ggx::LtcGgx;
 use crate::masking::{smith_ggx_root, v_smith_ggx_correlated_roots};
 use crate::ndf::d_ggx;
@@ -158,8 +157,7 @@ impl Brdf for MetallicRoughness {
         pp: &MetallicRoughnessPolygons<R>,
         poly: &PolygonLocal<R>,
     ) -> Rgb<R> {
-        let spec = pp.ltc.integral(poly);
-        let ff = form_factor(poly.vertices(), poly.two_sided);
+        let (ff, spec) = pp.ltc.form_factor_and_integral(poly);
         pp.specular * spec + pp.diffuse * ff
     }
 }

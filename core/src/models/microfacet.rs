@@ -18,7 +18,6 @@ use crate::fresnel::{f_conductor, f_dielectric, f_schlick, r0_from_ior};
 use crate::gtr_lambda::GtrLambdaTable;
 use crate::kulla_conty::{color_factor, f_avg, slice_for, KcColor, KcSlice};
 use crate::light::PolygonLocal;
-use crate::ltc::form_factor;
 use crate::ltc::ggx::LtcGgx;
 use crate::masking::{g2_height_correlated, g2_separable, lambda_beckmann, lambda_ggx};
 use crate::ndf::{d_beckmann, d_ggx, d_gtr};
@@ -460,8 +459,7 @@ impl Brdf for Microfacet {
         pp: &MicrofacetPolygons<R>,
         poly: &PolygonLocal<R>,
     ) -> Rgb<R> {
-        let spec = pp.ltc.integral(poly);
-        let ff = form_factor(poly.vertices(), poly.two_sided);
+        let (ff, spec) = pp.ltc.form_factor_and_integral(poly);
         pp.specular * spec + pp.diffuse * ff
     }
 }
