@@ -406,8 +406,9 @@ pub fn build(
     strokes: Option<&StrokesSpec>,
     output: &crate::scene::OutputDesc,
 ) -> LineStages {
+    use specula_npr::outline::id_materials;
     use specula_npr::outline::{Selection, ShadingOutline};
-    use specula_npr::sobel::{id_materials, Sobel, Source};
+    use specula_npr::sobel::{Sobel, Source};
     use std::sync::Arc;
     let index = |data: &specula_raster::SceneData, names: &Option<Vec<String>>| {
         names.as_ref().map(|list| {

@@ -27,6 +27,25 @@ use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::target::MISS;
 use specula_raster::{BufferSet, Camera, FrameBuffers, SceneData};
 
+/// Material index of every id the scene's passes write (index = id;
+/// u32::MAX for ids no pass writes).
+pub fn id_materials(scene: &SceneData) -> Vec<u32> {
+    let end = scene
+        .geometry
+        .iter()
+        .map(|p| p.ids().end)
+        .max()
+        .unwrap_or(0) as usize;
+    let map = IdMap::new(&scene.geometry);
+    let mut out = vec![u32::MAX; end];
+    for p in &scene.geometry {
+        for id in p.ids() {
+            out[id as usize] = map.look_up(id as u32, &scene.tri_material).1;
+        }
+    }
+    out
+}
+
 /// Which visibility-buffer ids a stage draws on: all, or those whose
 /// material is in a set.
 #[derive(Clone, Debug, Default)]
@@ -44,20 +63,10 @@ impl Selection {
     /// Pixels whose material (through the scene's geometry passes, so an
     /// outline pass's ids have the outline material) is one of `materials`.
     pub fn materials(scene: &SceneData, materials: &[u32]) -> Selection {
-        let end = scene
-            .geometry
-            .iter()
-            .map(|p| p.ids().end)
-            .max()
-            .unwrap_or(0) as usize;
-        let map = IdMap::new(&scene.geometry);
-        let mut ids = vec![false; end];
-        for p in &scene.geometry {
-            for id in p.ids() {
-                let (_, m) = map.look_up(id as u32, &scene.tri_material);
-                ids[id as usize] = materials.contains(&m);
-            }
-        }
+        let ids = id_materials(scene)
+            .into_iter()
+            .map(|m| materials.contains(&m))
+            .collect();
         Selection { ids: Some(ids) }
     }
 

@@ -59,24 +59,6 @@ pub struct Sobel {
     pub selection: Selection,
 }
 
-/// Material index of every id the scene's passes write (index = id).
-pub fn id_materials(scene: &specula_raster::SceneData) -> Vec<u32> {
-    let end = scene
-        .geometry
-        .iter()
-        .map(|p| p.ids().end)
-        .max()
-        .unwrap_or(0) as usize;
-    let map = specula_raster::geometry::IdMap::new(&scene.geometry);
-    let mut out = vec![u32::MAX; end];
-    for p in &scene.geometry {
-        for id in p.ids() {
-            out[id as usize] = map.look_up(id as u32, &scene.tri_material).1;
-        }
-    }
-    out
-}
-
 /// Read-only views of the buffers a detection reads, at frame size.
 pub struct EdgeInput<'a> {
     pub width: usize,
