@@ -449,7 +449,11 @@ pub fn build(
             out.extrusions.push(stage);
         }
     }
-    let id_material = Arc::new(id_materials(data));
+    let id_material = id_materials(data);
+    let selection = |names: &Option<Vec<String>>| match index(data, names) {
+        Some(m) => Selection::materials(&id_material, &m),
+        None => Selection::all(),
+    };
     for o in outlines {
         match o {
             OutlineSpec::Extrusion { .. } => {}
@@ -458,15 +462,11 @@ pub fn build(
                 threshold,
                 materials,
             } => {
-                let selection = match index(data, materials) {
-                    Some(m) => Selection::materials(data, &m),
-                    None => Selection::all(),
-                };
                 out.post.push(Arc::new(ShadingOutline::new(
                     data.camera.clone(),
                     *threshold,
                     *color,
-                    selection,
+                    selection(materials),
                 )));
             }
             OutlineSpec::Sobel {
@@ -476,10 +476,6 @@ pub fn build(
                 materials,
                 antialias,
             } => {
-                let selection = match index(data, materials) {
-                    Some(m) => Selection::materials(data, &m),
-                    None => Selection::all(),
-                };
                 out.post.push(Arc::new(Sobel {
                     sources: sources
                         .iter()
@@ -496,8 +492,8 @@ pub fn build(
                     width: *width,
                     color: *color,
                     antialias: *antialias,
-                    id_material: (*id_material).clone(),
-                    selection,
+                    id_material: id_material.clone(),
+                    selection: selection(materials),
                 }));
             }
         }

@@ -60,13 +60,11 @@ impl Selection {
         Selection { ids: None }
     }
 
-    /// Pixels whose material (through the scene's geometry passes, so an
-    /// outline pass's ids have the outline material) is one of `materials`.
-    pub fn materials(scene: &SceneData, materials: &[u32]) -> Selection {
-        let ids = id_materials(scene)
-            .into_iter()
-            .map(|m| materials.contains(&m))
-            .collect();
+    /// Pixels whose material is one of `materials`; `id_material` is the
+    /// scene's [`id_materials`] (so an outline pass's ids have the outline
+    /// material).
+    pub fn materials(id_material: &[u32], materials: &[u32]) -> Selection {
+        let ids = id_material.iter().map(|m| materials.contains(m)).collect();
         Selection { ids: Some(ids) }
     }
 
