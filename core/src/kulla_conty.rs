@@ -182,6 +182,10 @@ impl KcTable {
                 })
                 .collect()
         };
+        // Scoped std threads rather than rayon: tables are built inside
+        // OnceLock initialisers that rayon workers reach while shading, and
+        // a nested rayon join there may steal another pixel job that waits
+        // on the same OnceLock, on the same thread: a deadlock.
         let threads = std::thread::available_parallelism()
             .map_or(1, |n| n.get())
             .clamp(1, N_ALPHA);
