@@ -822,6 +822,20 @@ pub fn load_scene_str(
         check_radiometric("environment.uniform", e.uniform).map_err(&err)?;
         data.environment = Some(e.uniform);
     }
+    // Tables built once per process on first use: made here, so that
+    // their cost (the split-sum tables: ~400 M instructions) counts as
+    // loading and not as the first frame's shading pass.
+    let polygon_lights = data
+        .lights
+        .iter()
+        .any(|l| matches!(l, Light::Polygon { .. }));
+    if polygon_lights {
+        specula_core::ltc::ggx::table();
+    }
+    if (polygon_lights || data.environment.is_some()) && materials.iter().any(is_metallic_roughness)
+    {
+        specula_core::albedo_tables::AlbedoTables::get();
+    }
     let outlines = desc
         .outlines
         .iter()
@@ -860,4 +874,13 @@ pub fn load_scene_str(
         strokes,
         lines,
     })
+}
+
+/// Whether a material is `metallic_roughness`, whose polygon-light and
+/// environment terms read the process-wide split-sum tables.
+fn is_metallic_roughness(m: &Material) -> bool {
+    m.shader
+        .as_any()
+        .downcast_ref::<Lit>()
+        .is_some_and(|l| matches!(l.model, Model::MetallicRoughness(_)))
 }

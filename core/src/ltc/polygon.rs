@@ -94,31 +94,83 @@ pub fn theta_over_sin<R: Real>(x: R) -> R {
     p
 }
 
+/// [`theta_over_sin`] at two arguments, step by step together: the
+/// same operations, each coefficient loaded once for both.
+#[inline(always)]
+pub fn theta_over_sin_pair<R: Real>(x0: R, x1: R) -> (R, R) {
+    let k = |i: usize| R::splat(THETA_OVER_SIN[i]);
+    let (mut p0, mut p1) = (k(7), k(7));
+    for i in (0..7).rev() {
+        let ki = k(i);
+        p0 = p0.mul_add(x0, ki);
+        p1 = p1.mul_add(x1, ki);
+    }
+    (p0, p1)
+}
+
 /// θ ẑ·n̂ for the arc between two points with n = a × b (|n|² = `n2`) and
 /// c = a·b; see the module docs.
 #[inline(always)]
 fn arc<R: Real>(nz: R, n2: R, c: R) -> R {
-    let floor = R::splat(MIN_SQ);
     if R::EXACT {
-        let s = n2.sqrt();
-        // s = 0 only for points in line with the origin, where n.z = 0 too.
-        s.atan2(c) * nz / s.max(floor.sqrt())
-    } else {
-        // 1/|a||b|, correctly rounded (module docs: precision).
-        let inv = R::ONE / c.mul_add(c, n2).max(floor).sqrt();
-        let t = nz * inv;
-        let x = c * inv;
-        let p = theta_over_sin(x.abs());
-        let obtuse = c.lt(R::ZERO);
-        // Arcs over 90° are rare (large polygons near the point): the
-        // second square root only when some lane has one.
-        if obtuse.any() {
-            let pi_nz_over_s = R::PI * nz / n2.max(floor).sqrt();
-            R::select(obtuse, pi_nz_over_s - t * p, t * p)
-        } else {
-            t * p
-        }
+        return arc_exact(nz, n2, c);
     }
+    let (t, x) = arc_terms(nz, n2, c);
+    let r = t * theta_over_sin(x);
+    let obtuse = c.lt(R::ZERO);
+    // Arcs over 90° are rare (large polygons near the point): the
+    // second square root only when some lane has one.
+    if obtuse.any() {
+        reflect_obtuse(obtuse, nz, n2, r)
+    } else {
+        r
+    }
+}
+
+/// [`arc`] where [`Real::EXACT`]: atan2, the oracle the lanes are tested
+/// against.
+#[inline(always)]
+fn arc_exact<R: Real>(nz: R, n2: R, c: R) -> R {
+    let floor = R::splat(MIN_SQ);
+    let s = n2.sqrt();
+    // s = 0 only for points in line with the origin, where n.z = 0 too.
+    s.atan2(c) * nz / s.max(floor.sqrt())
+}
+
+/// (n.z/|a||b|, |cos θ|): the factor and the polynomial's argument of
+/// [`arc`]'s lane form.
+#[inline(always)]
+fn arc_terms<R: Real>(nz: R, n2: R, c: R) -> (R, R) {
+    // 1/|a||b|, correctly rounded (module docs: precision).
+    let inv = R::ONE / c.mul_add(c, n2).max(R::splat(MIN_SQ)).sqrt();
+    (nz * inv, (c * inv).abs())
+}
+
+/// π n.z/|n| − r where `obtuse` (cos θ < 0; module docs), else r.
+#[inline(always)]
+fn reflect_obtuse<R: Real>(obtuse: R::Mask, nz: R, n2: R, r: R) -> R {
+    let pi_nz_over_s = R::PI * nz / n2.max(R::splat(MIN_SQ)).sqrt();
+    R::select(obtuse, pi_nz_over_s - r, r)
+}
+
+/// (a × b, a·b) with a × b formed as a × (b ∓ a), the sign that makes
+/// b ∓ a exact (module docs), each component one product and one fused
+/// multiply-add.
+#[inline(always)]
+fn edge_normal<R: Real>(a: V3<R>, b: V3<R>) -> (V3<R>, R) {
+    let c = a.dot(b);
+    let k = R::select(c.lt(R::ZERO), R::ONE, -R::ONE);
+    let d = V3::new(
+        a.x.mul_add(k, b.x),
+        a.y.mul_add(k, b.y),
+        a.z.mul_add(k, b.z),
+    );
+    let n = V3::new(
+        a.y.mul_add(d.z, -(a.z * d.y)),
+        a.z.mul_add(d.x, -(a.x * d.z)),
+        a.x.mul_add(d.y, -(a.y * d.x)),
+    );
+    (n, c)
 }
 
 /// θ ẑ·n̂ of the great arc from `a` to `b` (points, any length, within 1e9
@@ -127,16 +179,35 @@ fn arc<R: Real>(nz: R, n2: R, c: R) -> R {
 /// sum edges in reverse order). Zero for points in line with the origin.
 #[inline(always)]
 pub fn edge_integral<R: Real>(a: V3<R>, b: V3<R>) -> R {
-    let c = a.dot(b);
-    // a × (b ∓ a) = a × b, with the sign that makes b ∓ a exact (module docs).
-    let k = R::select(c.lt(R::ZERO), R::ONE, -R::ONE);
-    let d = V3::new(
-        a.x.mul_add(k, b.x),
-        a.y.mul_add(k, b.y),
-        a.z.mul_add(k, b.z),
-    );
-    let n = a.cross(d);
+    let (n, c) = edge_normal(a, b);
     arc(n.z, n.length_squared(), c)
+}
+
+/// [`edge_integral`] of two arcs at once, `a0 → b0` and `a1 → b1` (a
+/// polygon's edge and the same edge under an LTC's map), each lane
+/// equal to the single form: the two share the polynomial's constants
+/// (loaded once per step instead of twice) and one test for obtuse arcs.
+#[inline(always)]
+pub fn edge_integral_pair<R: Real>(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V3<R>) -> (R, R) {
+    let (n0, c0) = edge_normal(a0, b0);
+    let (n1, c1) = edge_normal(a1, b1);
+    let (q0, q1) = (n0.length_squared(), n1.length_squared());
+    if R::EXACT {
+        return (arc_exact(n0.z, q0, c0), arc_exact(n1.z, q1, c1));
+    }
+    let (t0, x0) = arc_terms(n0.z, q0, c0);
+    let (t1, x1) = arc_terms(n1.z, q1, c1);
+    let (p0, p1) = theta_over_sin_pair(x0, x1);
+    let (r0, r1) = (t0 * p0, t1 * p1);
+    let (o0, o1) = (c0.lt(R::ZERO), c1.lt(R::ZERO));
+    if (o0 | o1).any() {
+        (
+            reflect_obtuse(o0, n0.z, q0, r0),
+            reflect_obtuse(o1, n1.z, q1, r1),
+        )
+    } else {
+        (r0, r1)
+    }
 }
 
 /// [`edge_integral`] for two points on the horizon (z = 0): the signed
@@ -271,8 +342,9 @@ pub fn form_factor_pair_signed<R: Real>(
     let mut a_m = map(a);
     for &b in vertices {
         let b_m = map(b);
-        sum += edge_integral(b, a);
-        sum_m += edge_integral(b_m, a_m);
+        let (e, e_m) = edge_integral_pair(b, a, b_m, a_m);
+        sum += e;
+        sum_m += e_m;
         (a, a_m) = (b, b_m);
     }
     let k = R::splat(0.5 * core::f64::consts::FRAC_1_PI);
@@ -306,6 +378,52 @@ mod tests {
 
     fn v(x: f64, y: f64, z: f64) -> V3<f64> {
         V3::new(x, y, z)
+    }
+
+    #[test]
+    fn the_paired_edge_integral_equals_two_single_ones_bit_for_bit() {
+        // The shading loop integrates a polygon and its LTC image with
+        // edge_integral_pair; the clipping path uses edge_integral. Both
+        // must give the same bits, obtuse arcs and lanes included.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut rnd = || {
+            state ^= state << 13;
+            state ^= state >> 7;
+            state ^= state << 17;
+            ((state >> 11) as f64 / (1u64 << 53) as f64) * 4.0 - 2.0
+        };
+        for _ in 0..2_000 {
+            let p: [[f32; 3]; 4] = core::array::from_fn(|_| core::array::from_fn(|_| rnd() as f32));
+            let w = |q: [f32; 3]| V3::new(q[0], q[1], q[2]);
+            let (a0, b0, a1, b1) = (w(p[0]), w(p[1]), w(p[2]), w(p[3]));
+            let (e0, e1) = edge_integral_pair(a0, b0, a1, b1);
+            assert_eq!(e0.to_bits(), edge_integral(a0, b0).to_bits());
+            assert_eq!(e1.to_bits(), edge_integral(a1, b1).to_bits());
+            // Lanes: the first edge in lane 0 only, so that one lane's
+            // obtuse arc takes the shared branch for all of them.
+            let lane = |q: [f32; 3], k: usize| {
+                let x = |c: usize| {
+                    wide::f32x8::from(core::array::from_fn(|i| {
+                        if i == 0 {
+                            q[c]
+                        } else {
+                            q[c] * (1.0 + k as f32 * 0.1)
+                        }
+                    }))
+                };
+                V3::new(x(0), x(1), x(2))
+            };
+            let (l0, l1) =
+                edge_integral_pair(lane(p[0], 1), lane(p[1], 2), lane(p[2], 3), lane(p[3], 4));
+            let (s0, s1) = (
+                edge_integral(lane(p[0], 1), lane(p[1], 2)),
+                edge_integral(lane(p[2], 3), lane(p[3], 4)),
+            );
+            for i in 0..8 {
+                assert_eq!(l0.to_array()[i].to_bits(), s0.to_array()[i].to_bits());
+                assert_eq!(l1.to_array()[i].to_bits(), s1.to_array()[i].to_bits());
+            }
+        }
     }
 
     #[test]

@@ -137,9 +137,9 @@ impl Brdf for MetallicRoughness {
             ltc.schlick_albedo(f0.y),
             ltc.schlick_albedo(f0.z),
         );
-        let t = AlbedoTables::get().ggx_schlick(self.alpha(), o.wo.z.max(R::ZERO));
+        let c = AlbedoTables::get().c(o.wo.z.max(R::ZERO));
         let diffuse: Rgb<R> = Rgb::from_f32(self.diffuse_color());
-        let diffuse = (Rgb::splat(R::ONE) - f0).mul_elem(diffuse) * (R::ONE - t.c);
+        let diffuse = (Rgb::splat(R::ONE) - f0).mul_elem(diffuse) * (R::ONE - c);
         MetallicRoughnessPolygons {
             ltc,
             specular: Rgb::select(o.above, specular, Rgb::zero()),
@@ -157,6 +157,11 @@ impl Brdf for MetallicRoughness {
         pp: &MetallicRoughnessPolygons<R>,
         poly: &PolygonLocal<R>,
     ) -> Rgb<R> {
+        if self.diffuse_color() == [0.0; 3] {
+            // A metal: no diffuse lobe, so no form factor to integrate
+            // (the specular integral is the same either way, bit for bit).
+            return pp.specular * pp.ltc.integral(poly);
+        }
         let (ff, spec) = pp.ltc.form_factor_and_integral(poly);
         pp.specular * spec + pp.diffuse * ff
     }
