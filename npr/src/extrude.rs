@@ -18,6 +18,20 @@
 //! normals of all vertices at the same position, so copies of a corner
 //! move together and the pushed shell stays closed.
 //!
+//! The smoothed normal's screen direction is not a silhouette corner's
+//! bisector: at a cube corner where two silhouette edges meet at an angle
+//! on screen, the push along it has a small component across one of the
+//! edges, and the ring along that edge thins toward the corner (to under
+//! a pixel at 1.5 px). So a vertex where exactly two outline edges meet
+//! this frame (silhouette edges: one face toward the eye, one away) moves
+//! by the **miter** of their outward screen normals n₁, n₂:
+//! m = (n₁ + n₂)/(1 + n₁·n₂), which has m·n₁ = m·n₂ = 1, so both pushed
+//! edges lie exactly `width` pixels out and the corner is mitred. The
+//! miter is used up to [`MITER_LIMIT`] (corners of 60° and wider); a
+//! sharper turn, or a vertex on one or on three and more outline edges,
+//! keeps the smoothed normal. Edges are found once per scene between
+//! vertices welded by position (as the smoothing), faces' facing per frame.
+//!
 //! The width is in output pixels; the renderer tells the stage its
 //! supersampling ([`Extrude::set_ssaa`]) so the ring is `width × ssaa`
 //! samples wide and `width` pixels after the resolve.
@@ -31,6 +45,10 @@ use std::collections::HashMap;
 use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::Arc;
 
+/// Longest miter, in widths: |m| = 1/cos(φ/2) for outward normals φ
+/// apart, 2 at φ = 120° (a corner of 60° on screen).
+pub const MITER_LIMIT: f32 = 2.0;
+
 /// The vertex stage of an extrusion pass.
 #[derive(Debug)]
 pub struct Extrude {
@@ -39,6 +57,98 @@ pub struct Extrude {
     ssaa: AtomicU32,
     /// Smoothed unit normal per scene vertex (module docs).
     smooth: Vec<Vec3>,
+    topo: Topology,
+}
+
+/// Welded vertices and edges of the scene's triangles (module docs).
+#[derive(Debug, Default)]
+struct Topology {
+    /// Welded index of each scene vertex.
+    weld: Vec<u32>,
+    /// Per edge: welded ends, its faces (u32::MAX: none), and per face the
+    /// scene vertex opposite the edge.
+    edges: Vec<TopoEdge>,
+    /// Edges at each welded vertex: `vertex_edges[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    vertex_edges: Vec<u32>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct TopoEdge {
+    a: u32,
+    b: u32,
+    faces: [u32; 2],
+    opposite: [u32; 2],
+}
+
+const NONE: u32 = u32::MAX;
+
+impl Topology {
+    fn new(positions: &[Vec3], triangles: &[[u32; 3]]) -> Topology {
+        let key = |p: Vec3| p.to_array().map(|c| (c + 0.0).to_bits());
+        let mut ids: HashMap<[u32; 3], u32> = HashMap::with_capacity(positions.len());
+        let weld: Vec<u32> = positions
+            .iter()
+            .map(|p| {
+                let n = ids.len() as u32;
+                *ids.entry(key(*p)).or_insert(n)
+            })
+            .collect();
+        let mut map: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 2);
+        let mut edges: Vec<TopoEdge> = Vec::new();
+        for (f, t) in triangles.iter().enumerate() {
+            let w = t.map(|v| weld.get(v as usize).copied().unwrap_or(NONE));
+            if w.contains(&NONE) || w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
+                continue;
+            }
+            for k in 0..3 {
+                let (u, v) = (w[k], w[(k + 1) % 3]);
+                let opp = t[(k + 2) % 3];
+                let e = *map.entry((u.min(v), u.max(v))).or_insert_with(|| {
+                    edges.push(TopoEdge {
+                        a: u.min(v),
+                        b: u.max(v),
+                        faces: [NONE; 2],
+                        opposite: [NONE; 2],
+                    });
+                    edges.len() as u32 - 1
+                });
+                let e = &mut edges[e as usize];
+                if e.faces[0] == NONE {
+                    e.faces[0] = f as u32;
+                    e.opposite[0] = opp;
+                } else if e.faces[1] == NONE {
+                    e.faces[1] = f as u32;
+                    e.opposite[1] = opp;
+                } else {
+                    // A third face: non-manifold; not an outline edge.
+                    e.faces = [NONE, f as u32];
+                }
+            }
+        }
+        let mut count = vec![0u32; ids.len() + 1];
+        for e in &edges {
+            count[e.a as usize + 1] += 1;
+            count[e.b as usize + 1] += 1;
+        }
+        for i in 1..count.len() {
+            count[i] += count[i - 1];
+        }
+        let mut fill = count.clone();
+        let mut vertex_edges = vec![0u32; *count.last().unwrap_or(&0) as usize];
+        for (i, e) in edges.iter().enumerate() {
+            for v in [e.a, e.b] {
+                vertex_edges[fill[v as usize] as usize] = i as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        Topology {
+            weld,
+            edges,
+            start: count,
+            vertex_edges,
+        }
+    }
 }
 
 impl Extrude {
@@ -47,6 +157,7 @@ impl Extrude {
             width,
             ssaa: AtomicU32::new(1),
             smooth: smooth_normals(&scene.positions, &scene.normals),
+            topo: Topology::new(&scene.positions, &scene.triangles),
         }
     }
 
@@ -58,6 +169,80 @@ impl Extrude {
 
     pub fn smoothed_normals(&self) -> &[Vec3] {
         &self.smooth
+    }
+
+    /// Per welded vertex, the miter (in widths, screen pixels with y up)
+    /// where exactly two outline edges meet this frame (module docs).
+    fn miters(&self, scene: &SceneData, view: &View, clip: &[Vec4]) -> Vec<Option<[f32; 2]>> {
+        let t = &self.topo;
+        let (hw, hh) = (view.width * 0.5, view.height * 0.5);
+        let front: Vec<bool> = scene
+            .triangles
+            .par_iter()
+            .with_min_len(4096)
+            .map(|tri| {
+                let [a, b, c] = tri.map(|v| scene.positions[v as usize]);
+                (b - a).cross(c - a).dot(view.eye - a) > 0.0
+            })
+            .collect();
+        // Screen position (pixels from the centre, y up), if in front of
+        // the eye.
+        let screen = |v: u32| {
+            let c = clip[v as usize];
+            (c.w > 0.0).then(|| [c.x / c.w * hw, c.y / c.w * hh])
+        };
+        let weld_point = |w: u32, e: &TopoEdge| {
+            // Any scene vertex of the welded one: the edge's faces hold it.
+            let f = e.faces.iter().find(|&&f| f != NONE).copied()?;
+            scene.triangles[f as usize]
+                .into_iter()
+                .find(|&v| t.weld[v as usize] == w)
+        };
+        // Outward unit screen normal of each outline edge.
+        let normals: Vec<Option<[f32; 2]>> = t
+            .edges
+            .par_iter()
+            .with_min_len(4096)
+            .map(|e| {
+                let [f0, f1] = e.faces;
+                if f0 == NONE || f1 == NONE || front[f0 as usize] == front[f1 as usize] {
+                    return None;
+                }
+                let k = if front[f0 as usize] { 0 } else { 1 };
+                let a = screen(weld_point(e.a, e)?)?;
+                let b = screen(weld_point(e.b, e)?)?;
+                let o = screen(e.opposite[k])?;
+                let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+                let len = (ex * ex + ey * ey).sqrt();
+                let (nx, ny) = (-ey / len, ex / len);
+                let side = nx * (o[0] - a[0]) + ny * (o[1] - a[1]);
+                if !(len > 1e-6 && side.is_finite() && side != 0.0) {
+                    return None;
+                }
+                Some(if side > 0.0 { [-nx, -ny] } else { [nx, ny] })
+            })
+            .collect();
+        let cos_limit = 2.0 / (MITER_LIMIT * MITER_LIMIT) - 1.0; // 1 + n₁·n₂ ≥ 2/L²
+        (0..t.start.len() - 1)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|v| {
+                let range = t.start[v] as usize..t.start[v + 1] as usize;
+                let mut on = t.vertex_edges[range]
+                    .iter()
+                    .filter_map(|&e| normals[e as usize]);
+                let (n1, n2) = (on.next()?, on.next()?);
+                if on.next().is_some() {
+                    return None;
+                }
+                let dot = n1[0] * n2[0] + n1[1] * n2[1];
+                if dot < cos_limit {
+                    return None;
+                }
+                let s = 1.0 / (1.0 + dot);
+                Some([(n1[0] + n2[0]) * s, (n1[1] + n2[1]) * s])
+            })
+            .collect()
     }
 }
 
@@ -82,26 +267,38 @@ impl VertexStage for Extrude {
         let m = view.view_proj;
         let px = self.width * self.ssaa.load(Ordering::Relaxed) as f32;
         let (hw, hh) = (view.width * 0.5, view.height * 0.5);
-        scene
+        let clip: Vec<Vec4> = scene
             .positions
             .par_iter()
-            .zip(self.smooth.par_iter())
             .with_min_len(4096)
-            .map(|(p, n)| {
-                let c = m * Vec4::from((*p, 1.0));
-                let nc = m * Vec4::from((*n, 0.0));
+            .map(|p| m * Vec4::from((*p, 1.0)))
+            .collect();
+        let miters = self.miters(scene, view, &clip);
+        let weld = &self.topo.weld;
+        (0..clip.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| {
+                let c = clip[i];
                 if c.w <= 0.0 {
                     return c.to_array();
                 }
-                // Screen direction of the normal, in pixels.
-                let dx = (nc.x - c.x / c.w * nc.w) * hw;
-                let dy = (nc.y - c.y / c.w * nc.w) * hh;
-                let len = (dx * dx + dy * dy).sqrt();
-                if !(len > 1e-12 && len.is_finite()) {
-                    return c.to_array();
-                }
-                let (ox, oy) = (dx / len * px / hw, dy / len * px / hh);
-                [c.x + ox * c.w, c.y + oy * c.w, c.z, c.w]
+                // Offset in pixels (y up): the miter, else along the
+                // smoothed normal's screen direction.
+                let (ox, oy) = if let Some([mx, my]) = weld.get(i).and_then(|&w| miters[w as usize])
+                {
+                    (mx * px, my * px)
+                } else {
+                    let nc = m * Vec4::from((self.smooth[i], 0.0));
+                    let dx = (nc.x - c.x / c.w * nc.w) * hw;
+                    let dy = (nc.y - c.y / c.w * nc.w) * hh;
+                    let len = (dx * dx + dy * dy).sqrt();
+                    if !(len > 1e-12 && len.is_finite()) {
+                        return c.to_array();
+                    }
+                    (dx / len * px, dy / len * px)
+                };
+                [c.x + ox / hw * c.w, c.y + oy / hh * c.w, c.z, c.w]
             })
             .collect_into_vec(out);
     }
