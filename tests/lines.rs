@@ -389,6 +389,95 @@ irradiance = [3.0, 3.0, 3.0]
     );
 }
 
+#[test]
+fn a_lone_plane_gets_an_extrusion_ring_from_the_front_and_none_from_behind() {
+    // An open mesh has no back faces behind its front ones: its copy is
+    // drawn front side out, pushed across its boundary and just behind it.
+    let scene = |eye: &str, double_sided: bool, outline: bool| {
+        let extra = if outline {
+            "[[outline]]\nmethod = \"extrusion\"\nwidth = 1.5\n"
+        } else {
+            ""
+        };
+        format!(
+            r#"
+[camera]
+eye = {eye}
+target = [0.0, 0.0, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 100.0
+
+[output]
+width = 160
+height = 160
+
+[[mesh]]
+plane = {{ size = [1.6, 1.1], segments = [3, 2] }}
+rotate = [0.0, 20.0, 0.0]
+material = "sheet"
+
+[materials.sheet]
+model = "lambert"
+base_color = [0.8, 0.5, 0.2]
+double_sided = {double_sided}
+
+[[light]]
+type = "directional"
+direction = [-0.5, -0.4, -1.0]
+irradiance = [3.0, 3.0, 3.0]
+{extra}
+"#
+        )
+    };
+    let ssaa = 4usize;
+    let n = 160 * ssaa;
+    let ids_of = |text: &str| {
+        let s = common::scene(text, &[]);
+        let mut settings = RenderSettings::from_scene(&s);
+        settings.buffers.id = true;
+        settings.ssaa = ssaa as u32;
+        let r = render_scene(&s, &settings, 0.0).unwrap();
+        (r.frame.buffers.id.clone(), s.data.triangles.len() as u32)
+    };
+    let above = "[1.2, 2.0, 3.2]"; // the plane faces +y: seen slanted from its front
+    let below = "[1.2, -2.0, 3.2]";
+    for (eye, double_sided, want_ring) in [
+        (above, false, true),
+        (below, false, false),
+        (below, true, true),
+    ] {
+        let (ids, main_ids) = ids_of(&scene(eye, double_sided, true));
+        let (plain, _) = ids_of(&scene(eye, double_sided, false));
+        // The sheet itself wins the depth test everywhere it is drawn.
+        for (i, (a, b)) in ids.iter().zip(&plain).enumerate() {
+            assert_eq!(
+                *a < main_ids,
+                *b < main_ids && *b != MISS,
+                "sample {i}: {a} vs {b}"
+            );
+        }
+        let ring = ids
+            .iter()
+            .filter(|&&id| id != MISS && id >= main_ids)
+            .count();
+        if !want_ring {
+            // A single-sided sheet seen from behind: nothing, and no ring.
+            assert_eq!(ring, 0, "{eye}");
+            assert!(!plain.iter().any(|&id| id != MISS));
+            continue;
+        }
+        let widths = min_ring_widths(&ids, n, main_ids, ssaa);
+        assert!(widths.len() > 400, "{}", widths.len());
+        let min = widths.iter().map(|w| w.0).fold(f64::INFINITY, f64::min);
+        let max = widths.iter().map(|w| w.0).fold(0.0, f64::max);
+        assert!(
+            min >= 1.5 - 0.3 && max <= 1.5 + 0.5,
+            "{eye} double-sided {double_sided}: ring width {min:.3}..{max:.3} px, want ≈ 1.5"
+        );
+    }
+}
+
 /// For every sample of the main pass next to a sample that is not (the
 /// object's outline on screen), the distance in output pixels from its
 /// centre to the nearest background sample's centre: the ring's width
