@@ -566,11 +566,11 @@ fn edge_extraction_on_a_cube_and_a_plane() {
                 kind,
                 a: s(a),
                 b: s(b),
-                ends: Some((a, b)),
+                ends: [Some(a), Some(b)],
             }
         })
         .collect();
-    let lines = chain(&pieces, &e.points);
+    let lines = chain(&pieces);
     assert_eq!(lines.len(), 1, "{lines:?}");
     assert!(lines[0].closed && lines[0].points.len() == 6);
 
@@ -643,6 +643,74 @@ fn uv_sphere_silhouette_is_one_closed_polyline_and_the_svg_matches_the_png() {
             "({x}, {y}): {px:?}"
         );
     }
+}
+
+#[test]
+fn a_partly_hidden_silhouette_is_one_polyline_per_visible_run() {
+    // A sphere whose outline a box hides on the right and a thin bar
+    // crosses on the left: two visible arcs, top and bottom.
+    let extra = format!(
+        r#"
+[[mesh]]
+cube = {{ size = 0.8 }}
+translate = [0.7, 0.0, 1.5]
+material = "toon"
+
+[[mesh]]
+cube = {{ size = 1.0 }}
+scale = [0.3, 2.0, 0.08]
+translate = [-0.6, 0.0, 1.5]
+material = "toon"
+
+{STROKE_SPHERE}"#
+    );
+    let s = common::scene(&sphere_scene(1.0, 4.0, 640, &extra), &[]);
+    let r = render_scene(&s, &RenderSettings::from_scene(&s), 0.0).unwrap();
+    let lines = s
+        .lines
+        .strokes
+        .as_ref()
+        .unwrap()
+        .polylines(&r.frame.buffers, 1);
+    // The sphere's polylines: every point on its exact outline.
+    let f = 320.0 / 20f64.to_radians().tan();
+    let r_exact = f * 0.25f64.asin().tan();
+    let on_sphere = |p: &[f32; 2]| {
+        let d = ((p[0] as f64 - 320.0).powi(2) + (p[1] as f64 - 320.0).powi(2)).sqrt();
+        (d - r_exact).abs() < 0.75
+    };
+    let arcs: Vec<_> = lines
+        .iter()
+        .filter(|l| l.points.iter().filter(|p| on_sphere(p)).count() * 2 > l.points.len())
+        .collect();
+    assert_eq!(
+        arcs.len(),
+        2,
+        "{:?}",
+        arcs.iter()
+            .map(|l| (l.points.len(), l.points[0]))
+            .collect::<Vec<_>>()
+    );
+    for a in &arcs {
+        assert!(!a.closed && a.points.len() > 20, "{a:?}");
+        assert!(a.points.iter().all(on_sphere), "{a:?}");
+    }
+    // The two runs cover the visible outline: their ends lie at the box
+    // and the bar, one arc above the centre, one below.
+    let mut tops: Vec<bool> = arcs
+        .iter()
+        .map(|a| a.points[a.points.len() / 2][1] < 320.0)
+        .collect();
+    tops.sort();
+    assert_eq!(tops, vec![false, true]);
+    // And the whole overlay is few polylines (the box and the bar's
+    // outlines besides), not one per partly hidden edge.
+    assert!(
+        lines.len() <= 6,
+        "{} polylines: {:?}",
+        lines.len(),
+        lines.iter().map(|l| l.points.len()).collect::<Vec<_>>()
+    );
 }
 
 #[test]

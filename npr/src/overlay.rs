@@ -53,7 +53,7 @@ impl Strokes {
             ssaa,
         };
         let pieces = visible_pieces(&self.edges, &edges, &view, self.camera.near, &depth);
-        chain(&pieces, &self.edges.points)
+        chain(&pieces)
     }
 }
 
