@@ -210,22 +210,31 @@ impl MeshEdges {
 
     /// Every edge drawn from `eye`, with its kind: (welded a, welded b, kind).
     pub fn classify(&self, eye: Vec3) -> Vec<(u32, u32, EdgeKind)> {
+        // Each face's facing once (an edge would test both of its faces,
+        // and every face has three edges).
+        let facing: Vec<bool> = if self.silhouettes {
+            self.face_normal
+                .par_iter()
+                .zip(self.face_point.par_iter())
+                .with_min_len(4096)
+                .map(|(n, p)| n.dot(eye - *p) > 0.0)
+                .collect()
+        } else {
+            Vec::new()
+        };
         self.edges
             .par_iter()
             .with_min_len(4096)
-            .filter_map(|e| self.kind(e, eye).map(|k| (e.a, e.b, k)))
+            .filter_map(|e| self.kind(e, &facing).map(|k| (e.a, e.b, k)))
             .collect()
     }
 
-    fn kind(&self, e: &Edge, eye: Vec3) -> Option<EdgeKind> {
-        if self.silhouettes && e.faces[1] != NO_FACE {
-            let facing = |f: u32| {
-                let f = f as usize;
-                self.face_normal[f].dot(eye - self.face_point[f]) > 0.0
-            };
-            if facing(e.faces[0]) != facing(e.faces[1]) {
-                return Some(EdgeKind::Silhouette);
-            }
+    fn kind(&self, e: &Edge, facing: &[bool]) -> Option<EdgeKind> {
+        if self.silhouettes
+            && e.faces[1] != NO_FACE
+            && facing[e.faces[0] as usize] != facing[e.faces[1] as usize]
+        {
+            return Some(EdgeKind::Silhouette);
         }
         e.fixed
     }
