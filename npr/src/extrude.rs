@@ -360,7 +360,7 @@ impl Extrude {
                     Some(m) => m,
                     None if open && count > 0 => {
                         let len = (sum[0] * sum[0] + sum[1] * sum[1]).sqrt();
-                        if !(len > 1e-6) {
+                        if len.is_nan() || len <= 1e-6 {
                             return None;
                         }
                         [sum[0] / len, sum[1] / len]

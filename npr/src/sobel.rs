@@ -179,9 +179,9 @@ fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usi
     let wk = W.map(|v| R::splat(v as f64));
     let gradient = |f: &[f32]| {
         let (mut gx, mut gy) = (R::ZERO, R::ZERO);
-        for k in 0..3 {
-            gx += wk[k] * (at(f, k, 2) - at(f, k, 0));
-            gy += wk[k] * (at(f, 2, k) - at(f, 0, k));
+        for (k, &w) in wk.iter().enumerate() {
+            gx += w * (at(f, k, 2) - at(f, k, 0));
+            gy += w * (at(f, 2, k) - at(f, 0, k));
         }
         (gx, gy)
     };
@@ -190,9 +190,9 @@ fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usi
             let q = input.inv_depth;
             let two = R::splat(2.0);
             let (mut dxx, mut dyy, mut qmax) = (R::ZERO, R::ZERO, R::ZERO);
-            for k in 0..3 {
-                dxx += wk[k] * (at(q, k, 2) + at(q, k, 0) - two * at(q, k, 1));
-                dyy += wk[k] * (at(q, 2, k) + at(q, 0, k) - two * at(q, 1, k));
+            for (k, &w) in wk.iter().enumerate() {
+                dxx += w * (at(q, k, 2) + at(q, k, 0) - two * at(q, k, 1));
+                dyy += w * (at(q, 2, k) + at(q, 0, k) - two * at(q, 1, k));
                 qmax = qmax.max(at(q, k, 0)).max(at(q, k, 1)).max(at(q, k, 2));
             }
             // Lanes with q_max = 0 divide 0 by 0; the select drops them.
