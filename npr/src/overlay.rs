@@ -61,7 +61,11 @@ impl Strokes {
 /// image, row-major.
 pub fn draw(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Vec<f32> {
     match draw_pixmap(lines, style, width, height) {
-        Some(pm) => pm.pixels().iter().map(|p| p.alpha() as f32 / 255.0).collect(),
+        Some(pm) => pm
+            .pixels()
+            .iter()
+            .map(|p| p.alpha() as f32 / 255.0)
+            .collect(),
         None => vec![0.0; (width * height) as usize],
     }
 }
