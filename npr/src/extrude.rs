@@ -62,7 +62,7 @@ use specula_raster::geometry::{Cull, GeometryPass, VertexStage};
 use specula_raster::SceneData;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
 
 /// Longest miter, in widths: |m| = 1/cos(φ/2) for outward normals φ
 /// apart, 2 at φ = 120° (a corner of 60° on screen).
@@ -82,6 +82,21 @@ pub struct Extrude {
     /// Smoothed unit normal per scene vertex (module docs).
     smooth: Vec<Vec3>,
     topo: Topology,
+    /// The last frame's clip positions and what they were made for: an
+    /// outline's passes (closed and open runs) share one vertex stage and
+    /// one frame, so the second pass copies them. (A stage belongs to the
+    /// scene it was built for, whose positions do not change.)
+    last: Mutex<Option<(FrameKey, Vec<[f32; 4]>)>>,
+}
+
+/// What the clip positions depend on besides the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct FrameKey {
+    view_proj: [f32; 16],
+    eye: [f32; 3],
+    size: [f32; 2],
+    px: f32,
+    vertices: usize,
 }
 
 /// Welded vertices and edges of the scene's triangles (module docs).
@@ -235,6 +250,7 @@ impl Extrude {
             ssaa: AtomicU32::new(1),
             smooth: smooth_normals(&scene.positions, &scene.normals),
             topo: Topology::new(&scene.positions, &scene.triangles),
+            last: Mutex::new(None),
         }
     }
 
@@ -409,6 +425,20 @@ impl VertexStage for Extrude {
         let m = view.view_proj;
         let px = self.width * self.ssaa.load(Ordering::Relaxed) as f32;
         let (hw, hh) = (view.width * 0.5, view.height * 0.5);
+        let key = FrameKey {
+            view_proj: m.to_cols_array(),
+            eye: view.eye.to_array(),
+            size: [view.width, view.height],
+            px,
+            vertices: scene.positions.len(),
+        };
+        if let Some((k, clip)) = &*self.last.lock().unwrap_or_else(|e| e.into_inner()) {
+            if *k == key {
+                out.clear();
+                out.extend_from_slice(clip);
+                return;
+            }
+        }
         let clip: Vec<Vec4> = scene
             .positions
             .par_iter()
@@ -459,6 +489,7 @@ impl VertexStage for Extrude {
                 [c.x + ox / hw * c.w, c.y + oy / hh * c.w, z, c.w]
             })
             .collect_into_vec(out);
+        *self.last.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, out.clone()));
     }
 }
 
