@@ -19,10 +19,13 @@
 //!   not the sample's own, is what keeps a silhouette (whose neighbours
 //!   show the background) and an edge where two objects touch (whose
 //!   neighbours show the edge's own faces) from being eaten by the bias.
-//! - Chaining ([`chain`]): wholly visible edges of one kind are joined at
-//!   shared vertices into polylines, going on through a vertex along the
-//!   unused edge that turns least; a chain that comes back to its start is
-//!   closed. Partly visible edges are polylines of their own.
+//! - Chaining ([`chain`]): the visible pieces of edges of one kind are
+//!   joined where they reach a shared vertex into polylines, going on
+//!   through a vertex along the unused piece that turns least on screen; a
+//!   piece end that stops short of its vertex (hidden beyond it) ends its
+//!   polyline, and a chain that comes back to its start is closed. So a
+//!   silhouette partly hidden behind another object is one polyline per
+//!   visible run, not one per edge.
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
@@ -207,22 +210,31 @@ impl MeshEdges {
 
     /// Every edge drawn from `eye`, with its kind: (welded a, welded b, kind).
     pub fn classify(&self, eye: Vec3) -> Vec<(u32, u32, EdgeKind)> {
+        // Each face's facing once (an edge would test both of its faces,
+        // and every face has three edges).
+        let facing: Vec<bool> = if self.silhouettes {
+            self.face_normal
+                .par_iter()
+                .zip(self.face_point.par_iter())
+                .with_min_len(4096)
+                .map(|(n, p)| n.dot(eye - *p) > 0.0)
+                .collect()
+        } else {
+            Vec::new()
+        };
         self.edges
             .par_iter()
             .with_min_len(4096)
-            .filter_map(|e| self.kind(e, eye).map(|k| (e.a, e.b, k)))
+            .filter_map(|e| self.kind(e, &facing).map(|k| (e.a, e.b, k)))
             .collect()
     }
 
-    fn kind(&self, e: &Edge, eye: Vec3) -> Option<EdgeKind> {
-        if self.silhouettes && e.faces[1] != NO_FACE {
-            let facing = |f: u32| {
-                let f = f as usize;
-                self.face_normal[f].dot(eye - self.face_point[f]) > 0.0
-            };
-            if facing(e.faces[0]) != facing(e.faces[1]) {
-                return Some(EdgeKind::Silhouette);
-            }
+    fn kind(&self, e: &Edge, facing: &[bool]) -> Option<EdgeKind> {
+        if self.silhouettes
+            && e.faces[1] != NO_FACE
+            && facing[e.faces[0] as usize] != facing[e.faces[1] as usize]
+        {
+            return Some(EdgeKind::Silhouette);
         }
         e.fixed
     }
@@ -237,14 +249,15 @@ pub struct Polyline {
     pub closed: bool,
 }
 
-/// A visible stretch of one edge: its points in output pixels and, when
-/// the whole edge is visible, its welded end vertices (for chaining).
+/// A visible stretch of one edge: its points in output pixels and, for
+/// each end that is the edge's own end (visible up to its vertex), the
+/// welded vertex there (for chaining).
 #[derive(Clone, Debug)]
 pub struct Piece {
     pub kind: EdgeKind,
     pub a: [f32; 2],
     pub b: [f32; 2],
-    pub ends: Option<(u32, u32)>,
+    pub ends: [Option<u32>; 2],
 }
 
 /// Depth-buffer view for [`visible_pieces`]: view depth per sample, +inf
@@ -316,14 +329,15 @@ pub fn visible_pieces(
             // capped (their points outside the image are hidden anyway).
             let n = (len.ceil() as usize).clamp(1, 4 * (depth.width + depth.height)) + 1;
             let mut run: Option<(usize, (f32, f32))> = None;
-            let whole = t0 == 0.0 && t1 == 1.0;
             let mut close = |start: (usize, (f32, f32)), end: (usize, (f32, f32))| {
-                let full = whole && start.0 == 0 && end.0 == n - 1;
                 out.push(Piece {
                     kind,
                     a: [start.1 .0 * inv_ss, start.1 .1 * inv_ss],
                     b: [end.1 .0 * inv_ss, end.1 .1 * inv_ss],
-                    ends: full.then_some((a, b)),
+                    ends: [
+                        (t0 == 0.0 && start.0 == 0).then_some(a),
+                        (t1 == 1.0 && end.0 == n - 1).then_some(b),
+                    ],
                 });
             };
             let mut last = (0usize, (0.0f32, 0.0f32));
@@ -357,83 +371,90 @@ pub fn visible_pieces(
 
 /// Chains pieces into polylines (module docs), kinds in [`EdgeKind`]
 /// order; deterministic for a given piece order.
-pub fn chain(pieces: &[Piece], points3: &[Vec3]) -> Vec<Polyline> {
+pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
     let mut out = Vec::new();
     for kind in EdgeKind::ALL {
         let ps: Vec<&Piece> = pieces.iter().filter(|p| p.kind == kind).collect();
-        // Vertex → (piece, other end) of the whole pieces at it.
-        let mut at: HashMap<u32, Vec<(usize, u32)>> = HashMap::new();
+        let point = |i: usize, end: usize| if end == 0 { ps[i].a } else { ps[i].b };
+        // Vertex → the piece ends (piece, end) at it.
+        let mut at: HashMap<u32, Vec<(usize, usize)>> = HashMap::new();
         for (i, p) in ps.iter().enumerate() {
-            if let Some((a, b)) = p.ends {
-                at.entry(a).or_default().push((i, b));
-                at.entry(b).or_default().push((i, a));
+            for (end, v) in p.ends.iter().enumerate() {
+                if let Some(v) = v {
+                    at.entry(*v).or_default().push((i, end));
+                }
             }
         }
         let mut used = vec![false; ps.len()];
-        let screen = |p: &Piece, v: u32| {
-            let (a, _) = p.ends.expect("whole piece");
-            if v == a {
-                p.a
-            } else {
-                p.b
+        // Walks from end `end` of piece `first` through the pieces after it.
+        let walk = |first: usize, end: usize, used: &mut [bool]| {
+            let start = ps[first].ends[end];
+            let mut points = vec![point(first, end)];
+            let (mut piece, mut from) = (first, end);
+            let mut closed = false;
+            loop {
+                used[piece] = true;
+                let to = 1 - from;
+                points.push(point(piece, to));
+                let Some(v) = ps[piece].ends[to] else { break };
+                if Some(v) == start && points.len() > 2 {
+                    closed = true;
+                    break;
+                }
+                // Go on along the unused piece that turns least on screen.
+                let (p, q) = (point(piece, from), point(piece, to));
+                let dir = norm2([q[0] - p[0], q[1] - p[1]]);
+                let next = at[&v]
+                    .iter()
+                    .filter(|(i, _)| !used[*i])
+                    .map(|&(i, e)| {
+                        let r = point(i, 1 - e);
+                        let d = norm2([r[0] - q[0], r[1] - q[1]]);
+                        (d[0] * dir[0] + d[1] * dir[1], i, e)
+                    })
+                    .max_by(|x, y| x.0.total_cmp(&y.0).then(y.1.cmp(&x.1)));
+                match next {
+                    Some((_, i, e)) => (piece, from) = (i, e),
+                    None => break,
+                }
+            }
+            if closed {
+                points.pop();
+            }
+            Polyline {
+                kind,
+                points,
+                closed,
             }
         };
-        // Open chains first (from vertices of odd degree), then loops.
-        let mut starts: Vec<u32> = at
-            .iter()
-            .filter(|(_, l)| l.len() % 2 == 1)
-            .map(|(v, _)| *v)
-            .collect();
-        starts.sort_unstable();
-        let mut rest: Vec<u32> = at.keys().copied().collect();
-        rest.sort_unstable();
-        starts.extend(rest);
-        for s in starts {
-            while let Some(&(first, _)) = at[&s].iter().find(|(i, _)| !used[*i]) {
-                let mut points = vec![screen(ps[first], s)];
-                let (mut cur, mut piece) = (s, first);
-                loop {
-                    used[piece] = true;
-                    let (a, b) = ps[piece].ends.expect("whole piece");
-                    let next = if cur == a { b } else { a };
-                    points.push(screen(ps[piece], next));
-                    let prev = std::mem::replace(&mut cur, next);
-                    if cur == s {
-                        break;
-                    }
-                    // Go on along the unused edge that turns least.
-                    let dir = (points3[cur as usize] - points3[prev as usize]).normalize_or_zero();
-                    let cand = at[&cur].iter().filter(|(i, _)| !used[*i]).max_by(|x, y| {
-                        let d = |v: u32| {
-                            (points3[v as usize] - points3[cur as usize])
-                                .normalize_or_zero()
-                                .dot(dir)
-                        };
-                        d(x.1).total_cmp(&d(y.1)).then(y.0.cmp(&x.0))
-                    });
-                    match cand {
-                        Some(&(i, _)) => piece = i,
-                        None => break,
-                    }
-                }
-                let closed = cur == s && points.len() > 2;
-                if closed {
-                    points.pop();
-                }
-                out.push(Polyline {
-                    kind,
-                    points,
-                    closed,
-                });
+        // Open chains first: from piece ends short of a vertex, then from
+        // vertices with an odd number of piece ends; then loops.
+        for i in 0..ps.len() {
+            if used[i] {
+                continue;
+            }
+            if let Some(end) = ps[i].ends.iter().position(|v| v.is_none()) {
+                out.push(walk(i, end, &mut used));
             }
         }
-        for p in ps.iter().filter(|p| p.ends.is_none()) {
-            out.push(Polyline {
-                kind,
-                points: vec![p.a, p.b],
-                closed: false,
-            });
+        let mut verts: Vec<u32> = at.keys().copied().collect();
+        verts.sort_unstable();
+        let odd = verts.iter().filter(|v| at[*v].len() % 2 == 1);
+        let starts: Vec<u32> = odd.chain(verts.iter()).copied().collect();
+        for v in starts {
+            while let Some(&(i, e)) = at[&v].iter().find(|(i, _)| !used[*i]) {
+                out.push(walk(i, e, &mut used));
+            }
         }
     }
     out
+}
+
+fn norm2(v: [f32; 2]) -> [f32; 2] {
+    let l = (v[0] * v[0] + v[1] * v[1]).sqrt();
+    if l > 0.0 {
+        [v[0] / l, v[1] / l]
+    } else {
+        [0.0; 2]
+    }
 }

@@ -18,6 +18,39 @@
 //! normals of all vertices at the same position, so copies of a corner
 //! move together and the pushed shell stays closed.
 //!
+//! The smoothed normal's screen direction is not a silhouette corner's
+//! bisector: at a cube corner where two silhouette edges meet at an angle
+//! on screen, the push along it has a small component across one of the
+//! edges, and the ring along that edge thins toward the corner (to under
+//! a pixel at 1.5 px). So a vertex where exactly two outline edges meet
+//! this frame (silhouette edges: one face toward the eye, one away) moves
+//! by the **miter** of their outward screen normals n₁, n₂:
+//! m = (n₁ + n₂)/(1 + n₁·n₂), which has m·n₁ = m·n₂ = 1, so both pushed
+//! edges lie exactly `width` pixels out and the corner is mitred. The
+//! miter is used up to [`MITER_LIMIT`] (corners of 60° and wider); a
+//! sharper turn, or a vertex on one or on three and more outline edges,
+//! keeps the smoothed normal. Edges are found once per scene between
+//! vertices welded by position (to 1e-6 of the scene's extent, as the
+//! stroke edges), faces' facing per frame.
+//!
+//! **Open meshes** (a lone plane, a sheet, anything with boundary edges:
+//! edges with one face) have no back faces behind their front ones, so
+//! back faces alone give them no ring (seen from the front) or a filled
+//! silhouette (a single-sided sheet seen from behind, which the main pass
+//! culls). A triangle whose connected piece of mesh has a boundary edge is
+//! drawn the other way: its faces as the main pass draws them (front
+//! faces; both sides for double-sided materials, `Cull::Back`), pushed out
+//! across the boundary and slightly behind. Boundary edges count as
+//! outline edges, outward away from their face; a vertex of an open piece
+//! moves by the miter of its outline edges (their normalized sum at three
+//! and more or past the limit, the one edge's normal at one) and a vertex
+//! on no outline edge stays put, so the copy covers the face and a ring
+//! `width` wide outside its boundary. A moved vertex keeps its depth on
+//! the plane of its edges' faces (z/w is affine in screen space on a
+//! plane, so the copy of a flat sheet lies in the sheet however slanted),
+//! and every vertex of the copy is pushed back by [`OPEN_DEPTH_PUSH`] so
+//! the sheet itself wins the depth test.
+//!
 //! The width is in output pixels; the renderer tells the stage its
 //! supersampling ([`Extrude::set_ssaa`]) so the ring is `width × ssaa`
 //! samples wide and `width` pixels after the resolve.
@@ -29,7 +62,16 @@ use specula_raster::geometry::{Cull, GeometryPass, VertexStage};
 use specula_raster::SceneData;
 use std::collections::HashMap;
 use std::sync::atomic::{AtomicU32, Ordering};
-use std::sync::Arc;
+use std::sync::{Arc, Mutex};
+
+/// Longest miter, in widths: |m| = 1/cos(φ/2) for outward normals φ
+/// apart, 2 at φ = 120° (a corner of 60° on screen).
+pub const MITER_LIMIT: f32 = 2.0;
+
+/// Relative depth by which the copy of an open piece of mesh lies behind
+/// it: z/w × (1 − push), about that fraction of the view distance (far
+/// above f32 rounding of the interpolated depth, ~1e-6).
+pub const OPEN_DEPTH_PUSH: f32 = 1e-3;
 
 /// The vertex stage of an extrusion pass.
 #[derive(Debug)]
@@ -39,6 +81,166 @@ pub struct Extrude {
     ssaa: AtomicU32,
     /// Smoothed unit normal per scene vertex (module docs).
     smooth: Vec<Vec3>,
+    topo: Topology,
+    /// The last frame's clip positions and what they were made for: an
+    /// outline's passes (closed and open runs) share one vertex stage and
+    /// one frame, so the second pass copies them. (A stage belongs to the
+    /// scene it was built for, whose positions do not change.)
+    last: Mutex<Option<(FrameKey, Vec<[f32; 4]>)>>,
+}
+
+/// What the clip positions depend on besides the scene.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct FrameKey {
+    view_proj: [f32; 16],
+    eye: [f32; 3],
+    size: [f32; 2],
+    px: f32,
+    vertices: usize,
+}
+
+/// Welded vertices and edges of the scene's triangles (module docs).
+#[derive(Debug, Default)]
+struct Topology {
+    /// Welded index of each scene vertex.
+    weld: Vec<u32>,
+    /// Per edge: welded ends, its faces (u32::MAX: none), and per face the
+    /// scene vertex opposite the edge.
+    edges: Vec<TopoEdge>,
+    /// Edges at each welded vertex: `vertex_edges[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    vertex_edges: Vec<u32>,
+    /// Per triangle: its connected piece has a boundary edge (open).
+    tri_open: Vec<bool>,
+    /// Per welded vertex: on an open piece.
+    vertex_open: Vec<bool>,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct TopoEdge {
+    a: u32,
+    b: u32,
+    faces: [u32; 2],
+    opposite: [u32; 2],
+}
+
+const NONE: u32 = u32::MAX;
+
+impl Topology {
+    fn new(positions: &[Vec3], triangles: &[[u32; 3]]) -> Topology {
+        // Welded on a grid of 1e-6 of the extent, as the stroke edges
+        // (edges.rs): a UV sphere's seam copies differ in the last bits
+        // (sin 2π ≠ 0) and must not make it open.
+        let extent = positions
+            .iter()
+            .filter(|p| p.is_finite())
+            .fold(0.0f32, |m, p| m.max(p.abs().max_element()));
+        let q = (extent * 1e-6).max(f32::MIN_POSITIVE);
+        let key = |p: Vec3| (p / q).round().to_array().map(|c| c as i64);
+        let mut ids: HashMap<[i64; 3], u32> = HashMap::with_capacity(positions.len());
+        let weld: Vec<u32> = positions
+            .iter()
+            .map(|p| {
+                let n = ids.len() as u32;
+                *ids.entry(key(*p)).or_insert(n)
+            })
+            .collect();
+        let mut map: HashMap<(u32, u32), u32> = HashMap::with_capacity(triangles.len() * 2);
+        let mut edges: Vec<TopoEdge> = Vec::new();
+        for (f, t) in triangles.iter().enumerate() {
+            let w = t.map(|v| weld.get(v as usize).copied().unwrap_or(NONE));
+            if w.contains(&NONE) || w[0] == w[1] || w[1] == w[2] || w[0] == w[2] {
+                continue;
+            }
+            for k in 0..3 {
+                let (u, v) = (w[k], w[(k + 1) % 3]);
+                let opp = t[(k + 2) % 3];
+                let e = *map.entry((u.min(v), u.max(v))).or_insert_with(|| {
+                    edges.push(TopoEdge {
+                        a: u.min(v),
+                        b: u.max(v),
+                        faces: [NONE; 2],
+                        opposite: [NONE; 2],
+                    });
+                    edges.len() as u32 - 1
+                });
+                let e = &mut edges[e as usize];
+                if e.faces[0] == NONE {
+                    e.faces[0] = f as u32;
+                    e.opposite[0] = opp;
+                } else if e.faces[1] == NONE {
+                    e.faces[1] = f as u32;
+                    e.opposite[1] = opp;
+                } else {
+                    // A third face: non-manifold; not an outline edge.
+                    e.faces = [NONE, f as u32];
+                }
+            }
+        }
+        let mut count = vec![0u32; ids.len() + 1];
+        for e in &edges {
+            count[e.a as usize + 1] += 1;
+            count[e.b as usize + 1] += 1;
+        }
+        for i in 1..count.len() {
+            count[i] += count[i - 1];
+        }
+        let mut fill = count.clone();
+        let mut vertex_edges = vec![0u32; *count.last().unwrap_or(&0) as usize];
+        for (i, e) in edges.iter().enumerate() {
+            for v in [e.a, e.b] {
+                vertex_edges[fill[v as usize] as usize] = i as u32;
+                fill[v as usize] += 1;
+            }
+        }
+        // Connected pieces (triangles sharing an edge), union-find; a
+        // piece with a boundary or non-manifold edge is open.
+        let mut parent: Vec<u32> = (0..triangles.len() as u32).collect();
+        fn root(parent: &mut [u32], mut i: u32) -> u32 {
+            while parent[i as usize] != i {
+                parent[i as usize] = parent[parent[i as usize] as usize];
+                i = parent[i as usize];
+            }
+            i
+        }
+        for e in &edges {
+            let [f0, f1] = e.faces;
+            if f0 != NONE && f1 != NONE {
+                let (a, b) = (root(&mut parent, f0), root(&mut parent, f1));
+                parent[a.max(b) as usize] = a.min(b);
+            }
+        }
+        let mut piece_open = vec![false; triangles.len()];
+        for e in &edges {
+            if let Some(&f) = e.faces.iter().find(|&&f| f != NONE) {
+                if e.faces.contains(&NONE) {
+                    let r = root(&mut parent, f);
+                    piece_open[r as usize] = true;
+                }
+            }
+        }
+        let tri_open: Vec<bool> = (0..triangles.len() as u32)
+            .map(|f| piece_open[root(&mut parent, f) as usize])
+            .collect();
+        let mut vertex_open = vec![false; ids.len()];
+        for (t, open) in triangles.iter().zip(&tri_open) {
+            if *open {
+                for v in t {
+                    if let Some(&w) = weld.get(*v as usize) {
+                        vertex_open[w as usize] = true;
+                    }
+                }
+            }
+        }
+        Topology {
+            weld,
+            edges,
+            start: count,
+            vertex_edges,
+            tri_open,
+            vertex_open,
+        }
+    }
 }
 
 impl Extrude {
@@ -47,6 +249,8 @@ impl Extrude {
             width,
             ssaa: AtomicU32::new(1),
             smooth: smooth_normals(&scene.positions, &scene.normals),
+            topo: Topology::new(&scene.positions, &scene.triangles),
+            last: Mutex::new(None),
         }
     }
 
@@ -59,6 +263,145 @@ impl Extrude {
     pub fn smoothed_normals(&self) -> &[Vec3] {
         &self.smooth
     }
+
+    /// Whether triangle `t`'s connected piece of mesh is open (module
+    /// docs): its copy is drawn front side out, not back faces.
+    pub fn is_open(&self, t: usize) -> bool {
+        self.topo.tri_open.get(t).copied().unwrap_or(false)
+    }
+
+    /// Per welded vertex, where it moves this frame (module docs): the
+    /// offset in widths (screen pixels, y up) and the screen gradient of
+    /// z/w (per pixel) of its outline edges' faces, for open pieces.
+    /// `None`: along the smoothed normal (closed pieces) or nowhere (open).
+    fn moves(&self, scene: &SceneData, view: &View, clip: &[Vec4]) -> Vec<Option<Move>> {
+        let t = &self.topo;
+        let (hw, hh) = (view.width * 0.5, view.height * 0.5);
+        let front: Vec<bool> = scene
+            .triangles
+            .par_iter()
+            .with_min_len(4096)
+            .map(|tri| {
+                let [a, b, c] = tri.map(|v| scene.positions[v as usize]);
+                (b - a).cross(c - a).dot(view.eye - a) > 0.0
+            })
+            .collect();
+        // Screen position (pixels from the centre, y up) and z/w, if in
+        // front of the eye.
+        let screen = |v: u32| {
+            let c = clip[v as usize];
+            (c.w > 0.0).then(|| [c.x / c.w * hw, c.y / c.w * hh, c.z / c.w])
+        };
+        let weld_point = |w: u32, e: &TopoEdge| {
+            // A scene vertex of the welded one: the edge's faces hold it.
+            let f = e.faces.iter().find(|&&f| f != NONE).copied()?;
+            scene.triangles[f as usize]
+                .into_iter()
+                .find(|&v| t.weld[v as usize] == w)
+        };
+        // Per outline edge: outward unit screen normal, and the gradient
+        // of z/w on its face (the front one of a silhouette edge).
+        let normals: Vec<Option<([f32; 2], [f32; 2])>> = t
+            .edges
+            .par_iter()
+            .with_min_len(4096)
+            .map(|e| {
+                let [f0, f1] = e.faces;
+                let k = match (f0 != NONE, f1 != NONE) {
+                    (true, true) if front[f0 as usize] != front[f1 as usize] => {
+                        if front[f0 as usize] {
+                            0
+                        } else {
+                            1
+                        }
+                    }
+                    (true, false) => 0, // a boundary edge
+                    _ => return None,
+                };
+                let a = screen(weld_point(e.a, e)?)?;
+                let b = screen(weld_point(e.b, e)?)?;
+                let o = screen(e.opposite[k])?;
+                let (ex, ey) = (b[0] - a[0], b[1] - a[1]);
+                let (fx, fy) = (o[0] - a[0], o[1] - a[1]);
+                let len = (ex * ex + ey * ey).sqrt();
+                let (nx, ny) = (-ey / len, ex / len);
+                let side = nx * fx + ny * fy;
+                if !(len > 1e-6 && side.is_finite() && side != 0.0) {
+                    return None;
+                }
+                let n = if side > 0.0 { [-nx, -ny] } else { [nx, ny] };
+                // z/w = a + gx·x + gy·y through the face's three corners.
+                let det = ex * fy - ey * fx;
+                let (dzb, dzo) = (b[2] - a[2], o[2] - a[2]);
+                let g = [(dzb * fy - dzo * ey) / det, (ex * dzo - fx * dzb) / det];
+                Some((
+                    n,
+                    if g[0].is_finite() && g[1].is_finite() {
+                        g
+                    } else {
+                        [0.0; 2]
+                    },
+                ))
+            })
+            .collect();
+        let cos_limit = 2.0 / (MITER_LIMIT * MITER_LIMIT) - 1.0; // 1 + n₁·n₂ ≥ 2/L²
+        (0..t.start.len() - 1)
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|v| {
+                let range = t.start[v] as usize..t.start[v + 1] as usize;
+                let on = t.vertex_edges[range]
+                    .iter()
+                    .filter_map(|&e| normals[e as usize]);
+                let (mut count, mut sum, mut grad) = (0, [0.0f32; 2], [0.0f32; 2]);
+                let mut first = [[0.0f32; 2]; 2];
+                for (n, g) in on {
+                    if count < 2 {
+                        first[count] = n;
+                    }
+                    count += 1;
+                    sum = [sum[0] + n[0], sum[1] + n[1]];
+                    grad = [grad[0] + g[0], grad[1] + g[1]];
+                }
+                let open = t.vertex_open[v];
+                let miter = (count == 2).then(|| {
+                    let [n1, n2] = first;
+                    let dot = n1[0] * n2[0] + n1[1] * n2[1];
+                    (dot >= cos_limit).then(|| {
+                        let s = 1.0 / (1.0 + dot);
+                        [(n1[0] + n2[0]) * s, (n1[1] + n2[1]) * s]
+                    })
+                });
+                let offset = match miter.flatten() {
+                    Some(m) => m,
+                    None if open && count > 0 => {
+                        let len = (sum[0] * sum[0] + sum[1] * sum[1]).sqrt();
+                        if len.is_nan() || len <= 1e-6 {
+                            return None;
+                        }
+                        [sum[0] / len, sum[1] / len]
+                    }
+                    None => return None,
+                };
+                let c = count as f32;
+                Some(Move {
+                    offset,
+                    z_gradient: if open {
+                        [grad[0] / c, grad[1] / c]
+                    } else {
+                        [0.0; 2]
+                    },
+                })
+            })
+            .collect()
+    }
+}
+
+/// Where a welded vertex moves (see [`Extrude::moves`]).
+#[derive(Clone, Copy, Debug)]
+struct Move {
+    offset: [f32; 2],
+    z_gradient: [f32; 2],
 }
 
 /// Per vertex, the normalized sum of the normals of every vertex at the
@@ -82,36 +425,80 @@ impl VertexStage for Extrude {
         let m = view.view_proj;
         let px = self.width * self.ssaa.load(Ordering::Relaxed) as f32;
         let (hw, hh) = (view.width * 0.5, view.height * 0.5);
-        scene
+        let key = FrameKey {
+            view_proj: m.to_cols_array(),
+            eye: view.eye.to_array(),
+            size: [view.width, view.height],
+            px,
+            vertices: scene.positions.len(),
+        };
+        if let Some((k, clip)) = &*self.last.lock().unwrap_or_else(|e| e.into_inner()) {
+            if *k == key {
+                out.clear();
+                out.extend_from_slice(clip);
+                return;
+            }
+        }
+        let clip: Vec<Vec4> = scene
             .positions
             .par_iter()
-            .zip(self.smooth.par_iter())
             .with_min_len(4096)
-            .map(|(p, n)| {
-                let c = m * Vec4::from((*p, 1.0));
-                let nc = m * Vec4::from((*n, 0.0));
+            .map(|p| m * Vec4::from((*p, 1.0)))
+            .collect();
+        let moves = self.moves(scene, view, &clip);
+        let t = &self.topo;
+        (0..clip.len())
+            .into_par_iter()
+            .with_min_len(4096)
+            .map(|i| {
+                let c = clip[i];
+                let w = t.weld.get(i).copied().unwrap_or(NONE);
+                let open = w != NONE && t.vertex_open[w as usize];
                 if c.w <= 0.0 {
                     return c.to_array();
                 }
-                // Screen direction of the normal, in pixels.
-                let dx = (nc.x - c.x / c.w * nc.w) * hw;
-                let dy = (nc.y - c.y / c.w * nc.w) * hh;
-                let len = (dx * dx + dy * dy).sqrt();
-                if !(len > 1e-12 && len.is_finite()) {
-                    return c.to_array();
-                }
-                let (ox, oy) = (dx / len * px / hw, dy / len * px / hh);
-                [c.x + ox * c.w, c.y + oy * c.w, c.z, c.w]
+                let z = if open {
+                    c.z * (1.0 - OPEN_DEPTH_PUSH)
+                } else {
+                    c.z
+                };
+                // Offset in pixels (y up): the miter (module docs), else
+                // along the smoothed normal's screen direction (closed
+                // pieces) or none (open ones).
+                let mv = if w != NONE { moves[w as usize] } else { None };
+                let (ox, oy, dz) = if let Some(m) = mv {
+                    let (ox, oy) = (m.offset[0] * px, m.offset[1] * px);
+                    (ox, oy, m.z_gradient[0] * ox + m.z_gradient[1] * oy)
+                } else if open {
+                    return [c.x, c.y, z, c.w];
+                } else {
+                    let nc = m * Vec4::from((self.smooth[i], 0.0));
+                    let dx = (nc.x - c.x / c.w * nc.w) * hw;
+                    let dy = (nc.y - c.y / c.w * nc.w) * hh;
+                    let len = (dx * dx + dy * dy).sqrt();
+                    if !(len > 1e-12 && len.is_finite()) {
+                        return c.to_array();
+                    }
+                    (dx / len * px, dy / len * px, 0.0)
+                };
+                let z = if open {
+                    (c.z + dz * c.w) * (1.0 - OPEN_DEPTH_PUSH)
+                } else {
+                    z
+                };
+                [c.x + ox / hw * c.w, c.y + oy / hh * c.w, z, c.w]
             })
             .collect_into_vec(out);
+        *self.last.lock().unwrap_or_else(|e| e.into_inner()) = Some((key, out.clone()));
     }
 }
 
 /// The geometry passes of one extrusion outline over the triangles whose
 /// material `selected` accepts: one pass per run of consecutive selected
-/// triangles (a pass draws a range), back faces only (`Cull::Front`),
-/// shaded by `material`, ids from `id_base` (triangle i writes
-/// `id_base + i`).
+/// triangles of closed or of open pieces (a pass draws a range), back
+/// faces only for closed pieces (`Cull::Front`), the main pass's sides
+/// for open ones (`Cull::Back`; module docs), shaded by `material`, ids
+/// from `id_base` (triangle i writes `id_base + i`).
 pub fn extrusion_passes(
     scene: &SceneData,
     stage: Arc<Extrude>,
@@ -127,14 +514,15 @@ pub fn extrusion_passes(
             i += 1;
             continue;
         }
-        let start = i;
-        while i < n && selected(scene.tri_material[i as usize]) {
+        let (start, open) = (i, stage.is_open(i as usize));
+        while i < n && selected(scene.tri_material[i as usize]) && stage.is_open(i as usize) == open
+        {
             i += 1;
         }
         passes.push(GeometryPass {
             name: "outline-extrusion".into(),
             vertex: stage.clone(),
-            cull: Cull::Front,
+            cull: if open { Cull::Back } else { Cull::Front },
             triangles: start..i,
             id_base,
             material: Some(material),

@@ -101,19 +101,33 @@ pub fn composite(img: &mut HdrImage, frame: &FrameBuffers, coverage: &[f32], col
         .zip(p.g.par_chunks_mut(w.max(1)))
         .zip(p.b.par_chunks_mut(w.max(1)))
         .enumerate()
-        .for_each(|(y, ((r, g), b))| {
-            for x in 0..r.len() {
-                let mut a = 0.0;
-                for sy in 0..ssaa {
-                    let row = (y * ssaa + sy) * sw + x * ssaa;
-                    a += coverage[row..row + ssaa].iter().sum::<f32>();
+        .for_each_init(Vec::new, |acc, (y, ((r, g), b))| {
+            // Row by row over the pixel's samples: the same sums in the
+            // same order as pixel by pixel, without the per-pixel slicing.
+            acc.clear();
+            acc.resize(r.len(), 0.0f32);
+            for sy in 0..ssaa {
+                let row = (y * ssaa + sy) * sw;
+                let samples = &coverage[row..row + r.len() * ssaa];
+                if ssaa == 1 {
+                    acc.copy_from_slice(samples); // 0 + c = c
+                    continue;
                 }
+                for (a, c) in acc.iter_mut().zip(samples.chunks_exact(ssaa)) {
+                    *a += c.iter().sum::<f32>();
+                }
+            }
+            // Where a = 0 the blend gives c·1 + colour·0 = c: no branch.
+            for (((r, g), b), &a) in r
+                .iter_mut()
+                .zip(g.iter_mut())
+                .zip(b.iter_mut())
+                .zip(acc.iter())
+            {
                 let a = a * inv;
-                if a > 0.0 {
-                    r[x] = r[x] * (1.0 - a) + color[0] * a;
-                    g[x] = g[x] * (1.0 - a) + color[1] * a;
-                    b[x] = b[x] * (1.0 - a) + color[2] * a;
-                }
+                *r = *r * (1.0 - a) + color[0] * a;
+                *g = *g * (1.0 - a) + color[1] * a;
+                *b = *b * (1.0 - a) + color[2] * a;
             }
         });
 }

@@ -53,16 +53,27 @@ impl Strokes {
             ssaa,
         };
         let pieces = visible_pieces(&self.edges, &edges, &view, self.camera.near, &depth);
-        chain(&pieces, &self.edges.points)
+        chain(&pieces)
     }
 }
 
 /// Stroke coverage (alpha in [0, 1]) of `lines` on a `width × height`
 /// image, row-major.
 pub fn draw(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Vec<f32> {
-    let Some(mut pm) = Pixmap::new(width.max(1), height.max(1)) else {
-        return vec![0.0; (width * height) as usize];
-    };
+    match draw_pixmap(lines, style, width, height) {
+        Some(pm) => pm
+            .pixels()
+            .iter()
+            .map(|p| p.alpha() as f32 / 255.0)
+            .collect(),
+        None => vec![0.0; (width * height) as usize],
+    }
+}
+
+/// The strokes drawn white on a transparent pixmap (None if tiny-skia
+/// cannot make one of that size).
+fn draw_pixmap(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Option<Pixmap> {
+    let mut pm = Pixmap::new(width.max(1), height.max(1))?;
     let mut paint = Paint::default();
     paint.set_color_rgba8(255, 255, 255, 255);
     paint.anti_alias = true;
@@ -122,10 +133,7 @@ pub fn draw(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) ->
             );
         }
     }
-    pm.pixels()
-        .iter()
-        .map(|p| p.alpha() as f32 / 255.0)
-        .collect()
+    Some(pm)
 }
 
 impl PostStage for Strokes {
@@ -142,11 +150,15 @@ impl PostStage for Strokes {
 
     fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
         let lines = self.polylines(frame, ssaa_of(img, frame));
-        let a = draw(&lines, &self.style, img.width, img.height);
+        let Some(pm) = draw_pixmap(&lines, &self.style, img.width, img.height) else {
+            return;
+        };
         let c = self.style.color;
         let p = &mut img.rgb;
-        for (i, &a) in a.iter().enumerate() {
-            if a > 0.0 {
+        // Straight from the alpha bytes (most are 0): the same a as draw's.
+        for (i, px) in pm.pixels().iter().enumerate() {
+            if px.alpha() != 0 {
+                let a = px.alpha() as f32 / 255.0;
                 p.r[i] = p.r[i] * (1.0 - a) + c[0] * a;
                 p.g[i] = p.g[i] * (1.0 - a) + c[1] * a;
                 p.b[i] = p.b[i] * (1.0 - a) + c[2] * a;

@@ -502,12 +502,30 @@ fn ldr_code(enc8: &SrgbEncoderX8, curve: Tonemap, ch: f32x8, inv_n: f32, k: f32)
 /// sRGB encoding of tone-mapped values: 8-bit RGB, row-major.
 pub fn encode_ldr(rgb: &Planes3) -> Vec<u8> {
     let enc = SrgbEncoder::new();
+    let enc8 = SrgbEncoderX8::new();
     let mut out = vec![0u8; rgb.len() * 3];
     out.par_chunks_mut(3 * 4096)
         .enumerate()
         .for_each(|(chunk, o)| {
-            for (j, px) in o.chunks_exact_mut(3).enumerate() {
-                let i = chunk * 4096 + j;
+            // Eight pixels at a time with the vector encoder (its codes are
+            // the scalar encoder's): the scalar loop was ~85 instructions a
+            // pixel, 2.4 times the whole fused post list, and ran whenever
+            // a custom stage unfuses the list (the outlines, strokes).
+            let n = o.len() / 3;
+            let full = n / 8 * 8;
+            let base = chunk * 4096;
+            for (j, px8) in o[..full * 3].chunks_exact_mut(24).enumerate() {
+                let i = base + j * 8;
+                let load = |p: &[f32]| f32x8::from(<[f32; 8]>::try_from(&p[i..i + 8]).unwrap());
+                let codes = [&rgb.r, &rgb.g, &rgb.b].map(|p| enc8.encode(load(p)).to_array());
+                for (lane, px) in px8.chunks_exact_mut(3).enumerate() {
+                    for c in 0..3 {
+                        px[c] = codes[c][lane] as u8;
+                    }
+                }
+            }
+            for (j, px) in o.chunks_exact_mut(3).enumerate().skip(full) {
+                let i = base + j;
                 px[0] = enc.encode(rgb.r[i]);
                 px[1] = enc.encode(rgb.g[i]);
                 px[2] = enc.encode(rgb.b[i]);
@@ -519,6 +537,45 @@ pub fn encode_ldr(rgb: &Planes3) -> Vec<u8> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn encode_ldr_packets_equal_the_scalar_encoder() {
+        // Each threshold and its neighbours, out-of-range values, NaN and
+        // infinities, over more than one 4096-pixel chunk and a tail.
+        let mut v = vec![
+            f32::NAN,
+            f32::INFINITY,
+            f32::NEG_INFINITY,
+            -1.0,
+            -0.0,
+            0.0,
+            1.0,
+            2.0,
+        ];
+        for &t in thresholds().iter().filter(|t| t.is_finite()) {
+            v.extend([t.next_down(), t, t.next_up()]);
+        }
+        while v.len() < 9003 {
+            v.push((v.len() as f32 * 0.618034).fract());
+        }
+        let n = v.len();
+        let rot = |k: usize| (0..n).map(|i| v[(i + k) % n]).collect::<Vec<f32>>();
+        let rgb = Planes3 {
+            r: rot(0),
+            g: rot(1),
+            b: rot(2),
+        };
+        let out = encode_ldr(&rgb);
+        let enc = SrgbEncoder::new();
+        for i in 0..n {
+            let want = [
+                enc.encode(rgb.r[i]),
+                enc.encode(rgb.g[i]),
+                enc.encode(rgb.b[i]),
+            ];
+            assert_eq!(out[3 * i..3 * i + 3], want, "pixel {i}: {}", rgb.r[i]);
+        }
+    }
 
     #[test]
     fn srgb_table_equals_rounding_the_f64_curve() {
