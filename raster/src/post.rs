@@ -465,17 +465,7 @@ fn resolve_ldr_with<const CURVE: u8>(frame: &FrameBuffers, ssaa: u32, exposure: 
             };
             let code = |ch| ldr_code(&enc8, curve, ch, inv_n, k);
             let (r, g, b) = (code(s[0]), code(s[1]), code(s[2]));
-            // r + 256 g + 65536 b < 2²⁴ is exact in f32: one conversion
-            // gives each pixel's three bytes in one little-endian word
-            // (a cast from f32 to u8 per channel was ~40 % of this pass).
-            let word = b.mul_add(f32x8::splat(65536.0), g * f32x8::splat(256.0)) + r;
-            let rgb = word.fast_trunc_int().to_array();
-            // Each word's 4 bytes at 3 lane: the next lane overwrites the
-            // fourth; the last lane writes its 3.
-            for (lane, w) in rgb.iter().enumerate().take(7) {
-                px8[3 * lane..3 * lane + 4].copy_from_slice(&w.to_le_bytes());
-            }
-            px8[21..24].copy_from_slice(&rgb[7].to_le_bytes()[..3]);
+            store_rgb8(px8, [r, g, b]);
         }
         for (x, px) in row.chunks_exact_mut(3).enumerate().skip(full) {
             let s = if ssaa == 1 {
@@ -489,6 +479,21 @@ fn resolve_ldr_with<const CURVE: u8>(frame: &FrameBuffers, ssaa: u32, exposure: 
         }
     });
     out
+}
+
+/// Writes eight pixels' sRGB codes (0..=255 as f32 lanes) as 24 bytes of
+/// RGB: r + 256 g + 65536 b < 2²⁴ is exact in f32, so one conversion
+/// gives each pixel's three bytes in one little-endian word, stored at
+/// 3 × lane (the next lane overwrites its fourth byte; the last writes
+/// three). A cast from f32 to u8 per channel was ~40 % of the fused pass.
+#[inline(always)]
+fn store_rgb8(px8: &mut [u8], [r, g, b]: [f32x8; 3]) {
+    let word = b.mul_add(f32x8::splat(65536.0), g * f32x8::splat(256.0)) + r;
+    let rgb = word.fast_trunc_int().to_array();
+    for (lane, w) in rgb.iter().enumerate().take(7) {
+        px8[3 * lane..3 * lane + 4].copy_from_slice(&w.to_le_bytes());
+    }
+    px8[21..24].copy_from_slice(&rgb[7].to_le_bytes()[..3]);
 }
 
 /// One channel of eight pixels: sample sum × (1/n) × 2^exposure, tone
@@ -517,12 +522,8 @@ pub fn encode_ldr(rgb: &Planes3) -> Vec<u8> {
             for (j, px8) in o[..full * 3].chunks_exact_mut(24).enumerate() {
                 let i = base + j * 8;
                 let load = |p: &[f32]| f32x8::from(<[f32; 8]>::try_from(&p[i..i + 8]).unwrap());
-                let codes = [&rgb.r, &rgb.g, &rgb.b].map(|p| enc8.encode(load(p)).to_array());
-                for (lane, px) in px8.chunks_exact_mut(3).enumerate() {
-                    for c in 0..3 {
-                        px[c] = codes[c][lane] as u8;
-                    }
-                }
+                let code = |p: &[f32]| enc8.encode(load(p));
+                store_rgb8(px8, [code(&rgb.r), code(&rgb.g), code(&rgb.b)]);
             }
             for (j, px) in o.chunks_exact_mut(3).enumerate().skip(full) {
                 let i = base + j;
