@@ -240,10 +240,10 @@ fn disney_ltc_error_table_over_the_parameter_grid() {
             ("sheen", &|p| p.sheen),
         ],
     );
-    // Measured: median 0.20 %, p90 3.9 %, max 74.6 % over 5184 cases
-    // (the tail is anisotropic = 1: p90 11.8 %; isotropic p90 2.1 %,
-    // max 10.9 %).
-    assert!(p90 < 0.05 && max < 0.85, "p90 {p90}, max {max}");
+    // Measured: median 0.17 %, p90 3.2 %, max 47 % over 5184 cases (the
+    // tail is anisotropic = 1 at grazing views: p90 6.4 %; isotropic
+    // p90 2.1 %, max 10.9 %).
+    assert!(p90 < 0.045 && max < 0.55, "p90 {p90}, max {max}");
     let mut iso: Vec<f64> = cases
         .iter()
         .filter(|c| c.params.anisotropic == 0.0)
@@ -302,7 +302,9 @@ fn disney_ltc_error_of_each_lobe_alone() {
             ("anisotropic", &|p| p.anisotropic),
         ],
     );
-    assert!(p90 < 0.13 && max < 0.65, "specular: p90 {p90}, max {max}");
+    // Measured: p90 4.7 %, max 35.5 % (anisotropic 1: p90 15 %; 0.5:
+    // p90 2.7 %, max 15.5 %).
+    assert!(p90 < 0.06 && max < 0.42, "specular: p90 {p90}, max {max}");
     // The isotropic lobe alone: the GGX fit with separable Smith.
     let mut iso: Vec<f64> = spec_cases
         .iter()
@@ -319,6 +321,7 @@ fn disney_ltc_error_of_each_lobe_alone() {
         &coat_cases,
         &[("clearcoat_gloss", &|p| p.clearcoat_gloss)],
     );
+    // Measured: p90 21.5 %, max 33.9 %; at views ≤ 30°: p90 ≤ 5 %, max 8.4 %.
     assert!(p90 < 0.26 && max < 0.40, "clearcoat: p90 {p90}, max {max}");
     let mut near: Vec<f64> = coat_cases
         .iter()
@@ -339,6 +342,8 @@ fn disney_ltc_error_of_each_lobe_alone() {
             ("sheen", &|p| p.sheen),
         ],
     );
+    // Measured: p90 2.4 %, max 13.5 % (retro-reflection and sheen at
+    // grazing views, where the lobe is far from its Lambert equivalent).
     assert!(p90 < 0.03 && max < 0.16, "diffuse: p90 {p90}, max {max}");
 }
 

@@ -692,6 +692,49 @@ impl Disney {
     }
 }
 
+impl Disney {
+    /// The GGX LTC of the anisotropic specular lobe at the view `wo`
+    /// (module docs, "Polygon lights"): the isotropic fit at α_ref, its
+    /// cosine's xy-plane sheared and scaled by L⁻¹, L = √C / α_ref, C the
+    /// 2 × 2 covariance of the half-vector slopes in the view's frame
+    /// (x along the view's azimuth, y across it).
+    #[inline(always)]
+    fn anisotropic_ltc<R: Real>(&self, wo: V3<R>) -> LtcGgx<R> {
+        let d = &self.d;
+        let (ax2, ay2) = (d.alpha_x * d.alpha_x, d.alpha_y * d.alpha_y);
+        let r2 = wo.x.mul_add(wo.x, wo.y * wo.y);
+        let ok = r2.gt(R::splat(1e-20));
+        let inv_r2 = r2.max(R::splat(1e-20)).rcp();
+        // cos²φo and cos φo sin φo of the view's azimuth from the tangent
+        // (φo = 0 at the normal, where the LTC's frame is the tangent's:
+        // ltc/ggx.rs).
+        let c2 = R::select(ok, wo.x * wo.x * inv_r2, R::ONE);
+        let cs = R::select(ok, wo.x * wo.y * inv_r2, R::ZERO);
+        // C = [[p, κ], [κ, q]]: α² along the view's plane, across it, and
+        // their covariance (p + q = αx² + αy², pq − κ² = αx² αy²).
+        let p = c2.mul_add(R::splat(ax2 - ay2), R::splat(ay2));
+        let q = R::splat(ax2 + ay2) - p;
+        let kappa = R::splat(ay2 - ax2) * cs;
+        // α_ref² = μo² αx αy + (1 − μo²) p: the isotropic equivalent at
+        // the normal (where the lobe must not depend on φo), the α along
+        // the view's plane at grazing views.
+        let m2 = wo.z * wo.z;
+        let a_ref = (R::splat(d.alpha_x * d.alpha_y) * m2)
+            .mul_add(R::ONE, p * (R::ONE - m2))
+            .sqrt();
+        let mut l = LtcGgx::new(a_ref, wo);
+        // √C = (C + s I)/t with s = αx αy, t = αx + αy; L⁻¹ = α_ref t /
+        // (s t²) · [[q + s, −κ], [−κ, p + s]] (det(C + s I) = s t²).
+        let s = R::splat(d.alpha_x * d.alpha_y);
+        let f = a_ref * R::splat(1.0 / (d.alpha_x * d.alpha_y * (d.alpha_x + d.alpha_y)));
+        let (i11, i12, i22) = ((q + s) * f, -kappa * f, (p + s) * f);
+        let (rx, ry) = (l.rx, l.ry);
+        l.rx = rx * i11 + ry * i12;
+        l.ry = rx * i12 + ry * i22;
+        l
+    }
+}
+
 impl Brdf for Disney {
     type Prepared<R: Real> = DisneyPrepared<R>;
     type PolygonPrepared<R: Real> = DisneyPolygons<R>;
@@ -721,7 +764,12 @@ impl Brdf for Disney {
     #[inline(always)]
     fn prepare_polygons<R: Real>(&self, p: &DisneyPrepared<R>) -> DisneyPolygons<R> {
         let (d, o) = (&self.d, &p.o);
-        let spec = LtcGgx::new(R::splat(d.spec_ltc_alpha), o.wo);
+        // A material constant: the branch is the same in every lane.
+        let spec = if d.alpha_x != d.alpha_y && d.alpha_x.max(d.alpha_y) <= 1.0 {
+            self.anisotropic_ltc(o.wo)
+        } else {
+            LtcGgx::new(R::splat(d.spec_ltc_alpha), o.wo)
+        };
         let c = d.cspec0;
         let specular = Rgb::new(
             spec.schlick_albedo(R::splat(c[0])),
