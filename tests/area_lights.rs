@@ -546,14 +546,9 @@ fn the_disney_area_lights_fixture_renders_by_ltc_close_to_its_reference() {
     // Per material, to see where the error is.
     {
         let mut per: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
-        let mut k = 0;
-        for i in 0..id.len() {
-            if id[i] == MISS {
-                continue;
-            }
-            let m = &scene.data.materials[scene.data.tri_material[id[i] as usize] as usize].name;
-            per.entry(m.clone()).or_default().push(errs[k]);
-            k += 1;
+        for (&t, &e) in id.iter().filter(|&&t| t != MISS).zip(&errs) {
+            let m = &scene.data.materials[scene.data.tri_material[t as usize] as usize].name;
+            per.entry(m.clone()).or_default().push(e);
         }
         for (m, mut e) in per {
             e.sort_by(f64::total_cmp);

@@ -77,8 +77,9 @@
 //!   peak) errs by up to 77 % of the coat's albedo (p90 20–35 %). The coat
 //!   goes through two GGX fits, D_GTR1 ≈ w D_GGX(α₁) + (1 − w) D_GGX(α₂),
 //!   fitted per clearcoat_gloss to the cumulative distribution of
-//!   D cos θh ([`fit_coat_mixture`]: gloss 1, α = 0.001 ≈ ½ GGX(0.0053)
-//!   + ½ GGX(0.19); gloss 0, α = 0.1 ≈ 0.48 GGX(0.16) + 0.52 GGX(0.59)),
+//!   D cos θh ([`fit_coat_mixture`]: at gloss 1, α = 0.001, half
+//!   GGX(0.0053) and half GGX(0.19); at gloss 0, α = 0.1, 0.48 GGX(0.16)
+//!   and 0.52 GGX(0.59)),
 //!   each weighted by its mass times its own albedo at the view (the wide
 //!   one loses more at grazing), scaled to the coat's own directional
 //!   albedo ([`coat_albedo_table`]: F0 = 0.04 and the Smith G at
