@@ -77,9 +77,9 @@
 //!   peak) errs by up to 77 % of the coat's albedo (p90 20–35 %). The coat
 //!   goes through two GGX fits, D_GTR1 ≈ w D_GGX(α₁) + (1 − w) D_GGX(α₂),
 //!   fitted per clearcoat_gloss to the cumulative distribution of
-//!   D cos θh ([`fit_coat_mixture`]: at gloss 1, α = 0.001, half
-//!   GGX(0.0053) and half GGX(0.19); at gloss 0, α = 0.1, 0.48 GGX(0.16)
-//!   and 0.52 GGX(0.59)),
+//!   D cos θh ([`fit_coat_mixture`]: at gloss 1, α = 0.001, 0.49
+//!   GGX(0.0050) and 0.51 GGX(0.17); at gloss 0, α = 0.1, 0.53 GGX(0.17)
+//!   and 0.47 GGX(0.64)),
 //!   each weighted by its mass times its own albedo at the view (the wide
 //!   one loses more at grazing), scaled to the coat's own directional
 //!   albedo ([`coat_albedo_table`]: F0 = 0.04 and the Smith G at
@@ -573,8 +573,9 @@ fn azimuth_dir(mu: f64, c2: f64) -> V3<f64> {
 
 /// The clearcoat lobe's directional albedo (F_r included, weight ¼
 /// clearcoat not) over (clearcoat_gloss, μo), by the model's own
-/// quadrature ([`Disney::albedo_quadrature`]): 11 × 32 entries, built
-/// once per process on the first material with a coat (~50 ms).
+/// quadrature ([`Disney::albedo_quadrature`]): 6 × 32 entries, built
+/// once per process by the first material with a coat (with the
+/// mixture fit, ~0.25 G instructions: about 0.1 s).
 pub fn coat_albedo_table() -> &'static Table2<1> {
     static T: OnceLock<Table2<1>> = OnceLock::new();
     T.get_or_init(|| {
@@ -597,7 +598,7 @@ pub fn coat_albedo_table() -> &'static Table2<1> {
 
 /// Nodes of clearcoat_gloss in the coat tables ([`coat_albedo_table`],
 /// [`coat_mixture_table`]).
-const GLOSS_AXIS: Axis = Axis::new(11, 0.0, 1.0, Warp::Linear, Nodes::Ends);
+const GLOSS_AXIS: Axis = Axis::new(6, 0.0, 1.0, Warp::Linear, Nodes::Ends);
 
 /// The two-GGX stand-in for the clearcoat's GTR1 distribution, per
 /// clearcoat_gloss: (w, α₁, α₂) such that w D_GGX(α₁) + (1 − w) D_GGX(α₂)
@@ -610,15 +611,15 @@ pub fn coat_mixture_table() -> &'static Table1<3> {
 
 /// Fits (w, α₁, α₂) of [`coat_mixture_table`] for GTR1 of roughness
 /// `alpha`: least squares between the cumulative distributions of
-/// D cos θh, u(θh), sampled at 200 points uniform in ln tan θh over
+/// D cos θh, u(θh), sampled at 100 points uniform in ln tan θh over
 /// [α/30, 30] (both are closed forms: GGX u = t²/(α² + t²), t = tan θh;
 /// GTR1 u = 1 − ln(1 − (1 − α²) cos²θh)/ln α² [Burley12, eq. 2]); α₁, α₂
-/// over a log grid (80 × 80 values in [1e-3, 1]), w in closed form
+/// over a log grid (48 values in [1e-3, 1]), w in closed form
 /// (the residual is linear in it), clamped to [0, 1]. Returns the fit and
 /// its largest CDF difference.
 pub fn fit_coat_mixture(alpha: f64) -> ([f64; 3], f64) {
-    const N_S: usize = 200;
-    const N_A: usize = 80;
+    const N_S: usize = 100;
+    const N_A: usize = 48;
     let a2 = alpha * alpha;
     let (lo, hi) = ((alpha / 30.0).ln(), 30f64.ln());
     let ts: Vec<f64> = (0..N_S)
