@@ -83,8 +83,8 @@
 //!   each weighted by its mass times its own albedo at the view (the wide
 //!   one loses more at grazing), scaled to the coat's own directional
 //!   albedo ([`coat_albedo_table`]: F0 = 0.04 and the Smith G at
-//!   α = 0.25 included). Measured: p90 ≤ 5 %, max 8.4 % at views ≤ 30°;
-//!   p90 21.5 %, max 34 % over all views (the G at 0.25 and the mixture's
+//!   α = 0.25 included). Measured: p90 ≤ 5 %, max 7.6 % at views ≤ 30°;
+//!   p90 21 %, max 34 % over all views (the G at 0.25 and the mixture's
 //!   shape at grazing views).
 //! - Diffuse, subsurface blend and sheen (× (1 − metallic)): the polygon's
 //!   exact Lambert form factor times the lobes' directional albedo at μo,
