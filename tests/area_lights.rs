@@ -415,3 +415,179 @@ fn a_concave_16_vertex_light_and_a_light_in_the_floor_plane_shade_finitely() {
     eprintln!("16-vertex star over a Lambert floor: worst relative LTC vs reference {worst:e}");
     assert!(worst < 2e-3, "{worst:e}");
 }
+
+#[test]
+fn eval_answers_light_lines_on_disney_materials() {
+    // Every lobe on; the LTC against the reference (Disney's measured
+    // error tables are in core/tests/disney_ltc.rs) and against the core
+    // model's own f64 LTC integral (the wiring).
+    let mat = r#"{"model": "disney", "base_color": [0.8, 0.5, 0.3], "roughness": 0.4, "anisotropic": 0.5, "clearcoat": 1, "sheen": 0.5, "subsurface": 0.3}"#;
+    // Counter-clockwise seen from the shading point below it: its front.
+    let quad = "[[-0.4, 0.5, 1.5], [0.8, 0.5, 1.5], [0.8, -0.6, 1.5], [-0.4, -0.6, 1.5]]";
+    let wo = [0.3f64, 0.1, 1.0];
+    let lines = [
+        format!(
+            r#"{{"material": {mat}, "wo": {wo:?}, "light": {{"polygon": {quad}, "radiance": [1, 2, 3]}}, "method": "ltc"}}"#
+        ),
+        format!(
+            r#"{{"material": {mat}, "wo": {wo:?}, "light": {{"polygon": {quad}, "radiance": [1, 2, 3]}}, "method": "reference"}}"#
+        ),
+        // Its back faces the point: one-sided gives 0.
+        format!(
+            r#"{{"material": {mat}, "wo": {wo:?}, "light": {{"polygon": [[-0.4, -0.6, 1.5], [0.8, -0.6, 1.5], [0.8, 0.5, 1.5], [-0.4, 0.5, 1.5]], "radiance": [1, 2, 3]}}}}"#
+        ),
+    ];
+    let out = eval(&(lines.join("\n") + "\n"));
+    let ltc = rgb(&out[0], "radiance");
+    let reference = rgb(&out[1], "radiance");
+    let err = rgb(&out[1], "error");
+    assert_eq!(rgb(&out[2], "radiance"), [0.0; 3]);
+
+    use specula_core::light::{PolygonLocal, MAX_POLYGON_VERTICES};
+    use specula_core::models::disney::{Disney, DisneyParams};
+    use specula_core::{Brdf, V3};
+    let m = Disney::new_without_table(
+        DisneyParams {
+            base_color: [0.8, 0.5, 0.3],
+            roughness: 0.4,
+            anisotropic: 0.5,
+            clearcoat: 1.0,
+            sheen: 0.5,
+            subsurface: 0.3,
+            ..DisneyParams::default()
+        },
+        false,
+    );
+    let q = [
+        [-0.4, 0.5, 1.5],
+        [0.8, 0.5, 1.5],
+        [0.8, -0.6, 1.5],
+        [-0.4, -0.6, 1.5],
+    ];
+    let mut poly = PolygonLocal {
+        vertices: [V3::new(0.0f64, 0.0, 0.0); MAX_POLYGON_VERTICES],
+        len: 4,
+        two_sided: false,
+    };
+    for (k, p) in q.iter().enumerate() {
+        poly.vertices[k] = V3::new(p[0], p[1], p[2]);
+    }
+    let n = (wo[0] * wo[0] + wo[1] * wo[1] + wo[2] * wo[2]).sqrt();
+    let e = m.polygon_local(&m.prepare(V3::new(wo[0] / n, wo[1] / n, wo[2] / n)), &poly);
+    for (c, (want, l)) in [e.x, e.y, e.z].iter().zip([1.0, 2.0, 3.0]).enumerate() {
+        assert!(
+            (ltc[c] / (want * l) - 1.0).abs() < 1e-6,
+            "channel {c}: eval {} vs core {}",
+            ltc[c],
+            want * l
+        );
+        assert!(err[c] < 1e-4 * reference[c], "reference ± {}", err[c]);
+        let rel = (ltc[c] / reference[c] - 1.0).abs();
+        eprintln!(
+            "disney eval, channel {c}: LTC {} vs reference {} ({rel:.4})",
+            ltc[c], reference[c]
+        );
+        assert!(
+            rel < 0.06,
+            "channel {c}: LTC {} vs reference {}",
+            ltc[c],
+            reference[c]
+        );
+    }
+}
+
+#[test]
+fn the_disney_area_lights_fixture_renders_by_ltc_close_to_its_reference() {
+    let dir = common::fixtures().join("scenes");
+    let text = std::fs::read_to_string(dir.join("disney-area-lights.toml")).unwrap();
+    let read = |p: &std::path::Path| std::fs::read(dir.join(p));
+    let load = |t: &str| {
+        specula::scene::load_scene_str(std::path::Path::new("disney-area-lights.toml"), t, &read)
+            .unwrap_or_else(|e| panic!("{e}"))
+    };
+    let shoot = |s: &specula::scene::LoadedScene, path: ShadePath| {
+        let mut set = RenderSettings::from_scene(s);
+        set.width = 192;
+        set.height = 108;
+        set.ssaa = 1;
+        set.path = path;
+        set.buffers.id = true;
+        let r = render_scene(s, &set, 0.0).unwrap();
+        let b = &r.frame.buffers;
+        let c: Vec<[f32; 3]> = (0..b.id.len()).map(|i| b.color.get(i)).collect();
+        (c, b.id.clone())
+    };
+    let scene = load(&text);
+    let (ltc, id) = shoot(&scene, ShadePath::Simd);
+    let (scalar, _) = shoot(&scene, ShadePath::Scalar);
+    let (reference, _) = shoot(
+        &load(&text.replace("area_lights = \"ltc\"", "area_lights = \"reference\"")),
+        ShadePath::Simd,
+    );
+    let mut errs = Vec::new();
+    let mut simd_vs_scalar = 0.0f32;
+    for i in 0..id.len() {
+        assert!(ltc[i]
+            .iter()
+            .chain(&reference[i])
+            .chain(&scalar[i])
+            .all(|c| c.is_finite()));
+        for c in 0..3 {
+            simd_vs_scalar =
+                simd_vs_scalar.max((ltc[i][c] - scalar[i][c]).abs() / ltc[i][c].abs().max(1e-3));
+        }
+        if id[i] == MISS {
+            continue;
+        }
+        let peak = reference[i].iter().fold(0.0f32, |m, c| m.max(*c)).max(1e-3);
+        let d = (0..3).fold(0.0f32, |m, c| m.max((ltc[i][c] - reference[i][c]).abs()));
+        errs.push((d / peak) as f64);
+    }
+    // Per material, to see where the error is.
+    {
+        let mut per: std::collections::BTreeMap<String, Vec<f64>> = Default::default();
+        for (&t, &e) in id.iter().filter(|&&t| t != MISS).zip(&errs) {
+            let m = &scene.data.materials[scene.data.tri_material[t as usize] as usize].name;
+            per.entry(m.clone()).or_default().push(e);
+        }
+        for (m, mut e) in per {
+            e.sort_by(f64::total_cmp);
+            let n = e.len();
+            eprintln!(
+                "{m}: median {:.4} p90 {:.4} p99 {:.4} max {:.4} ({n})",
+                e[n / 2],
+                e[n * 9 / 10],
+                e[n * 99 / 100],
+                e[n - 1]
+            );
+            // Isotropic lobes err per pixel like the microfacet spheres of
+            // area-lights.toml (p90 up to 0.33 there, 0.25 here on the
+            // rough metal, relative to the pixel's own radiance); the
+            // brushed spheres far more (p90 0.9 and 4.2: the LTC draws
+            // the anisotropic lobe's curved band as a straight one).
+            if !m.starts_with("brushed") {
+                assert!(e[n * 9 / 10] < 0.3, "{m}: p90 {}", e[n * 9 / 10]);
+            }
+        }
+    }
+    errs.sort_by(f64::total_cmp);
+    let q = |f: f64| errs[((errs.len() - 1) as f64 * f) as usize];
+    eprintln!(
+        "disney-area-lights fixture, LTC vs reference per pixel (relative): median {:.4}, p90 {:.4}, p99 {:.4}, max {:.4} over {} pixels; SIMD vs scalar {simd_vs_scalar:e}",
+        q(0.5),
+        q(0.9),
+        q(0.99),
+        q(1.0),
+        errs.len()
+    );
+    assert!(simd_vs_scalar < 1e-4, "{simd_vs_scalar:e}");
+    // Measured at 192 × 108: median 0.0000 (the Lambert floor), p90
+    // 0.038, p99 1.0, max 12 (on the brushed spheres).
+    assert!(
+        q(0.5) < 0.002 && q(0.9) < 0.05 && q(0.99) < 1.2,
+        "median {}, p90 {}, p99 {}",
+        q(0.5),
+        q(0.9),
+        q(0.99)
+    );
+}

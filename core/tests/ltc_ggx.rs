@@ -6,26 +6,14 @@
 //! (F = 1), the measure of [Heitz16]'s evaluation. Also: the committed
 //! table decodes, f32x8 matches f64, and the materials built on it.
 
-use specula_core::light::{PolygonLocal, MAX_POLYGON_VERTICES};
+mod common;
+
+use common::{facing_square, poly, polygons, quantile, v};
 use specula_core::ltc::ggx::{decode, encode, table, Cell, N};
 use specula_core::ltc::reference::{integrate_polygon, Tolerance};
 use specula_core::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
 use specula_core::models::MetallicRoughness;
 use specula_core::{f32x8, Brdf, Real, V3};
-
-fn v(x: f64, y: f64, z: f64) -> V3<f64> {
-    V3::new(x, y, z)
-}
-
-fn poly<R: Real>(q: &[V3<R>], two_sided: bool) -> PolygonLocal<R> {
-    let mut p = PolygonLocal {
-        vertices: [V3::new(R::ZERO, R::ZERO, R::ZERO); MAX_POLYGON_VERTICES],
-        len: q.len(),
-        two_sided,
-    };
-    p.vertices[..q.len()].copy_from_slice(q);
-    p
-}
 
 fn ggx(alpha: f32, f0: [f32; 3]) -> Microfacet {
     Microfacet::new_without_table(
@@ -39,91 +27,6 @@ fn ggx(alpha: f32, f0: [f32; 3]) -> Microfacet {
         },
         None,
     )
-}
-
-/// A square of side `s` centred at `c`, facing the origin (front toward
-/// it), turned by `twist` about its normal.
-fn facing_square(c: V3<f64>, s: f64, twist: f64) -> Vec<V3<f64>> {
-    let n = (c * -1.0).normalize();
-    let up = if n.z.abs() < 0.9 {
-        v(0.0, 0.0, 1.0)
-    } else {
-        v(1.0, 0.0, 0.0)
-    };
-    let e1 = up.cross(n).normalize();
-    let e2 = n.cross(e1);
-    let (sn, cs) = twist.sin_cos();
-    let (a, b) = (e1 * cs + e2 * sn, e2 * cs - e1 * sn);
-    let h = s / 2.0;
-    // Counter-clockwise seen from the origin: a, then b, around −n.
-    vec![
-        c - a * h - b * h,
-        c - a * h + b * h,
-        c + a * h + b * h,
-        c + a * h - b * h,
-    ]
-}
-
-/// The test polygons for a view at θo (in the xz-plane, x > 0): name,
-/// vertices (front toward the origin unless reversed below).
-fn polygons(theta: f64) -> Vec<(&'static str, Vec<V3<f64>>)> {
-    let mirror = v(-theta.sin(), 0.0, theta.cos());
-    let mut out = vec![
-        ("overhead quad", facing_square(v(0.0, 0.0, 1.5), 1.0, 0.3)),
-        ("mirror quad", facing_square(mirror * 2.0, 0.8, 0.0)),
-        ("mirror small quad", facing_square(mirror * 4.0, 0.3, 0.5)),
-        ("tilted quad", facing_square(v(0.8, 1.2, 1.0), 1.2, 0.7)),
-        (
-            "tilted triangle",
-            vec![v(-1.5, -0.6, 0.9), v(-0.4, 0.9, 1.6), v(-1.0, 1.0, 0.3)],
-        ),
-        (
-            "straddling wall",
-            vec![
-                v(-1.5, -1.0, -0.5),
-                v(-1.5, -1.0, 1.0),
-                v(-1.5, 1.0, 1.0),
-                v(-1.5, 1.0, -0.5),
-            ],
-        ),
-        (
-            "straddling triangle",
-            vec![v(0.4, -1.5, -0.6), v(0.4, -1.5, 1.2), v(-1.2, -1.5, 0.2)],
-        ),
-        (
-            "low wall (horizon)",
-            vec![
-                v(-3.0, -2.0, 0.02),
-                v(-3.0, -2.0, 0.6),
-                v(-3.0, 2.0, 0.6),
-                v(-3.0, 2.0, 0.02),
-            ],
-        ),
-        (
-            "below",
-            vec![
-                v(-1.0, -1.0, -0.3),
-                v(-1.0, 1.0, -0.3),
-                v(1.0, 1.0, -0.3),
-                v(1.0, -1.0, -0.3),
-            ],
-        ),
-    ];
-    // Make every polygon face the origin (Newell normal against v₀).
-    for (_, q) in out.iter_mut() {
-        let mut n = v(0.0, 0.0, 0.0);
-        for k in 0..q.len() {
-            n += q[k].cross(q[(k + 1) % q.len()]);
-        }
-        if n.dot(q[0]) > 0.0 {
-            q.reverse();
-        }
-    }
-    out
-}
-
-fn quantile(sorted: &[f64], q: f64) -> f64 {
-    sorted[((sorted.len() - 1) as f64 * q).round() as usize]
 }
 
 #[test]
