@@ -214,10 +214,7 @@ impl<R: Real> LtcGgx<R> {
     /// `v` (local) in the cosine's coordinates.
     #[inline(always)]
     pub fn map(&self, v: V3<R>) -> V3<R> {
-        // ry.z = 0: Y without the product by zero (which the compiler must
-        // keep, since 0 · inf is NaN).
-        let y = self.ry.x.mul_add(v.x, self.ry.y * v.y);
-        V3::new(self.rx.dot(v), y, self.rz.dot(v))
+        V3::new(self.rx.dot(v), self.ry.dot(v), self.rz.dot(v))
     }
 
     /// ∫ D over the polygon (module docs): the LTC's share of the lobe
