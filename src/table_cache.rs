@@ -1,6 +1,8 @@
 //! The user's table cache: Kulla–Conty E tables (core::kulla_conty) kept
-//! between runs, so a GTR sweep pays for its γ node tables once per
-//! machine, not once per run.
+//! between runs. The common ones (GGX, Beckmann, GTR at the γ nodes) are
+//! committed in core (kc_tables.rs) and never reach it; GTR with γ
+//! outside the γ axis builds a table per γ (~0.6 s), which the cache
+//! keeps so that it is paid once per machine, not once per run.
 //!
 //! Folder: `$SPECULA_CACHE_DIR` when set (empty: no cache), else
 //! `$XDG_CACHE_HOME/specula`, else `$HOME/.cache/specula`. One file per
