@@ -83,6 +83,11 @@ impl TriPlanes {
 /// NaN one instead of being clipped into a meaningless sliver.
 pub const MAX_CLIP_COORD: f64 = (1u64 << 50) as f64;
 
+/// Largest magnitude a triangle's planes (`TriPlanes`) may reach at any
+/// pixel of the image; beyond it the triangle is skipped as degenerate
+/// (see `SetupContext::setup`).
+pub const MAX_PLANE_VALUE: f64 = 1e30;
+
 /// What happened to triangles in setup; sums over chunks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct SetupCounts {
@@ -289,14 +294,21 @@ impl SetupContext {
             facing: if det > 0.0 { 1.0 } else { -1.0 },
         };
         // A vertex at a subnormal w (found by fuzzing) makes det tiny and
-        // the planes' gradients overflow f32: barycentrics and 1/w would
-        // be inf/inf = NaN at its pixels. It has no usable perspective:
-        // drop the screen triangles it pushed and count it as degenerate.
-        let finite = [planes.k1, planes.k2, planes.ks, planes.z]
-            .iter()
-            .flatten()
-            .all(|x| x.is_finite());
-        if !finite {
+        // the planes' gradients huge: beyond f32, or finite but
+        // overflowing when evaluated a few pixels from the origin, so
+        // depth, barycentrics and 1/w would be inf or inf/inf = NaN at its
+        // pixels. Such a triangle has no usable perspective: drop the
+        // screen triangles it pushed and count it as degenerate. The
+        // bound, on any pixel of the image, leaves f32 room for the
+        // products shading forms; ordinary planes stay near 1/near
+        // (1e8 at near = 1e-8).
+        let (span_x, span_y) = (w + 1.0, h + 1.0);
+        let bounded = [planes.k1, planes.k2, planes.ks, planes.z].iter().all(|p| {
+            let m =
+                (p[0] as f64).abs() * span_x + (p[1] as f64).abs() * span_y + (p[2] as f64).abs();
+            m <= MAX_PLANE_VALUE
+        });
+        if !bounded {
             out.truncate(before);
             counts.skipped_degenerate += 1;
             return None;
