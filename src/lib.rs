@@ -3,12 +3,14 @@
 //! (`mesh`), the material contract shared by scenes and `specula eval`
 //! (`material_desc`), rendering with statistics (`render`) and image output
 //! (`output`), image files as textures (`textures`), text labels on images
-//! (`label`). The built-in demo lives in `demo`.
+//! (`label`). The built-in demo lives in `demo`; `fuzzing` holds the fuzz
+//! targets' entry points.
 
 pub mod demo;
 pub mod eval;
 pub mod fit_ltc;
 pub mod furnace;
+pub mod fuzzing;
 pub mod label;
 pub mod lines;
 pub mod material_desc;

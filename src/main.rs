@@ -44,6 +44,9 @@ enum Command {
     /// Fit the LTC table of the GGX lobe (core/data/ltc_ggx.bin; format in
     /// core/src/ltc/ggx.rs).
     FitLtc(FitLtcArgs),
+    /// Build the committed Kulla-Conty E tables (core/data/kc_tables.bin;
+    /// format in core/src/kc_tables.rs).
+    KcTables(KcTablesArgs),
 }
 
 #[derive(clap::Args)]
@@ -69,6 +72,13 @@ struct TamArgs {
 struct FitLtcArgs {
     /// Where to write the table.
     #[arg(short, long, default_value = "core/data/ltc_ggx.bin")]
+    output: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct KcTablesArgs {
+    /// Where to write the tables.
+    #[arg(short, long, default_value = "core/data/kc_tables.bin")]
     output: PathBuf,
 }
 
@@ -366,6 +376,7 @@ fn main() -> ExitCode {
         Some(Command::Furnace(a)) => run_furnace(a),
         Some(Command::Tam(a)) => run_tam(a),
         Some(Command::FitLtc(a)) => specula::fit_ltc::run(&a.output),
+        Some(Command::KcTables(a)) => specula::table_cache::write_committed(&a.output),
         Some(Command::Eval) => {
             let stdin = std::io::stdin().lock();
             let stdout = std::io::BufWriter::new(std::io::stdout().lock());

@@ -35,6 +35,13 @@ pub fn set_limit(bytes: u64) {
     LIMIT.store(bytes, Ordering::Relaxed);
 }
 
+/// Forgets everything reserved so far, for a process that loads one
+/// scene after another (the fuzz targets, `fuzzing.rs`); the CLI loads
+/// one scene per run and never calls it.
+pub fn reset_reserved() {
+    RESERVED.store(BASE_BYTES, Ordering::Relaxed);
+}
+
 /// Counts `bytes` against the budget, or refuses them naming `what`.
 pub fn reserve(what: &str, bytes: u64) -> Result<(), String> {
     let limit = LIMIT.load(Ordering::Relaxed);

@@ -1,6 +1,8 @@
 //! The user's table cache: Kulla–Conty E tables (core::kulla_conty) kept
-//! between runs, so a GTR sweep pays for its γ node tables once per
-//! machine, not once per run.
+//! between runs. The common ones (GGX, Beckmann, GTR at the γ nodes) are
+//! committed in core (kc_tables.rs) and never reach it; GTR with γ
+//! outside the γ axis builds a table per γ (~0.6 s), which the cache
+//! keeps so that it is paid once per machine, not once per run.
 //!
 //! Folder: `$SPECULA_CACHE_DIR` when set (empty: no cache), else
 //! `$XDG_CACHE_HOME/specula`, else `$HOME/.cache/specula`. One file per
@@ -58,6 +60,32 @@ impl TableStore for DirStore {
             let _ = std::fs::remove_file(&tmp);
         }
     }
+}
+
+/// `specula kc-tables`: builds the tables core commits
+/// (core/src/kc_tables.rs) and writes the file to `out`.
+pub fn write_committed(out: &std::path::Path) -> Result<(), String> {
+    let t = std::time::Instant::now();
+    let tables = specula_core::kc_tables::build_all();
+    let comments = vec![
+        format!("written by `specula kc-tables --output {}`", out.display()),
+        "Kulla-Conty E(mu, alpha), F = 1; mu: 64 nodes (j/63)^2; sqrt(alpha): 32 nodes k/31 (alpha floored at ALPHA_MIN)".into(),
+        "GTR at gamma = 2^(-2 + 9 k / 27), k = 0..27, with GGX's and with the exact Lambda; names as KcTable::store_name".into(),
+    ];
+    let bytes = specula_core::kc_tables::encode(&tables, &comments);
+    let sink = crate::outputs::Output {
+        flag: "--output".into(),
+        path: out.to_path_buf(),
+        sink: crate::outputs::resolve(out, false)?,
+    };
+    sink.write(&bytes)?;
+    eprintln!(
+        "wrote {} tables to {} ({:.0} s)",
+        tables.len(),
+        out.display(),
+        t.elapsed().as_secs_f64()
+    );
+    Ok(())
 }
 
 /// Installs the user's cache folder as core's table store (no-op when

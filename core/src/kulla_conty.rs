@@ -39,9 +39,9 @@
 //! number (eval scripts sweep it), so one table per γ would cost a build
 //! per material. Instead GTR takes E from node tables on a γ axis:
 //! x = log₂ γ over [−2, 7] (γ ∈ [¼, 128]), a node every third of an
-//! octave ([`GAMMA_AXIS`]), each node an ordinary table at that γ, built
-//! on first use (rows spread over the cores: ~0.3 s per node on two
-//! cores). A material's slice ([`slice_for`]) takes the α slice of the
+//! octave ([`GAMMA_AXIS`]), each node an ordinary table at that γ
+//! (committed, see below; building one takes ~0.3 s on two cores). A
+//! material's slice ([`slice_for`]) takes the α slice of the
 //! four nearest nodes and a Catmull–Rom cubic in log₂ γ through them;
 //! E_avg is then integrated from that slice as above. Against a table
 //! built at the material's own γ, half-way between nodes
@@ -50,6 +50,12 @@
 //! GGX's Λ exceeds 1 at grazing angles for some γ; a clamp would put a
 //! kink in E along γ, which took the cubic's error to 6e-3) and clamped
 //! to [0, 1] in the slice. γ outside [¼, 128] gets a table of its own.
+//!
+//! **Where tables come from.** GGX, Beckmann and the GTR γ nodes (with
+//! GGX's and with the exact Λ) are committed (`core/data/kc_tables.bin`,
+//! kc_tables.rs), so no run builds them; GTR off the γ axis gets its
+//! table built on first use and kept in the [`TableStore`] the CLI
+//! installs (the user's cache folder).
 
 use crate::brdf::ALPHA_MIN;
 use crate::models::microfacet::{Fresnel, GtrLambda, MicrofacetParams, Ndf, Smith};
@@ -213,29 +219,49 @@ impl KcTable {
         }
     }
 
-    /// The table from the store when it holds a valid one (the right
-    /// length, finite values), else built and saved there.
+    /// The table from its store layout (α rows in order, μ inside a row).
+    fn from_values(v: &[f32]) -> KcTable {
+        let rows = v
+            .chunks(N_MU)
+            .map(|r| r.iter().map(|&x| [x]).collect())
+            .collect();
+        KcTable {
+            e: Table2::from_rows(MU_AXIS, ALPHA_AXIS, rows),
+        }
+    }
+
+    /// The table's node values in store layout.
+    fn values(&self) -> Vec<f32> {
+        (0..N_ALPHA)
+            .flat_map(|j| (0..N_MU).map(move |i| (i, j)))
+            .map(|(i, j)| self.e.node_value(i, j)[0])
+            .collect()
+    }
+
+    /// Builds the table of (NDF, Smith, exact GTR Λ) afresh, whatever is
+    /// committed or stored, and returns its values in store layout (for
+    /// the generator of `core/data/kc_tables.bin` and its test).
+    pub fn build_values(ndf: Ndf, smith: Smith, exact_gtr: bool) -> Vec<f32> {
+        KcTable::build(ndf, smith, exact_gtr).values()
+    }
+
+    /// The committed table (kc_tables.rs) when there is one, else the
+    /// store's when it holds a valid one (the right length, finite
+    /// values), else built and saved there.
     fn load_or_build(ndf: Ndf, smith: Smith, key: TableKey) -> KcTable {
         let name = table_name(key);
+        if let Some(v) = crate::kc_tables::committed().get(&name) {
+            return KcTable::from_values(v);
+        }
         let store = STORE.get();
         if let Some(v) = store.and_then(|s| s.load(&name)) {
             if v.len() == N_MU * N_ALPHA && v.iter().all(|x| x.is_finite()) {
-                let rows = v
-                    .chunks(N_MU)
-                    .map(|r| r.iter().map(|&x| [x]).collect())
-                    .collect();
-                return KcTable {
-                    e: Table2::from_rows(MU_AXIS, ALPHA_AXIS, rows),
-                };
+                return KcTable::from_values(&v);
             }
         }
         let t = KcTable::build(ndf, smith, key.3);
         if let Some(s) = store {
-            let v: Vec<f32> = (0..N_ALPHA)
-                .flat_map(|j| (0..N_MU).map(move |i| (i, j)))
-                .map(|(i, j)| t.e.node_value(i, j)[0])
-                .collect();
-            s.save(&name, &v);
+            s.save(&name, &t.values());
         }
         t
     }

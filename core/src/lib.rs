@@ -10,6 +10,7 @@ pub mod brdf;
 pub mod diffuse;
 pub mod fresnel;
 pub mod gtr_lambda;
+pub mod kc_tables;
 pub mod kulla_conty;
 pub mod light;
 pub mod ltc;

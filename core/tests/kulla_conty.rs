@@ -365,9 +365,11 @@ fn gtr_gamma_axis_matches_tables_built_at_that_gamma() {
 }
 
 /// A sweep of GTR materials with a different γ per material builds no
-/// table per material: only the γ nodes it touches (here the 10 nodes
-/// around [1, 8]), however many materials. Before the γ axis every
-/// distinct γ built its own table (~0.6 s each).
+/// table per material: it reads the γ nodes it touches (here the 10 nodes
+/// around [1, 8]), however many materials, and those are committed
+/// (core/data/kc_tables.bin), so it builds none at all. Before the γ axis
+/// every distinct γ built its own table (~0.6 s each); before the
+/// committed file, each node was built once per machine.
 #[test]
 fn gtr_sweep_builds_only_gamma_node_tables() {
     use specula_core::kulla_conty::{tables_built_on_this_thread, GAMMA_AXIS};
@@ -397,6 +399,6 @@ fn gtr_sweep_builds_only_gamma_node_tables() {
         .find(|&k| GAMMA_AXIS.node(k) >= 3.0)
         .unwrap()
         + 1;
-    eprintln!("300 materials built {built} tables (nodes {lo}..={hi})");
-    assert!(built <= hi - lo + 1, "{built} tables for 300 materials");
+    eprintln!("300 materials built {built} tables (nodes {lo}..={hi} read)");
+    assert_eq!(built, 0, "{built} tables built for 300 materials");
 }

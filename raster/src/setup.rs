@@ -2,7 +2,7 @@
 //! rule) and the per-triangle planes that depth testing and shading evaluate.
 
 use crate::clip::{ClipVertex, GuardBand};
-use crate::fixed::{pixel_centre, snap, SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE};
+use crate::fixed::{pixel_centre, snap, GUARD_BAND_PX, SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE};
 use crate::geometry::Cull;
 
 /// An edge function E(X, Y) = A·X + B·Y + C over fixed-point coordinates,
@@ -82,6 +82,11 @@ impl TriPlanes {
 /// carries no usable position, so its triangle is skipped and counted like a
 /// NaN one instead of being clipped into a meaningless sliver.
 pub const MAX_CLIP_COORD: f64 = (1u64 << 50) as f64;
+
+/// Largest magnitude a triangle's planes (`TriPlanes`) may reach at any
+/// pixel of the image; beyond it the triangle is skipped as degenerate
+/// (see `SetupContext::setup`).
+pub const MAX_PLANE_VALUE: f64 = 1e30;
 
 /// What happened to triangles in setup; sums over chunks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -210,10 +215,23 @@ impl SetupContext {
         let (w, h) = (self.width as f64, self.height as f64);
         let mut screen = [[0i64; 2]; crate::clip::MAX_CLIPPED];
         let (mut min_x, mut min_y) = (f64::INFINITY, f64::INFINITY);
+        let mut finite = true;
+        // Clipping puts every vertex inside the guard band up to rounding,
+        // but only relative to w: at a subnormal w (1e-45, say) a clipped
+        // vertex can land at w = 0 (x/w infinite) or millions of pixels
+        // past the band (found by fuzzing; fixed.rs's i64 bounds assume
+        // the band). Such a vertex carries no position: its triangle is
+        // skipped as invalid; the others are clamped into the band, which
+        // moves only vertices that rounding pushed out of it.
         let mut project = |i: usize, p: &ClipVertex| {
             let inv_w = 1.0 / p[3];
             let sx = (p[0] * inv_w + 1.0) * 0.5 * w;
             let sy = (1.0 - p[1] * inv_w) * 0.5 * h;
+            finite &= sx.is_finite() && sy.is_finite();
+            let (sx, sy) = (
+                sx.clamp(-GUARD_BAND_PX, GUARD_BAND_PX),
+                sy.clamp(-GUARD_BAND_PX, GUARD_BAND_PX),
+            );
             min_x = min_x.min(sx);
             min_y = min_y.min(sy);
             screen[i] = [snap(sx), snap(sy)];
@@ -235,6 +253,10 @@ impl SetupContext {
             counts.culled_outside += 1;
             return None;
         }
+        if !finite {
+            counts.skipped_invalid += 1;
+            return None;
+        }
 
         let before = out.len();
         for i in 1..n - 1 {
@@ -246,7 +268,6 @@ impl SetupContext {
             counts.no_samples += 1;
             return None;
         }
-        counts.drawn += 1;
 
         // Planes: rows of M⁻¹ = adj / det, composed with pixel → NDC
         // (nx = 2x/W − 1, ny = 1 − 2y/H) and moved to the origin.
@@ -264,14 +285,36 @@ impl SetupContext {
         let z: [f32; 3] = std::array::from_fn(|c| {
             (k[0][c] * v[0][2] + k[1][c] * v[1][2] + k[2][c] * v[2][2]) as f32
         });
-        Some(TriPlanes {
+        let planes = TriPlanes {
             origin: [ox as f32, oy as f32],
             k1: k[1].map(|x| x as f32),
             k2: k[2].map(|x| x as f32),
             ks,
             z,
             facing: if det > 0.0 { 1.0 } else { -1.0 },
-        })
+        };
+        // A vertex at a subnormal w (found by fuzzing) makes det tiny and
+        // the planes' gradients huge: beyond f32, or finite but
+        // overflowing when evaluated a few pixels from the origin, so
+        // depth, barycentrics and 1/w would be inf or inf/inf = NaN at its
+        // pixels. Such a triangle has no usable perspective: drop the
+        // screen triangles it pushed and count it as degenerate. The
+        // bound, on any pixel of the image, leaves f32 room for the
+        // products shading forms; ordinary planes stay near 1/near
+        // (1e8 at near = 1e-8).
+        let (span_x, span_y) = (w + 1.0, h + 1.0);
+        let bounded = [planes.k1, planes.k2, planes.ks, planes.z].iter().all(|p| {
+            let m =
+                (p[0] as f64).abs() * span_x + (p[1] as f64).abs() * span_y + (p[2] as f64).abs();
+            m <= MAX_PLANE_VALUE
+        });
+        if !bounded {
+            out.truncate(before);
+            counts.skipped_degenerate += 1;
+            return None;
+        }
+        counts.drawn += 1;
+        Some(planes)
     }
 
     /// Edge functions and pixel bounds of one snapped screen triangle, or

@@ -366,3 +366,100 @@ fn zero_area_triangles_are_skipped() {
     assert_eq!(counts.skipped_degenerate, 1);
     assert!(out.is_empty());
 }
+
+/// Found by the `raster` fuzz target (docs/ROBUSTNESS.md): vertices with
+/// subnormal w clip to a vertex at w = 0 and to others millions of pixels
+/// past the guard band, whose snapped coordinates overflowed the i64 edge
+/// setup (a panic with overflow checks, wrapped coverage without). Now
+/// the triangle is skipped as invalid.
+#[test]
+fn subnormal_w_clipped_past_the_guard_band_is_skipped() {
+    let (w, h) = (32, 32);
+    let ctx = SetupContext {
+        width: w,
+        height: h,
+        guard: GuardBand::for_image(w, h),
+    };
+    let bits: [[u32; 4]; 3] = [
+        [0x10101010, 0x10101010, 0x10101010, 0x10101010],
+        [0xbf10, 0x3f00, 0x80000000, 0x8000003f],
+        [0x80000037, 0xbf, 0x8000003f, 0x33bf],
+    ];
+    let v = bits.map(|p| p.map(f32::from_bits));
+    let mut out = Vec::new();
+    let mut counts = SetupCounts::default();
+    let planes = ctx.setup(0, v, Cull::Front, &mut out, &mut counts);
+    assert!(planes.is_none(), "{planes:?}");
+    assert_eq!(counts.skipped_invalid, 1, "{counts:?}");
+    assert!(out.is_empty());
+}
+
+/// Found by the `raster` fuzz target: a vertex at a subnormal w gave
+/// plane gradients beyond f32 (1/w = inf at its pixels, NaN barycentrics).
+/// Such a triangle is now skipped as degenerate, its screen triangles
+/// withdrawn.
+#[test]
+fn planes_beyond_f32_are_skipped() {
+    let (w, h) = (101, 101);
+    let ctx = SetupContext {
+        width: w,
+        height: h,
+        guard: GuardBand::for_image(w, h),
+    };
+    let bits: [[u32; 4]; 3] = [
+        [0x29bee8a2, 0x3f46e2, 0x3f0000, 0x263f8000],
+        [0xbf591689, 0x3e9a5ccf, 0x3f000000, 0x3f800000],
+        [0x1, 0x0, 0x8000, 0x10000],
+    ];
+    let v = bits.map(|p| p.map(f32::from_bits));
+    let mut out = Vec::new();
+    let mut counts = SetupCounts::default();
+    let planes = ctx.setup(3, v, Cull::None, &mut out, &mut counts);
+    assert!(planes.is_none(), "{planes:?}");
+    assert_eq!(counts.skipped_degenerate, 1, "{counts:?}");
+    assert!(out.is_empty());
+}
+
+/// Found by the `raster` fuzz target: planes finite in f32 but so steep
+/// (a vertex at w ≈ 1e-43) that depth evaluated a few dozen pixels from
+/// their origin overflowed to inf. Every plane a triangle is drawn with
+/// must now evaluate finite at every pixel of the image.
+#[test]
+fn planes_evaluate_finite_over_the_whole_image() {
+    use specula_raster::setup::TriPlanes;
+    let (w, h) = (101, 101);
+    let ctx = SetupContext {
+        width: w,
+        height: h,
+        guard: GuardBand::for_image(w, h),
+    };
+    let tris: [[[u32; 4]; 3]; 2] = [
+        [
+            [0x49010000, 0x0, 0x0, 0x80],
+            [0x0, 0x10, 0x2, 0x0],
+            [0x80, 0x0, 0x3f000000, 0x3f800000],
+        ],
+        [
+            [0xbee8a212, 0x3f46e229, 0x3f000000, 0x3f800000],
+            [0xbf210000, 0x3f000000, 0x89000000, 0x9ebf5916],
+            [0x5ccf00, 0x80, 0xbf611689, 0x8000ff],
+        ],
+    ];
+    for (id, bits) in tris.iter().enumerate() {
+        let v = bits.map(|p| p.map(f32::from_bits));
+        let mut out = Vec::new();
+        let mut counts = SetupCounts::default();
+        let Some(p) = ctx.setup(id as u32, v, Cull::None, &mut out, &mut counts) else {
+            continue;
+        };
+        for y in 0..h {
+            for x in 0..w {
+                let (px, py) = (x as f32 + 0.5, y as f32 + 0.5);
+                for plane in [&p.k1, &p.k2, &p.ks, &p.z] {
+                    let e = TriPlanes::eval(plane, p.origin, px, py);
+                    assert!(e.is_finite(), "triangle {id} at ({x}, {y}): {e} from {p:?}");
+                }
+            }
+        }
+    }
+}
