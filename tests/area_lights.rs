@@ -319,30 +319,42 @@ fn non_ggx_microfacet_materials_refuse_polygon_lights() {
     );
 }
 
+/// fixtures/scenes/`name` (which says `area_lights = "ltc"`) with its
+/// area lights integrated by `method` ("ltc" or "reference").
+fn load_fixture(name: &str, method: &str) -> specula::scene::LoadedScene {
+    let dir = common::fixtures().join("scenes");
+    let text = std::fs::read_to_string(dir.join(name)).unwrap();
+    assert!(text.contains("area_lights = \"ltc\""), "{name}");
+    let text = text.replace(
+        "area_lights = \"ltc\"",
+        &format!("area_lights = \"{method}\""),
+    );
+    let read = |p: &std::path::Path| std::fs::read(dir.join(p));
+    specula::scene::load_scene_str(std::path::Path::new(name), &text, &read)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// `scene` at 192×108 on `path`: each pixel's colour and id.
+fn shoot(scene: &specula::scene::LoadedScene, path: ShadePath) -> (Vec<[f32; 3]>, Vec<u32>) {
+    let mut set = RenderSettings::from_scene(scene);
+    set.width = 192;
+    set.height = 108;
+    set.ssaa = 1;
+    set.path = path;
+    set.buffers.id = true;
+    let r = render_scene(scene, &set, 0.0).unwrap();
+    let b = &r.frame.buffers;
+    let c: Vec<[f32; 3]> = (0..b.id.len()).map(|i| b.color.get(i)).collect();
+    (c, b.id.clone())
+}
+
 #[test]
 fn the_area_lights_fixture_renders_by_ltc_close_to_its_reference() {
-    let dir = common::fixtures().join("scenes");
-    let text = std::fs::read_to_string(dir.join("area-lights.toml")).unwrap();
-    let read = |p: &std::path::Path| std::fs::read(dir.join(p));
-    let load = |t: &str| {
-        specula::scene::load_scene_str(std::path::Path::new("area-lights.toml"), t, &read)
-            .unwrap_or_else(|e| panic!("{e}"))
-    };
-    let shoot = |s: &specula::scene::LoadedScene| {
-        let mut set = RenderSettings::from_scene(s);
-        set.width = 192;
-        set.height = 108;
-        set.ssaa = 1;
-        set.buffers.id = true;
-        let r = render_scene(s, &set, 0.0).unwrap();
-        let b = &r.frame.buffers;
-        let c: Vec<[f32; 3]> = (0..b.id.len()).map(|i| b.color.get(i)).collect();
-        (c, b.id.clone())
-    };
-    let (ltc, id) = shoot(&load(&text));
-    let (reference, _) = shoot(&load(
-        &text.replace("area_lights = \"ltc\"", "area_lights = \"reference\""),
-    ));
+    let (ltc, id) = shoot(&load_fixture("area-lights.toml", "ltc"), ShadePath::Simd);
+    let (reference, _) = shoot(
+        &load_fixture("area-lights.toml", "reference"),
+        ShadePath::Simd,
+    );
     // Per pixel: |LTC − reference| relative to the reference's brightest
     // channel (the lights themselves are unlit in both, so equal).
     let mut errs = Vec::new();
@@ -498,30 +510,11 @@ fn eval_answers_light_lines_on_disney_materials() {
 
 #[test]
 fn the_disney_area_lights_fixture_renders_by_ltc_close_to_its_reference() {
-    let dir = common::fixtures().join("scenes");
-    let text = std::fs::read_to_string(dir.join("disney-area-lights.toml")).unwrap();
-    let read = |p: &std::path::Path| std::fs::read(dir.join(p));
-    let load = |t: &str| {
-        specula::scene::load_scene_str(std::path::Path::new("disney-area-lights.toml"), t, &read)
-            .unwrap_or_else(|e| panic!("{e}"))
-    };
-    let shoot = |s: &specula::scene::LoadedScene, path: ShadePath| {
-        let mut set = RenderSettings::from_scene(s);
-        set.width = 192;
-        set.height = 108;
-        set.ssaa = 1;
-        set.path = path;
-        set.buffers.id = true;
-        let r = render_scene(s, &set, 0.0).unwrap();
-        let b = &r.frame.buffers;
-        let c: Vec<[f32; 3]> = (0..b.id.len()).map(|i| b.color.get(i)).collect();
-        (c, b.id.clone())
-    };
-    let scene = load(&text);
+    let scene = load_fixture("disney-area-lights.toml", "ltc");
     let (ltc, id) = shoot(&scene, ShadePath::Simd);
     let (scalar, _) = shoot(&scene, ShadePath::Scalar);
     let (reference, _) = shoot(
-        &load(&text.replace("area_lights = \"ltc\"", "area_lights = \"reference\"")),
+        &load_fixture("disney-area-lights.toml", "reference"),
         ShadePath::Simd,
     );
     let mut errs = Vec::new();

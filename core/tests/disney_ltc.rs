@@ -13,7 +13,7 @@ mod common;
 use common::{poly, polygons, quantile, v};
 use specula_core::ltc::reference::{integrate_polygon, Tolerance};
 use specula_core::models::disney::{diffuse_albedo_coefficients, Disney, DisneyParams, Lobe};
-use specula_core::{f32x8, Brdf, Real, V3};
+use specula_core::{Brdf, Real, V3};
 
 const VIEWS: [f64; 8] = [0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0];
 /// View azimuths from the tangent, cycled over the views: along the
@@ -433,39 +433,7 @@ fn f32x8_matches_f64_through_the_disney_ltc() {
     ] {
         for kc in [false, true] {
             let m = Disney::new_without_table(p.clone(), kc);
-            for deg in [0.0f64, 20.0, 50.0, 75.0, 88.0] {
-                let t = deg.to_radians();
-                for phi in [0.0f64, 1.0, 2.5] {
-                    let wo = v(t.sin() * phi.cos(), t.sin() * phi.sin(), t.cos());
-                    for (_, q) in polygons(t) {
-                        let want = m.polygon_local(&m.prepare(wo), &poly(&q, false));
-                        let s = |x: f64| f32x8::splat(x as f32);
-                        let w8 = V3::new(s(wo.x), s(wo.y), s(wo.z));
-                        let q8: Vec<_> =
-                            q.iter().map(|p| V3::new(s(p.x), s(p.y), s(p.z))).collect();
-                        let got = m.polygon_local(&m.prepare(w8), &poly(&q8, false));
-                        let one = m.polygon_local(
-                            &m.prepare(V3::new(wo.x as f32, wo.y as f32, wo.z as f32)),
-                            &poly(
-                                &q.iter()
-                                    .map(|p| V3::new(p.x as f32, p.y as f32, p.z as f32))
-                                    .collect::<Vec<_>>(),
-                                false,
-                            ),
-                        );
-                        for (a, b, c) in [
-                            (got.x, want.x, one.x),
-                            (got.y, want.y, one.y),
-                            (got.z, want.z, one.z),
-                        ] {
-                            for k in 0..8 {
-                                worst = worst.max((a.lane(k) - b).abs());
-                            }
-                            worst = worst.max((c as f64 - b).abs());
-                        }
-                    }
-                }
-            }
+            worst = worst.max(common::worst_lanes_against_f64(&m));
         }
     }
     eprintln!("f32x8 and f32 vs f64 through the Disney LTC: worst |Δ| = {worst:e}");

@@ -13,7 +13,7 @@ use specula_core::ltc::ggx::{decode, encode, table, Cell, N};
 use specula_core::ltc::reference::{integrate_polygon, Tolerance};
 use specula_core::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
 use specula_core::models::MetallicRoughness;
-use specula_core::{f32x8, Brdf, Real, V3};
+use specula_core::{Brdf, V3};
 
 fn ggx(alpha: f32, f0: [f32; 3]) -> Microfacet {
     Microfacet::new_without_table(
@@ -207,26 +207,9 @@ const P90_BOUND: f64 = 0.015;
 const MAX_BOUND: f64 = 0.09;
 
 #[test]
-fn f32x8_matches_f64_through_the_ltc() {
-    let m = ggx(0.3, [0.9, 0.5, 0.1]);
-    let mut worst = 0.0f64;
-    for deg in [0.0f64, 20.0, 50.0, 75.0, 88.0] {
-        let t = deg.to_radians();
-        for phi in [0.0f64, 1.0, 2.5] {
-            let wo = v(t.sin() * phi.cos(), t.sin() * phi.sin(), t.cos());
-            for (_, q) in polygons(t) {
-                let want = m.polygon_local(&m.prepare(wo), &poly(&q, false));
-                let s = |x: f64| f32x8::splat(x as f32);
-                let w8 = V3::new(s(wo.x), s(wo.y), s(wo.z));
-                let q8: Vec<_> = q.iter().map(|p| V3::new(s(p.x), s(p.y), s(p.z))).collect();
-                let got = m.polygon_local(&m.prepare(w8), &poly(&q8, false));
-                for (a, b) in [(got.x, want.x), (got.y, want.y), (got.z, want.z)] {
-                    worst = worst.max((a.lane(0) - b).abs());
-                }
-            }
-        }
-    }
-    eprintln!("f32x8 vs f64 through the GGX LTC: worst |Δ| = {worst:e}");
+fn f32x8_and_f32_match_f64_through_the_ltc() {
+    let worst = common::worst_lanes_against_f64(&ggx(0.3, [0.9, 0.5, 0.1]));
+    eprintln!("f32x8 and f32 vs f64 through the GGX LTC: worst |Δ| = {worst:e}");
     assert!(worst < 2e-5, "{worst:e}");
 }
 

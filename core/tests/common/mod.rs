@@ -5,7 +5,7 @@
 #![allow(dead_code)]
 
 use specula_core::light::{PolygonLocal, MAX_POLYGON_VERTICES};
-use specula_core::{Real, V3};
+use specula_core::{f32x8, Brdf, Real, V3};
 
 pub fn v(x: f64, y: f64, z: f64) -> V3<f64> {
     V3::new(x, y, z)
@@ -104,4 +104,41 @@ pub fn polygons(theta: f64) -> Vec<(&'static str, Vec<V3<f64>>)> {
 
 pub fn quantile(sorted: &[f64], q: f64) -> f64 {
     sorted[((sorted.len() - 1) as f64 * q).round() as usize]
+}
+
+/// The largest |f32x8 lane − f64| and |f32 − f64| of `m`'s polygon
+/// integral over views at 0–88° (three azimuths) and [`polygons`] of each:
+/// the lane types against the exact one, on the same inputs.
+pub fn worst_lanes_against_f64<B: Brdf>(m: &B) -> f64 {
+    let mut worst = 0.0f64;
+    for deg in [0.0f64, 20.0, 50.0, 75.0, 88.0] {
+        let t = deg.to_radians();
+        for phi in [0.0f64, 1.0, 2.5] {
+            let wo = v(t.sin() * phi.cos(), t.sin() * phi.sin(), t.cos());
+            for (_, q) in polygons(t) {
+                let want = m.polygon_local(&m.prepare(wo), &poly(&q, false));
+                let s8 = |x: f64| f32x8::splat(x as f32);
+                let w8 = V3::new(s8(wo.x), s8(wo.y), s8(wo.z));
+                let q8: Vec<_> = q
+                    .iter()
+                    .map(|p| V3::new(s8(p.x), s8(p.y), s8(p.z)))
+                    .collect();
+                let got = m.polygon_local(&m.prepare(w8), &poly(&q8, false));
+                let s1 = |p: V3<f64>| V3::new(p.x as f32, p.y as f32, p.z as f32);
+                let q1: Vec<_> = q.iter().map(|&p| s1(p)).collect();
+                let one = m.polygon_local(&m.prepare(s1(wo)), &poly(&q1, false));
+                for (a, b, c) in [
+                    (got.x, want.x, one.x),
+                    (got.y, want.y, one.y),
+                    (got.z, want.z, one.z),
+                ] {
+                    for k in 0..8 {
+                        worst = worst.max((a.lane(k) - b).abs());
+                    }
+                    worst = worst.max((c as f64 - b).abs());
+                }
+            }
+        }
+    }
+    worst
 }
