@@ -431,40 +431,61 @@ pub fn dilate(mask: &[bool], w: usize, h: usize, width: f32, antialias: bool) ->
         return distance(mask, w, h).into_par_iter().map(cover).collect();
     }
     let mut out = vec![0.0f32; w * h];
-    // Past r: "no mark within the window"; rows of the column pass are
-    // padded with it by r on both sides so the row pass needs no bounds.
+    // Past r: "no mark within the window". The squared column distances
+    // are padded with it by r on both sides so the row pass needs no
+    // bounds; the padding is written once per task, and every other entry
+    // of the scratch rows is assigned before it is read (no per-row fill).
     let far = r as u32 + 1;
+    let far2 = far * far;
     let row_has: Vec<bool> = mask
         .par_chunks(w.max(1))
         .map(|m| m.contains(&true))
         .collect();
     out.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-        || (vec![0u32; w + 2 * r], vec![0u32; w]),
-        |(col, d2), (y, row)| {
+        || (vec![0u32; w], vec![far2; w + 2 * r], vec![0u32; w]),
+        |(col, sq, d2), (y, row)| {
             let rows = y.saturating_sub(r)..(y + r + 1).min(h);
             if !row_has[rows.clone()].contains(&true) {
                 return; // no ink within r rows
             }
-            col.fill(far);
-            for yy in rows {
+            // dy where marked, far elsewhere, without a branch.
+            let first = rows.start;
+            let near = |on: bool, dy: u32| far - u32::from(on) * (far - dy);
+            let dy = first.abs_diff(y) as u32;
+            for (c, &on) in col.iter_mut().zip(&mask[first * w..(first + 1) * w]) {
+                *c = near(on, dy);
+            }
+            for yy in first + 1..rows.end {
                 let dy = yy.abs_diff(y) as u32;
-                let m = &mask[yy * w..(yy + 1) * w];
-                for (c, &on) in col[r..r + w].iter_mut().zip(m) {
-                    *c = (*c).min(if on { dy } else { far });
+                for (c, &on) in col.iter_mut().zip(&mask[yy * w..(yy + 1) * w]) {
+                    *c = (*c).min(near(on, dy));
                 }
             }
-            for c in col.iter_mut() {
-                *c *= *c;
+            for (s, &c) in sq[r..r + w].iter_mut().zip(col.iter()) {
+                *s = c * c;
             }
-            d2.fill(u32::MAX);
             for k in 0..=2 * r {
                 let dx2 = (k.abs_diff(r) * k.abs_diff(r)) as u32;
-                for (d, &c) in d2.iter_mut().zip(&col[k..k + w]) {
-                    *d = (*d).min(dx2 + c);
+                let s = &sq[k..k + w];
+                if k == 0 {
+                    for (d, &c) in d2.iter_mut().zip(s) {
+                        *d = dx2 + c;
+                    }
+                } else {
+                    for (d, &c) in d2.iter_mut().zip(s) {
+                        *d = (*d).min(dx2 + c);
+                    }
                 }
             }
-            for (o, &d) in row.iter_mut().zip(d2.iter()) {
-                *o = cover((d as f32).sqrt());
+            // d² ≥ (r + 1)² is past half the width: no ink, and `out` is
+            // already 0 there. Blocks of 8 with no nearer mark are skipped.
+            for (o, d) in row.chunks_mut(8).zip(d2.chunks(8)) {
+                if d.iter().fold(u32::MAX, |a, &b| a.min(b)) >= far2 {
+                    continue;
+                }
+                for (o, &d) in o.iter_mut().zip(d) {
+                    *o = cover((d as f32).sqrt());
+                }
             }
         },
     );
