@@ -101,13 +101,22 @@ pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
 /// number (exact below 2²⁴ materials), −1 where nothing is hit or the id
 /// has no material.
 pub fn material_labels(ids: &[u32], id_material: &[u32]) -> Vec<f32> {
-    ids.par_iter()
-        .with_min_len(4096)
-        .map(|&id| match id_material.get(id as usize) {
-            Some(&m) if id != MISS && m != u32::MAX => m as f32,
-            _ => -1.0,
-        })
-        .collect()
+    // Chunks with a plain loop, as `inverse_depth`: a per-element
+    // parallel map and collect cost ~20 instructions a sample.
+    let mut labels = vec![-1.0f32; ids.len()];
+    labels
+        .par_chunks_mut(4096)
+        .zip(ids.par_chunks(4096))
+        .for_each(|(labels, ids)| {
+            for (l, &id) in labels.iter_mut().zip(ids) {
+                if let Some(&m) = id_material.get(id as usize) {
+                    if id != MISS && m != u32::MAX {
+                        *l = m as f32;
+                    }
+                }
+            }
+        });
+    labels
 }
 
 /// Marks edge samples (1) in a `width × height` mask; see the module docs.
