@@ -152,21 +152,18 @@ pub fn detect_edges(
                     edge |= measure_lanes::<f32x8>(input, *s, rows, x0).gt(*t).bits();
                 }
                 for (l, o) in row[x0..x0 + 8].iter_mut().enumerate() {
-                    *o = edge & (1 << l) != 0;
+                    // `keep` only where there is an edge (most samples have none).
+                    *o = edge & (1 << l) != 0 && keep(y * w + x0 + l);
                 }
                 x = x0 + 8;
             }
+            let scalar = |x: usize| scalar(x) && keep(y * w + x);
             if interior >= 8 {
                 row[0] = scalar(0);
                 row[w - 1] = scalar(w - 1);
             } else {
                 for (x, o) in row.iter_mut().enumerate() {
                     *o = scalar(x);
-                }
-            }
-            for (x, o) in row.iter_mut().enumerate() {
-                if *o && !keep(y * w + x) {
-                    *o = false;
                 }
             }
         });
@@ -179,30 +176,40 @@ pub fn detect_edges(
 /// same operations in the same order as [`measure_at`].
 #[inline(always)]
 fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usize) -> R {
-    // f at row r (0 above, 2 below), column offset c − 1. One slice of
-    // LANES + 2 per row read, so the loads' bounds checks fold away.
-    let at = |f: &[f32], r: usize, c: usize| {
-        let s = &f[rows[r] + x - 1..rows[r] + x + 1 + R::LANES];
-        R::load(&s[c..])
+    // The 3×3 neighbourhood of f, [row][column offset + 1] (row 0 above,
+    // 2 below): one slice of LANES + 2 per row, each of the nine loads
+    // once, so the bounds checks are three per field.
+    let around = |f: &[f32]| {
+        let mut n = [[R::ZERO; 3]; 3];
+        for (r, nr) in n.iter_mut().enumerate() {
+            let s = &f[rows[r] + x - 1..rows[r] + x + 1 + R::LANES];
+            for (c, v) in nr.iter_mut().enumerate() {
+                *v = R::load(&s[c..]);
+            }
+        }
+        n
     };
     let wk = W.map(|v| R::splat(v as f64));
     let gradient = |f: &[f32]| {
+        let n = around(f);
+        let at = |r: usize, c: usize| n[r][c];
         let (mut gx, mut gy) = (R::ZERO, R::ZERO);
         for (k, &w) in wk.iter().enumerate() {
-            gx += w * (at(f, k, 2) - at(f, k, 0));
-            gy += w * (at(f, 2, k) - at(f, 0, k));
+            gx += w * (at(k, 2) - at(k, 0));
+            gy += w * (at(2, k) - at(0, k));
         }
         (gx, gy)
     };
     match s {
         Source::Depth => {
-            let q = input.inv_depth;
+            let n = around(input.inv_depth);
+            let at = |r: usize, c: usize| n[r][c];
             let two = R::splat(2.0);
             let (mut dxx, mut dyy, mut qmax) = (R::ZERO, R::ZERO, R::ZERO);
             for (k, &w) in wk.iter().enumerate() {
-                dxx += w * (at(q, k, 2) + at(q, k, 0) - two * at(q, k, 1));
-                dyy += w * (at(q, 2, k) + at(q, 0, k) - two * at(q, 1, k));
-                qmax = qmax.max(at(q, k, 0)).max(at(q, k, 1)).max(at(q, k, 2));
+                dxx += w * (at(k, 2) + at(k, 0) - two * at(k, 1));
+                dyy += w * (at(2, k) + at(0, k) - two * at(1, k));
+                qmax = qmax.max(at(k, 0)).max(at(k, 1)).max(at(k, 2));
             }
             // Lanes with q_max = 0 divide 0 by 0; the select drops them.
             R::select(qmax.gt(R::ZERO), dxx.abs().max(dyy.abs()) / qmax, R::ZERO)
@@ -216,13 +223,13 @@ fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usi
             g2.sqrt()
         }
         Source::Id => {
-            let mat = input.material;
-            let m = at(mat, 1, 1);
+            let n = around(input.material);
+            let m = n[1][1];
             let mut f = R::ZERO;
             for r in 0..3 {
                 for c in 0..3 {
                     let weight = R::splat(if r == 1 || c == 1 { 2.0 } else { 1.0 });
-                    let o = at(mat, r, c);
+                    let o = n[r][c];
                     f += R::select(o.lt(m) | o.gt(m), weight, R::ZERO);
                 }
             }
