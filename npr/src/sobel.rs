@@ -127,6 +127,21 @@ pub fn material_labels(ids: &[u32], id_material: &[u32]) -> Vec<f32> {
     labels
 }
 
+/// Lane bits (lane l = bit l) of an 8-lane mask as the 8 booleans.
+const LANE_BOOLS: [[bool; 8]; 256] = {
+    let mut t = [[false; 8]; 256];
+    let mut m = 0;
+    while m < 256 {
+        let mut l = 0;
+        while l < 8 {
+            t[m][l] = m & (1 << l) != 0;
+            l += 1;
+        }
+        m += 1;
+    }
+    t
+};
+
 /// Marks edge samples (1) in a `width × height` mask; see the module docs.
 /// `keep(i)` says whether sample i may carry a line (material selection).
 ///
@@ -159,9 +174,14 @@ pub fn detect_edges(
                 for (s, t) in &thresholds {
                     edge |= measure_lanes::<f32x8>(input, *s, rows, x0).gt(*t).bits();
                 }
-                for (l, o) in row[x0..x0 + 8].iter_mut().enumerate() {
-                    // `keep` only where there is an edge (most samples have none).
-                    *o = edge & (1 << l) != 0 && keep(y * w + x0 + l);
+                let out = &mut row[x0..x0 + 8];
+                out.copy_from_slice(&LANE_BOOLS[edge as usize]);
+                // `keep` only where there is an edge (most samples have none).
+                let mut set = edge;
+                while set != 0 {
+                    let l = set.trailing_zeros() as usize;
+                    out[l] = keep(y * w + x0 + l);
+                    set &= set - 1;
                 }
                 x = x0 + 8;
             }
