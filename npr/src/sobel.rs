@@ -254,10 +254,9 @@ fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usi
             let n = around(input.material);
             let m = n[1][1];
             let mut f = R::ZERO;
-            for r in 0..3 {
-                for c in 0..3 {
+            for (r, nr) in n.iter().enumerate() {
+                for (c, &o) in nr.iter().enumerate() {
                     let weight = R::splat(if r == 1 || c == 1 { 2.0 } else { 1.0 });
-                    let o = n[r][c];
                     f += R::select(o.lt(m) | o.gt(m), weight, R::ZERO);
                 }
             }
