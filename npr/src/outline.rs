@@ -104,19 +104,22 @@ pub fn composite(img: &mut HdrImage, frame: &FrameBuffers, coverage: &[f32], col
         .for_each_init(Vec::new, |acc, (y, ((r, g), b))| {
             // Row by row over the pixel's samples: the same sums in the
             // same order as pixel by pixel, without the per-pixel slicing.
-            acc.clear();
-            acc.resize(r.len(), 0.0f32);
-            for sy in 0..ssaa {
-                let row = (y * ssaa + sy) * sw;
-                let samples = &coverage[row..row + r.len() * ssaa];
-                if ssaa == 1 {
-                    acc.copy_from_slice(samples); // 0 + c = c
-                    continue;
+            // At ssaa 1 the sum is the sample itself (0 + c = c): read the
+            // coverage row in place, no scratch row to clear and copy.
+            let acc: &[f32] = if ssaa == 1 {
+                &coverage[y * sw..y * sw + r.len()]
+            } else {
+                acc.clear();
+                acc.resize(r.len(), 0.0f32);
+                for sy in 0..ssaa {
+                    let row = (y * ssaa + sy) * sw;
+                    let samples = &coverage[row..row + r.len() * ssaa];
+                    for (a, c) in acc.iter_mut().zip(samples.chunks_exact(ssaa)) {
+                        *a += c.iter().sum::<f32>();
+                    }
                 }
-                for (a, c) in acc.iter_mut().zip(samples.chunks_exact(ssaa)) {
-                    *a += c.iter().sum::<f32>();
-                }
-            }
+                acc
+            };
             // Where a = 0 the blend gives c·1 + colour·0 = c: no branch.
             for (((r, g), b), &a) in r
                 .iter_mut()

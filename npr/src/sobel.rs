@@ -101,14 +101,46 @@ pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
 /// number (exact below 2²⁴ materials), −1 where nothing is hit or the id
 /// has no material.
 pub fn material_labels(ids: &[u32], id_material: &[u32]) -> Vec<f32> {
-    ids.par_iter()
-        .with_min_len(4096)
-        .map(|&id| match id_material.get(id as usize) {
-            Some(&m) if id != MISS && m != u32::MAX => m as f32,
-            _ => -1.0,
+    // The label of each id once (ids are far fewer than samples); then a
+    // plain loop over chunks, as `inverse_depth`: a table read a sample.
+    // MISS (u32::MAX) is past the table's end and reads −1.
+    let of_id: Vec<f32> = id_material
+        .iter()
+        .enumerate()
+        .map(|(id, &m)| {
+            if id as u32 != MISS && m != u32::MAX {
+                m as f32
+            } else {
+                -1.0
+            }
         })
-        .collect()
+        .collect();
+    let mut labels = vec![-1.0f32; ids.len()];
+    labels
+        .par_chunks_mut(4096)
+        .zip(ids.par_chunks(4096))
+        .for_each(|(labels, ids)| {
+            for (l, &id) in labels.iter_mut().zip(ids) {
+                *l = of_id.get(id as usize).copied().unwrap_or(-1.0);
+            }
+        });
+    labels
 }
+
+/// Lane bits (lane l = bit l) of an 8-lane mask as the 8 booleans.
+const LANE_BOOLS: [[bool; 8]; 256] = {
+    let mut t = [[false; 8]; 256];
+    let mut m = 0;
+    while m < 256 {
+        let mut l = 0;
+        while l < 8 {
+            t[m][l] = m & (1 << l) != 0;
+            l += 1;
+        }
+        m += 1;
+    }
+    t
+};
 
 /// Marks edge samples (1) in a `width × height` mask; see the module docs.
 /// `keep(i)` says whether sample i may carry a line (material selection).
@@ -142,22 +174,24 @@ pub fn detect_edges(
                 for (s, t) in &thresholds {
                     edge |= measure_lanes::<f32x8>(input, *s, rows, x0).gt(*t).bits();
                 }
-                for (l, o) in row[x0..x0 + 8].iter_mut().enumerate() {
-                    *o = edge & (1 << l) != 0;
+                let out = &mut row[x0..x0 + 8];
+                out.copy_from_slice(&LANE_BOOLS[edge as usize]);
+                // `keep` only where there is an edge (most samples have none).
+                let mut set = edge;
+                while set != 0 {
+                    let l = set.trailing_zeros() as usize;
+                    out[l] = keep(y * w + x0 + l);
+                    set &= set - 1;
                 }
                 x = x0 + 8;
             }
+            let scalar = |x: usize| scalar(x) && keep(y * w + x);
             if interior >= 8 {
                 row[0] = scalar(0);
                 row[w - 1] = scalar(w - 1);
             } else {
                 for (x, o) in row.iter_mut().enumerate() {
                     *o = scalar(x);
-                }
-            }
-            for (x, o) in row.iter_mut().enumerate() {
-                if *o && !keep(y * w + x) {
-                    *o = false;
                 }
             }
         });
@@ -170,30 +204,40 @@ pub fn detect_edges(
 /// same operations in the same order as [`measure_at`].
 #[inline(always)]
 fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usize) -> R {
-    // f at row r (0 above, 2 below), column offset c − 1. One slice of
-    // LANES + 2 per row read, so the loads' bounds checks fold away.
-    let at = |f: &[f32], r: usize, c: usize| {
-        let s = &f[rows[r] + x - 1..rows[r] + x + 1 + R::LANES];
-        R::load(&s[c..])
+    // The 3×3 neighbourhood of f, [row][column offset + 1] (row 0 above,
+    // 2 below): one slice of LANES + 2 per row, each of the nine loads
+    // once, so the bounds checks are three per field.
+    let around = |f: &[f32]| {
+        let mut n = [[R::ZERO; 3]; 3];
+        for (r, nr) in n.iter_mut().enumerate() {
+            let s = &f[rows[r] + x - 1..rows[r] + x + 1 + R::LANES];
+            for (c, v) in nr.iter_mut().enumerate() {
+                *v = R::load(&s[c..]);
+            }
+        }
+        n
     };
     let wk = W.map(|v| R::splat(v as f64));
     let gradient = |f: &[f32]| {
+        let n = around(f);
+        let at = |r: usize, c: usize| n[r][c];
         let (mut gx, mut gy) = (R::ZERO, R::ZERO);
         for (k, &w) in wk.iter().enumerate() {
-            gx += w * (at(f, k, 2) - at(f, k, 0));
-            gy += w * (at(f, 2, k) - at(f, 0, k));
+            gx += w * (at(k, 2) - at(k, 0));
+            gy += w * (at(2, k) - at(0, k));
         }
         (gx, gy)
     };
     match s {
         Source::Depth => {
-            let q = input.inv_depth;
+            let n = around(input.inv_depth);
+            let at = |r: usize, c: usize| n[r][c];
             let two = R::splat(2.0);
             let (mut dxx, mut dyy, mut qmax) = (R::ZERO, R::ZERO, R::ZERO);
             for (k, &w) in wk.iter().enumerate() {
-                dxx += w * (at(q, k, 2) + at(q, k, 0) - two * at(q, k, 1));
-                dyy += w * (at(q, 2, k) + at(q, 0, k) - two * at(q, 1, k));
-                qmax = qmax.max(at(q, k, 0)).max(at(q, k, 1)).max(at(q, k, 2));
+                dxx += w * (at(k, 2) + at(k, 0) - two * at(k, 1));
+                dyy += w * (at(2, k) + at(0, k) - two * at(1, k));
+                qmax = qmax.max(at(k, 0)).max(at(k, 1)).max(at(k, 2));
             }
             // Lanes with q_max = 0 divide 0 by 0; the select drops them.
             R::select(qmax.gt(R::ZERO), dxx.abs().max(dyy.abs()) / qmax, R::ZERO)
@@ -207,13 +251,12 @@ fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usi
             g2.sqrt()
         }
         Source::Id => {
-            let mat = input.material;
-            let m = at(mat, 1, 1);
+            let n = around(input.material);
+            let m = n[1][1];
             let mut f = R::ZERO;
-            for r in 0..3 {
-                for c in 0..3 {
+            for (r, nr) in n.iter().enumerate() {
+                for (c, &o) in nr.iter().enumerate() {
                     let weight = R::splat(if r == 1 || c == 1 { 2.0 } else { 1.0 });
-                    let o = at(mat, r, c);
                     f += R::select(o.lt(m) | o.gt(m), weight, R::ZERO);
                 }
             }
@@ -431,40 +474,61 @@ pub fn dilate(mask: &[bool], w: usize, h: usize, width: f32, antialias: bool) ->
         return distance(mask, w, h).into_par_iter().map(cover).collect();
     }
     let mut out = vec![0.0f32; w * h];
-    // Past r: "no mark within the window"; rows of the column pass are
-    // padded with it by r on both sides so the row pass needs no bounds.
+    // Past r: "no mark within the window". The squared column distances
+    // are padded with it by r on both sides so the row pass needs no
+    // bounds; the padding is written once per task, and every other entry
+    // of the scratch rows is assigned before it is read (no per-row fill).
     let far = r as u32 + 1;
+    let far2 = far * far;
     let row_has: Vec<bool> = mask
         .par_chunks(w.max(1))
         .map(|m| m.contains(&true))
         .collect();
     out.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-        || (vec![0u32; w + 2 * r], vec![0u32; w]),
-        |(col, d2), (y, row)| {
+        || (vec![0u32; w], vec![far2; w + 2 * r], vec![0u32; w]),
+        |(col, sq, d2), (y, row)| {
             let rows = y.saturating_sub(r)..(y + r + 1).min(h);
             if !row_has[rows.clone()].contains(&true) {
                 return; // no ink within r rows
             }
-            col.fill(far);
-            for yy in rows {
+            // dy where marked, far elsewhere, without a branch.
+            let first = rows.start;
+            let near = |on: bool, dy: u32| far - u32::from(on) * (far - dy);
+            let dy = first.abs_diff(y) as u32;
+            for (c, &on) in col.iter_mut().zip(&mask[first * w..(first + 1) * w]) {
+                *c = near(on, dy);
+            }
+            for yy in first + 1..rows.end {
                 let dy = yy.abs_diff(y) as u32;
-                let m = &mask[yy * w..(yy + 1) * w];
-                for (c, &on) in col[r..r + w].iter_mut().zip(m) {
-                    *c = (*c).min(if on { dy } else { far });
+                for (c, &on) in col.iter_mut().zip(&mask[yy * w..(yy + 1) * w]) {
+                    *c = (*c).min(near(on, dy));
                 }
             }
-            for c in col.iter_mut() {
-                *c *= *c;
+            for (s, &c) in sq[r..r + w].iter_mut().zip(col.iter()) {
+                *s = c * c;
             }
-            d2.fill(u32::MAX);
             for k in 0..=2 * r {
                 let dx2 = (k.abs_diff(r) * k.abs_diff(r)) as u32;
-                for (d, &c) in d2.iter_mut().zip(&col[k..k + w]) {
-                    *d = (*d).min(dx2 + c);
+                let s = &sq[k..k + w];
+                if k == 0 {
+                    for (d, &c) in d2.iter_mut().zip(s) {
+                        *d = dx2 + c;
+                    }
+                } else {
+                    for (d, &c) in d2.iter_mut().zip(s) {
+                        *d = (*d).min(dx2 + c);
+                    }
                 }
             }
-            for (o, &d) in row.iter_mut().zip(d2.iter()) {
-                *o = cover((d as f32).sqrt());
+            // d² ≥ (r + 1)² is past half the width: no ink, and `out` is
+            // already 0 there. Blocks of 8 with no nearer mark are skipped.
+            for (o, d) in row.chunks_mut(8).zip(d2.chunks(8)) {
+                if d.iter().fold(u32::MAX, |a, &b| a.min(b)) >= far2 {
+                    continue;
+                }
+                for (o, &d) in o.iter_mut().zip(d) {
+                    *o = cover((d as f32).sqrt());
+                }
             }
         },
     );
