@@ -49,13 +49,16 @@ use std::f64::consts::FRAC_PI_2;
 
 /// Nodes of the μΛ table.
 pub const N_X: usize = 2048;
-/// Nodes on the same x range at which μΛ is computed by quadrature; the
-/// N_X table nodes take a cubic through the four nearest of them (ln q is
-/// smooth in ln μ, so the cubic's h⁴ error is far below the lerp's h²).
+/// Quadrature intervals below and above μ = SPLIT_OVER_ALPHA · α, each
+/// side evenly spaced in x: μΛ is computed by quadrature only at their
+/// ends, and the N_X table nodes take a cubic through the four nearest of
+/// those (ln q is smooth in ln μ, so the cubic's h⁴ error is far below the
+/// lerp's h²).
 pub const N_LOW: usize = 12;
+/// See [`N_LOW`].
 pub const N_HIGH: usize = 100;
 /// Where the quadrature nodes change spacing: μ = SPLIT_OVER_ALPHA · α.
-/// Below it q is within ~μ/α of its limit at μ = 0, nearly flat.
+/// Below it q is nearly flat (it tends to its μ = 0 limit like μ/α).
 pub const SPLIT_OVER_ALPHA: f64 = 0.003;
 /// Smallest μ of the table, relative to α.
 const MU_MIN_OVER_ALPHA: f64 = 1e-5;
@@ -115,7 +118,7 @@ impl GtrLambdaTable {
 
     /// [`GtrLambdaTable::new`] with `n_low` (≥ 1) quadrature intervals on
     /// μ < split · α and `n_high` (≥ 1) above (at least 3 in all).
-    pub fn with_quadratures(
+    fn with_quadratures(
         gamma: f64,
         alpha: f64,
         n_low: usize,

@@ -23,8 +23,7 @@ fn d_gtr(gamma: f64, alpha: f64, cos_m: f64) -> f64 {
     } else if gamma > 1.0 && a2 < 1.0 {
         // The same with a2^(γ−1) factored out of the normalisation, so that
         // large γ neither overflows a2^(1−γ) nor underflows t^γ: t ≥ a2.
-        (gamma - 1.0) * (1.0 - a2) / (PI * a2 * (1.0 - a2.powf(gamma - 1.0)))
-            * (a2 / t).powf(gamma)
+        (gamma - 1.0) * (1.0 - a2) / (PI * a2 * (1.0 - a2.powf(gamma - 1.0))) * (a2 / t).powf(gamma)
     } else {
         (gamma - 1.0) * (a2 - 1.0) / (PI * (1.0 - a2.powf(1.0 - gamma))) / t.powf(gamma)
     }
