@@ -17,21 +17,26 @@ fn d_gtr(gamma: f64, alpha: f64, cos_m: f64) -> f64 {
     if (a2 - 1.0).abs() < 1e-12 {
         return 1.0 / PI;
     }
-    let c = if (gamma - 1.0).abs() < 1e-12 {
-        (a2 - 1.0) / (PI * a2.ln())
+    let t = 1.0 + (a2 - 1.0) * cos_m * cos_m;
+    if (gamma - 1.0).abs() < 1e-12 {
+        (a2 - 1.0) / (PI * a2.ln()) / t
+    } else if gamma > 1.0 && a2 < 1.0 {
+        // The same with a2^(γ−1) factored out of the normalisation, so that
+        // large γ neither overflows a2^(1−γ) nor underflows t^γ: t ≥ a2.
+        (gamma - 1.0) * (1.0 - a2) / (PI * a2 * (1.0 - a2.powf(gamma - 1.0))) * (a2 / t).powf(gamma)
     } else {
-        (gamma - 1.0) * (a2 - 1.0) / (PI * (1.0 - a2.powf(1.0 - gamma)))
-    };
-    c / (1.0 + (a2 - 1.0) * cos_m * cos_m).powf(gamma)
+        (gamma - 1.0) * (a2 - 1.0) / (PI * (1.0 - a2.powf(1.0 - gamma))) / t.powf(gamma)
+    }
 }
 
 /// Λ(μ) = (1/μ) ∫_{v·m < 0} |v·m| D(m) dωm by brute force: v = (s, 0, μ);
 /// v·m < 0 needs cos φ < 0 and tan θ > μ / (s |cos φ|); Gauss–Legendre on
 /// panels over φ ∈ (π/2, 3π/2) and over θ from that bound to π/2.
-fn lambda_direct(gamma: f64, alpha: f64, mu: f64) -> f64 {
+/// `panels` per dimension: 24 resolve D for γ ≤ 10 at α ≥ 0.05; γ = 128
+/// at α = 0.05 (lobe ~α/√γ wide) needs 64.
+fn lambda_direct(gamma: f64, alpha: f64, mu: f64, panels: usize) -> f64 {
     let s = (1.0 - mu * mu).sqrt();
     let gl = GaussLegendre::new(16);
-    let panels = 24;
     let mut sum = 0.0;
     for pp in 0..panels {
         let (p0, p1) = (
@@ -70,7 +75,7 @@ fn table_matches_a_direct_quadrature() {
         for alpha in [0.05, 0.15, 0.5, 1.0] {
             let t = GtrLambdaTable::new(gamma, alpha);
             for mu in [0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.9, 0.97] {
-                let want = lambda_direct(gamma, alpha, mu);
+                let want = lambda_direct(gamma, alpha, mu, 24);
                 let got = t.lambda(mu);
                 let err = if want >= 1e-4 {
                     (got - want).abs() / want
@@ -87,6 +92,30 @@ fn table_matches_a_direct_quadrature() {
         }
     }
     eprintln!("exact GTR Λ: worst error vs direct quadrature {worst:e}");
+}
+
+/// The same at the ends of the γ range eval is used with (γ ∈ [¼, 128])
+/// and α off the grid above: the table interpolates between sparse
+/// quadrature nodes, and large γ is where Λ changes fastest.
+#[test]
+fn table_matches_a_direct_quadrature_for_extreme_gamma() {
+    let mut worst = 0.0f64;
+    for gamma in [0.25, 0.6, 30.0, 128.0] {
+        for alpha in [0.05, 0.27, 0.8] {
+            let t = GtrLambdaTable::new(gamma, alpha);
+            for mu in [0.003, 0.02, 0.1, 0.3, 0.6, 0.8, 0.95] {
+                let want = lambda_direct(gamma, alpha, mu, 64);
+                let got = t.lambda(mu);
+                let err = (got - want).abs() / want.max(1e-4);
+                worst = worst.max(err);
+                assert!(
+                    err < 1e-4,
+                    "γ {gamma} α {alpha} μ {mu}: table {got:e}, quadrature {want:e}"
+                );
+            }
+        }
+    }
+    eprintln!("exact GTR Λ, γ ¼ … 128: worst error vs direct quadrature {worst:e}");
 }
 
 /// γ = 2 is GGX, whose Λ has a closed form.
