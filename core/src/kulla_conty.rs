@@ -119,7 +119,7 @@ pub trait TableStore: Send + Sync {
 
 /// Part of every stored table's name: bump it whenever what a table holds
 /// changes (axes, quadrature, clamping), so old stored tables are ignored.
-pub const TABLE_VERSION: u32 = 2;
+pub const TABLE_VERSION: u32 = 3;
 
 static STORE: OnceLock<Box<dyn TableStore>> = OnceLock::new();
 
