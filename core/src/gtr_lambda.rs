@@ -113,23 +113,11 @@ impl GtrLambdaTable {
     /// Tabulates μΛ: N_LOW + N_HIGH + 1 one-dimensional quadratures,
     /// then the N_X table nodes by a cubic through the four nearest.
     pub fn new(gamma: f64, alpha: f64) -> GtrLambdaTable {
-        Self::with_quadratures(gamma, alpha, N_LOW, N_HIGH, SPLIT_OVER_ALPHA)
-    }
-
-    /// [`GtrLambdaTable::new`] with `n_low` (≥ 1) quadrature intervals on
-    /// μ < split · α and `n_high` (≥ 1) above (at least 3 in all).
-    fn with_quadratures(
-        gamma: f64,
-        alpha: f64,
-        n_low: usize,
-        n_high: usize,
-        split: f64,
-    ) -> GtrLambdaTable {
         let lo = (MU_MIN_OVER_ALPHA * alpha).ln();
-        let xs_split = (split * alpha).ln().clamp(lo + 1.0, -1.0);
-        let xs: Vec<f64> = (0..n_low)
-            .map(|k| lo + (xs_split - lo) * k as f64 / n_low as f64)
-            .chain((0..n_high).map(|k| xs_split * (1.0 - k as f64 / n_high as f64)))
+        let xs_split = (SPLIT_OVER_ALPHA * alpha).ln().clamp(lo + 1.0, -1.0);
+        let xs: Vec<f64> = (0..N_LOW)
+            .map(|k| lo + (xs_split - lo) * k as f64 / N_LOW as f64)
+            .chain((0..N_HIGH).map(|k| xs_split * (1.0 - k as f64 / N_HIGH as f64)))
             .chain([0.0])
             .collect();
         let rule = GaussLegendre::new(POINTS);

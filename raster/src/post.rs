@@ -453,11 +453,8 @@ fn resolve_ldr_with<const CURVE: u8>(frame: &FrameBuffers, ssaa: u32, exposure: 
         let full = w / 8 * 8;
         for (x0, px8) in (0..full).step_by(8).zip(row.chunks_exact_mut(24)) {
             let s: [f32x8; 3] = if ssaa == 1 {
-                // Straight vector loads: filling an array lane by lane and
-                // reading it back as a vector stalls on store forwarding.
                 let i = y * sw + x0;
-                let load = |p: &[f32]| f32x8::from(<[f32; 8]>::try_from(&p[i..i + 8]).unwrap());
-                [load(&color.r), load(&color.g), load(&color.b)]
+                [load8(&color.r, i), load8(&color.g, i), load8(&color.b, i)]
             } else {
                 let sums: [[f32; 3]; 8] =
                     std::array::from_fn(|lane| box_sum(color, sw, ssaa, x0 + lane, y));
@@ -479,6 +476,13 @@ fn resolve_ldr_with<const CURVE: u8>(frame: &FrameBuffers, ssaa: u32, exposure: 
         }
     });
     out
+}
+
+/// p[i..i + 8] as one vector load (filling an array lane by lane and
+/// reading it back stalls on store forwarding).
+#[inline(always)]
+fn load8(p: &[f32], i: usize) -> f32x8 {
+    f32x8::from(<[f32; 8]>::try_from(&p[i..i + 8]).unwrap())
 }
 
 /// Writes eight pixels' sRGB codes (0..=255 as f32 lanes) as 24 bytes of
@@ -521,8 +525,7 @@ pub fn encode_ldr(rgb: &Planes3) -> Vec<u8> {
             let base = chunk * 4096;
             for (j, px8) in o[..full * 3].chunks_exact_mut(24).enumerate() {
                 let i = base + j * 8;
-                let load = |p: &[f32]| f32x8::from(<[f32; 8]>::try_from(&p[i..i + 8]).unwrap());
-                let code = |p: &[f32]| enc8.encode(load(p));
+                let code = |p: &[f32]| enc8.encode(load8(p, i));
                 store_rgb8(px8, [code(&rgb.r), code(&rgb.g), code(&rgb.b)]);
             }
             for (j, px) in o.chunks_exact_mut(3).enumerate().skip(full) {
