@@ -177,15 +177,21 @@ pub fn render_scene(
             let t0 = Instant::now();
             // Later frames reuse the previous frame's buffers, as a renderer
             // drawing frame after frame would.
-            let frame = match last.take() {
-                Some((_, mut f)) => {
+            let (frame, recycled) = match last.take() {
+                Some((ldr, mut f)) => {
                     render_into(&scene.data, &mut f, settings.path);
-                    f
+                    (f, ldr)
                 }
-                None => render_with(&scene.data, target, settings.path, buffers),
+                None => (
+                    render_with(&scene.data, target, settings.path, buffers),
+                    Vec::new(),
+                ),
             };
             let tp = Instant::now();
-            let ldr = post.run(&frame.buffers)?.ldr.unwrap_or_default();
+            let ldr = post
+                .run_reusing(&frame.buffers, recycled)?
+                .ldr
+                .unwrap_or_default();
             let post = tp.elapsed().as_secs_f64() * 1e3;
             let total = t0.elapsed().as_secs_f64() * 1e3;
             let t = frame.stats.times;

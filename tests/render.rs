@@ -169,3 +169,30 @@ fn benchmark_with_a_microfacet_row_renders_and_paths_agree() {
     assert_eq!(shaded, 480 * 270);
     assert!(worst < 1e-5, "worst relative difference {worst:e}");
 }
+
+/// Frames drawn one after another reuse the previous frame's buffers (the
+/// setup and bin chunks, the 8-bit output): a frame drawn into buffers that
+/// a larger scene used, and its post pass writing over a longer, dirty
+/// output vector, give the bytes a fresh frame gives.
+#[test]
+fn a_frame_drawn_into_reused_buffers_equals_a_fresh_one() {
+    use specula_raster::frame::{render, render_into};
+    let big = benchmark();
+    let small = demo::demo_scene().expect("demo");
+    let target = specula_raster::Target::new(480, 270).expect("target");
+    let fresh = render(&small.data, target, ShadePath::Simd);
+    let mut reused = render(&big.data, target, ShadePath::Simd);
+    render_into(&small.data, &mut reused, ShadePath::Simd);
+    assert!(reused.visibility.vis.id == fresh.visibility.vis.id, "ids");
+    assert!(reused.buffers.color == fresh.buffers.color, "colour");
+    assert_eq!(reused.stats.counts, fresh.stats.counts);
+    assert_eq!(reused.stats.raster_triangles, fresh.stats.raster_triangles);
+
+    let mut settings = RenderSettings::from_scene(&small);
+    settings.ssaa = 1;
+    let post = settings.post();
+    let expected = post.run(&fresh.buffers).expect("post").ldr;
+    let dirty = vec![0xA5u8; 480 * 270 * 3 + 1000];
+    let got = post.run_reusing(&fresh.buffers, dirty).expect("post").ldr;
+    assert!(got == expected, "8-bit output");
+}

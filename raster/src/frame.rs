@@ -5,7 +5,7 @@
 //! split in fixed pieces (vertex and setup chunks, tiles) so that the result
 //! does not depend on the thread count.
 
-use crate::bin::{bin_chunk, BinnedChunk, CHUNK};
+use crate::bin::{BinnedChunk, CHUNK};
 use crate::buffers::{BufferSet, FrameBuffers, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
@@ -50,6 +50,9 @@ pub struct Visibility {
     pub planes: Vec<TriPlanes>,
     pub view: View,
     clip: Vec<[f32; 4]>,
+    /// Setup's and binning's output per chunk, kept for the next frame's
+    /// geometry passes to refill (see [`BinnedChunk::bin`]).
+    chunks: Vec<BinnedChunk>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -64,6 +67,7 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         planes: Vec::new(),
         view: scene.camera.view(target.width, target.height),
         clip: Vec::new(),
+        chunks: Vec::new(),
     };
     visibility_into(scene, target, &mut v, stats);
     v
@@ -129,12 +133,19 @@ fn geometry_pass(
     };
     let range = pass.triangles.start as usize..pass.triangles.end as usize;
     let ids = pass.ids();
-    let set_up: Vec<(Vec<crate::setup::RasterTri>, SetupCounts)> = scene.triangles[range.clone()]
+    let n_chunks = range.len().div_ceil(CHUNK);
+    if out.chunks.len() < n_chunks {
+        out.chunks.resize_with(n_chunks, BinnedChunk::new);
+    }
+    let chunks = &mut out.chunks[..n_chunks];
+    let set_up: Vec<SetupCounts> = scene.triangles[range.clone()]
         .par_chunks(CHUNK)
         .zip(out.planes[ids.start as usize..ids.end as usize].par_chunks_mut(CHUNK))
+        .zip(chunks.par_iter_mut())
         .enumerate()
-        .map(|(c, (tris, planes))| {
-            let mut raster = Vec::with_capacity(tris.len());
+        .map(|(c, ((tris, planes), chunk))| {
+            let raster = &mut chunk.tris;
+            raster.clear();
             let mut counts = SetupCounts::default();
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate() {
                 let src = range.start + c * CHUNK + i;
@@ -148,24 +159,22 @@ fn geometry_pass(
                     }
                     c => c,
                 };
-                if let Some(p) = ctx.setup(id, v, cull, &mut raster, &mut counts) {
+                if let Some(p) = ctx.setup(id, v, cull, raster, &mut counts) {
                     *plane = p;
                 }
             }
-            (raster, counts)
+            counts
         })
         .collect();
     stats.times.setup += ms_since(t);
 
     let t = Instant::now();
-    for (tris, c) in &set_up {
+    for (c, chunk) in set_up.iter().zip(chunks.iter()) {
         stats.counts.add(c);
-        stats.raster_triangles += tris.len() as u64;
+        stats.raster_triangles += chunk.tris.len() as u64;
     }
-    let chunks: Vec<BinnedChunk> = set_up
-        .into_par_iter()
-        .map(|(tris, _)| bin_chunk(target, tris))
-        .collect();
+    chunks.par_iter_mut().for_each(|c| c.bin(target));
+    let chunks = &*chunks;
     stats.times.bin += ms_since(t);
 
     let t = Instant::now();
@@ -181,7 +190,7 @@ fn geometry_pass(
                 depth.fill(0.0);
                 ids.fill(MISS);
             }
-            rasterize_tile(target, tile, &chunks, planes, depth, ids)
+            rasterize_tile(target, tile, chunks, planes, depth, ids)
         });
     stats.times.raster += ms_since(t);
 }
