@@ -2,7 +2,7 @@
 //! then an 8-pixel-wide depth test and visibility-buffer write.
 
 use crate::bin::BinnedChunk;
-use crate::setup::{RasterTri, TriPlanes};
+use crate::setup::{RasterTri, RectCoverage, TriPlanes};
 use crate::target::{Target, TILE};
 use specula_core::Real;
 use wide::{f32x8, i32x8, u32x8};
@@ -73,6 +73,26 @@ pub fn covered_groups(
             }
         }
     } else {
+        // Large triangles (the ground quad's two span the whole frame)
+        // cover most tiles they touch entirely or not at all: an edge
+        // function is linear, so its sign at the four corner pixel centres
+        // of the rectangle decides every pixel inside when they agree.
+        match rt.rect_coverage([x_lo, x_hi, y_lo, y_hi]) {
+            RectCoverage::Outside => return,
+            RectCoverage::Inside => {
+                for y in y_lo..y_hi {
+                    let mut gx = first_group(x_lo);
+                    while gx < x_hi {
+                        let lo = (x_lo - gx).max(0);
+                        let hi = (x_hi - gx).min(8);
+                        emit(y, gx, (0xFFu32 >> (8 - (hi - lo))) << lo);
+                        gx += 8;
+                    }
+                }
+                return;
+            }
+            RectCoverage::Partial => {}
+        }
         for y in y_lo..y_hi {
             let (x0, x1) = rt.span(y, x_lo, x_hi);
             let mut gx = first_group(x0);

@@ -32,6 +32,17 @@ pub struct RasterTri {
     pub tri: u32,
 }
 
+/// How a triangle covers a rectangle of pixels ([`RasterTri::rect_coverage`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RectCoverage {
+    /// No pixel centre of the rectangle is covered.
+    Outside,
+    /// Every one is.
+    Inside,
+    /// Some may be: the rows' spans decide.
+    Partial,
+}
+
 /// Largest vertex extent (pixels, each axis) of a triangle whose edge
 /// values are evaluated in i32. Relative to a pixel centre inside the
 /// vertices' box, |A|, |B| ≤ (SMALL_PX + 1)·256 < 2¹⁴·¹ and offsets likewise,
@@ -430,6 +441,32 @@ impl RasterTri {
             }
         }
         (lo as i32, hi as i32)
+    }
+
+    /// Whether the triangle covers every pixel centre of the rectangle
+    /// [x0, x1) × [y0, y1) (non-empty), none of them, or some. Exact: each
+    /// edge function is linear, so over the rectangle's pixel centres it
+    /// takes its extremes at the four corner ones.
+    pub fn rect_coverage(&self, [x0, x1, y0, y1]: [i32; 4]) -> RectCoverage {
+        let xs = [pixel_centre(x0 as i64), pixel_centre(x1 as i64 - 1)];
+        let ys = [pixel_centre(y0 as i64), pixel_centre(y1 as i64 - 1)];
+        let mut all_inside = true;
+        for e in &self.edges {
+            let inside = |x: i64, y: i64| e.a * x + e.b * y + e.c >= 0;
+            let n = [(0, 0), (0, 1), (1, 0), (1, 1)]
+                .iter()
+                .filter(|&&(i, j)| inside(xs[i], ys[j]))
+                .count();
+            if n == 0 {
+                return RectCoverage::Outside;
+            }
+            all_inside &= n == 4;
+        }
+        if all_inside {
+            RectCoverage::Inside
+        } else {
+            RectCoverage::Partial
+        }
     }
 
     /// True if the centre of pixel (x, y) is covered: the direct test that
