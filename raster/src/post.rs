@@ -7,6 +7,7 @@
 use crate::buffers::{BufferSet, FrameBuffers, Planes3};
 use rayon::prelude::*;
 use specula_core::{f32x8, Real};
+use wide::i32x8;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Tonemap {
@@ -142,33 +143,110 @@ impl Default for SrgbEncoder {
     }
 }
 
-/// [`SrgbEncoder`] on 8 values at once: the same two tables (as f32, so
-/// [`Real::gather`] reads them) and the same comparison, so its codes equal
-/// the scalar encoder's (a test checks every bin edge).
+/// Low bits of an f32 below a cell of [`SrgbEncoderX8`]'s table: a cell
+/// is the floats sharing their top 17 bits (1/256 of a binade).
+const CELL_BITS: u32 = 15;
+/// Smallest value the cells cover (2⁻¹³, below the first threshold ≈
+/// 1.5e-4); every float under it encodes to 0.
+const CELL_FLOOR: f32 = 1.0 / 8192.0;
+/// Threshold position of a cell that holds none (above every low part).
+const NO_THRESHOLD: u32 = 1 << CELL_BITS;
+
+/// Per cell of the float line from [`CELL_FLOOR`] to 1: the code of its
+/// first float, plus (shifted by 8) the low [`CELL_BITS`] bits of the one
+/// threshold inside it, or [`NO_THRESHOLD`]. Cells are 1/256 of their
+/// binade wide and thresholds are at least 0.89 % apart (relative; at
+/// v = 1, the curve's flattest), so a cell holds one at most; building the
+/// table checks it.
+fn srgb_cells() -> &'static [i32] {
+    static T: std::sync::OnceLock<Vec<i32>> = std::sync::OnceLock::new();
+    T.get_or_init(|| {
+        let t = thresholds();
+        // Number of thresholds ≤ v: the scalar encoder's code of v.
+        let code = |v: f32| t.partition_point(|&th| th <= v);
+        let first = CELL_FLOOR.to_bits() >> CELL_BITS;
+        let last = 1.0f32.to_bits() >> CELL_BITS;
+        (first..=last)
+            .map(|cell| {
+                let lo = f32::from_bits(cell << CELL_BITS);
+                let hi = f32::from_bits(((cell + 1) << CELL_BITS) - 1);
+                let (c, inside) = (code(lo), code(hi) - code(lo));
+                assert!(inside <= 1, "sRGB cell at {lo:e} holds {inside} thresholds");
+                let pos = if inside == 1 {
+                    t[c].to_bits() & (NO_THRESHOLD - 1)
+                } else {
+                    NO_THRESHOLD
+                };
+                (c as u32 | pos << 8) as i32
+            })
+            .collect()
+    })
+}
+
+/// [`SrgbEncoder`] on 8 values at once, with one table read per value
+/// instead of two: the float's top bits pick a cell ([`srgb_cells`]), and
+/// an integer comparison of its low bits with the cell's threshold adds
+/// the last code. Its codes equal the scalar encoder's (a test checks every
+/// threshold, cell edge and a sweep). The two dependent reads per value
+/// (bin start, then threshold) were most of the fused post pass: a
+/// hardware gather costs ~17 cycles here.
 #[derive(Clone, Copy)]
 pub struct SrgbEncoderX8 {
-    start: &'static [f32; SRGB_BINS + 1],
-    thresholds: &'static [f32; 256],
+    cells: &'static [i32],
 }
 
 impl SrgbEncoderX8 {
     pub fn new() -> SrgbEncoderX8 {
-        static START: std::sync::OnceLock<[f32; SRGB_BINS + 1]> = std::sync::OnceLock::new();
         SrgbEncoderX8 {
-            start: START.get_or_init(|| bin_start_codes().map(f32::from)),
-            thresholds: thresholds(),
+            cells: srgb_cells(),
         }
+    }
+
+    /// The codes 0..=255 as i32 lanes.
+    #[inline(always)]
+    pub fn encode_i32(&self, v: f32x8) -> i32x8 {
+        // NaN → 0 like the scalar encoder (Real::clamp maps NaN to 0).
+        let v = Real::clamp(v, f32x8::ZERO, f32x8::ONE);
+        let bits: i32x8 = bytemuck::cast(v);
+        let first = i32x8::splat((CELL_FLOOR.to_bits() >> CELL_BITS) as i32);
+        let last = i32x8::splat(self.cells.len() as i32 - 1);
+        // v ∈ [0, 1]: below the floor, cell 0 (code 0, no threshold).
+        let top: i32x8 = bits >> CELL_BITS as i32;
+        let cell = (top - first).max(i32x8::ZERO).min(last);
+        let e = gather_i32(self.cells, cell);
+        let low = bits & i32x8::splat(NO_THRESHOLD as i32 - 1);
+        // −1 where v is below the cell's threshold, else 0.
+        let threshold: i32x8 = e >> 8;
+        let below = threshold.simd_gt(low);
+        (e & i32x8::splat(0xFF)) + i32x8::splat(1) + below
     }
 
     /// The codes 0..=255, as f32 lanes.
     #[inline(always)]
     pub fn encode(&self, v: f32x8) -> f32x8 {
-        // NaN → 0 like the scalar encoder (Real::clamp maps NaN to 0).
-        let v = Real::clamp(v, f32x8::ZERO, f32x8::ONE);
-        let code = f32x8::gather(self.start, v * f32x8::splat(SRGB_BINS as f32));
-        let next = f32x8::gather(self.thresholds, code);
-        code + Real::select(v.ge(next), f32x8::ONE, f32x8::ZERO)
+        self.encode_i32(v).round_float()
     }
+}
+
+/// 8 reads of `table` at indices already in `0..table.len()`.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn gather_i32(table: &[i32], i: i32x8) -> i32x8 {
+    use core::arch::x86_64::{__m256i, _mm256_i32gather_epi32};
+    assert!(!table.is_empty());
+    debug_assert!(i.to_array().iter().all(|&k| (k as usize) < table.len()));
+    let iv: __m256i = bytemuck::cast(i);
+    // SAFETY: AVX2 is enabled (cfg); the caller clamps every index lane
+    // into 0..table.len(), so each read is in bounds.
+    bytemuck::cast(unsafe { _mm256_i32gather_epi32::<4>(table.as_ptr(), iv) })
+}
+
+/// Per-lane fallback of the gather above.
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+#[inline(always)]
+fn gather_i32(table: &[i32], i: i32x8) -> i32x8 {
+    let i = i.to_array();
+    i32x8::new(core::array::from_fn(|l| table[i[l] as usize]))
 }
 
 impl Default for SrgbEncoderX8 {
@@ -528,15 +606,14 @@ fn load8(p: &[f32], i: usize) -> f32x8 {
     f32x8::from(<[f32; 8]>::try_from(&p[i..i + 8]).unwrap())
 }
 
-/// Writes eight pixels' sRGB codes (0..=255 as f32 lanes) as 24 bytes of
-/// RGB: r + 256 g + 65536 b < 2²⁴ is exact in f32, so one conversion
-/// gives each pixel's three bytes in one little-endian word, stored at
-/// 3 × lane (the next lane overwrites its fourth byte; the last writes
-/// three). A cast from f32 to u8 per channel was ~40 % of the fused pass.
+/// Writes eight pixels' sRGB codes (0..=255 per lane) as 24 bytes of RGB:
+/// r | g << 8 | b << 16 is each pixel's three bytes in one little-endian
+/// word, stored at 3 × lane (the next lane overwrites its fourth byte; the
+/// last writes three). A cast to u8 per channel was ~40 % of the fused pass.
 #[inline(always)]
-fn store_rgb8(px8: &mut [u8], [r, g, b]: [f32x8; 3]) {
-    let word = b.mul_add(f32x8::splat(65536.0), g * f32x8::splat(256.0)) + r;
-    let rgb = word.fast_trunc_int().to_array();
+fn store_rgb8(px8: &mut [u8], [r, g, b]: [i32x8; 3]) {
+    let word: i32x8 = r | (g << 8) | (b << 16);
+    let rgb = word.to_array();
     for (lane, w) in rgb.iter().enumerate().take(7) {
         px8[3 * lane..3 * lane + 4].copy_from_slice(&w.to_le_bytes());
     }
@@ -544,11 +621,11 @@ fn store_rgb8(px8: &mut [u8], [r, g, b]: [f32x8; 3]) {
 }
 
 /// One channel of eight pixels: sample sum × (1/n) × 2^exposure, tone
-/// curve, sRGB code (as f32).
+/// curve, sRGB code.
 #[inline(always)]
-fn ldr_code(enc8: &SrgbEncoderX8, curve: Tonemap, ch: f32x8, inv_n: f32, k: f32) -> f32x8 {
+fn ldr_code(enc8: &SrgbEncoderX8, curve: Tonemap, ch: f32x8, inv_n: f32, k: f32) -> i32x8 {
     let v = ch * f32x8::splat(inv_n) * f32x8::splat(k);
-    enc8.encode(curve.apply_x8(v))
+    enc8.encode_i32(curve.apply_x8(v))
 }
 
 /// sRGB encoding of tone-mapped values: 8-bit RGB, row-major.
@@ -575,7 +652,7 @@ pub fn encode_ldr_into(rgb: &Planes3, out: &mut Vec<u8>) {
             let base = chunk * 4096;
             for (j, px8) in o[..full * 3].chunks_exact_mut(24).enumerate() {
                 let i = base + j * 8;
-                let code = |p: &[f32]| enc8.encode(load8(p, i));
+                let code = |p: &[f32]| enc8.encode_i32(load8(p, i));
                 store_rgb8(px8, [code(&rgb.r), code(&rgb.g), code(&rgb.b)]);
             }
             for (j, px) in o.chunks_exact_mut(3).enumerate().skip(full) {
@@ -719,6 +796,16 @@ mod tests {
         }
         vals.extend((0..=SRGB_BINS).map(|i| i as f32 / SRGB_BINS as f32));
         vals.extend((0..50_000).map(|i| i as f32 * 1e-4 - 1.0));
+        // The vector encoder's cells: each one's first and last float and
+        // their outer neighbours, and a sweep over the bit patterns of
+        // [0, 1] with an odd stride (every exponent, every cell).
+        let first = CELL_FLOOR.to_bits() >> CELL_BITS;
+        for cell in first..=(1.0f32.to_bits() >> CELL_BITS) {
+            let lo = cell << CELL_BITS;
+            let hi = lo + (1 << CELL_BITS) - 1;
+            vals.extend([lo - 1, lo, hi, hi + 1].map(f32::from_bits));
+        }
+        vals.extend((0..=1.0f32.to_bits()).step_by(997).map(f32::from_bits));
         vals.resize(vals.len().div_ceil(8) * 8, 0.5);
         let (enc, enc8) = (SrgbEncoder::new(), SrgbEncoderX8::new());
         for chunk in vals.chunks_exact(8) {

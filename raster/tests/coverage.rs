@@ -480,7 +480,10 @@ fn large_triangles_walked_by_rectangles_cover_exactly_their_pixels() {
         // Vertices far outside the image, on half-pixel positions for a
         // third of the triangles (edges through pixel centres).
         let mut p = || {
-            let q = [rng.random_range(-150.0..250.0), rng.random_range(-150.0..230.0)];
+            let q = [
+                rng.random_range(-150.0..250.0),
+                rng.random_range(-150.0..230.0),
+            ];
             if i % 3 == 0 {
                 q.map(|v: f64| (v * 2.0).round() / 2.0)
             } else {
