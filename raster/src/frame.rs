@@ -14,6 +14,7 @@ use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
 use crate::setup::{SetupContext, SetupCounts, TriPlanes};
+use crate::setup_x4::LANES;
 use crate::shade::{shade_tile, ShadeTargets};
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use rayon::prelude::*;
@@ -136,19 +137,39 @@ fn geometry_pass(
         .map(|(c, (tris, planes))| {
             let mut raster = Vec::with_capacity(tris.len());
             let mut counts = SetupCounts::default();
-            for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate() {
-                let src = range.start + c * CHUNK + i;
-                let id = ids.start as u32 + (c * CHUNK + i) as u32;
-                let v = tri.map(|k| clip[k as usize]);
-                let cull = match pass.cull {
-                    Cull::Back
-                        if scene.materials[scene.tri_material[src] as usize].double_sided =>
-                    {
-                        Cull::None
+            let first = c * CHUNK;
+            let cull = |i: usize| match pass.cull {
+                Cull::Back
+                    if scene.materials[scene.tri_material[range.start + first + i] as usize]
+                        .double_sided =>
+                {
+                    Cull::None
+                }
+                c => c,
+            };
+            let id = |i: usize| ids.start as u32 + (first + i) as u32;
+            let vertices = |tri: &[u32; 3]| tri.map(|k| clip[k as usize]);
+            // 4 triangles at a time (bit-identical to `setup` per triangle),
+            // the chunk's last 0–3 one at a time.
+            let quads = tris.len() / LANES * LANES;
+            for (q, (tris4, planes4)) in tris[..quads]
+                .chunks_exact(LANES)
+                .zip(planes[..quads].chunks_exact_mut(LANES))
+                .enumerate()
+            {
+                let i = q * LANES;
+                let v = std::array::from_fn(|t| vertices(&tris4[t]));
+                let cull4 = std::array::from_fn(|t| cull(i + t));
+                let set = ctx.setup_x4(id(i), &v, cull4, &mut raster, &mut counts);
+                for (plane, p) in planes4.iter_mut().zip(set) {
+                    if let Some(p) = p {
+                        *plane = p;
                     }
-                    c => c,
-                };
-                if let Some(p) = ctx.setup(id, v, cull, &mut raster, &mut counts) {
+                }
+            }
+            for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
+                if let Some(p) = ctx.setup(id(i), vertices(tri), cull(i), &mut raster, &mut counts)
+                {
                     *plane = p;
                 }
             }

@@ -26,6 +26,7 @@ pub mod resolve;
 pub mod scan;
 pub mod scene;
 pub mod setup;
+pub mod setup_x4;
 pub mod shade;
 pub mod shader;
 pub mod target;

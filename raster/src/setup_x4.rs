@@ -1,0 +1,346 @@
+//! Triangle setup of 4 source triangles at once in f64x4: the common case of
+//! [`SetupContext::setup`] (every vertex valid and inside the guard band, so
+//! no clipping), bit for bit.
+//!
+//! Each lane performs the scalar path's IEEE operations in the scalar path's
+//! order (no FMA where it multiplies and adds, no reassociation, `snap`'s
+//! ties-to-even), so it produces the same bits: the invalid check, the
+//! outcodes and trivial reject, the 2D-homogeneous adjugate and determinant
+//! (orientation, cull), the guard-band test, projection and snapping, the
+//! planes and their bound. The integer edge functions stay scalar
+//! ([`SetupContext::edges`], per triangle that survives). A lane the fast
+//! path does not cover (a NaN, infinite or huge coordinate, a zero or
+//! non-finite determinant, a triangle that needs clipping, a non-finite
+//! projection) is set up by the scalar [`SetupContext::setup`] instead, in
+//! its turn, so the screen triangles reach `out` in source order and the
+//! counts are the scalar ones. `tests/setup_x4.rs` checks all of it against
+//! the scalar path on random and hand-picked triangles.
+
+use crate::fixed::{GUARD_BAND_PX, SUBPIXEL_ONE};
+use crate::geometry::Cull;
+use crate::setup::{
+    RasterTri, SetupContext, SetupCounts, TriPlanes, MAX_CLIP_COORD, MAX_PLANE_VALUE,
+};
+use wide::f64x4;
+
+/// Triangles per call of [`SetupContext::setup_x4`].
+pub const LANES: usize = 4;
+
+/// What the first, cheap part of setup decided for one lane.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Lane {
+    /// Set up by the scalar path (rare inputs; see the module doc).
+    Scalar,
+    /// All three vertices outside one frustum plane.
+    Outside,
+    /// Its facing is not drawn by the pass.
+    Culled,
+    /// Projected, snapped and given planes here.
+    Fast,
+}
+
+/// How each lane ended, counted per thread by the tests so they can show
+/// the fast path ran (a suite that always fell back would pass too).
+#[cfg(test)]
+mod trace {
+    use std::cell::Cell;
+    /// Scalar, outside, culled, fast drawn, fast no samples, fast unbounded.
+    #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+    pub struct Paths(pub [u64; 6]);
+    thread_local!(pub static PATHS: Cell<Paths> = Cell::new(Paths::default()));
+    pub fn hit(i: usize) {
+        PATHS.with(|p| {
+            let mut v = p.get();
+            v.0[i] += 1;
+            p.set(v);
+        });
+    }
+}
+
+#[cfg(test)]
+use trace::hit;
+#[cfg(not(test))]
+#[inline(always)]
+fn hit(_: usize) {}
+
+/// Lane `t` of a mask as a bool.
+#[inline(always)]
+fn bit(mask: u32, t: usize) -> bool {
+    mask >> t & 1 != 0
+}
+
+/// f64 → f32 per lane, rounding to nearest like `as f32`, and back to f64.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[inline(always)]
+fn to_f32(x: f64x4) -> ([f32; 4], f64x4) {
+    use core::arch::x86_64::{_mm256_cvtpd_ps, _mm256_cvtps_pd};
+    // SAFETY: AVX is enabled (cfg). vcvtpd2ps rounds by MXCSR, nearest by
+    // default, as the scalar cvtsd2ss of `as f32` does.
+    unsafe {
+        let n = _mm256_cvtpd_ps(bytemuck::cast(x));
+        (bytemuck::cast(n), bytemuck::cast(_mm256_cvtps_pd(n)))
+    }
+}
+
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+#[inline(always)]
+fn to_f32(x: f64x4) -> ([f32; 4], f64x4) {
+    let n = x.to_array().map(|c| c as f32);
+    (n, f64x4::new(n.map(f64::from)))
+}
+
+impl SetupContext {
+    /// [`SetupContext::setup`] of the 4 triangles of ids `first..first + 4`
+    /// (clip-space vertices `v[t]`, cull mode `cull[t]`), as if called for
+    /// each in turn: the same screen triangles in `out` in the same order,
+    /// the same planes, the same counts.
+    pub fn setup_x4(
+        &self,
+        first: u32,
+        v: &[[[f32; 4]; 3]; LANES],
+        cull: [Cull; LANES],
+        out: &mut Vec<RasterTri>,
+        counts: &mut SetupCounts,
+    ) -> [Option<TriPlanes>; LANES] {
+        // Structure of arrays: x[j] holds vertex j's x of the 4 triangles.
+        let coord = |j: usize, c: usize| f64x4::new(std::array::from_fn(|t| v[t][j][c] as f64));
+        let x: [f64x4; 3] = std::array::from_fn(|j| coord(j, 0));
+        let y: [f64x4; 3] = std::array::from_fn(|j| coord(j, 1));
+        let z: [f64x4; 3] = std::array::from_fn(|j| coord(j, 2));
+        let w: [f64x4; 3] = std::array::from_fn(|j| coord(j, 3));
+
+        // `!(|c| ≤ MAX)` is the scalar `c.is_nan() || c.abs() > MAX`.
+        let max = f64x4::splat(MAX_CLIP_COORD);
+        let mut valid = valid_all();
+        for c in x.iter().chain(&y).chain(&z).chain(&w) {
+            valid &= c.abs().simd_le(max);
+        }
+
+        // Outcodes: outside if all three vertices are beyond one plane.
+        let zero = f64x4::ZERO;
+        let outside = all3(|j| x[j].simd_lt(-w[j]))
+            | all3(|j| x[j].simd_gt(w[j]))
+            | all3(|j| y[j].simd_lt(-w[j]))
+            | all3(|j| y[j].simd_gt(w[j]))
+            | all3(|j| z[j].simd_gt(w[j]))
+            | all3(|j| z[j].simd_lt(zero));
+
+        // The 2D-homogeneous adjugate, columns (x, y, w) per vertex, as
+        // `cross3` and `dot3` evaluate it.
+        let cross = |a: usize, b: usize| {
+            [
+                y[a] * w[b] - w[a] * y[b],
+                w[a] * x[b] - x[a] * w[b],
+                x[a] * y[b] - y[a] * x[b],
+            ]
+        };
+        let adj = [cross(1, 2), cross(2, 0), cross(0, 1)];
+        let det = x[0] * adj[0][0] + y[0] * adj[0][1] + w[0] * adj[0][2];
+        let degenerate = det.simd_eq(zero) | !det.is_finite();
+
+        // Guard band: `GuardBand::needs_clip`'s distances, any below 0.
+        let (kx, ky) = (f64x4::splat(self.guard.kx), f64x4::splat(self.guard.ky));
+        let mut clip = f64x4::ZERO;
+        for j in 0..3 {
+            clip |= (w[j] - z[j]).simd_lt(zero)
+                | (kx * w[j] - x[j]).simd_lt(zero)
+                | (kx * w[j] + x[j]).simd_lt(zero)
+                | (ky * w[j] - y[j]).simd_lt(zero)
+                | (ky * w[j] + y[j]).simd_lt(zero);
+        }
+
+        let (valid, outside, degenerate, clip) = (
+            valid.to_bitmask(),
+            outside.to_bitmask(),
+            degenerate.to_bitmask(),
+            clip.to_bitmask(),
+        );
+        let (negative, positive) = (
+            det.simd_lt(zero).to_bitmask(),
+            det.simd_gt(zero).to_bitmask(),
+        );
+        let lanes: [Lane; LANES] = std::array::from_fn(|t| {
+            if !bit(valid, t) {
+                Lane::Scalar
+            } else if bit(outside, t) {
+                Lane::Outside
+            } else if bit(degenerate, t) {
+                Lane::Scalar
+            } else if match cull[t] {
+                Cull::Back => bit(negative, t),
+                Cull::Front => bit(positive, t),
+                Cull::None => false,
+            } {
+                Lane::Culled
+            } else if bit(clip, t) {
+                Lane::Scalar
+            } else {
+                Lane::Fast
+            }
+        });
+
+        let mut result = [None; LANES];
+        if !lanes.contains(&Lane::Fast) {
+            // Neighbouring triangles of a mesh often share their facing:
+            // a group culled together skips the projection entirely.
+            for (t, &lane) in lanes.iter().enumerate() {
+                result[t] = self.finish_lane(lane, first, t, v, cull, out, counts);
+            }
+            return result;
+        }
+
+        // Projection and snapping, as `setup`'s `project`.
+        let (wd, hd) = (self.width as f64, self.height as f64);
+        let (one, half) = (f64x4::ONE, f64x4::splat(0.5));
+        let (ws, hs) = (f64x4::splat(wd), f64x4::splat(hd));
+        let (lo, hi) = (f64x4::splat(-GUARD_BAND_PX), f64x4::splat(GUARD_BAND_PX));
+        let fixed = f64x4::splat(SUBPIXEL_ONE as f64);
+        let mut finite = valid_all();
+        let mut min_x = f64x4::splat(f64::INFINITY);
+        let mut min_y = f64x4::splat(f64::INFINITY);
+        let mut screen = [[[0i64; 2]; 3]; LANES];
+        for j in 0..3 {
+            let inv_w = one / w[j];
+            let sx = (x[j] * inv_w + one) * half * ws;
+            let sy = (one - y[j] * inv_w) * half * hs;
+            finite &= sx.is_finite() & sy.is_finite();
+            // Lanes that are not finite go to the scalar path; on the others
+            // max/min are `f64::clamp` and `f64::min` (no NaN, and no −0:
+            // `a + 1` and `1 − a` are +0 when zero).
+            let sx = sx.fast_max(lo).fast_min(hi);
+            let sy = sy.fast_max(lo).fast_min(hi);
+            min_x = min_x.fast_min(sx);
+            min_y = min_y.fast_min(sy);
+            // `snap`: ×256, round half to even, to integer (exact: ≤ 2²⁸).
+            let snap_x = (sx * fixed).round_ties_even().to_array();
+            let snap_y = (sy * fixed).round_ties_even().to_array();
+            for t in 0..LANES {
+                screen[t][j] = [snap_x[t] as i64, snap_y[t] as i64];
+            }
+        }
+        let finite = finite.to_bitmask();
+
+        // Planes: rows of M⁻¹ = adj / det, composed with pixel → NDC and
+        // moved to the origin, as `setup`'s `plane`.
+        let ox = min_x.fast_max(zero).fast_min(ws);
+        let oy = min_y.fast_max(zero).fast_min(hs);
+        let (to_nx, to_ny) = (f64x4::splat(2.0 / wd), f64x4::splat(-2.0 / hd));
+        let inv_det = one / det;
+        let k = adj.map(|row| {
+            let r = row.map(|c| c * inv_det);
+            let (a, b) = (r[0] * to_nx, r[1] * to_ny);
+            let c = -r[0] + r[1] + r[2];
+            [a, b, a * ox + b * oy + c]
+        });
+        let ks: [f64x4; 3] = std::array::from_fn(|c| k[0][c] + k[1][c] + k[2][c]);
+        let zp: [f64x4; 3] =
+            std::array::from_fn(|c| k[0][c] * z[0] + k[1][c] * z[1] + k[2][c] * z[2]);
+
+        // f32 planes and the bound on them (`setup`'s `bounded`).
+        let (span_x, span_y) = (f64x4::splat(wd + 1.0), f64x4::splat(hd + 1.0));
+        let bound = f64x4::splat(MAX_PLANE_VALUE);
+        let mut bounded = valid_all();
+        let mut narrow = |p: &[f64x4; 3]| -> [[f32; 4]; 3] {
+            let (p0, q0) = to_f32(p[0]);
+            let (p1, q1) = to_f32(p[1]);
+            let (p2, q2) = to_f32(p[2]);
+            bounded &= (q0.abs() * span_x + q1.abs() * span_y + q2.abs()).simd_le(bound);
+            [p0, p1, p2]
+        };
+        let k1 = narrow(&k[1]);
+        let k2 = narrow(&k[2]);
+        let ks = narrow(&ks);
+        let zp = narrow(&zp);
+        let bounded = bounded.to_bitmask();
+        let (ox, _) = to_f32(ox);
+        let (oy, _) = to_f32(oy);
+
+        for (t, &lane) in lanes.iter().enumerate() {
+            if lane != Lane::Fast {
+                result[t] = self.finish_lane(lane, first, t, v, cull, out, counts);
+                continue;
+            }
+            if !bit(finite, t) {
+                hit(0);
+                result[t] = self.setup(first + t as u32, v[t], cull[t], out, counts);
+                continue;
+            }
+            counts.triangles += 1;
+            let [p0, p1, p2] = screen[t];
+            let Some(rt) = self.edges(first + t as u32, p0, p1, p2) else {
+                counts.no_samples += 1;
+                hit(4);
+                continue;
+            };
+            // Planes beyond the bound (a vertex at a subnormal w, say):
+            // skipped as degenerate, see `setup`.
+            if !bit(bounded, t) {
+                counts.skipped_degenerate += 1;
+                hit(5);
+                continue;
+            }
+            out.push(rt);
+            counts.drawn += 1;
+            hit(3);
+            let lane3 = |p: &[[f32; 4]; 3]| [p[0][t], p[1][t], p[2][t]];
+            result[t] = Some(TriPlanes {
+                origin: [ox[t], oy[t]],
+                k1: lane3(&k1),
+                k2: lane3(&k2),
+                ks: lane3(&ks),
+                z: lane3(&zp),
+                facing: if bit(positive, t) { 1.0 } else { -1.0 },
+            });
+        }
+        result
+    }
+
+    /// A lane the fast path does not project: counted here, or set up by
+    /// the scalar path.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn finish_lane(
+        &self,
+        lane: Lane,
+        first: u32,
+        t: usize,
+        v: &[[[f32; 4]; 3]; LANES],
+        cull: [Cull; LANES],
+        out: &mut Vec<RasterTri>,
+        counts: &mut SetupCounts,
+    ) -> Option<TriPlanes> {
+        match lane {
+            Lane::Outside => {
+                hit(1);
+                counts.triangles += 1;
+                counts.culled_outside += 1;
+                None
+            }
+            Lane::Culled => {
+                hit(2);
+                counts.triangles += 1;
+                counts.culled_backface += 1;
+                None
+            }
+            Lane::Scalar | Lane::Fast => {
+                hit(0);
+                self.setup(first + t as u32, v[t], cull[t], out, counts)
+            }
+        }
+    }
+}
+
+/// Lanes where a per-vertex mask holds for all three vertices.
+#[inline(always)]
+fn all3(f: impl Fn(usize) -> f64x4) -> f64x4 {
+    f(0) & f(1) & f(2)
+}
+
+/// A mask with every lane set.
+#[inline(always)]
+fn valid_all() -> f64x4 {
+    f64x4::splat(f64::from_bits(u64::MAX))
+}
+
+#[cfg(test)]
+mod tests;
