@@ -160,12 +160,8 @@ fn geometry_pass(
                 let i = q * LANES;
                 let v = std::array::from_fn(|t| vertices(&tris4[t]));
                 let cull4 = std::array::from_fn(|t| cull(i + t));
-                let set = ctx.setup_x4(id(i), &v, cull4, &mut raster, &mut counts);
-                for (plane, p) in planes4.iter_mut().zip(set) {
-                    if let Some(p) = p {
-                        *plane = p;
-                    }
-                }
+                let planes4 = planes4.try_into().expect("chunks of LANES");
+                ctx.setup_x4(id(i), &v, cull4, planes4, &mut raster, &mut counts);
             }
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
                 if let Some(p) = ctx.setup(id(i), vertices(tri), cull(i), &mut raster, &mut counts)

@@ -93,15 +93,17 @@ impl SetupContext {
     /// [`SetupContext::setup`] of the 4 triangles of ids `first..first + 4`
     /// (clip-space vertices `v[t]`, cull mode `cull[t]`), as if called for
     /// each in turn: the same screen triangles in `out` in the same order,
-    /// the same planes, the same counts.
+    /// the same counts, and `planes[t]` set to the planes `setup` returns
+    /// (left as it was where it returns `None`).
     pub fn setup_x4(
         &self,
         first: u32,
         v: &[[[f32; 4]; 3]; LANES],
         cull: [Cull; LANES],
+        planes: &mut [TriPlanes; LANES],
         out: &mut Vec<RasterTri>,
         counts: &mut SetupCounts,
-    ) -> [Option<TriPlanes>; LANES] {
+    ) {
         // Structure of arrays: x[j] holds vertex j's x of the 4 triangles.
         let coord = |j: usize, c: usize| f64x4::new(std::array::from_fn(|t| v[t][j][c] as f64));
         let x: [f64x4; 3] = std::array::from_fn(|j| coord(j, 0));
@@ -112,8 +114,10 @@ impl SetupContext {
         // `!(|c| ≤ MAX)` is the scalar `c.is_nan() || c.abs() > MAX`.
         let max = f64x4::splat(MAX_CLIP_COORD);
         let mut valid = valid_all();
-        for c in x.iter().chain(&y).chain(&z).chain(&w) {
-            valid &= c.abs().simd_le(max);
+        for j in 0..3 {
+            for c in [x[j], y[j], z[j], w[j]] {
+                valid &= c.abs().simd_le(max);
+            }
         }
 
         // Outcodes: outside if all three vertices are beyond one plane.
@@ -159,34 +163,32 @@ impl SetupContext {
             det.simd_lt(zero).to_bitmask(),
             det.simd_gt(zero).to_bitmask(),
         );
+        // Lane masks, decided in `setup`'s order: invalid, outside,
+        // degenerate, culled, clipped.
+        let with = |c: Cull| (0..LANES).fold(0, |m, t| m | ((cull[t] == c) as u32) << t);
+        let outside = valid & outside;
+        let kept = valid & !outside & !degenerate;
+        let culled = kept & (with(Cull::Back) & negative | with(Cull::Front) & positive);
+        let fast = kept & !culled & !clip;
         let lanes: [Lane; LANES] = std::array::from_fn(|t| {
-            if !bit(valid, t) {
-                Lane::Scalar
+            if bit(fast, t) {
+                Lane::Fast
             } else if bit(outside, t) {
                 Lane::Outside
-            } else if bit(degenerate, t) {
-                Lane::Scalar
-            } else if match cull[t] {
-                Cull::Back => bit(negative, t),
-                Cull::Front => bit(positive, t),
-                Cull::None => false,
-            } {
+            } else if bit(culled, t) {
                 Lane::Culled
-            } else if bit(clip, t) {
-                Lane::Scalar
             } else {
-                Lane::Fast
+                Lane::Scalar
             }
         });
 
-        let mut result = [None; LANES];
-        if !lanes.contains(&Lane::Fast) {
+        if fast == 0 {
             // Neighbouring triangles of a mesh often share their facing:
             // a group culled together skips the projection entirely.
             for (t, &lane) in lanes.iter().enumerate() {
-                result[t] = self.finish_lane(lane, first, t, v, cull, out, counts);
+                self.finish_lane(lane, first, t, v, cull, &mut planes[t], out, counts);
             }
-            return result;
+            return;
         }
 
         // Projection and snapping, as `setup`'s `project`.
@@ -198,7 +200,7 @@ impl SetupContext {
         let mut finite = valid_all();
         let mut min_x = f64x4::splat(f64::INFINITY);
         let mut min_y = f64x4::splat(f64::INFINITY);
-        let mut screen = [[[0i64; 2]; 3]; LANES];
+        let mut snapped = [[[0i64; LANES]; 2]; 3];
         for j in 0..3 {
             let inv_w = one / w[j];
             let sx = (x[j] * inv_w + one) * half * ws;
@@ -211,12 +213,7 @@ impl SetupContext {
             let sy = sy.fast_max(lo).fast_min(hi);
             min_x = min_x.fast_min(sx);
             min_y = min_y.fast_min(sy);
-            // `snap`: ×256, round half to even, to integer (exact: ≤ 2²⁸).
-            let snap_x = (sx * fixed).round_ties_even().to_array();
-            let snap_y = (sy * fixed).round_ties_even().to_array();
-            for t in 0..LANES {
-                screen[t][j] = [snap_x[t] as i64, snap_y[t] as i64];
-            }
+            snapped[j] = [snap(sx * fixed), snap(sy * fixed)];
         }
         let finite = finite.to_bitmask();
 
@@ -226,12 +223,13 @@ impl SetupContext {
         let oy = min_y.fast_max(zero).fast_min(hs);
         let (to_nx, to_ny) = (f64x4::splat(2.0 / wd), f64x4::splat(-2.0 / hd));
         let inv_det = one / det;
-        let k = adj.map(|row| {
-            let r = row.map(|c| c * inv_det);
+        let plane = |row: &[f64x4; 3]| {
+            let r = [row[0] * inv_det, row[1] * inv_det, row[2] * inv_det];
             let (a, b) = (r[0] * to_nx, r[1] * to_ny);
             let c = -r[0] + r[1] + r[2];
             [a, b, a * ox + b * oy + c]
-        });
+        };
+        let k = [plane(&adj[0]), plane(&adj[1]), plane(&adj[2])];
         let ks: [f64x4; 3] = std::array::from_fn(|c| k[0][c] + k[1][c] + k[2][c]);
         let zp: [f64x4; 3] =
             std::array::from_fn(|c| k[0][c] * z[0] + k[1][c] * z[1] + k[2][c] * z[2]);
@@ -257,16 +255,18 @@ impl SetupContext {
 
         for (t, &lane) in lanes.iter().enumerate() {
             if lane != Lane::Fast {
-                result[t] = self.finish_lane(lane, first, t, v, cull, out, counts);
+                self.finish_lane(lane, first, t, v, cull, &mut planes[t], out, counts);
                 continue;
             }
             if !bit(finite, t) {
                 hit(0);
-                result[t] = self.setup(first + t as u32, v[t], cull[t], out, counts);
+                if let Some(p) = self.setup(first + t as u32, v[t], cull[t], out, counts) {
+                    planes[t] = p;
+                }
                 continue;
             }
             counts.triangles += 1;
-            let [p0, p1, p2] = screen[t];
+            let [p0, p1, p2] = snapped.map(|[sx, sy]| [sx[t], sy[t]]);
             let Some(rt) = self.edges(first + t as u32, p0, p1, p2) else {
                 counts.no_samples += 1;
                 hit(4);
@@ -283,16 +283,15 @@ impl SetupContext {
             counts.drawn += 1;
             hit(3);
             let lane3 = |p: &[[f32; 4]; 3]| [p[0][t], p[1][t], p[2][t]];
-            result[t] = Some(TriPlanes {
+            planes[t] = TriPlanes {
                 origin: [ox[t], oy[t]],
                 k1: lane3(&k1),
                 k2: lane3(&k2),
                 ks: lane3(&ks),
                 z: lane3(&zp),
                 facing: if bit(positive, t) { 1.0 } else { -1.0 },
-            });
+            };
         }
-        result
     }
 
     /// A lane the fast path does not project: counted here, or set up by
@@ -306,25 +305,26 @@ impl SetupContext {
         t: usize,
         v: &[[[f32; 4]; 3]; LANES],
         cull: [Cull; LANES],
+        plane: &mut TriPlanes,
         out: &mut Vec<RasterTri>,
         counts: &mut SetupCounts,
-    ) -> Option<TriPlanes> {
+    ) {
         match lane {
             Lane::Outside => {
                 hit(1);
                 counts.triangles += 1;
                 counts.culled_outside += 1;
-                None
             }
             Lane::Culled => {
                 hit(2);
                 counts.triangles += 1;
                 counts.culled_backface += 1;
-                None
             }
             Lane::Scalar | Lane::Fast => {
                 hit(0);
-                self.setup(first + t as u32, v[t], cull[t], out, counts)
+                if let Some(p) = self.setup(first + t as u32, v[t], cull[t], out, counts) {
+                    *plane = p;
+                }
             }
         }
     }
@@ -334,6 +334,19 @@ impl SetupContext {
 #[inline(always)]
 fn all3(f: impl Fn(usize) -> f64x4) -> f64x4 {
     f(0) & f(1) & f(2)
+}
+
+/// `snap` of `v` = 256·(a screen coordinate): rounded half to even, as
+/// `round_ties_even`, then to integer. |v| ≤ 2²⁸ (the guard band), so
+/// v + 1.5·2⁵² is exact after rounding and its low mantissa bits are the
+/// integer (two's complement once the constant's bits are subtracted).
+#[inline(always)]
+fn snap(v: f64x4) -> [i64; LANES] {
+    const MAGIC: f64 = 6755399441055744.0; // 1.5·2⁵²
+    let bits = (v.round_ties_even() + f64x4::splat(MAGIC))
+        .to_bits()
+        .to_array();
+    bits.map(|b| b.wrapping_sub(MAGIC.to_bits()) as i64)
 }
 
 /// A mask with every lane set.

@@ -44,17 +44,31 @@ fn plane_bits(p: &TriPlanes) -> Vec<u32> {
 /// they agree, and returns how the 4-wide path's lanes ended.
 fn compare(ctx: &SetupContext, tris: &[(Tri, Cull)]) -> Paths {
     assert_eq!(tris.len() % LANES, 0);
-    let (mut out_s, mut counts_s, mut planes_s) = (Vec::new(), SetupCounts::default(), Vec::new());
+    // Planes not written keep this value in both paths.
+    let unset = TriPlanes {
+        facing: 7.0,
+        ..TriPlanes::default()
+    };
+    let (mut out_s, mut counts_s) = (Vec::new(), SetupCounts::default());
+    let mut planes_s = vec![unset; tris.len()];
     for (i, (v, cull)) in tris.iter().enumerate() {
-        planes_s.push(ctx.setup(i as u32, *v, *cull, &mut out_s, &mut counts_s));
+        if let Some(p) = ctx.setup(i as u32, *v, *cull, &mut out_s, &mut counts_s) {
+            planes_s[i] = p;
+        }
     }
     PATHS.with(|p| p.set(Paths::default()));
-    let (mut out_v, mut counts_v, mut planes_v) = (Vec::new(), SetupCounts::default(), Vec::new());
-    for (g, group) in tris.chunks_exact(LANES).enumerate() {
+    let (mut out_v, mut counts_v) = (Vec::new(), SetupCounts::default());
+    let mut planes_v = vec![unset; tris.len()];
+    for (g, (group, planes)) in tris
+        .chunks_exact(LANES)
+        .zip(planes_v.chunks_exact_mut(LANES))
+        .enumerate()
+    {
         let v = std::array::from_fn(|t| group[t].0);
         let cull = std::array::from_fn(|t| group[t].1);
+        let planes = planes.try_into().unwrap();
         let first = (g * LANES) as u32;
-        planes_v.extend(ctx.setup_x4(first, &v, cull, &mut out_v, &mut counts_v));
+        ctx.setup_x4(first, &v, cull, planes, &mut out_v, &mut counts_v);
     }
     let paths = PATHS.with(|p| p.get());
     assert_eq!(counts_v, counts_s);
@@ -63,8 +77,7 @@ fn compare(ctx: &SetupContext, tris: &[(Tri, Cull)]) -> Paths {
         assert_eq!(raster_bits(a), raster_bits(b), "{:?}", tris[b.tri as usize]);
     }
     for (i, (a, b)) in planes_v.iter().zip(&planes_s).enumerate() {
-        let (a, b) = (a.as_ref().map(plane_bits), b.as_ref().map(plane_bits));
-        assert_eq!(a, b, "planes of {:?}", tris[i]);
+        assert_eq!(plane_bits(a), plane_bits(b), "planes of {:?}", tris[i]);
     }
     // Every lane ends in exactly one way.
     assert_eq!(paths.0.iter().sum::<u64>(), tris.len() as u64);
@@ -293,4 +306,26 @@ fn every_pattern_of_scalar_lanes_matches() {
     }
     let paths = compare(&ctx, &tris);
     assert_eq!(paths.0[0], 50 * 32, "{paths:?}");
+}
+
+#[test]
+fn snap_matches_the_scalar_snap_at_ties_and_extremes() {
+    let g = crate::fixed::GUARD_BAND_PX;
+    let mut vs = vec![
+        0.0, -0.0, 1e-300, -1e-300, g, -g, 0.5, -0.5, 1.5, -1.5, 2.5, -2.5,
+    ];
+    let mut rng = StdRng::seed_from_u64(3);
+    for _ in 0..4000 {
+        // Ties (k + ½)/256, and anything in the band.
+        let k = rng.random_range(-(1i64 << 28)..1 << 28) as f64;
+        vs.push((k + 0.5) / 256.0);
+        vs.push(rng.random_range(-g..=g));
+        vs.push(k / 256.0);
+    }
+    for chunk in vs.chunks_exact(LANES) {
+        let v: [f64; LANES] = chunk.try_into().unwrap();
+        let fixed = wide::f64x4::splat(crate::fixed::SUBPIXEL_ONE as f64);
+        let got = super::snap(wide::f64x4::new(v) * fixed);
+        assert_eq!(got, v.map(crate::fixed::snap), "{v:?}");
+    }
 }
