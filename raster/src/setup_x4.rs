@@ -16,10 +16,11 @@
 //! counts are the scalar ones. `tests/setup_x4.rs` checks all of it against
 //! the scalar path on random and hand-picked triangles.
 
-use crate::fixed::{GUARD_BAND_PX, SUBPIXEL_ONE};
+use crate::fixed::{GUARD_BAND_PX, SUBPIXEL_HALF, SUBPIXEL_ONE};
 use crate::geometry::Cull;
 use crate::setup::{
-    RasterTri, SetupContext, SetupCounts, TriPlanes, MAX_CLIP_COORD, MAX_PLANE_VALUE,
+    Edge, RasterTri, SetupContext, SetupCounts, SmallEdges, TriPlanes, MAX_CLIP_COORD,
+    MAX_PLANE_VALUE, SMALL_PX,
 };
 use wide::f64x4;
 
@@ -44,9 +45,10 @@ enum Lane {
 #[cfg(test)]
 mod trace {
     use std::cell::Cell;
-    /// Scalar, outside, culled, fast drawn, fast no samples, fast unbounded.
+    /// Scalar, outside, culled, fast drawn, fast no samples, fast
+    /// unbounded; and apart, fast lanes whose edges were scalar.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-    pub struct Paths(pub [u64; 6]);
+    pub struct Paths(pub [u64; 7]);
     thread_local!(pub static PATHS: Cell<Paths> = Cell::new(Paths::default()));
     pub fn hit(i: usize) {
         PATHS.with(|p| {
@@ -200,7 +202,7 @@ impl SetupContext {
         let mut finite = valid_all();
         let mut min_x = f64x4::splat(f64::INFINITY);
         let mut min_y = f64x4::splat(f64::INFINITY);
-        let mut snapped = [[[0i64; LANES]; 2]; 3];
+        let mut snapped = [[f64x4::ZERO; 2]; 3];
         for j in 0..3 {
             let inv_w = one / w[j];
             let sx = (x[j] * inv_w + one) * half * ws;
@@ -213,9 +215,16 @@ impl SetupContext {
             let sy = sy.fast_max(lo).fast_min(hi);
             min_x = min_x.fast_min(sx);
             min_y = min_y.fast_min(sy);
-            snapped[j] = [snap(sx * fixed), snap(sy * fixed)];
+            // `snap`'s rounding; the integers stay in f64 (exact) for
+            // `edges_x4`.
+            snapped[j] = [
+                (sx * fixed).round_ties_even(),
+                (sy * fixed).round_ties_even(),
+            ];
         }
         let finite = finite.to_bitmask();
+        let exact = within_exact_range(&snapped);
+        let edges = edges_x4(self.width, self.height, &snapped);
 
         // Planes: rows of M⁻¹ = adj / det, composed with pixel → NDC and
         // moved to the origin, as `setup`'s `plane`.
@@ -266,8 +275,15 @@ impl SetupContext {
                 continue;
             }
             counts.triangles += 1;
-            let [p0, p1, p2] = snapped.map(|[sx, sy]| [sx[t], sy[t]]);
-            let Some(rt) = self.edges(first + t as u32, p0, p1, p2) else {
+            let id = first + t as u32;
+            let rt = if bit(exact, t) {
+                bit(edges.some, t).then(|| edges.lane(t, id))
+            } else {
+                hit(6);
+                let [p0, p1, p2] = snapped.map(|[sx, sy]| [to_int(sx)[t], to_int(sy)[t]]);
+                self.edges(id, p0, p1, p2)
+            };
+            let Some(rt) = rt else {
                 counts.no_samples += 1;
                 hit(4);
                 continue;
@@ -337,16 +353,137 @@ fn all3(f: impl Fn(usize) -> f64x4) -> f64x4 {
 }
 
 /// `snap` of `v` = 256·(a screen coordinate): rounded half to even, as
-/// `round_ties_even`, then to integer. |v| ≤ 2²⁸ (the guard band), so
-/// v + 1.5·2⁵² is exact after rounding and its low mantissa bits are the
-/// integer (two's complement once the constant's bits are subtracted).
-#[inline(always)]
+/// `round_ties_even`, then to integer.
+#[cfg(test)]
 fn snap(v: f64x4) -> [i64; LANES] {
+    to_int(v.round_ties_even())
+}
+
+/// Integral lanes |v| < 2⁵¹ to i64: v + 1.5·2⁵² is exact and its low
+/// mantissa bits are v (two's complement once the constant's bits are
+/// subtracted); −0 gives 0.
+#[inline(always)]
+fn to_int(v: f64x4) -> [i64; LANES] {
     const MAGIC: f64 = 6755399441055744.0; // 1.5·2⁵²
-    let bits = (v.round_ties_even() + f64x4::splat(MAGIC))
-        .to_bits()
-        .to_array();
+    let bits = (v + f64x4::splat(MAGIC)).to_bits().to_array();
     bits.map(|b| b.wrapping_sub(MAGIC.to_bits()) as i64)
+}
+
+/// Largest |X|, |Y| (fixed point: 2¹⁶ pixels) for which [`edges_x4`] is
+/// exact in f64: then |A|, |B| ≤ 2²⁵, |A·X|, |B·Y| ≤ 2⁴⁹, |C| ≤ 2⁵⁰ + 1,
+/// the doubled area below 2⁵¹ and the edge value at a pixel centre of the
+/// image (< 2²³ fixed units) below 2⁵¹: integers f64 holds exactly, so
+/// every operation gives the i64 result. A vertex beyond it (far out in
+/// the guard band) sends its lane to the i64 [`SetupContext::edges`].
+const EXACT_FIXED: f64 = (1u64 << 24) as f64;
+
+/// Lanes whose snapped vertices are all within ±`EXACT_FIXED`.
+#[inline(always)]
+fn within_exact_range(p: &[[f64x4; 2]; 3]) -> u32 {
+    let bound = f64x4::splat(EXACT_FIXED);
+    let mut m = valid_all();
+    for c in p.iter().flatten() {
+        m &= c.abs().simd_le(bound);
+    }
+    m.to_bitmask()
+}
+
+/// [`SetupContext::edges`] of 4 snapped triangles, structure of arrays;
+/// lanes beyond `EXACT_FIXED` hold garbage.
+struct EdgesX4 {
+    a: [[i64; LANES]; 3],
+    b: [[i64; LANES]; 3],
+    c: [[i64; LANES]; 3],
+    inv_step: [[f64; LANES]; 3],
+    /// Edge values at the centre of pixel (x0, y0), for `small` lanes.
+    e0: [[i64; LANES]; 3],
+    /// x0, y0, x1, y1.
+    bbox: [[i64; LANES]; 4],
+    /// Lanes that give a screen triangle (nonzero area, a candidate pixel).
+    some: u32,
+    /// Lanes at most `SMALL_PX` pixels each way.
+    small: u32,
+}
+
+impl EdgesX4 {
+    /// Lane `t`'s screen triangle, as `edges` builds it.
+    #[inline(always)]
+    fn lane(&self, t: usize, tri: u32) -> RasterTri {
+        let edges: [Edge; 3] = std::array::from_fn(|k| Edge {
+            a: self.a[k][t],
+            b: self.b[k][t],
+            c: self.c[k][t],
+        });
+        RasterTri {
+            small: bit(self.small, t).then(|| SmallEdges {
+                e0: std::array::from_fn(|k| self.e0[k][t] as i32),
+                a: edges.map(|e| (e.a * SUBPIXEL_ONE) as i32),
+                b: edges.map(|e| (e.b * SUBPIXEL_ONE) as i32),
+            }),
+            inv_step: std::array::from_fn(|k| self.inv_step[k][t]),
+            edges,
+            bbox: std::array::from_fn(|i| self.bbox[i][t] as i32),
+            tri,
+        }
+    }
+}
+
+/// `edges` in f64x4 on integral coordinates `p[j] = [X, Y]` of vertex j:
+/// the same integer operations, exact (see `EXACT_FIXED`); ⌊n/256⌋ and
+/// ⌈n/256⌉ are `floor` and `ceil` of an exact division by a power of two.
+#[inline(always)]
+fn edges_x4(width: u32, height: u32, p: &[[f64x4; 2]; 3]) -> EdgesX4 {
+    let (zero, one) = (f64x4::ZERO, f64x4::ONE);
+    let [[x0, y0], [x1, y1], [x2, y2]] = *p;
+    let area2 = (x1 - x0) * (y2 - y0) - (y1 - y0) * (x2 - x0);
+    // Clockwise on screen: swap p1 and p2.
+    let flip = area2.simd_lt(zero);
+    let (x1, x2) = (flip.select(x2, x1), flip.select(x1, x2));
+    let (y1, y2) = (flip.select(y2, y1), flip.select(y1, y2));
+
+    let edge = |xa: f64x4, ya: f64x4, xb: f64x4, yb: f64x4| {
+        let a = ya - yb;
+        let b = xb - xa;
+        // Top-left rule, see `edges`.
+        let top_left = a.simd_gt(zero) | (a.simd_eq(zero) & b.simd_gt(zero));
+        let c = -(a * xa + b * ya) - top_left.select(zero, one);
+        [a, b, c]
+    };
+    let e = [
+        edge(x0, y0, x1, y1),
+        edge(x1, y1, x2, y2),
+        edge(x2, y2, x0, y0),
+    ];
+
+    let px = f64x4::splat(SUBPIXEL_ONE as f64);
+    let half = f64x4::splat(SUBPIXEL_HALF as f64);
+    let bound = |lo: f64x4, hi: f64x4, n: u32| {
+        let first = ((lo - half) / px).ceil().fast_max(zero);
+        let end = (((hi - half) / px).floor() + one).fast_min(f64x4::splat(n as f64));
+        (first, end)
+    };
+    let (min_x, max_x) = (x0.fast_min(x1).fast_min(x2), x0.fast_max(x1).fast_max(x2));
+    let (min_y, max_y) = (y0.fast_min(y1).fast_min(y2), y0.fast_max(y1).fast_max(y2));
+    let (bx0, bx1) = bound(min_x, max_x, width);
+    let (by0, by1) = bound(min_y, max_y, height);
+    let none = area2.simd_eq(zero) | bx0.simd_ge(bx1) | by0.simd_ge(by1);
+    let extent = (max_x - min_x).fast_max(max_y - min_y);
+    let small = extent.simd_le(f64x4::splat((SMALL_PX * SUBPIXEL_ONE) as f64));
+
+    let (cx, cy) = (bx0 * px + half, by0 * px + half);
+    EdgesX4 {
+        a: e.map(|[a, _, _]| to_int(a)),
+        b: e.map(|[_, b, _]| to_int(b)),
+        c: e.map(|[_, _, c]| to_int(c)),
+        inv_step: e.map(|[a, _, _]| {
+            let inv = one / (a.abs() * px);
+            a.simd_eq(zero).select(zero, inv).to_array()
+        }),
+        e0: e.map(|[a, b, c]| to_int(a * cx + b * cy + c)),
+        bbox: [bx0, by0, bx1, by1].map(to_int),
+        some: !none.to_bitmask() & 0xf,
+        small: small.to_bitmask(),
+    }
 }
 
 /// A mask with every lane set.
