@@ -4,17 +4,21 @@
 //!
 //! Each lane performs the scalar path's IEEE operations in the scalar path's
 //! order (no FMA where it multiplies and adds, no reassociation, `snap`'s
-//! ties-to-even), so it produces the same bits: the invalid check, the
-//! outcodes and trivial reject, the 2D-homogeneous adjugate and determinant
-//! (orientation, cull), the guard-band test, projection and snapping, the
-//! planes and their bound. The integer edge functions stay scalar
-//! ([`SetupContext::edges`], per triangle that survives). A lane the fast
-//! path does not cover (a NaN, infinite or huge coordinate, a zero or
-//! non-finite determinant, a triangle that needs clipping, a non-finite
-//! projection) is set up by the scalar [`SetupContext::setup`] instead, in
-//! its turn, so the screen triangles reach `out` in source order and the
-//! counts are the scalar ones. `tests/setup_x4.rs` checks all of it against
-//! the scalar path on random and hand-picked triangles.
+//! ties-to-even, f64 → f32 rounding to nearest), so it produces the same
+//! bits: the invalid check, the outcodes and trivial reject, the
+//! 2D-homogeneous adjugate and determinant (orientation, cull), the
+//! guard-band test, projection and snapping, the planes and their bound.
+//! The integer edge functions are computed in f64x4 too, where f64 holds
+//! every intermediate exactly (vertices within 2¹⁶ pixels of the origin,
+//! see `EXACT_FIXED`); a lane beyond it calls the i64
+//! [`SetupContext::edges`]. A lane the fast path does not cover (a NaN,
+//! infinite or huge coordinate, a zero or non-finite determinant, a
+//! triangle that needs clipping, a non-finite projection) is set up by the
+//! scalar [`SetupContext::setup`] instead, in its turn, so the screen
+//! triangles reach `out` in source order and the counts are the scalar
+//! ones. The scalar `setup` stays the reference: a change to it must be
+//! made here too, and `setup_x4/tests.rs` (random and hand-picked
+//! triangles, every outcome of each lane) fails until it is.
 
 use crate::fixed::{GUARD_BAND_PX, SUBPIXEL_HALF, SUBPIXEL_ONE};
 use crate::geometry::Cull;
