@@ -18,7 +18,8 @@ use crate::scene::{load_scene_str, LoadedScene};
 use specula_raster::bin::{bin_chunk, BinnedChunk};
 use specula_raster::clip::GuardBand;
 use specula_raster::scan::{covered_groups, rasterize_tile};
-use specula_raster::setup::{SetupContext, SetupCounts, TriPlanes};
+use specula_raster::setup::{RasterTri, SetupContext, SetupCounts, TriPlanes};
+use specula_raster::setup_x4::LANES;
 use specula_raster::target::{Target, VisBuffer, MISS, TILE, TILE_PIXELS};
 use specula_raster::{Cull, ShadePath};
 use std::path::Path;
@@ -208,6 +209,72 @@ const TRI_BYTES: usize = 48;
 /// Most triangles a [`raster`] input sets up.
 const MAX_TRIANGLES: usize = 64;
 
+/// The frame's 4-wide setup (groups of 4, the last 0–3 triangles one at
+/// a time, as `frame` runs it) gives what `setup` per triangle gave:
+/// the same screen triangles, planes (as bits) and counts.
+fn same_as_setup_x4(
+    ctx: &SetupContext,
+    tris: &[[[f32; 4]; 3]],
+    cull: Cull,
+    raster_tris: &[RasterTri],
+    planes: &[TriPlanes],
+    counts: &SetupCounts,
+) {
+    let (mut out, mut counts4) = (Vec::new(), SetupCounts::default());
+    let mut planes4 = vec![TriPlanes::default(); tris.len()];
+    let quads = tris.len() / LANES * LANES;
+    for (q, (v, p)) in tris[..quads]
+        .chunks_exact(LANES)
+        .zip(planes4.chunks_exact_mut(LANES))
+        .enumerate()
+    {
+        let v = v.try_into().expect("chunks of LANES");
+        let p = p.try_into().expect("chunks of LANES");
+        ctx.setup_x4(
+            (q * LANES) as u32,
+            v,
+            [cull; LANES],
+            p,
+            &mut out,
+            &mut counts4,
+        );
+    }
+    for (id, v) in tris.iter().enumerate().skip(quads) {
+        if let Some(p) = ctx.setup(id as u32, *v, cull, &mut out, &mut counts4) {
+            planes4[id] = p;
+        }
+    }
+    assert_eq!(&counts4, counts, "setup_x4 counts");
+    assert_eq!(out.len(), raster_tris.len(), "setup_x4 screen triangles");
+    let rt_bits = |r: &RasterTri| {
+        (
+            r.edges,
+            r.inv_step.map(f64::to_bits),
+            r.small,
+            r.bbox,
+            r.tri,
+        )
+    };
+    for (a, b) in out.iter().zip(raster_tris) {
+        assert_eq!(
+            rt_bits(a),
+            rt_bits(b),
+            "setup_x4: screen triangle of {}",
+            b.tri
+        );
+    }
+    let plane_bits = |p: &TriPlanes| {
+        [&p.origin[..], &p.k1, &p.k2, &p.ks, &p.z, &[p.facing]]
+            .concat()
+            .iter()
+            .map(|c| c.to_bits())
+            .collect::<Vec<_>>()
+    };
+    for (id, (a, b)) in planes4.iter().zip(planes).enumerate() {
+        assert_eq!(plane_bits(a), plane_bits(b), "setup_x4: planes of {id}");
+    }
+}
+
 /// Target `raster`: arbitrary clip-space triangles through setup (cull,
 /// clip, snap), binning and scan conversion into a visibility buffer of
 /// a small image, checking that
@@ -216,7 +283,9 @@ const MAX_TRIANGLES: usize = 64;
 ///   the triangle's exact fixed-point edges,
 /// - the padding of the tiles past the image stays empty,
 /// - every depth is finite and every id names a drawn triangle,
-/// - the planes of drawn triangles are finite.
+/// - the planes of drawn triangles are finite,
+/// - the 4-wide setup the frame runs (`setup_x4`) gives the same screen
+///   triangles, planes and counts, bit for bit.
 ///
 /// Layout: byte 0 → width 1..=160, byte 1 → height 1..=160, byte 2 → cull
 /// mode (0 back, 1 front, else none), then 48 bytes per triangle. The
@@ -244,6 +313,7 @@ pub fn raster(data: &[u8]) -> Result<(), String> {
     let mut counts = SetupCounts::default();
     let mut planes: Vec<TriPlanes> = Vec::new();
     let mut drawn = Vec::new();
+    let mut tris = Vec::new();
     for (id, t) in rest.chunks_exact(TRI_BYTES).take(MAX_TRIANGLES).enumerate() {
         let small = t[0] & 1 == 1;
         let c = |k: usize| -> f32 {
@@ -255,6 +325,7 @@ pub fn raster(data: &[u8]) -> Result<(), String> {
             }
         };
         let v = [0, 1, 2].map(|i| [0, 1, 2, 3].map(|j| c(4 * i + j)));
+        tris.push(v);
         let before = raster_tris.len();
         let p = ctx.setup(id as u32, v, cull, &mut raster_tris, &mut counts);
         planes.push(p.unwrap_or_default());
@@ -274,6 +345,7 @@ pub fn raster(data: &[u8]) -> Result<(), String> {
             );
         }
     }
+    same_as_setup_x4(&ctx, &tris, cull, &raster_tris, &planes, &counts);
     for rt in &raster_tris {
         let [x0, y0, x1, y1] = rt.bbox;
         assert!(

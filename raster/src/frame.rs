@@ -14,6 +14,7 @@ use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
 use crate::setup::{SetupContext, SetupCounts, TriPlanes};
+use crate::setup_x4::LANES;
 use crate::shade::{shade_tile, ShadeTargets};
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use rayon::prelude::*;
@@ -147,19 +148,35 @@ fn geometry_pass(
             let raster = &mut chunk.tris;
             raster.clear();
             let mut counts = SetupCounts::default();
-            for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate() {
-                let src = range.start + c * CHUNK + i;
-                let id = ids.start as u32 + (c * CHUNK + i) as u32;
-                let v = tri.map(|k| clip[k as usize]);
-                let cull = match pass.cull {
-                    Cull::Back
-                        if scene.materials[scene.tri_material[src] as usize].double_sided =>
-                    {
-                        Cull::None
-                    }
-                    c => c,
-                };
-                if let Some(p) = ctx.setup(id, v, cull, raster, &mut counts) {
+            let base = c * CHUNK;
+            let cull = |i: usize| match pass.cull {
+                Cull::Back
+                    if scene.materials[scene.tri_material[range.start + base + i] as usize]
+                        .double_sided =>
+                {
+                    Cull::None
+                }
+                c => c,
+            };
+            let id = |i: usize| ids.start as u32 + (base + i) as u32;
+            let vertices = |tri: &[u32; 3]| tri.map(|k| clip[k as usize]);
+            // 4 triangles at a time (bit-identical to `setup` per triangle),
+            // the chunk's last 0–3 one at a time.
+            let quads = tris.len() / LANES * LANES;
+            for (q, (tris4, planes4)) in tris[..quads]
+                .chunks_exact(LANES)
+                .zip(planes[..quads].chunks_exact_mut(LANES))
+                .enumerate()
+            {
+                let i = q * LANES;
+                let v = std::array::from_fn(|t| vertices(&tris4[t]));
+                let cull4 = std::array::from_fn(|t| cull(i + t));
+                let planes4 = planes4.try_into().expect("chunks of LANES");
+                ctx.setup_x4(id(i), &v, cull4, planes4, raster, &mut counts);
+            }
+            for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
+                if let Some(p) = ctx.setup(id(i), vertices(tri), cull(i), raster, &mut counts)
+                {
                     *plane = p;
                 }
             }

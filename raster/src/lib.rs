@@ -2,7 +2,8 @@
 //!
 //! A frame is a list of passes (`frame`): the scene's geometry passes
 //! (`geometry`: vertex stage, cull mode, id range) each transform vertices,
-//! clip (`clip`), set up fixed-point edge functions (`setup`, `fixed`), bin
+//! clip (`clip`), set up fixed-point edge functions (`setup`, `fixed`;
+//! `setup_x4` does 4 triangles at once, bit-identical), bin
 //! screen triangles into 64×64 tiles (`bin`) and scan-convert each tile into
 //! the one visibility buffer (`scan`, `target`); the shading pass rebuilds
 //! attributes at pixel centres (`resolve`) and runs each material's surface
@@ -26,6 +27,7 @@ pub mod resolve;
 pub mod scan;
 pub mod scene;
 pub mod setup;
+pub mod setup_x4;
 pub mod shade;
 pub mod shader;
 pub mod target;

@@ -178,6 +178,9 @@ impl SetupContext {
     /// it if `cull` says its facing is not drawn. Pushes its
     /// screen triangles to `out` and returns its planes, or `None` if it
     /// draws nothing; `counts` says why.
+    ///
+    /// The reference for `setup_x4` (4 triangles at once, bit-identical,
+    /// what the frame runs): change both together.
     pub fn setup(
         &self,
         tri: u32,
