@@ -10,6 +10,7 @@ use crate::buffers::{BufferSet, FrameBuffers, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
 use crate::geometry::{Cull, GeometryPass};
+use crate::occlusion::DepthBounds;
 use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
@@ -50,6 +51,8 @@ pub struct Visibility {
     pub planes: Vec<TriPlanes>,
     pub view: View,
     clip: Vec<[f32; 4]>,
+    /// Block depth bounds after the first pass, for the later ones.
+    occluder: DepthBounds,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -64,6 +67,7 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         planes: Vec::new(),
         view: scene.camera.view(target.width, target.height),
         clip: Vec::new(),
+        occluder: DepthBounds::default(),
     };
     visibility_into(scene, target, &mut v, stats);
     v
@@ -90,7 +94,7 @@ pub fn visibility_into(
         .unwrap_or(0);
     out.planes.resize(ids as usize, TriPlanes::default());
     for (i, pass) in scene.geometry.iter().enumerate() {
-        geometry_pass(scene, target, pass, i == 0, out, stats);
+        geometry_pass(scene, target, pass, i, out, stats);
     }
     if scene.geometry.is_empty() {
         out.vis.depth.fill(0.0);
@@ -100,15 +104,18 @@ pub fn visibility_into(
 
 /// One geometry pass: vertex stage, clip + setup, bin, raster. The first
 /// pass of a frame clears the visibility buffer; later ones depth-test
-/// against what the earlier ones drew.
+/// against what the earlier ones drew, and skip in setup the triangles
+/// that test shows cannot pass anywhere (`occlusion`; bounds built once,
+/// before the second pass, and counted in the setup time).
 fn geometry_pass(
     scene: &SceneData,
     target: &Target,
     pass: &GeometryPass,
-    first: bool,
+    index: usize,
     out: &mut Visibility,
     stats: &mut FrameStats,
 ) {
+    let (first, second) = (index == 0, index == 1);
     let t = Instant::now();
     out.clip.clear();
     pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
@@ -127,6 +134,10 @@ fn geometry_pass(
         height: target.height,
         guard: GuardBand::for_image(target.width, target.height),
     };
+    if second {
+        out.occluder.build(target, &out.vis.depth);
+    }
+    let occluder = (!first).then_some(&out.occluder);
     let range = pass.triangles.start as usize..pass.triangles.end as usize;
     let ids = pass.ids();
     let set_up: Vec<(Vec<crate::setup::RasterTri>, SetupCounts)> = scene.triangles[range.clone()]
@@ -148,7 +159,8 @@ fn geometry_pass(
                     }
                     c => c,
                 };
-                if let Some(p) = ctx.setup(id, v, cull, &mut raster, &mut counts) {
+                if let Some(p) = ctx.setup_occluded(id, v, cull, occluder, &mut raster, &mut counts)
+                {
                     *plane = p;
                 }
             }
