@@ -18,7 +18,6 @@
 //! 97k on the benchmark scene (62k with 8×8 blocks; the rest lie within
 //! a few pixels of a silhouette, where the ring is, and must be drawn).
 
-use crate::setup::MAX_CLIP_COORD;
 use crate::target::{Target, TILE, TILE_PIXELS};
 use rayon::prelude::*;
 
@@ -75,17 +74,7 @@ impl DepthBounds {
             });
     }
 
-    /// Whether every block touched by pixels [x0, x1] × [y0, y1]
-    /// (inclusive, inside the image) has least depth ≥ `z`.
-    fn all_at_least(&self, [x0, x1, y0, y1]: [usize; 4], z: f32) -> bool {
-        (y0 / BLOCK..=y1 / BLOCK).all(|by| {
-            let r = &self.min[by * self.row..(by + 1) * self.row];
-            r[x0 / BLOCK..=x1 / BLOCK].iter().all(|&m| m >= z)
-        })
-    }
-
-    /// Whether the triangle with clip-space vertices `v` (finite, within
-    /// `MAX_CLIP_COORD`) writes no pixel against depth these bounds
+    /// Whether the triangle with clip-space vertices `v` writes no pixel against depth these bounds
     /// bound from below; `false` whenever that is not shown.
     ///
     /// With every w > 0 the triangle's screen projection is the triangle
@@ -100,55 +89,77 @@ impl DepthBounds {
     /// relative to a corner of the triangle's box: a few ulps of |z| +
     /// |∂z/∂x|·Δx + |∂z/∂y|·Δy, far below the 1e-6 relative margin added.
     pub fn hides(&self, v: &[[f64; 4]; 3]) -> bool {
-        if !v.iter().all(|p| p[3] > 0.0) {
+        let [a, b, c] = v;
+        if !(a[3] > 0.0 && b[3] > 0.0 && c[3] > 0.0) {
             return false;
         }
         let (w, h) = (self.width as f64, self.height as f64);
-        // The same projection as setup's.
-        let s = v.map(|p| {
+        // Setup's projection (up to rounding, which the pixel of margin
+        // around the rectangle covers).
+        let (hw, hh) = (0.5 * w, 0.5 * h);
+        let project = |p: &[f64; 4]| {
             let inv_w = 1.0 / p[3];
-            [
-                (p[0] * inv_w + 1.0) * 0.5 * w,
-                (1.0 - p[1] * inv_w) * 0.5 * h,
+            (
+                (p[0] * inv_w + 1.0) * hw,
+                (1.0 - p[1] * inv_w) * hh,
                 p[2] * inv_w,
-            ]
-        });
-        let (e1, e2) = (
-            [s[1][0] - s[0][0], s[1][1] - s[0][1], s[1][2] - s[0][2]],
-            [s[2][0] - s[0][0], s[2][1] - s[0][1], s[2][2] - s[0][2]],
-        );
-        let d = e1[0] * e2[1] - e2[0] * e1[1];
-        let gx = (e1[2] * e2[1] - e2[2] * e1[1]) / d;
-        let gy = (e1[0] * e2[2] - e2[0] * e1[2]) / d;
-        let lo = |k: usize| s.iter().fold(f64::INFINITY, |m, p| m.min(p[k]));
-        let hi = |k: usize| s.iter().fold(f64::NEG_INFINITY, |m, p| m.max(p[k]));
-        let (x0, x1, y0, y1) = (lo(0) - 1.0, hi(0) + 1.0, lo(1) - 1.0, hi(1) + 1.0);
-        let slope = gx.abs() + gy.abs();
-        let z = hi(2)
-            + slope / 256.0
-            + 1e-6 * (hi(2).abs() + gx.abs() * (x1 - x0) + gy.abs() * (y1 - y0));
-        // Non-finite anywhere (a degenerate triangle, d = 0): not shown.
-        if !(z.is_finite() && x0.abs() < MAX_CLIP_COORD && y0.abs() < MAX_CLIP_COORD)
-            || !(x1.abs() < MAX_CLIP_COORD && y1.abs() < MAX_CLIP_COORD)
-        {
+            )
+        };
+        let (x0, y0, z0) = project(a);
+        let (x1, y1, z1) = project(b);
+        let (x2, y2, z2) = project(c);
+        let (ux, uy, uz) = (x1 - x0, y1 - y0, z1 - z0);
+        let (vx, vy, vz) = (x2 - x0, y2 - y0, z2 - z0);
+        // The plane's screen gradient; NaN or infinite coordinates and
+        // collinear vertices (d = 0) make it non-finite or NaN, and so z
+        // below: not judged.
+        let inv_d = 1.0 / (ux * vy - vx * uy);
+        let gx = (uz * vy - vz * uy) * inv_d;
+        let gy = (ux * vz - vx * uz) * inv_d;
+        let min3 = |a: f64, b: f64, c: f64| {
+            let m = if b < a { b } else { a };
+            if c < m {
+                c
+            } else {
+                m
+            }
+        };
+        let max3 = |a: f64, b: f64, c: f64| -min3(-a, -b, -c);
+        let (x_lo, x_hi) = (min3(x0, x1, x2) - 1.0, max3(x0, x1, x2) + 1.0);
+        let (y_lo, y_hi) = (min3(y0, y1, y2) - 1.0, max3(y0, y1, y2) + 1.0);
+        // Off the image (setup's business), or NaN: not judged.
+        if !(x_hi >= 0.0 && y_hi >= 0.0 && x_lo <= w && y_lo <= h) {
             return false;
         }
-        let clamp_x = |x: f64| x.clamp(0.0, w - 1.0) as usize;
-        let clamp_y = |y: f64| y.clamp(0.0, h - 1.0) as usize;
-        if x1 < 0.0 || y1 < 0.0 || x0 > w || y0 > h {
-            return false; // off screen: setup's own business
+        let z_hi = max3(z0, z1, z2);
+        let (ax, ay) = (gx.abs(), gy.abs());
+        let z = z_hi
+            + (ax + ay) * (1.0 / 256.0)
+            + 1e-6 * (z_hi.abs() + ax * (x_hi - x_lo) + ay * (y_hi - y_lo));
+        if !z.is_finite() {
+            return false;
         }
-        let rect = [
-            clamp_x(x0.floor()),
-            clamp_x(x1.ceil()),
-            clamp_y(y0.floor()),
-            clamp_y(y1.ceil()),
-        ];
         // z as f32 rounded up, so a bound exactly at a block's depth
         // still compares right.
         let z32 = z as f32;
         let z32 = if (z32 as f64) < z { z32.next_up() } else { z32 };
-        self.all_at_least(rect, z32)
+        // Inside the image: the casts truncate non-negative values.
+        let bx0 = x_lo.max(0.0) as usize / BLOCK;
+        let bx1 = x_hi.ceil().min(w - 1.0) as usize / BLOCK;
+        let by0 = y_lo.max(0.0) as usize / BLOCK;
+        let by1 = y_hi.ceil().min(h - 1.0) as usize / BLOCK;
+        if bx0 > bx1 || by0 > by1 {
+            return false; // only past the right or bottom edge
+        }
+        for by in by0..=by1 {
+            let row = &self.min[by * self.row..(by + 1) * self.row];
+            for &m in &row[bx0..=bx1] {
+                if m < z32 {
+                    return false;
+                }
+            }
+        }
+        true
     }
 }
 
