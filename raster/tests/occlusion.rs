@@ -91,7 +91,7 @@ fn triangles_called_hidden_write_no_pixel() {
         }
         let v: [[f32; 4]; 3] = p.map(|[x, y]| {
             // Every fifth between the checker's two depths: hidden only
-            // where every block it touches is all far cells.
+            // where every block it touches is all near cells (0.06; depth is reversed).
             let base = if n % 5 == 0 { 0.055 } else { least as f64 };
             let z = base * (1.0 + spread * rng.random_range(-2.0..2.0));
             let w: f64 = rng.random_range(0.5..4.0);
