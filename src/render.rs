@@ -104,6 +104,7 @@ pub struct RunStats {
     pub triangles_in: u64,
     pub culled_backface: u64,
     pub culled_outside: u64,
+    pub culled_occluded: u64,
     pub skipped_invalid: u64,
     pub skipped_degenerate: u64,
     pub clipped: u64,
@@ -259,6 +260,7 @@ fn run_stats(
         triangles_in: c.triangles,
         culled_backface: c.culled_backface,
         culled_outside: c.culled_outside,
+        culled_occluded: c.culled_occluded,
         skipped_invalid: c.skipped_invalid,
         skipped_degenerate: c.skipped_degenerate,
         clipped: c.clipped,
@@ -291,10 +293,11 @@ impl RunStats {
             self.frames.len()
         );
         s += &format!(
-            "triangles: {} in, {} back-face culled, {} outside, {} invalid (NaN/huge), {} degenerate, {} clipped, {} drawn ({} screen triangles), {} between pixel centres\n",
+            "triangles: {} in, {} back-face culled, {} outside, {} hidden by earlier passes, {} invalid (NaN/huge), {} degenerate, {} clipped, {} drawn ({} screen triangles), {} between pixel centres\n",
             self.triangles_in,
             self.culled_backface,
             self.culled_outside,
+            self.culled_occluded,
             self.skipped_invalid,
             self.skipped_degenerate,
             self.clipped,

@@ -10,6 +10,7 @@ use crate::buffers::{BufferSet, FrameBuffers, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
 use crate::geometry::{Cull, GeometryPass};
+use crate::occlusion::DepthBounds;
 use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
@@ -54,6 +55,8 @@ pub struct Visibility {
     /// Setup's and binning's output per chunk, kept for the next frame's
     /// geometry passes to refill (see [`BinnedChunk::bin`]).
     chunks: Vec<BinnedChunk>,
+    /// Block depth bounds after the first pass, for the later ones.
+    occluder: DepthBounds,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -69,6 +72,7 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         view: scene.camera.view(target.width, target.height),
         clip: Vec::new(),
         chunks: Vec::new(),
+        occluder: DepthBounds::default(),
     };
     visibility_into(scene, target, &mut v, stats);
     v
@@ -95,7 +99,7 @@ pub fn visibility_into(
         .unwrap_or(0);
     out.planes.resize(ids as usize, TriPlanes::default());
     for (i, pass) in scene.geometry.iter().enumerate() {
-        geometry_pass(scene, target, pass, i == 0, out, stats);
+        geometry_pass(scene, target, pass, i, out, stats);
     }
     if scene.geometry.is_empty() {
         out.vis.depth.fill(0.0);
@@ -105,15 +109,18 @@ pub fn visibility_into(
 
 /// One geometry pass: vertex stage, clip + setup, bin, raster. The first
 /// pass of a frame clears the visibility buffer; later ones depth-test
-/// against what the earlier ones drew.
+/// against what the earlier ones drew, and skip in setup the triangles
+/// that test shows cannot pass anywhere (`occlusion`; bounds built once,
+/// before the second pass, and counted in the setup time).
 fn geometry_pass(
     scene: &SceneData,
     target: &Target,
     pass: &GeometryPass,
-    first: bool,
+    index: usize,
     out: &mut Visibility,
     stats: &mut FrameStats,
 ) {
+    let (first, second) = (index == 0, index == 1);
     let t = Instant::now();
     out.clip.clear();
     pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
@@ -132,6 +139,10 @@ fn geometry_pass(
         height: target.height,
         guard: GuardBand::for_image(target.width, target.height),
     };
+    if second {
+        out.occluder.build(target, &out.vis.depth);
+    }
+    let occluder = (!first).then_some(&out.occluder);
     let range = pass.triangles.start as usize..pass.triangles.end as usize;
     let ids = pass.ids();
     let n_chunks = range.len().div_ceil(CHUNK);
@@ -161,8 +172,13 @@ fn geometry_pass(
             let id = |i: usize| ids.start as u32 + (base + i) as u32;
             let vertices = |tri: &[u32; 3]| tri.map(|k| clip[k as usize]);
             // 4 triangles at a time (bit-identical to `setup` per triangle),
-            // the chunk's last 0–3 one at a time.
-            let quads = tris.len() / LANES * LANES;
+            // the chunk's last 0–3 one at a time; passes after the first
+            // (outlines) one at a time with the occlusion test.
+            let quads = if occluder.is_none() {
+                tris.len() / LANES * LANES
+            } else {
+                0
+            };
             for (q, (tris4, planes4)) in tris[..quads]
                 .chunks_exact(LANES)
                 .zip(planes[..quads].chunks_exact_mut(LANES))
@@ -175,7 +191,8 @@ fn geometry_pass(
                 ctx.setup_x4(id(i), &v, cull4, planes4, raster, &mut counts);
             }
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
-                if let Some(p) = ctx.setup(id(i), vertices(tri), cull(i), raster, &mut counts)
+                if let Some(p) =
+                    ctx.setup_occluded(id(i), vertices(tri), cull(i), occluder, raster, &mut counts)
                 {
                     *plane = p;
                 }

@@ -2,7 +2,8 @@
 //!
 //! A frame is a list of passes (`frame`): the scene's geometry passes
 //! (`geometry`: vertex stage, cull mode, id range) each transform vertices,
-//! clip (`clip`), set up fixed-point edge functions (`setup`, `fixed`;
+//! clip (`clip`), skip triangles hidden behind earlier passes
+//! (`occlusion`), set up fixed-point edge functions (`setup`, `fixed`;
 //! `setup_x4` does 4 triangles at once, bit-identical), bin
 //! screen triangles into 64×64 tiles (`bin`) and scan-convert each tile into
 //! the one visibility buffer (`scan`, `target`); the shading pass rebuilds
@@ -22,6 +23,7 @@ pub mod fixed;
 pub mod frame;
 pub mod geometry;
 pub mod lit;
+pub mod occlusion;
 pub mod post;
 pub mod resolve;
 pub mod scan;

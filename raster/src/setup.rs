@@ -4,6 +4,7 @@
 use crate::clip::{ClipVertex, GuardBand};
 use crate::fixed::{pixel_centre, snap, GUARD_BAND_PX, SUBPIXEL_BITS, SUBPIXEL_HALF, SUBPIXEL_ONE};
 use crate::geometry::Cull;
+use crate::occlusion::DepthBounds;
 
 /// An edge function E(X, Y) = A·X + B·Y + C over fixed-point coordinates,
 /// positive inside. `c` already holds the fill-rule bias, so a pixel centre is
@@ -107,6 +108,9 @@ pub struct SetupCounts {
     /// pass with `Cull::Front`).
     pub culled_backface: u64,
     pub culled_outside: u64,
+    /// Behind what earlier passes drew at every pixel it touches
+    /// (`occlusion`); only in passes after a frame's first.
+    pub culled_occluded: u64,
     /// A vertex is NaN, infinite or beyond `MAX_CLIP_COORD`.
     pub skipped_invalid: u64,
     pub skipped_degenerate: u64,
@@ -122,6 +126,7 @@ impl SetupCounts {
         self.triangles += o.triangles;
         self.culled_backface += o.culled_backface;
         self.culled_outside += o.culled_outside;
+        self.culled_occluded += o.culled_occluded;
         self.skipped_invalid += o.skipped_invalid;
         self.skipped_degenerate += o.skipped_degenerate;
         self.clipped += o.clipped;
@@ -189,6 +194,20 @@ impl SetupContext {
         out: &mut Vec<RasterTri>,
         counts: &mut SetupCounts,
     ) -> Option<TriPlanes> {
+        self.setup_occluded(tri, v, cull, None, out, counts)
+    }
+
+    /// [`SetupContext::setup`], skipping the triangle too if `occluder`
+    /// shows it writes no pixel (see `occlusion`).
+    pub fn setup_occluded(
+        &self,
+        tri: u32,
+        v: [[f32; 4]; 3],
+        cull: Cull,
+        occluder: Option<&DepthBounds>,
+        out: &mut Vec<RasterTri>,
+        counts: &mut SetupCounts,
+    ) -> Option<TriPlanes> {
         counts.triangles += 1;
         let v: [ClipVertex; 3] = v.map(|p| p.map(|c| c as f64));
         if v.iter()
@@ -223,6 +242,10 @@ impl SetupContext {
         };
         if culled {
             counts.culled_backface += 1;
+            return None;
+        }
+        if occluder.is_some_and(|o| o.hides(&v)) {
+            counts.culled_occluded += 1;
             return None;
         }
 
