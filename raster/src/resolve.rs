@@ -156,12 +156,15 @@ impl PacketTris {
             for t in 0..self.n {
                 let (tri, m) = ctx.ids.look_up(self.id[t], &ctx.scene.tri_material);
                 (self.tri[t], self.material[t]) = (tri, m);
-                // Packets hold one material almost always: compare with the
-                // last group first.
-                match (0..self.groups)
-                    .rev()
-                    .find(|&g| self.group_material[g] == m)
-                {
+                // Packets hold one material almost always: the last group
+                // is tested first, without the search (which cost ~20
+                // instructions a packet).
+                let last = self.groups.wrapping_sub(1);
+                if self.groups > 0 && self.group_material[last] == m {
+                    self.group_lanes[last] |= self.lanes[t];
+                    continue;
+                }
+                match (0..self.groups).find(|&g| self.group_material[g] == m) {
                     Some(g) => self.group_lanes[g] |= self.lanes[t],
                     None => {
                         self.group_material[self.groups] = m;
