@@ -77,24 +77,17 @@ pub fn covered_groups(
         // cover most tiles they touch entirely or not at all: an edge
         // function is linear, so its sign at the four corner pixel centres
         // of the rectangle decides every pixel inside when they agree.
-        match rt.rect_coverage([x_lo, x_hi, y_lo, y_hi]) {
+        let whole = match rt.rect_coverage([x_lo, x_hi, y_lo, y_hi]) {
             RectCoverage::Outside => return,
-            RectCoverage::Inside => {
-                for y in y_lo..y_hi {
-                    let mut gx = first_group(x_lo);
-                    while gx < x_hi {
-                        let lo = (x_lo - gx).max(0);
-                        let hi = (x_hi - gx).min(8);
-                        emit(y, gx, (0xFFu32 >> (8 - (hi - lo))) << lo);
-                        gx += 8;
-                    }
-                }
-                return;
-            }
-            RectCoverage::Partial => {}
-        }
+            RectCoverage::Inside => true,
+            RectCoverage::Partial => false,
+        };
         for y in y_lo..y_hi {
-            let (x0, x1) = rt.span(y, x_lo, x_hi);
+            let (x0, x1) = if whole {
+                (x_lo, x_hi)
+            } else {
+                rt.span(y, x_lo, x_hi)
+            };
             let mut gx = first_group(x0);
             while gx < x1 {
                 let lo = (x0 - gx).max(0);
