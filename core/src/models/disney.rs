@@ -75,17 +75,18 @@
 //!   1/sin⁴θh: half its D cos θh mass lies beyond tan θh = √α, against α
 //!   for GGX, so one GGX at the coat's α (or at √α, or at the α of equal
 //!   peak) errs by up to 77 % of the coat's albedo (p90 20–35 %). The coat
-//!   goes through two GGX fits, D_GTR1 ≈ w D_GGX(α₁) + (1 − w) D_GGX(α₂),
-//!   fitted per clearcoat_gloss to the cumulative distribution of
-//!   D cos θh ([`fit_coat_mixture`]: at gloss 1, α = 0.001, 0.49
-//!   GGX(0.0050) and 0.51 GGX(0.17); at gloss 0, α = 0.1, 0.53 GGX(0.17)
-//!   and 0.47 GGX(0.64)),
-//!   each weighted by its mass times its own albedo at the view (the wide
-//!   one loses more at grazing), scaled to the coat's own directional
-//!   albedo ([`coat_albedo_table`]: F0 = 0.04 and the Smith G at
-//!   α = 0.25 included). Measured: p90 ≤ 5 %, max 7.6 % at views ≤ 30°;
-//!   p90 21 %, max 34 % over all views (the G at 0.25 and the mixture's
-//!   shape at grazing views).
+//!   has its own fit (ltc/coat.rs, `specula fit-ltc-coat`): per (ln α, μo)
+//!   a mixture of two linearly transformed cosines, w D₁ + (1 − w) D₂,
+//!   fitted to the coat lobe itself (GTR1, the Smith G at α = 0.25 and
+//!   the F0 = 0.04 Fresnel all in the fitted shape), times its directional
+//!   albedo. Measured on the coat lobe alone (core/tests/disney_ltc.rs,
+//!   `coat_ltc_error_by_gloss_and_view`, as a fraction of the coat's
+//!   albedo): p90 2.0 %, max 13.6 %; clearcoat_gloss ≤ 0.75 max 4.5 %;
+//!   the tail is gloss 1 (α = 0.001, whose peak and tail span three
+//!   decades of θh that two cosines cannot both hold) at θo = 85°. The
+//!   two-GGX stand-in it replaces ([`fit_coat_mixture`] through the GGX
+//!   table, whose G and Fresnel are not the coat's) measured p90 6.2 %,
+//!   max 17.4 %.
 //! - Diffuse, subsurface blend and sheen (× (1 − metallic)): the polygon's
 //!   exact Lambert form factor times the lobes' directional albedo at μo,
 //!   i.e. the lobes replaced by the Lambertian lobe of the same albedo at
@@ -107,6 +108,7 @@ use crate::diffuse::{f_subsurface_burley, fd_burley, sheen_burley};
 use crate::fresnel::{f_schlick, schlick_weight};
 use crate::kulla_conty::KcColor;
 use crate::light::PolygonLocal;
+use crate::ltc::coat::{self, LtcCoat, ALPHA_HI, ALPHA_LO};
 use crate::ltc::ggx::LtcGgx;
 use crate::masking::{g1_smith, lambda_ggx, lambda_ggx_aniso};
 use crate::models::microfacet::{Compensation, Fresnel, GtrLambda, MicrofacetParams, Ndf, Smith};
@@ -226,9 +228,9 @@ struct Derived {
     /// α of the specular lobe's GGX LTC lookup for polygon lights: its
     /// isotropic equivalent √(αx αy) (module docs, "Polygon lights").
     spec_ltc_alpha: f64,
-    /// (w, α₁, α₂) of the clearcoat's two-GGX stand-in
-    /// ([`coat_mixture_table`]; unset without clearcoat).
-    coat_mix: [f64; 3],
+    /// ln α of the clearcoat, where its LTC table is read (ltc/coat.rs),
+    /// α clamped into the table's [0.001, 0.1] (a material's own range).
+    coat_ln_alpha: f64,
 }
 
 impl Derived {
@@ -247,11 +249,7 @@ impl Derived {
             clearcoat_alpha: p.clearcoat_alpha(),
             clearcoat_weight: 0.25 * p.clearcoat as f64,
             spec_ltc_alpha: (alpha_x * alpha_y).sqrt(),
-            coat_mix: if p.clearcoat > 0.0 {
-                coat_mixture_table().lookup::<f64>(p.clearcoat_gloss as f64)
-            } else {
-                [1.0, 0.1, 0.1]
-            },
+            coat_ln_alpha: p.clearcoat_alpha().clamp(ALPHA_LO, ALPHA_HI).ln(),
         }
     }
 }
@@ -347,14 +345,13 @@ impl Disney {
         // not inside the shading pass.
         diffuse_albedo_table();
         if params.clearcoat > 0.0 {
-            coat_albedo_table();
+            coat::table();
         }
         Disney::bare(params, energy_compensation)
     }
 
-    /// [`Disney::new_without_table`] without building the process-wide
-    /// tables (what [`coat_albedo_table`]'s own builder uses: building it
-    /// from inside its initialiser would wait on itself).
+    /// [`Disney::new_without_table`] without touching the process-wide
+    /// tables.
     fn bare(params: DisneyParams, energy_compensation: bool) -> Disney {
         let d = Derived::new(&params);
         let kc = energy_compensation.then(|| {
@@ -571,46 +568,12 @@ fn azimuth_dir(mu: f64, c2: f64) -> V3<f64> {
     V3::new(s * c2.sqrt(), s * (1.0 - c2).max(0.0).sqrt(), mu)
 }
 
-/// The clearcoat lobe's directional albedo (F_r included, weight ¼
-/// clearcoat not) over (clearcoat_gloss, μo), by the model's own
-/// quadrature ([`Disney::albedo_quadrature`]): 6 × 32 entries, built
-/// once per process by the first material with a coat (with the
-/// mixture fit, ~0.25 G instructions: about 0.1 s).
-pub fn coat_albedo_table() -> &'static Table2<1> {
-    static T: OnceLock<Table2<1>> = OnceLock::new();
-    T.get_or_init(|| {
-        Table2::build(GLOSS_AXIS, MU_AXIS, |g, mu| {
-            let m = Disney::bare(
-                DisneyParams {
-                    base_color: [0.0; 3],
-                    specular: 0.0,
-                    clearcoat: 4.0,
-                    clearcoat_gloss: g as f32,
-                    ..DisneyParams::default()
-                },
-                false,
-            );
-            let wo = azimuth_dir(mu, 1.0);
-            [m.albedo_quadrature(&m.prepare(wo), Lobe::Clearcoat)[0]]
-        })
-    })
-}
-
-/// Nodes of clearcoat_gloss in the coat tables ([`coat_albedo_table`],
-/// [`coat_mixture_table`]).
-const GLOSS_AXIS: Axis = Axis::new(6, 0.0, 1.0, Warp::Linear, Nodes::Ends);
-
-/// The two-GGX stand-in for the clearcoat's GTR1 distribution, per
-/// clearcoat_gloss: (w, α₁, α₂) such that w D_GGX(α₁) + (1 − w) D_GGX(α₂)
-/// has nearly the cumulative distribution of D_GTR1(α) cos θh over θh
-/// ([`fit_coat_mixture`]). Built once per process.
-pub fn coat_mixture_table() -> &'static Table1<3> {
-    static T: OnceLock<Table1<3>> = OnceLock::new();
-    T.get_or_init(|| Table1::build(GLOSS_AXIS, |g| fit_coat_mixture(mix(0.1, 0.001, g)).0))
-}
-
-/// Fits (w, α₁, α₂) of [`coat_mixture_table`] for GTR1 of roughness
-/// `alpha`: least squares between the cumulative distributions of
+/// A two-GGX stand-in for the clearcoat's GTR1 distribution of roughness
+/// `alpha`: (w, α₁, α₂) such that w D_GGX(α₁) + (1 − w) D_GGX(α₂) has
+/// nearly the cumulative distribution of D_GTR1(α) cos θh over θh. What
+/// `specula fit-ltc-coat` starts its first cell from (src/fit_ltc_coat.rs;
+/// the runtime used it through the GGX table before ltc/coat.rs: up to
+/// 34 % of the coat's albedo off at grazing views). Least squares between the cumulative distributions of
 /// D cos θh, u(θh), sampled at 100 points uniform in ln tan θh over
 /// [α/30, 30] (both are closed forms: GGX u = t²/(α² + t²), t = tan θh;
 /// GTR1 u = 1 − ln(1 − (1 − α²) cos²θh)/ln α² [Burley12, eq. 2]); α₁, α₂
@@ -726,13 +689,14 @@ pub fn diffuse_albedo_coefficients(mu_o: f64) -> [f64; 7] {
 pub struct DisneyPolygons<R: Real> {
     /// The specular lobe's GGX LTC (sheared for anisotropic lobes).
     pub spec: LtcGgx<R>,
-    /// The two GGX LTCs standing in for the clearcoat (copies of `spec`,
+    /// The clearcoat's two fitted cosines (ltc/coat.rs; copies of `spec`,
     /// unused, without clearcoat).
     pub coat: LtcGgx<R>,
     pub coat2: LtcGgx<R>,
     /// C_spec0 (n − n_w) + n_w per channel.
     pub specular: Rgb<R>,
-    /// ¼ clearcoat × the coat's albedo, times w and 1 − w of the mixture.
+    /// ¼ clearcoat × the coat's albedo, times w and 1 − w of the mixture
+    /// (0 where the view is below the horizon).
     pub coat_scale: R,
     pub coat_scale2: R,
     /// The diffuse lobes' directional albedo at μo (plus the compensation
@@ -842,21 +806,9 @@ impl Brdf for Disney {
         );
         // A material constant: the branch is the same in every lane.
         let (coat, coat2, coat_scale, coat_scale2) = if d.clearcoat_weight > 0.0 {
-            let g = self.params.clearcoat_gloss as f64;
-            let [w, a1, a2] = d.coat_mix;
-            let [a] = coat_albedo_table().lookup(R::splat(g), o.cos_o);
-            let s = R::select(o.above, R::splat(d.clearcoat_weight) * a, R::ZERO);
-            let (l1, l2) = (
-                LtcGgx::new(R::splat(a1), o.wo),
-                LtcGgx::new(R::splat(a2), o.wo),
-            );
-            // Each GGX's share of the coat's albedo: its mass times its
-            // own albedo at this view (the wide one loses more at grazing).
-            let f0 = R::splat(CLEARCOAT_F0);
-            let e1 = R::splat(w) * l1.schlick_albedo(f0);
-            let e2 = R::splat(1.0 - w) * l2.schlick_albedo(f0);
-            let k = s / (e1 + e2).max(R::splat(1e-12));
-            (l1, l2, k * e1, k * e2)
+            let c = LtcCoat::new(R::splat(d.coat_ln_alpha), o.wo);
+            let k = R::select(o.above, R::splat(d.clearcoat_weight), R::ZERO);
+            (c.narrow, c.wide, k * c.scale1, k * c.scale2)
         } else {
             (spec, spec, R::ZERO, R::ZERO)
         };
@@ -875,7 +827,7 @@ impl Brdf for Disney {
         }
     }
 
-    /// Specular through its GGX LTC, clearcoat through its two GGX LTCs,
+    /// Specular through its GGX LTC, clearcoat through its two fitted LTCs,
     /// the diffuse lobes as their albedo at μo times the form factor
     /// (module docs, "Polygon lights").
     #[inline(always)]
