@@ -2,33 +2,40 @@
 //! core/src/ltc/coat.rs (its module docs give the lobe, the two-cosine
 //! mixture, the axes and the file format).
 //!
-//! Per cell (ln α, √(1 − μo)) of the 12 × 32 grid:
+//! Per cell (ln α, √(1 − μo)) of the 12 × 32 grid, with K = 3 cosines:
 //! - the lobe p(wi) = f_r(wi, wo) μi / n: the Disney model's own clearcoat
 //!   lobe (`Disney::lobes`, weight 1, view in the xz-plane), n its albedo
 //!   by the model's quadrature (`Disney::albedo_quadrature`);
-//! - the mixture w D₁ + (1 − w) D₂ minimizing the L1 distance
-//!   ∫ |w D₁ + (1 − w) D₂ − p| dω (which bounds every polygon's error as a
-//!   fraction of n), by Nelder–Mead (argmin) over the nine parameters
-//!   (ln a, ln c, b, d of each M and logit w), restarted once from its
-//!   best point. The distance is estimated with fixed stratified points
-//!   (fit_ltc.rs's), a third drawn from the lobe (h ∝ D_GTR1(h)(n·h),
-//!   reflected), a third from each cosine, with the balance heuristic:
-//!   |D − p| / mean of the three densities is bounded.
+//! - the mixture D = Σ wₖ Dₖ minimizing the L1 distance ∫ |D − p| dω
+//!   (which bounds every polygon's error as a fraction of n), by
+//!   Nelder–Mead (argmin) over the 4K + K − 1 parameters (ln a, ln c, b, d
+//!   of each M; the weights as a softmax of K − 1 free logits and 0),
+//!   restarted once from its best point. The distance is estimated with
+//!   fixed stratified points (fit_ltc.rs's), drawn in equal numbers from
+//!   the lobe (h ∝ D_GTR1(h)(n·h), reflected) and from each cosine, with
+//!   the balance heuristic: |D − p| / mean of the K + 1 densities is
+//!   bounded.
 //!
-//! Warm start: the normal view's row runs from α = 0.1 down to 0.001, the
-//! first cell from `fit_coat_mixture`'s two GGX α (as isotropic
-//! transforms), each next from its neighbour; then each α column runs
-//! from the normal view to grazing, each cell from the previous view
-//! (columns in parallel, each in a fixed order: the table does not depend
-//! on the thread count).
+//! Warm start: the α = 0.001 column runs from the normal view to grazing,
+//! the first cell from isotropic cosines a = c = α^((2K − 2k − 1)/2K),
+//! equal weights (GTR1's D cos θh mass is uniform in ln tan θh over
+//! [ln α, 0]: one cosine at the middle of each K-th of it), each next
+//! from the previous view; then each view's row runs from α = 0.001 up to
+//! 0.1, each cell from its neighbour (rows in parallel, each in a fixed
+//! order: the table does not depend on the thread count). Each cosine
+//! thus changes continuously along both axes, so that bilinear
+//! interpolation blends like with like (the mixture is the same under any
+//! order of its cosines; fitted column by column from the normal view
+//! instead, neighbouring columns at grazing views held them in different
+//! orders, and a coat between two α nodes erred by up to 16 %).
 
 use crate::fit_ltc::{ltc_density, ltc_sample, points, MU_MIN};
 use argmin::core::{CostFunction, Error, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use specula_core::ltc::coat::{CoatCell, NX, NY, X_AXIS, Y_AXIS};
-use specula_core::models::disney::{fit_coat_mixture, Disney, DisneyParams, Lobe};
+use specula_core::ltc::coat::{CoatCell, K, NX, NY, X_AXIS, Y_AXIS};
+use specula_core::models::disney::{Disney, DisneyParams, Lobe};
 use specula_core::ndf::d_gtr;
 use specula_core::{Brdf, V3};
 use std::f64::consts::PI;
@@ -111,27 +118,43 @@ impl CoatLobe {
     }
 }
 
-/// A cell's nine fitted parameters: (ln a, ln c, b, d) of M₁ and M₂,
-/// logit w.
-pub type Params = [f64; 9];
+/// Fitted parameters per cell: (ln a, ln c, b, d) of each Mₖ, then the
+/// logits of w₂ … w_K (w₁'s is 0).
+pub const N_PARAMS: usize = 4 * K + K - 1;
+pub type Params = [f64; N_PARAMS];
 
-/// (M₁, M₂, w) of a parameter vector.
-pub fn unpack(p: &[f64]) -> ([f64; 4], [f64; 4], f64) {
-    (
-        [p[0].exp(), p[2], p[1].exp(), p[3]],
-        [p[4].exp(), p[6], p[5].exp(), p[7]],
-        1.0 / (1.0 + (-p[8]).exp()),
-    )
+/// (Mₖ, wₖ) of a parameter vector.
+pub fn unpack(p: &[f64]) -> ([[f64; 4]; K], [f64; K]) {
+    let m = core::array::from_fn(|k| {
+        let q = &p[4 * k..4 * k + 4];
+        [q[0].exp(), q[2], q[1].exp(), q[3]]
+    });
+    let e: [f64; K] = core::array::from_fn(|k| if k == 0 { 1.0 } else { p[4 * K + k - 1].exp() });
+    let sum: f64 = e.iter().sum();
+    (m, e.map(|x| x / sum))
 }
 
-/// ∫ |w D₁ + (1 − w) D₂ − p| dω, estimated as in the module docs.
+/// The parameters of (Mₖ, wₖ) (w₁ > 0).
+pub fn pack(m: &[[f64; 4]; K], w: &[f64; K]) -> Params {
+    let mut p = [0.0; N_PARAMS];
+    for k in 0..K {
+        p[4 * k..4 * k + 4].copy_from_slice(&[m[k][0].ln(), m[k][2].ln(), m[k][1], m[k][3]]);
+        if k > 0 {
+            p[4 * K + k - 1] = (w[k] / w[0]).ln();
+        }
+    }
+    p
+}
+
+/// ∫ |Σ wₖ Dₖ − p| dω, estimated as in the module docs.
 pub fn l1_error(lobe: &CoatLobe, p: &[f64], pts: &[(f64, f64)]) -> f64 {
-    let (m1, m2, w) = unpack(p);
+    let (m, w) = unpack(p);
     let term = |x: V3<f64>, pdf_lobe: f64| {
-        let (d1, d2) = (ltc_density(m1, x), ltc_density(m2, x));
-        let q = (pdf_lobe + d1 + d2) / 3.0;
+        let d = m.map(|m| ltc_density(m, x));
+        let q = (pdf_lobe + d.iter().sum::<f64>()) / (K + 1) as f64;
         if q > 0.0 {
-            (w * d1 + (1.0 - w) * d2 - lobe.p(x)).abs() / q
+            let mix: f64 = d.iter().zip(&w).map(|(d, w)| d * w).sum();
+            (mix - lobe.p(x)).abs() / q
         } else {
             0.0
         }
@@ -140,12 +163,12 @@ pub fn l1_error(lobe: &CoatLobe, p: &[f64], pts: &[(f64, f64)]) -> f64 {
     for &(u1, u2) in pts {
         let (x, pdf) = lobe.sample(u1, u2);
         sum += term(x, pdf);
-        for m in [m1, m2] {
-            let x = ltc_sample(m, u1, u2);
+        for mk in m {
+            let x = ltc_sample(mk, u1, u2);
             sum += term(x, lobe.pdf(x));
         }
     }
-    sum / (3 * pts.len()) as f64
+    sum / ((K + 1) * pts.len()) as f64
 }
 
 struct Problem<'a> {
@@ -158,12 +181,14 @@ impl CostFunction for Problem<'_> {
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, Error> {
         // Keep the simplex out of absurd transforms (a, c within e^±12,
-        // w not pinned to 0 or 1, det M > 0).
-        let (m1, m2, _) = unpack(p);
-        let bad = |m: [f64; 4], q: &[f64]| {
+        // no weight pinned to 0, det M > 0).
+        let (m, _) = unpack(p);
+        let bad = |m: &[f64; 4], q: &[f64]| {
             q[0].abs() > 12.0 || q[1].abs() > 12.0 || q[2].abs() > 1e4 || m[0] - m[1] * m[3] <= 1e-9
         };
-        if bad(m1, &p[0..4]) || bad(m2, &p[4..8]) || p[8].abs() > 20.0 {
+        if (0..K).any(|k| bad(&m[k], &p[4 * k..4 * k + 4]))
+            || p[4 * K..].iter().any(|l| l.abs() > 20.0)
+        {
             return Ok(1e9);
         }
         Ok(l1_error(self.lobe, p, self.pts))
@@ -171,11 +196,15 @@ impl CostFunction for Problem<'_> {
 }
 
 fn nelder_mead(problem: Problem, x0: &[f64], iters: u64) -> (Vec<f64>, f64) {
-    let step = [0.15, 0.15, 0.1, 0.1, 0.15, 0.15, 0.1, 0.1, 0.5];
     let mut simplex = vec![x0.to_vec()];
-    for (k, s) in step.iter().enumerate() {
+    for k in 0..x0.len() {
         let mut x = x0.to_vec();
-        x[k] += s * if k % 4 == 2 { 1.0 + x0[k].abs() } else { 1.0 };
+        x[k] += match k {
+            _ if k >= 4 * K => 0.5,
+            _ if k % 4 == 2 => 0.1 * (1.0 + x0[k].abs()),
+            _ if k % 4 == 3 => 0.1,
+            _ => 0.15,
+        };
         simplex.push(x);
     }
     let solver = NelderMead::new(simplex)
@@ -198,20 +227,11 @@ pub fn fit_cell(
     pts: &[(f64, f64)],
 ) -> (CoatCell, Params, f64) {
     let lobe = CoatLobe::new(alpha, mu_o);
-    let (x, _) = nelder_mead(Problem { lobe: &lobe, pts }, start, 1500);
-    let (x, err) = nelder_mead(Problem { lobe: &lobe, pts }, &x, 1000);
+    let (x, _) = nelder_mead(Problem { lobe: &lobe, pts }, start, 4000);
+    let (x, err) = nelder_mead(Problem { lobe: &lobe, pts }, &x, 3000);
     let p: Params = core::array::from_fn(|k| x[k]);
-    let (m1, m2, w) = unpack(&p);
-    (
-        CoatCell {
-            m1,
-            m2,
-            w,
-            n: lobe.n,
-        },
-        p,
-        err,
-    )
+    let (m, w) = unpack(&p);
+    (CoatCell { m, w, n: lobe.n }, p, err)
 }
 
 /// α and μo of node (i, j).
@@ -220,13 +240,14 @@ pub fn node(i: usize, j: usize) -> (f64, f64) {
     (X_AXIS.node(i).exp(), 1.0 - t * t)
 }
 
-/// The first cell's start: `fit_coat_mixture`'s (w, α₁, α₂) as isotropic
-/// transforms diag(αₖ, αₖ, 1).
-pub fn mixture_start(alpha: f64) -> Params {
-    let ([w, a1, a2], _) = fit_coat_mixture(alpha);
-    let w = w.clamp(0.01, 0.99);
-    let (l1, l2) = (a1.ln(), a2.ln());
-    [l1, l1, 0.0, 0.0, l2, l2, 0.0, 0.0, (w / (1.0 - w)).ln()]
+/// The first cell's start (module docs): isotropic cosines
+/// a = c = α^((2K − 2k − 1)/2K), equal weights.
+pub fn first_start(alpha: f64) -> Params {
+    let m = core::array::from_fn(|k| {
+        let a = alpha.powf((2 * K - 2 * k - 1) as f64 / (2 * K) as f64);
+        [a, 0.0, a, 0.0]
+    });
+    pack(&m, &[1.0 / K as f64; K])
 }
 
 /// One line per fitted cell on stderr where the progress bar is not
@@ -237,8 +258,8 @@ fn log(progress: bool, i: usize, j: usize, r: &(CoatCell, Params, f64)) {
         let (alpha, mu) = node(i, j);
         let c = &r.0;
         eprintln!(
-            "cell ({i}, {j}) α {alpha:.4} μo {mu:.3}: L1 {:.4}, w {:.3}, M1 {:.4?}, M2 {:.4?}, n {:.5}",
-            r.2, c.w, c.m1, c.m2, c.n
+            "cell ({i}, {j}) α {alpha:.4} μo {mu:.3}: L1 {:.4}, w {:.3?}, M {:.4?}, n {:.5}",
+            r.2, c.w, c.m, c.n
         );
     }
 }
@@ -259,40 +280,42 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
     } else {
         ProgressBar::hidden()
     };
-    // The normal view's row, from α = 0.1 down.
-    let mut start = mixture_start(node(NX - 1, 0).0);
-    let mut first = vec![None; NX];
-    for i in (0..NX).rev() {
-        let (alpha, mu) = node(i, 0);
+    // The α = 0.001 column, from the normal view to grazing.
+    let mut start = first_start(node(0, 0).0);
+    let mut first = Vec::with_capacity(NY);
+    for j in 0..NY {
+        let (alpha, mu) = node(0, j);
         let r = fit_cell(alpha, mu, &start, &pts);
-        log(progress, i, 0, &r);
+        log(progress, 0, j, &r);
         start = r.1;
-        first[i] = Some(r);
+        first.push(r);
         bar.inc(1);
     }
-    // Each α column from the normal view to grazing.
-    let columns: Vec<Vec<(CoatCell, f64)>> = (0..NX)
+    // Each view's row from α = 0.001 up.
+    let rows: Vec<Vec<(CoatCell, f64)>> = (0..NY)
         .into_par_iter()
-        .map(|i| {
-            let (cell, mut s, err) = first[i].expect("fitted above");
-            let mut col = vec![(cell, err)];
-            for j in 1..NY {
+        .map(|j| {
+            let (cell, mut s, err) = first[j];
+            let mut row = vec![(cell, err)];
+            for i in 1..NX {
                 let (alpha, mu) = node(i, j);
                 let r = fit_cell(alpha, mu, &s, &pts);
                 log(progress, i, j, &r);
                 s = r.1;
-                col.push((r.0, r.2));
+                row.push((r.0, r.2));
                 bar.inc(1);
             }
-            col
+            row
         })
         .collect();
     bar.finish();
-    let cells = (0..NY)
-        .map(|j| (0..NX).map(|i| columns[i][j].0).collect())
+    let cells = rows
+        .iter()
+        .map(|r| r.iter().map(|c| c.0).collect())
         .collect();
-    let errs = (0..NY)
-        .map(|j| (0..NX).map(|i| columns[i][j].1).collect())
+    let errs = rows
+        .iter()
+        .map(|r| r.iter().map(|c| c.1).collect())
         .collect();
     (cells, errs)
 }
@@ -321,9 +344,9 @@ pub fn run(out: &std::path::Path) -> Result<(), String> {
     let comments = vec![
         format!("written by `specula fit-ltc-coat --output {}`", out.display()),
         "Disney clearcoat f_r mu_i: GTR1(alpha), separable Smith GGX at 0.25, Schlick F0 0.04, weight 1; view in the xz-plane".into(),
-        "f_r mu_i / n ~ w D1 + (1 - w) D2, Dk the cosine through Mk = [[a,0,b],[0,c,0],[d,0,1]]".into(),
+        "f_r mu_i / n ~ w1 D1 + w2 D2 + w3 D3, Dk the cosine through Mk = [[a,0,b],[0,c,0],[d,0,1]]".into(),
         "x = ln(alpha): 12 nodes on [ln 0.001, ln 0.1], ends; y = sqrt(1 - mu_o): 32 nodes on [0, 1], ends".into(),
-        "per node, f32 LE: c M1^-1 entries m00 m02 m20 m22, the same for M2, w, n; rows in y, x inside a row".into(),
+        "per node, f32 LE: c M1^-1 entries m00 m02 m20 m22, the same for M2 and M3, w1 w2 w3, n; rows in y, x inside a row".into(),
         summary,
     ];
     let bytes = specula_core::ltc::coat::encode(&cells, &comments);
@@ -344,35 +367,18 @@ mod tests {
 
     /// The parameters of a stored node: each (a, b, c, d) from c M⁻¹
     /// (m11 = 1; M is proportional to its inverse's inverse, normalized to
-    /// M₂₂ = 1), and logit w.
-    fn stored(i: usize, j: usize) -> (Params, [f32; 10]) {
+    /// M₂₂ = 1), the weights; and n.
+    fn stored(i: usize, j: usize) -> (Params, f32) {
         let v = table().node_value(i, j);
-        let m = |k: usize| {
-            let (m00, m02, m20, m22) = (
-                v[k] as f64,
-                v[k + 1] as f64,
-                v[k + 2] as f64,
-                v[k + 3] as f64,
-            );
+        let m = core::array::from_fn(|k| {
+            let q = &v[4 * k..4 * k + 4];
+            let (m00, m02, m20, m22) = (q[0] as f64, q[1] as f64, q[2] as f64, q[3] as f64);
             let det = m00 * m22 - m02 * m20;
             let (a, b, d, e) = (m22 / det, -m02 / det, -m20 / det, m00 / det);
             [a / e, b / e, 1.0 / e, d / e]
-        };
-        let (m1, m2, w) = (m(0), m(4), v[8] as f64);
-        (
-            [
-                m1[0].ln(),
-                m1[2].ln(),
-                m1[1],
-                m1[3],
-                m2[0].ln(),
-                m2[2].ln(),
-                m2[1],
-                m2[3],
-                (w / (1.0 - w)).ln(),
-            ],
-            v,
-        )
+        });
+        let w = core::array::from_fn(|k| v[4 * K + k] as f64);
+        (pack(&m, &w), v[5 * K])
     }
 
     #[test]
@@ -380,8 +386,8 @@ mod tests {
         let pts = points();
         // (i = α node, j = view node): glossy, rough, grazing, on the horizon.
         for (i, j) in [(1, 5), (6, 20), (11, 28), (3, 31)] {
-            // The fit of (i, j) warm-starts from (i, j − 1).
-            let (start, _) = stored(i, j - 1);
+            // The fit of (i, j) warm-starts from (i − 1, j).
+            let (start, _) = stored(i - 1, j);
             let (alpha, mu) = node(i, j);
             let (cell, _, err) = fit_cell(alpha, mu, &start, &pts);
             let (here, want) = stored(i, j);
@@ -394,34 +400,30 @@ mod tests {
                 (err - stored_err).abs() < 0.01 * stored_err,
                 "({i}, {j}): {err} vs {stored_err}"
             );
-            let n = cell.channels()[9];
+            let n = cell.channels()[5 * K];
             assert!(
-                (n - want[9]).abs() <= 1e-6 * want[9],
-                "({i}, {j}): n {n} vs {}",
-                want[9]
+                (n - want).abs() <= 1e-6 * want,
+                "({i}, {j}): n {n} vs {want}"
             );
         }
     }
 
     #[test]
     fn the_l1_estimate_matches_quadrature() {
-        // An independent check of the three-way MIS estimate: ∫ |D − p|
-        // by a plain midpoint rule in (cos θ, φ) on a fine grid, for the
-        // roughest coat at an oblique view and a mixture near its fit.
+        // An independent check of the MIS estimate: ∫ |D − p| by a plain
+        // midpoint rule in (cos θ, φ) on a fine grid, for the roughest coat
+        // at an oblique view and a mixture near its fit.
         let lobe = CoatLobe::new(0.1, 0.6);
-        let p = [
-            (0.12f64).ln(),
-            (0.1f64).ln(),
-            -0.05,
-            0.02,
-            (0.5f64).ln(),
-            (0.45f64).ln(),
-            -0.2,
-            0.05,
-            0.3,
-        ];
+        let p = pack(
+            &[
+                [0.12, -0.05, 0.1, 0.02],
+                [0.5, -0.2, 0.45, 0.05],
+                [1.2, -0.4, 0.9, 0.1],
+            ],
+            &[0.4, 0.35, 0.25],
+        );
         let est = l1_error(&lobe, &p, &points());
-        let (m1, m2, w) = unpack(&p);
+        let (m, w) = unpack(&p);
         let (nt, np) = (1600, 800);
         let mut q = 0.0;
         for a in 0..nt {
@@ -430,7 +432,7 @@ mod tests {
             for b in 0..np {
                 let phi = 2.0 * PI * (b as f64 + 0.5) / np as f64;
                 let x = V3::new(r * phi.cos(), r * phi.sin(), z);
-                let d = w * ltc_density(m1, x) + (1.0 - w) * ltc_density(m2, x);
+                let d: f64 = (0..K).map(|k| w[k] * ltc_density(m[k], x)).sum();
                 q += (d - lobe.p(x)).abs();
             }
         }

@@ -41,9 +41,9 @@
 //!
 //! **Polygon lights** (linearly transformed cosines [Heitz16], the
 //! project's GGX fit in ltc/ggx.rs). Once per pixel, `prepare_polygons`
-//! looks up one LTC for the specular lobe (three with clearcoat) and the
+//! looks up one LTC for the specular lobe (four with clearcoat) and the
 //! lobes' albedos; each light then costs one clipped polygon integral for
-//! specular and diffuse together, two more for the coat.
+//! specular and diffuse together, three more for the coat.
 //!
 //! - Specular: the GGX fit (height-correlated Smith, shared by this
 //!   separable lobe as by `microfacet`'s) at the isotropic-equivalent
@@ -76,17 +76,20 @@
 //!   for GGX, so one GGX at the coat's α (or at √α, or at the α of equal
 //!   peak) errs by up to 77 % of the coat's albedo (p90 20–35 %). The coat
 //!   has its own fit (ltc/coat.rs, `specula fit-ltc-coat`): per (ln α, μo)
-//!   a mixture of two linearly transformed cosines, w D₁ + (1 − w) D₂,
-//!   fitted to the coat lobe itself (GTR1, the Smith G at α = 0.25 and
-//!   the F0 = 0.04 Fresnel all in the fitted shape), times its directional
-//!   albedo. Measured on the coat lobe alone (core/tests/disney_ltc.rs,
+//!   a mixture of three linearly transformed cosines Σ wₖ Dₖ fitted to the
+//!   coat lobe itself (GTR1, the Smith G at α = 0.25 and the F0 = 0.04
+//!   Fresnel all in the fitted shape), times its directional albedo.
+//!   Measured on the coat lobe alone (core/tests/disney_ltc.rs,
 //!   `coat_ltc_error_by_gloss_and_view`, as a fraction of the coat's
-//!   albedo): p90 2.0 %, max 13.6 %; clearcoat_gloss ≤ 0.75 max 4.5 %;
-//!   the tail is gloss 1 (α = 0.001, whose peak and tail span three
-//!   decades of θh that two cosines cannot both hold) at θo = 85°. The
-//!   two-GGX stand-in it replaces ([`fit_coat_mixture`] through the GGX
-//!   table, whose G and Fresnel are not the coat's) measured p90 6.2 %,
-//!   max 17.4 %.
+//!   albedo, clearcoat_gloss 0–1): p90 1.1 %, max 7.3 % (gloss 1,
+//!   α = 0.001, whose mass spans three decades of tan θh, at θo = 85°);
+//!   gloss ≤ 0.75 max 3.6 %; θo ≤ 30° max 1.5 %. Two cosines (one
+//!   integral fewer) measured p90 2.0 %, max 13.6 %; the two-GGX
+//!   stand-in before them (two GGX fits, whose G and Fresnel are not the
+//!   coat's, mixed to GTR1's cumulative distribution) p90 6.2 %,
+//!   max 17.4 %. Cost: the shading pass of a coated Disney plane under
+//!   two polygon lights runs 65.2 M instructions, 57.2 M with two
+//!   cosines, 38.7 M without a coat (callgrind).
 //! - Diffuse, subsurface blend and sheen (× (1 − metallic)): the polygon's
 //!   exact Lambert form factor times the lobes' directional albedo at μo,
 //!   i.e. the lobes replaced by the Lambertian lobe of the same albedo at
@@ -568,70 +571,6 @@ fn azimuth_dir(mu: f64, c2: f64) -> V3<f64> {
     V3::new(s * c2.sqrt(), s * (1.0 - c2).max(0.0).sqrt(), mu)
 }
 
-/// A two-GGX stand-in for the clearcoat's GTR1 distribution of roughness
-/// `alpha`: (w, α₁, α₂) such that w D_GGX(α₁) + (1 − w) D_GGX(α₂) has
-/// nearly the cumulative distribution of D_GTR1(α) cos θh over θh. What
-/// `specula fit-ltc-coat` starts its first cell from (src/fit_ltc_coat.rs;
-/// the runtime used it through the GGX table before ltc/coat.rs: up to
-/// 34 % of the coat's albedo off at grazing views). Least squares between the cumulative distributions of
-/// D cos θh, u(θh), sampled at 100 points uniform in ln tan θh over
-/// [α/30, 30] (both are closed forms: GGX u = t²/(α² + t²), t = tan θh;
-/// GTR1 u = 1 − ln(1 − (1 − α²) cos²θh)/ln α² [Burley12, eq. 2]); α₁, α₂
-/// over a log grid (48 values in [1e-3, 1]), w in closed form
-/// (the residual is linear in it), clamped to [0, 1]. Returns the fit and
-/// its largest CDF difference.
-pub fn fit_coat_mixture(alpha: f64) -> ([f64; 3], f64) {
-    const N_S: usize = 100;
-    const N_A: usize = 48;
-    let a2 = alpha * alpha;
-    let (lo, hi) = ((alpha / 30.0).ln(), 30f64.ln());
-    let ts: Vec<f64> = (0..N_S)
-        .map(|k| (lo + (hi - lo) * (k as f64 + 0.5) / N_S as f64).exp())
-        .collect();
-    let target: Vec<f64> = ts
-        .iter()
-        .map(|t| {
-            let c2 = 1.0 / (1.0 + t * t);
-            1.0 - (1.0 - (1.0 - a2) * c2).ln() / a2.ln()
-        })
-        .collect();
-    let ggx = |a: f64| -> Vec<f64> { ts.iter().map(|t| t * t / (a * a + t * t)).collect() };
-    let alphas: Vec<f64> = (0..N_A)
-        .map(|k| (1e-3f64.ln() * (1.0 - k as f64 / (N_A - 1) as f64)).exp())
-        .collect();
-    let cdfs: Vec<Vec<f64>> = alphas.iter().map(|&a| ggx(a)).collect();
-    let mut best = (f64::INFINITY, [1.0, alpha, alpha]);
-    for i in 0..N_A {
-        for j in i..N_A {
-            let (u1, u2) = (&cdfs[i], &cdfs[j]);
-            // r(w) = w (u1 − u2) + u2 − target.
-            let (mut num, mut den) = (0.0, 0.0);
-            for k in 0..N_S {
-                let d = u1[k] - u2[k];
-                num += d * (target[k] - u2[k]);
-                den += d * d;
-            }
-            let w = if den > 0.0 {
-                (num / den).clamp(0.0, 1.0)
-            } else {
-                1.0
-            };
-            let e: f64 = (0..N_S)
-                .map(|k| (w * u1[k] + (1.0 - w) * u2[k] - target[k]).powi(2))
-                .sum();
-            if e < best.0 {
-                best = (e, [w, alphas[i], alphas[j]]);
-            }
-        }
-    }
-    let [w, a1, a2_] = best.1;
-    let (c1, c2) = (ggx(a1), ggx(a2_));
-    let worst = (0..N_S)
-        .map(|k| (w * c1[k] + (1.0 - w) * c2[k] - target[k]).abs())
-        .fold(0.0, f64::max);
-    (best.1, worst)
-}
-
 /// μo nodes of the diffuse-albedo table: ends included, dense at grazing.
 const DIFFUSE_MU_AXIS: Axis = Axis::new(64, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
 
@@ -689,16 +628,12 @@ pub fn diffuse_albedo_coefficients(mu_o: f64) -> [f64; 7] {
 pub struct DisneyPolygons<R: Real> {
     /// The specular lobe's GGX LTC (sheared for anisotropic lobes).
     pub spec: LtcGgx<R>,
-    /// The clearcoat's two fitted cosines (ltc/coat.rs; copies of `spec`,
-    /// unused, without clearcoat).
-    pub coat: LtcGgx<R>,
-    pub coat2: LtcGgx<R>,
+    /// The clearcoat's fitted cosines (ltc/coat.rs), their scales times
+    /// ¼ clearcoat (0 where the view is below the horizon); `None`
+    /// without clearcoat (a material constant: nothing to fill per pixel).
+    pub coat: Option<LtcCoat<R>>,
     /// C_spec0 (n − n_w) + n_w per channel.
     pub specular: Rgb<R>,
-    /// ¼ clearcoat × the coat's albedo, times w and 1 − w of the mixture
-    /// (0 where the view is below the horizon).
-    pub coat_scale: R,
-    pub coat_scale2: R,
     /// The diffuse lobes' directional albedo at μo (plus the compensation
     /// lobe's factor · (1 − E(μo))): what multiplies the form factor.
     pub diffuse: Rgb<R>,
@@ -805,13 +740,12 @@ impl Brdf for Disney {
             spec.schlick_albedo(R::splat(c[2])),
         );
         // A material constant: the branch is the same in every lane.
-        let (coat, coat2, coat_scale, coat_scale2) = if d.clearcoat_weight > 0.0 {
-            let c = LtcCoat::new(R::splat(d.coat_ln_alpha), o.wo);
+        let coat = (d.clearcoat_weight > 0.0).then(|| {
+            let mut c = LtcCoat::new(R::splat(d.coat_ln_alpha), o.wo);
             let k = R::select(o.above, R::splat(d.clearcoat_weight), R::ZERO);
-            (c.narrow, c.wide, k * c.scale1, k * c.scale2)
-        } else {
-            (spec, spec, R::ZERO, R::ZERO)
-        };
+            c.scale = c.scale.map(|s| k * s);
+            c
+        });
         let mut diffuse = self.diffuse_albedo(o.cos_o.min(R::ONE));
         if let Some(k) = &self.kc {
             diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
@@ -819,10 +753,7 @@ impl Brdf for Disney {
         DisneyPolygons {
             spec,
             coat,
-            coat2,
             specular: Rgb::select(o.above, specular, Rgb::zero()),
-            coat_scale,
-            coat_scale2,
             diffuse: Rgb::select(o.above, diffuse, Rgb::zero()),
         }
     }
@@ -839,10 +770,8 @@ impl Brdf for Disney {
     ) -> Rgb<R> {
         let (ff, spec) = pp.spec.form_factor_and_integral(poly);
         let mut e = pp.specular * spec + pp.diffuse * ff;
-        if self.d.clearcoat_weight > 0.0 {
-            let c =
-                pp.coat_scale * pp.coat.integral(poly) + pp.coat_scale2 * pp.coat2.integral(poly);
-            e += Rgb::splat(c);
+        if let Some(coat) = &pp.coat {
+            e += Rgb::splat(coat.integral(poly));
         }
         e
     }
