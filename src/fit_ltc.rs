@@ -35,7 +35,7 @@ use std::f64::consts::PI;
 /// grid, jittered by a fixed Hammersley offset).
 const SIDE: usize = 32;
 /// Smallest μo fitted (the last view node is μo = 0, a view on the horizon).
-const MU_MIN: f64 = 1e-3;
+pub const MU_MIN: f64 = 1e-3;
 
 /// The lobe at one (α, μo): everything the cost needs.
 pub struct Lobe {
@@ -110,7 +110,7 @@ pub fn ltc_density(m: [f64; 4], w: V3<f64>) -> f64 {
 }
 
 /// A direction of the LTC's distribution from uniform (u1, u2).
-fn ltc_sample(m: [f64; 4], u1: f64, u2: f64) -> V3<f64> {
+pub fn ltc_sample(m: [f64; 4], u1: f64, u2: f64) -> V3<f64> {
     let [a, b, c, d] = m;
     let r = u1.sqrt();
     let phi = 2.0 * PI * u2;
@@ -119,7 +119,7 @@ fn ltc_sample(m: [f64; 4], u1: f64, u2: f64) -> V3<f64> {
 }
 
 /// The stratified points of the estimate.
-fn points() -> Vec<(f64, f64)> {
+pub fn points() -> Vec<(f64, f64)> {
     (0..SIDE * SIDE)
         .map(|k| {
             let (i, j) = (k % SIDE, k / SIDE);

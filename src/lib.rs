@@ -9,6 +9,7 @@
 pub mod demo;
 pub mod eval;
 pub mod fit_ltc;
+pub mod fit_ltc_coat;
 pub mod furnace;
 pub mod fuzzing;
 pub mod label;

@@ -44,6 +44,9 @@ enum Command {
     /// Fit the LTC table of the GGX lobe (core/data/ltc_ggx.bin; format in
     /// core/src/ltc/ggx.rs).
     FitLtc(FitLtcArgs),
+    /// Fit the LTC table of the Disney clearcoat lobe (core/data/ltc_coat.bin;
+    /// format in core/src/ltc/coat.rs).
+    FitLtcCoat(FitLtcCoatArgs),
     /// Build the committed Kulla-Conty E tables (core/data/kc_tables.bin;
     /// format in core/src/kc_tables.rs).
     KcTables(KcTablesArgs),
@@ -72,6 +75,13 @@ struct TamArgs {
 struct FitLtcArgs {
     /// Where to write the table.
     #[arg(short, long, default_value = "core/data/ltc_ggx.bin")]
+    output: PathBuf,
+}
+
+#[derive(clap::Args)]
+struct FitLtcCoatArgs {
+    /// Where to write the table.
+    #[arg(short, long, default_value = "core/data/ltc_coat.bin")]
     output: PathBuf,
 }
 
@@ -376,6 +386,7 @@ fn main() -> ExitCode {
         Some(Command::Furnace(a)) => run_furnace(a),
         Some(Command::Tam(a)) => run_tam(a),
         Some(Command::FitLtc(a)) => specula::fit_ltc::run(&a.output),
+        Some(Command::FitLtcCoat(a)) => specula::fit_ltc_coat::run(&a.output),
         Some(Command::KcTables(a)) => specula::table_cache::write_committed(&a.output),
         Some(Command::Eval) => {
             let stdin = std::io::stdin().lock();

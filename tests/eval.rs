@@ -146,7 +146,7 @@ fn disney_values_frame_and_errors() {
         // 5: a mixing weight past 1.
         r#"{"material":{"model":"disney","sheen_tint":1.5},"wi":[0,0,1],"wo":[0,0,1]}"#,
         "\n",
-        // 6: accepted beyond [0, 1] (with a warning in scenes).
+        // 6: accepted beyond [0, 1], with a warning naming each field.
         r#"{"material":{"model":"disney","specular":2,"sheen":3},"wi":[0,0,1],"wo":[0,0,1]}"#,
         "\n",
         // 7: an unknown field.
@@ -195,4 +195,12 @@ fn disney_values_frame_and_errors() {
         assert!(e.contains(field), "{e}");
     }
     assert!(f(&out[5])[0] > 0.0);
+    let w = out[5]["warning"]
+        .as_str()
+        .unwrap_or_else(|| panic!("line 6: expected a warning, got {}", out[5]));
+    assert!(
+        w.contains("material.specular") && w.contains("material.sheen"),
+        "{w}"
+    );
+    assert!(out[0].get("warning").is_none(), "{}", out[0]);
 }

@@ -11,8 +11,11 @@
 mod common;
 
 use common::{poly, polygons, quantile, v};
+use specula_core::light::PolygonLocal;
 use specula_core::ltc::reference::{integrate_polygon, Tolerance};
-use specula_core::models::disney::{diffuse_albedo_coefficients, Disney, DisneyParams, Lobe};
+use specula_core::models::disney::{
+    diffuse_albedo_coefficients, Disney, DisneyParams, DisneyPolygons, Lobe,
+};
 use specula_core::{Brdf, Real, V3};
 
 const VIEWS: [f64; 8] = [0.0, 15.0, 30.0, 45.0, 60.0, 70.0, 80.0, 85.0];
@@ -254,7 +257,10 @@ fn disney_ltc_error_table_over_the_parameter_grid() {
 }
 
 /// Each lobe alone: specular (a white metal: no diffuse, C_spec0 = 1),
-/// clearcoat (black base, specular 0: only the coat reflects), diffuse
+/// a coated black dielectric (black base, specular 0: the coat, plus the
+/// specular lobe's Schlick (1 − cos θd)⁵, which F0 = 0 leaves and which
+/// dominates at grazing views; the coat truly alone is
+/// [`coat_ltc_error_by_gloss_and_view`]), diffuse
 /// (specular 0, no coat: diffuse, subsurface blend and sheen).
 #[test]
 fn disney_ltc_error_of_each_lobe_alone() {
@@ -317,12 +323,19 @@ fn disney_ltc_error_of_each_lobe_alone() {
         "isotropic specular: p90 {p90}, max {max}"
     );
     let (p90, max) = print_table(
-        "clearcoat alone",
+        "coated black dielectric (coat + F0 = 0 specular)",
         &coat_cases,
         &[("clearcoat_gloss", &|p| p.clearcoat_gloss)],
     );
-    // Measured: p90 21 %, max 33.8 %; at views ≤ 30°: p90 ≤ 5 %, max 7.6 %.
-    assert!(p90 < 0.26 && max < 0.40, "clearcoat: p90 {p90}, max {max}");
+    // Measured: p90 18.1 %, max 30.1 %, nearly all of it the F0 = 0
+    // specular lobe's (its own error is up to 58 % of its albedo: the
+    // Schlick split's n_w part keeps the F = 1 lobe's shape); at views
+    // ≤ 30°: max 4.5 %. (Before the coat's own fit, with the two-GGX
+    // stand-in: p90 21 %, max 33.8 %.)
+    assert!(
+        p90 < 0.21 && max < 0.35,
+        "coated black dielectric: p90 {p90}, max {max}"
+    );
     let mut near: Vec<f64> = coat_cases
         .iter()
         .filter(|c| VIEWS[c.view] <= 30.0)
@@ -331,7 +344,7 @@ fn disney_ltc_error_of_each_lobe_alone() {
     let (_, p90, max) = stats(&mut near);
     assert!(
         p90 < 0.06 && max < 0.10,
-        "clearcoat, θo ≤ 30°: p90 {p90}, max {max}"
+        "coated black dielectric, θo ≤ 30°: p90 {p90}, max {max}"
     );
     let (p90, max) = print_table(
         "diffuse alone",
@@ -345,16 +358,6 @@ fn disney_ltc_error_of_each_lobe_alone() {
     // Measured: p90 2.4 %, max 13.5 % (retro-reflection and sheen at
     // grazing views, where the lobe is far from its Lambert equivalent).
     assert!(p90 < 0.03 && max < 0.16, "diffuse: p90 {p90}, max {max}");
-}
-
-#[test]
-fn the_coat_mixture_follows_gtr1() {
-    use specula_core::models::disney::fit_coat_mixture;
-    for gloss in [0.0, 0.5, 1.0] {
-        let alpha = 0.1 + (0.001 - 0.1) * gloss;
-        let (f, worst) = fit_coat_mixture(alpha);
-        eprintln!("gloss {gloss}: GTR1 α {alpha:.4} ≈ {:.3} GGX({:.4}) + {:.3} GGX({:.4}); CDF off by ≤ {worst:.4}", f[0], f[1], 1.0 - f[0], f[2]);
-    }
 }
 
 /// Kulla–Conty compensation under polygon lights: its lobe as its albedo
@@ -438,4 +441,165 @@ fn f32x8_matches_f64_through_the_disney_ltc() {
     }
     eprintln!("f32x8 and f32 vs f64 through the Disney LTC: worst |Δ| = {worst:e}");
     assert!(worst < 3e-5, "{worst:e}");
+}
+
+/// The errors of one lobe of `m` alone (`lobe` of [`Disney::lobes`]
+/// against `ltc`, its share of the polygon integral), as a fraction of
+/// that lobe's own directional albedo, over [`VIEWS`] and every polygon, one- and two-sided: (view index, error).
+fn lobe_errors(
+    m: &Disney,
+    lobe: Lobe,
+    ltc: &dyn Fn(&DisneyPolygons<f64>, &PolygonLocal<f64>) -> f64,
+) -> Vec<(usize, f64)> {
+    let mut out = Vec::new();
+    for (vi, &deg) in VIEWS.iter().enumerate() {
+        let theta = deg.to_radians();
+        // The azimuths cycled over the views, as in `cases_of` (the coat
+        // is isotropic: every azimuth gives the same errors).
+        {
+            let phi = AZIMUTHS[vi % AZIMUTHS.len()].to_radians();
+            let wo = rotate(v(theta.sin(), 0.0, theta.cos()), phi);
+            let p = m.prepare(wo);
+            let pp = m.prepare_polygons(&p);
+            let alb = m.albedo_quadrature(&p, lobe)[0];
+            let f = |wi: V3<f64>| {
+                let (l, above) = m.lobes(&p, wi);
+                let x = match lobe {
+                    Lobe::Clearcoat => l.clearcoat,
+                    Lobe::Specular => l.specular.x,
+                    Lobe::Diffuse => l.diffuse.x,
+                };
+                [if above { x * wi.z } else { 0.0 }; 3]
+            };
+            for (_, q) in polygons(theta) {
+                let q: Vec<_> = q.iter().map(|x| rotate(*x, phi)).collect();
+                for sided in [false, true] {
+                    let q: Vec<_> = if sided {
+                        q.iter().rev().copied().collect()
+                    } else {
+                        q.clone()
+                    };
+                    let r = integrate_polygon(&q, sided, &f, TOL).value[0];
+                    let l = ltc(&pp, &poly(&q, sided));
+                    out.push((vi, (l - r).abs() / alb));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// The clearcoat lobe truly alone: the coat's part of the LTC integral
+/// against the reference integral of the coat lobe only, per
+/// clearcoat_gloss and view, as a fraction of the coat's own albedo.
+/// (`disney_ltc_error_of_each_lobe_alone`'s coat material still has a
+/// specular lobe: specular = 0 makes its F0 zero, but Schlick's
+/// (1 − cos θd)⁵ remains and dominates at grazing views; printed here too.)
+#[test]
+fn coat_ltc_error_by_gloss_and_view() {
+    let glosses = [0.0f32, 0.1, 0.25, 0.4, 0.5, 0.6, 0.75, 0.9, 0.97, 1.0];
+    // Per gloss: (the coat's errors, the specular lobe's), by view.
+    type Errors = Vec<(usize, f64)>;
+    let per: Vec<(Errors, Errors)> = std::thread::scope(|s| {
+        let hs: Vec<_> = glosses
+            .iter()
+            .map(|&clearcoat_gloss| {
+                s.spawn(move || {
+                    let m = Disney::new_without_table(
+                        DisneyParams {
+                            base_color: [0.0; 3],
+                            specular: 0.0,
+                            clearcoat: 1.0,
+                            clearcoat_gloss,
+                            ..DisneyParams::default()
+                        },
+                        false,
+                    );
+                    let coat = lobe_errors(&m, Lobe::Clearcoat, &|pp, q| {
+                        let c = pp.coat.as_ref().expect("a coat");
+                        c.ltc
+                            .iter()
+                            .zip(c.scale)
+                            .map(|(l, s)| s * l.integral(q))
+                            .sum()
+                    });
+                    let spec = lobe_errors(&m, Lobe::Specular, &|pp, q| {
+                        pp.specular.x * pp.spec.integral(q)
+                    });
+                    (coat, spec)
+                })
+            })
+            .collect();
+        hs.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let summary = |e: &[(usize, f64)], view: Option<usize>| {
+        let mut x: Vec<f64> = e
+            .iter()
+            .filter(|(v, _)| view.is_none_or(|w| *v == w))
+            .map(|(_, e)| *e)
+            .collect();
+        let (_, p90, max) = stats(&mut x);
+        (p90, max)
+    };
+    for (title, pick) in [
+        ("clearcoat lobe alone", 0usize),
+        ("its F0 = 0 specular lobe, roughness 0.5", 1),
+    ] {
+        eprintln!("{title}: LTC error / the lobe's albedo, p90 / max (%)");
+        eprint!("  {:<10}", "gloss");
+        for deg in VIEWS {
+            eprint!(" {:>13}", format!("θo {deg}°"));
+        }
+        eprintln!(" {:>13}", "all");
+        for (g, e) in glosses.iter().zip(&per) {
+            let e = if pick == 0 { &e.0 } else { &e.1 };
+            eprint!("  {:<10}", g);
+            for vi in 0..VIEWS.len() {
+                let (p, m) = summary(e, Some(vi));
+                eprint!(" {:>13}", format!("{:.1} / {:.1}", 100.0 * p, 100.0 * m));
+            }
+            let (p, m) = summary(e, None);
+            eprintln!(" {:>13}", format!("{:.1} / {:.1}", 100.0 * p, 100.0 * m));
+        }
+    }
+    let coat: Vec<(usize, f64)> = per.iter().flat_map(|e| e.0.clone()).collect();
+    let (p90, max) = summary(&coat, None);
+    let near: Vec<(usize, f64)> = coat
+        .iter()
+        .filter(|(v, _)| VIEWS[*v] <= 30.0)
+        .copied()
+        .collect();
+    let (p90_near, max_near) = summary(&near, None);
+    let below_1: Vec<(usize, f64)> = glosses
+        .iter()
+        .zip(&per)
+        .filter(|(g, _)| **g <= 0.75)
+        .flat_map(|(_, e)| e.0.clone())
+        .collect();
+    let (p90_rough, max_rough) = summary(&below_1, None);
+    eprintln!(
+        "clearcoat lobe alone: all p90 {:.2} %, max {:.2} %; θo ≤ 30°: p90 {:.2} %, max {:.2} %; \
+         gloss ≤ 0.75: p90 {:.2} %, max {:.2} %",
+        100.0 * p90,
+        100.0 * max,
+        100.0 * p90_near,
+        100.0 * max_near,
+        100.0 * p90_rough,
+        100.0 * max_rough
+    );
+    // Measured with three cosines: p90 1.1 %, max 7.3 % (gloss 1,
+    // α = 0.001, at 85°); gloss ≤ 0.75 p90 0.95 %, max 3.6 %; θo ≤ 30°
+    // p90 0.38 %, max 1.5 %. On the glosses 0, ¼, ½, ¾, 1 alone: p90
+    // 1.2 %, max 7.3 %; with two cosines p90 2.0 %, max 13.6 %; with the
+    // two-GGX stand-in before them p90 6.2 %, max 17.4 % (θo ≤ 30° p90
+    // 2.8 %, max 7.7 %).
+    assert!(p90 < 0.015 && max < 0.085, "coat: p90 {p90}, max {max}");
+    assert!(
+        p90_rough < 0.012 && max_rough < 0.045,
+        "coat, gloss ≤ 0.75: p90 {p90_rough}, max {max_rough}"
+    );
+    assert!(
+        p90_near < 0.006 && max_near < 0.02,
+        "coat, θo ≤ 30°: p90 {p90_near}, max {max_near}"
+    );
 }

@@ -193,6 +193,16 @@ impl<R: Real> LtcGgx<R> {
         let x = alpha.max(R::ZERO).sqrt();
         let y = (R::ONE - mu).sqrt();
         let [m00, m02, m20, m22, n, n_w] = table().lookup(x, y);
+        LtcGgx::from_inverse([m00, m02, m20, m22], n, n_w, wo)
+    }
+
+    /// Any isotropic LTC fitted with the view in the xz-plane (as this
+    /// table's and ltc/coat.rs's cells are): c M⁻¹'s entries m00, m02,
+    /// m20, m22 (m11 = 1), the magnitudes n and n_w, turned to the
+    /// azimuth of the unit local view `wo`.
+    #[inline(always)]
+    pub fn from_inverse(m: [R; 4], n: R, n_w: R, wo: V3<R>) -> LtcGgx<R> {
+        let [m00, m02, m20, m22] = m;
         // cos φo, sin φo of the view's azimuth (1, 0 at the normal).
         let r2 = wo.x.mul_add(wo.x, wo.y * wo.y);
         let ok = r2.gt(R::splat(1e-20));

@@ -6,6 +6,7 @@
 //!   a polygon's solid angle (f64), what the LTC approximation is measured
 //!   against and what `area_lights = "reference"` renders.
 
+pub mod coat;
 pub mod ggx;
 pub mod polygon;
 pub mod reference;

@@ -41,9 +41,9 @@
 //!
 //! **Polygon lights** (linearly transformed cosines [Heitz16], the
 //! project's GGX fit in ltc/ggx.rs). Once per pixel, `prepare_polygons`
-//! looks up one LTC for the specular lobe (three with clearcoat) and the
+//! looks up one LTC for the specular lobe (four with clearcoat) and the
 //! lobes' albedos; each light then costs one clipped polygon integral for
-//! specular and diffuse together, two more for the coat.
+//! specular and diffuse together, three more for the coat.
 //!
 //! - Specular: the GGX fit (height-correlated Smith, shared by this
 //!   separable lobe as by `microfacet`'s) at the isotropic-equivalent
@@ -75,17 +75,21 @@
 //!   1/sin⁴θh: half its D cos θh mass lies beyond tan θh = √α, against α
 //!   for GGX, so one GGX at the coat's α (or at √α, or at the α of equal
 //!   peak) errs by up to 77 % of the coat's albedo (p90 20–35 %). The coat
-//!   goes through two GGX fits, D_GTR1 ≈ w D_GGX(α₁) + (1 − w) D_GGX(α₂),
-//!   fitted per clearcoat_gloss to the cumulative distribution of
-//!   D cos θh ([`fit_coat_mixture`]: at gloss 1, α = 0.001, 0.49
-//!   GGX(0.0050) and 0.51 GGX(0.17); at gloss 0, α = 0.1, 0.53 GGX(0.17)
-//!   and 0.47 GGX(0.64)),
-//!   each weighted by its mass times its own albedo at the view (the wide
-//!   one loses more at grazing), scaled to the coat's own directional
-//!   albedo ([`coat_albedo_table`]: F0 = 0.04 and the Smith G at
-//!   α = 0.25 included). Measured: p90 ≤ 5 %, max 7.6 % at views ≤ 30°;
-//!   p90 21 %, max 34 % over all views (the G at 0.25 and the mixture's
-//!   shape at grazing views).
+//!   has its own fit (ltc/coat.rs, `specula fit-ltc-coat`): per (ln α, μo)
+//!   a mixture of three linearly transformed cosines Σ wₖ Dₖ fitted to the
+//!   coat lobe itself (GTR1, the Smith G at α = 0.25 and the F0 = 0.04
+//!   Fresnel all in the fitted shape), times its directional albedo.
+//!   Measured on the coat lobe alone (core/tests/disney_ltc.rs,
+//!   `coat_ltc_error_by_gloss_and_view`, as a fraction of the coat's
+//!   albedo, clearcoat_gloss 0–1): p90 1.1 %, max 7.3 % (gloss 1,
+//!   α = 0.001, whose mass spans three decades of tan θh, at θo = 85°);
+//!   gloss ≤ 0.75 max 3.6 %; θo ≤ 30° max 1.5 %. Two cosines (one
+//!   integral fewer) measured p90 2.0 %, max 13.6 %; the two-GGX
+//!   stand-in before them (two GGX fits, whose G and Fresnel are not the
+//!   coat's, mixed to GTR1's cumulative distribution) p90 6.2 %,
+//!   max 17.4 %. Cost: the shading pass of a coated Disney plane under
+//!   two polygon lights runs 65.2 M instructions, 57.2 M with two
+//!   cosines, 38.7 M without a coat (callgrind).
 //! - Diffuse, subsurface blend and sheen (× (1 − metallic)): the polygon's
 //!   exact Lambert form factor times the lobes' directional albedo at μo,
 //!   i.e. the lobes replaced by the Lambertian lobe of the same albedo at
@@ -107,6 +111,7 @@ use crate::diffuse::{f_subsurface_burley, fd_burley, sheen_burley};
 use crate::fresnel::{f_schlick, schlick_weight};
 use crate::kulla_conty::KcColor;
 use crate::light::PolygonLocal;
+use crate::ltc::coat::{self, LtcCoat, ALPHA_HI, ALPHA_LO};
 use crate::ltc::ggx::LtcGgx;
 use crate::masking::{g1_smith, lambda_ggx, lambda_ggx_aniso};
 use crate::models::microfacet::{Compensation, Fresnel, GtrLambda, MicrofacetParams, Ndf, Smith};
@@ -226,9 +231,9 @@ struct Derived {
     /// α of the specular lobe's GGX LTC lookup for polygon lights: its
     /// isotropic equivalent √(αx αy) (module docs, "Polygon lights").
     spec_ltc_alpha: f64,
-    /// (w, α₁, α₂) of the clearcoat's two-GGX stand-in
-    /// ([`coat_mixture_table`]; unset without clearcoat).
-    coat_mix: [f64; 3],
+    /// ln α of the clearcoat, where its LTC table is read (ltc/coat.rs),
+    /// α clamped into the table's [0.001, 0.1] (a material's own range).
+    coat_ln_alpha: f64,
 }
 
 impl Derived {
@@ -247,11 +252,7 @@ impl Derived {
             clearcoat_alpha: p.clearcoat_alpha(),
             clearcoat_weight: 0.25 * p.clearcoat as f64,
             spec_ltc_alpha: (alpha_x * alpha_y).sqrt(),
-            coat_mix: if p.clearcoat > 0.0 {
-                coat_mixture_table().lookup::<f64>(p.clearcoat_gloss as f64)
-            } else {
-                [1.0, 0.1, 0.1]
-            },
+            coat_ln_alpha: p.clearcoat_alpha().clamp(ALPHA_LO, ALPHA_HI).ln(),
         }
     }
 }
@@ -347,14 +348,13 @@ impl Disney {
         // not inside the shading pass.
         diffuse_albedo_table();
         if params.clearcoat > 0.0 {
-            coat_albedo_table();
+            coat::table();
         }
         Disney::bare(params, energy_compensation)
     }
 
-    /// [`Disney::new_without_table`] without building the process-wide
-    /// tables (what [`coat_albedo_table`]'s own builder uses: building it
-    /// from inside its initialiser would wait on itself).
+    /// [`Disney::new_without_table`] without touching the process-wide
+    /// tables.
     fn bare(params: DisneyParams, energy_compensation: bool) -> Disney {
         let d = Derived::new(&params);
         let kc = energy_compensation.then(|| {
@@ -571,104 +571,6 @@ fn azimuth_dir(mu: f64, c2: f64) -> V3<f64> {
     V3::new(s * c2.sqrt(), s * (1.0 - c2).max(0.0).sqrt(), mu)
 }
 
-/// The clearcoat lobe's directional albedo (F_r included, weight ¼
-/// clearcoat not) over (clearcoat_gloss, μo), by the model's own
-/// quadrature ([`Disney::albedo_quadrature`]): 6 × 32 entries, built
-/// once per process by the first material with a coat (with the
-/// mixture fit, ~0.25 G instructions: about 0.1 s).
-pub fn coat_albedo_table() -> &'static Table2<1> {
-    static T: OnceLock<Table2<1>> = OnceLock::new();
-    T.get_or_init(|| {
-        Table2::build(GLOSS_AXIS, MU_AXIS, |g, mu| {
-            let m = Disney::bare(
-                DisneyParams {
-                    base_color: [0.0; 3],
-                    specular: 0.0,
-                    clearcoat: 4.0,
-                    clearcoat_gloss: g as f32,
-                    ..DisneyParams::default()
-                },
-                false,
-            );
-            let wo = azimuth_dir(mu, 1.0);
-            [m.albedo_quadrature(&m.prepare(wo), Lobe::Clearcoat)[0]]
-        })
-    })
-}
-
-/// Nodes of clearcoat_gloss in the coat tables ([`coat_albedo_table`],
-/// [`coat_mixture_table`]).
-const GLOSS_AXIS: Axis = Axis::new(6, 0.0, 1.0, Warp::Linear, Nodes::Ends);
-
-/// The two-GGX stand-in for the clearcoat's GTR1 distribution, per
-/// clearcoat_gloss: (w, α₁, α₂) such that w D_GGX(α₁) + (1 − w) D_GGX(α₂)
-/// has nearly the cumulative distribution of D_GTR1(α) cos θh over θh
-/// ([`fit_coat_mixture`]). Built once per process.
-pub fn coat_mixture_table() -> &'static Table1<3> {
-    static T: OnceLock<Table1<3>> = OnceLock::new();
-    T.get_or_init(|| Table1::build(GLOSS_AXIS, |g| fit_coat_mixture(mix(0.1, 0.001, g)).0))
-}
-
-/// Fits (w, α₁, α₂) of [`coat_mixture_table`] for GTR1 of roughness
-/// `alpha`: least squares between the cumulative distributions of
-/// D cos θh, u(θh), sampled at 100 points uniform in ln tan θh over
-/// [α/30, 30] (both are closed forms: GGX u = t²/(α² + t²), t = tan θh;
-/// GTR1 u = 1 − ln(1 − (1 − α²) cos²θh)/ln α² [Burley12, eq. 2]); α₁, α₂
-/// over a log grid (48 values in [1e-3, 1]), w in closed form
-/// (the residual is linear in it), clamped to [0, 1]. Returns the fit and
-/// its largest CDF difference.
-pub fn fit_coat_mixture(alpha: f64) -> ([f64; 3], f64) {
-    const N_S: usize = 100;
-    const N_A: usize = 48;
-    let a2 = alpha * alpha;
-    let (lo, hi) = ((alpha / 30.0).ln(), 30f64.ln());
-    let ts: Vec<f64> = (0..N_S)
-        .map(|k| (lo + (hi - lo) * (k as f64 + 0.5) / N_S as f64).exp())
-        .collect();
-    let target: Vec<f64> = ts
-        .iter()
-        .map(|t| {
-            let c2 = 1.0 / (1.0 + t * t);
-            1.0 - (1.0 - (1.0 - a2) * c2).ln() / a2.ln()
-        })
-        .collect();
-    let ggx = |a: f64| -> Vec<f64> { ts.iter().map(|t| t * t / (a * a + t * t)).collect() };
-    let alphas: Vec<f64> = (0..N_A)
-        .map(|k| (1e-3f64.ln() * (1.0 - k as f64 / (N_A - 1) as f64)).exp())
-        .collect();
-    let cdfs: Vec<Vec<f64>> = alphas.iter().map(|&a| ggx(a)).collect();
-    let mut best = (f64::INFINITY, [1.0, alpha, alpha]);
-    for i in 0..N_A {
-        for j in i..N_A {
-            let (u1, u2) = (&cdfs[i], &cdfs[j]);
-            // r(w) = w (u1 − u2) + u2 − target.
-            let (mut num, mut den) = (0.0, 0.0);
-            for k in 0..N_S {
-                let d = u1[k] - u2[k];
-                num += d * (target[k] - u2[k]);
-                den += d * d;
-            }
-            let w = if den > 0.0 {
-                (num / den).clamp(0.0, 1.0)
-            } else {
-                1.0
-            };
-            let e: f64 = (0..N_S)
-                .map(|k| (w * u1[k] + (1.0 - w) * u2[k] - target[k]).powi(2))
-                .sum();
-            if e < best.0 {
-                best = (e, [w, alphas[i], alphas[j]]);
-            }
-        }
-    }
-    let [w, a1, a2_] = best.1;
-    let (c1, c2) = (ggx(a1), ggx(a2_));
-    let worst = (0..N_S)
-        .map(|k| (w * c1[k] + (1.0 - w) * c2[k] - target[k]).abs())
-        .fold(0.0, f64::max);
-    (best.1, worst)
-}
-
 /// μo nodes of the diffuse-albedo table: ends included, dense at grazing.
 const DIFFUSE_MU_AXIS: Axis = Axis::new(64, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
 
@@ -726,15 +628,12 @@ pub fn diffuse_albedo_coefficients(mu_o: f64) -> [f64; 7] {
 pub struct DisneyPolygons<R: Real> {
     /// The specular lobe's GGX LTC (sheared for anisotropic lobes).
     pub spec: LtcGgx<R>,
-    /// The two GGX LTCs standing in for the clearcoat (copies of `spec`,
-    /// unused, without clearcoat).
-    pub coat: LtcGgx<R>,
-    pub coat2: LtcGgx<R>,
+    /// The clearcoat's fitted cosines (ltc/coat.rs), their scales times
+    /// ¼ clearcoat (0 where the view is below the horizon); `None`
+    /// without clearcoat (a material constant: nothing to fill per pixel).
+    pub coat: Option<LtcCoat<R>>,
     /// C_spec0 (n − n_w) + n_w per channel.
     pub specular: Rgb<R>,
-    /// ¼ clearcoat × the coat's albedo, times w and 1 − w of the mixture.
-    pub coat_scale: R,
-    pub coat_scale2: R,
     /// The diffuse lobes' directional albedo at μo (plus the compensation
     /// lobe's factor · (1 − E(μo))): what multiplies the form factor.
     pub diffuse: Rgb<R>,
@@ -841,25 +740,12 @@ impl Brdf for Disney {
             spec.schlick_albedo(R::splat(c[2])),
         );
         // A material constant: the branch is the same in every lane.
-        let (coat, coat2, coat_scale, coat_scale2) = if d.clearcoat_weight > 0.0 {
-            let g = self.params.clearcoat_gloss as f64;
-            let [w, a1, a2] = d.coat_mix;
-            let [a] = coat_albedo_table().lookup(R::splat(g), o.cos_o);
-            let s = R::select(o.above, R::splat(d.clearcoat_weight) * a, R::ZERO);
-            let (l1, l2) = (
-                LtcGgx::new(R::splat(a1), o.wo),
-                LtcGgx::new(R::splat(a2), o.wo),
-            );
-            // Each GGX's share of the coat's albedo: its mass times its
-            // own albedo at this view (the wide one loses more at grazing).
-            let f0 = R::splat(CLEARCOAT_F0);
-            let e1 = R::splat(w) * l1.schlick_albedo(f0);
-            let e2 = R::splat(1.0 - w) * l2.schlick_albedo(f0);
-            let k = s / (e1 + e2).max(R::splat(1e-12));
-            (l1, l2, k * e1, k * e2)
-        } else {
-            (spec, spec, R::ZERO, R::ZERO)
-        };
+        let coat = (d.clearcoat_weight > 0.0).then(|| {
+            let mut c = LtcCoat::new(R::splat(d.coat_ln_alpha), o.wo);
+            let k = R::select(o.above, R::splat(d.clearcoat_weight), R::ZERO);
+            c.scale = c.scale.map(|s| k * s);
+            c
+        });
         let mut diffuse = self.diffuse_albedo(o.cos_o.min(R::ONE));
         if let Some(k) = &self.kc {
             diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
@@ -867,15 +753,12 @@ impl Brdf for Disney {
         DisneyPolygons {
             spec,
             coat,
-            coat2,
             specular: Rgb::select(o.above, specular, Rgb::zero()),
-            coat_scale,
-            coat_scale2,
             diffuse: Rgb::select(o.above, diffuse, Rgb::zero()),
         }
     }
 
-    /// Specular through its GGX LTC, clearcoat through its two GGX LTCs,
+    /// Specular through its GGX LTC, clearcoat through its two fitted LTCs,
     /// the diffuse lobes as their albedo at μo times the form factor
     /// (module docs, "Polygon lights").
     #[inline(always)]
@@ -887,10 +770,8 @@ impl Brdf for Disney {
     ) -> Rgb<R> {
         let (ff, spec) = pp.spec.form_factor_and_integral(poly);
         let mut e = pp.specular * spec + pp.diffuse * ff;
-        if self.d.clearcoat_weight > 0.0 {
-            let c =
-                pp.coat_scale * pp.coat.integral(poly) + pp.coat_scale2 * pp.coat2.integral(poly);
-            e += Rgb::splat(c);
+        if let Some(coat) = &pp.coat {
+            e += Rgb::splat(coat.integral(poly));
         }
         e
     }
