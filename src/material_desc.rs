@@ -293,7 +293,7 @@ impl DisneyDesc {
                 "specular",
                 self.specular,
                 DISNEY_SPECULAR_MAX,
-                "F0 = 0.08 specular above the 0.08 of IOR 1.8",
+                "F0 = 0.08 · specular above 0.08, i.e. an IOR above ≈ 1.8",
             ),
             (
                 "roughness",
