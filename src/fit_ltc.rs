@@ -288,21 +288,27 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<Cell>>, Vec<Vec<f64>>) {
     (cells, errs)
 }
 
-/// Fits the table and writes it to `out` (atomically), with the command,
-/// the axes and the error summary in its header.
-pub fn run(out: &std::path::Path) -> Result<(), String> {
-    let t = std::time::Instant::now();
-    let (cells, errs) = fit_table(true);
+/// The fit's L1 distances over all cells as one header line: median, p90
+/// and max.
+pub(crate) fn error_summary(errs: &[Vec<f64>]) -> String {
     let mut all: Vec<f64> = errs.iter().flatten().copied().collect();
     all.sort_by(f64::total_cmp);
     let q = |f: f64| all[((all.len() - 1) as f64 * f) as usize];
-    let summary = format!(
+    format!(
         "L1 distance of the fit over the {} cells: median {:.4}, p90 {:.4}, max {:.4}",
         all.len(),
         q(0.5),
         q(0.9),
         q(1.0)
-    );
+    )
+}
+
+/// Fits the table and writes it to `out` (atomically), with the command,
+/// the axes and the error summary in its header.
+pub fn run(out: &std::path::Path) -> Result<(), String> {
+    let t = std::time::Instant::now();
+    let (cells, errs) = fit_table(true);
+    let summary = error_summary(&errs);
     eprintln!("{summary} ({:.0} s)", t.elapsed().as_secs_f64());
     let comments = vec![
         format!("written by `specula fit-ltc --output {}`", out.display()),
@@ -311,15 +317,18 @@ pub fn run(out: &std::path::Path) -> Result<(), String> {
         "per node, f32 LE: c M^-1 entries m00 m02 m20 m22, n, n_w; rows in y, x inside a row".into(),
         summary,
     ];
-    let bytes = specula_core::ltc::ggx::encode(&cells, &comments);
-    // Checked and written like every output (outputs.rs): no device or
-    // link is replaced, the write is atomic.
+    write_table(out, &specula_core::ltc::ggx::encode(&cells, &comments))
+}
+
+/// Writes a fitted table's bytes to `out`, checked and written like every
+/// output (outputs.rs): no device or link is replaced, the write is atomic.
+pub(crate) fn write_table(out: &std::path::Path, bytes: &[u8]) -> Result<(), String> {
     let sink = crate::outputs::Output {
         flag: "--output".into(),
         path: out.to_path_buf(),
         sink: crate::outputs::resolve(out, false)?,
     };
-    sink.write(&bytes)?;
+    sink.write(bytes)?;
     eprintln!("wrote {}", out.display());
     Ok(())
 }

@@ -325,16 +325,7 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
 pub fn run(out: &std::path::Path) -> Result<(), String> {
     let t = std::time::Instant::now();
     let (cells, errs) = fit_table(true);
-    let mut all: Vec<f64> = errs.iter().flatten().copied().collect();
-    all.sort_by(f64::total_cmp);
-    let q = |f: f64| all[((all.len() - 1) as f64 * f) as usize];
-    let summary = format!(
-        "L1 distance of the fit over the {} cells: median {:.4}, p90 {:.4}, max {:.4}",
-        all.len(),
-        q(0.5),
-        q(0.9),
-        q(1.0)
-    );
+    let summary = crate::fit_ltc::error_summary(&errs);
     eprintln!("{summary} ({:.0} s)", t.elapsed().as_secs_f64());
     for (j, row) in errs.iter().enumerate() {
         let (_, mu) = node(0, j);
@@ -349,15 +340,7 @@ pub fn run(out: &std::path::Path) -> Result<(), String> {
         "per node, f32 LE: c M1^-1 entries m00 m02 m20 m22, the same for M2 and M3, w1 w2 w3, n; rows in y, x inside a row".into(),
         summary,
     ];
-    let bytes = specula_core::ltc::coat::encode(&cells, &comments);
-    let sink = crate::outputs::Output {
-        flag: "--output".into(),
-        path: out.to_path_buf(),
-        sink: crate::outputs::resolve(out, false)?,
-    };
-    sink.write(&bytes)?;
-    eprintln!("wrote {}", out.display());
-    Ok(())
+    crate::fit_ltc::write_table(out, &specula_core::ltc::coat::encode(&cells, &comments))
 }
 
 #[cfg(test)]

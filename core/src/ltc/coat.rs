@@ -107,65 +107,17 @@ impl CoatCell {
 }
 
 /// The table file's bytes for cells in row order (y outer, x inner), with
-/// `comments` (lines without the leading `#`) in the header.
+/// `comments` (lines without the leading `#`) in the header (format in
+/// `ltc::file`).
 pub fn encode(cells: &[Vec<CoatCell>], comments: &[String]) -> Vec<u8> {
-    let mut out = format!("{MAGIC} {NX} {NY} {CHANNELS}\n");
-    for c in comments {
-        out += &format!("# {c}\n");
-    }
-    out += "end\n";
-    let mut bytes = out.into_bytes();
-    for row in cells {
-        for cell in row {
-            for v in cell.channels() {
-                bytes.extend_from_slice(&v.to_le_bytes());
-            }
-        }
-    }
-    bytes
+    let (nx, ny) = (NX, NY);
+    let cells = cells.iter().flatten().map(|c| c.channels());
+    crate::ltc::file::encode(MAGIC, nx, ny, cells, comments)
 }
 
-/// Reads a table file (format in the module docs).
+/// Reads a table file (format in `ltc::file`).
 pub fn decode(bytes: &[u8]) -> Result<Table2<CHANNELS>, String> {
-    let first = bytes
-        .iter()
-        .position(|&b| b == b'\n')
-        .ok_or("no header line")?;
-    let head = std::str::from_utf8(&bytes[..first]).map_err(|_| "header is not text")?;
-    if head != format!("{MAGIC} {NX} {NY} {CHANNELS}") {
-        return Err(format!("unexpected header {head:?}"));
-    }
-    let end = bytes
-        .windows(5)
-        .position(|w| w == b"\nend\n")
-        .ok_or("no `end` line")?
-        + 5;
-    let data = &bytes[end..];
-    if data.len() != NX * NY * CHANNELS * 4 {
-        return Err(format!(
-            "{} data bytes, want {}",
-            data.len(),
-            NX * NY * CHANNELS * 4
-        ));
-    }
-    let vals: Vec<f32> = data
-        .chunks_exact(4)
-        .map(|c| f32::from_le_bytes([c[0], c[1], c[2], c[3]]))
-        .collect();
-    if !vals.iter().all(|v| v.is_finite()) {
-        return Err("non-finite value".into());
-    }
-    let rows = (0..NY)
-        .map(|j| {
-            (0..NX)
-                .map(|i| {
-                    let k = (j * NX + i) * CHANNELS;
-                    core::array::from_fn(|c| vals[k + c])
-                })
-                .collect()
-        })
-        .collect();
-    Ok(Table2::from_rows(X_AXIS, Y_AXIS, rows))
+    crate::ltc::file::decode(bytes, MAGIC, (X_AXIS, Y_AXIS))
 }
 
 /// The committed table, decoded once.

@@ -7,6 +7,7 @@
 //!   against and what `area_lights = "reference"` renders.
 
 pub mod coat;
+pub mod file;
 pub mod ggx;
 pub mod polygon;
 pub mod reference;
