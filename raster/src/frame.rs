@@ -171,14 +171,10 @@ fn geometry_pass(
             };
             let id = |i: usize| ids.start as u32 + (base + i) as u32;
             let vertices = |tri: &[u32; 3]| tri.map(|k| clip[k as usize]);
-            // 4 triangles at a time (bit-identical to `setup` per triangle),
-            // the chunk's last 0–3 one at a time; passes after the first
-            // (outlines) one at a time with the occlusion test.
-            let quads = if occluder.is_none() {
-                tris.len() / LANES * LANES
-            } else {
-                0
-            };
+            // 4 triangles at a time (bit-identical to `setup` per triangle,
+            // passes after the first with the occlusion test), the chunk's
+            // last 0–3 one at a time.
+            let quads = tris.len() / LANES * LANES;
             for (q, (tris4, planes4)) in tris[..quads]
                 .chunks_exact(LANES)
                 .zip(planes[..quads].chunks_exact_mut(LANES))
@@ -188,7 +184,7 @@ fn geometry_pass(
                 let v = std::array::from_fn(|t| vertices(&tris4[t]));
                 let cull4 = std::array::from_fn(|t| cull(i + t));
                 let planes4 = planes4.try_into().expect("chunks of LANES");
-                ctx.setup_x4(id(i), &v, cull4, planes4, raster, &mut counts);
+                ctx.setup_x4_occluded(id(i), &v, cull4, occluder, planes4, raster, &mut counts);
             }
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
                 if let Some(p) =

@@ -22,6 +22,7 @@
 
 use crate::fixed::{GUARD_BAND_PX, SUBPIXEL_HALF, SUBPIXEL_ONE};
 use crate::geometry::Cull;
+use crate::occlusion::DepthBounds;
 use crate::setup::{
     Edge, RasterTri, SetupContext, SetupCounts, SmallEdges, TriPlanes, MAX_CLIP_COORD,
     MAX_PLANE_VALUE, SMALL_PX,
@@ -40,6 +41,8 @@ enum Lane {
     Outside,
     /// Its facing is not drawn by the pass.
     Culled,
+    /// Behind what earlier passes drew (`occlusion`).
+    Occluded,
     /// Projected, snapped and given planes here.
     Fast,
 }
@@ -110,6 +113,23 @@ impl SetupContext {
         out: &mut Vec<RasterTri>,
         counts: &mut SetupCounts,
     ) {
+        self.setup_x4_occluded(first, v, cull, None, planes, out, counts);
+    }
+
+    /// [`SetupContext::setup_x4`] as [`SetupContext::setup_occluded`] per
+    /// triangle: lanes the occlusion test hides (after the facing cull, as
+    /// there) are counted and skipped.
+    #[allow(clippy::too_many_arguments)]
+    pub fn setup_x4_occluded(
+        &self,
+        first: u32,
+        v: &[[[f32; 4]; 3]; LANES],
+        cull: [Cull; LANES],
+        occluder: Option<&DepthBounds>,
+        planes: &mut [TriPlanes; LANES],
+        out: &mut Vec<RasterTri>,
+        counts: &mut SetupCounts,
+    ) {
         // Structure of arrays: x[j] holds vertex j's x of the 4 triangles.
         let coord = |j: usize, c: usize| f64x4::new(std::array::from_fn(|t| v[t][j][c] as f64));
         let x: [f64x4; 3] = std::array::from_fn(|j| coord(j, 0));
@@ -175,7 +195,13 @@ impl SetupContext {
         let outside = valid & outside;
         let kept = valid & !outside & !degenerate;
         let culled = kept & (with(Cull::Back) & negative | with(Cull::Front) & positive);
-        let fast = kept & !culled & !clip;
+        let occluded = occluder.map_or(0, |o| {
+            (0..LANES)
+                .filter(|&t| bit(kept & !culled, t))
+                .filter(|&t| o.hides(&v[t].map(|p| p.map(|c| c as f64))))
+                .fold(0, |m, t| m | 1 << t)
+        });
+        let fast = kept & !culled & !occluded & !clip;
         let lanes: [Lane; LANES] = std::array::from_fn(|t| {
             if bit(fast, t) {
                 Lane::Fast
@@ -183,6 +209,8 @@ impl SetupContext {
                 Lane::Outside
             } else if bit(culled, t) {
                 Lane::Culled
+            } else if bit(occluded, t) {
+                Lane::Occluded
             } else {
                 Lane::Scalar
             }
@@ -339,6 +367,10 @@ impl SetupContext {
                 hit(2);
                 counts.triangles += 1;
                 counts.culled_backface += 1;
+            }
+            Lane::Occluded => {
+                counts.triangles += 1;
+                counts.culled_occluded += 1;
             }
             Lane::Scalar | Lane::Fast => {
                 hit(0);

@@ -148,3 +148,77 @@ fn triangles_called_hidden_write_no_pixel() {
         "{hidden} hidden, {writers} writing"
     );
 }
+
+/// The 4-wide setup with the occlusion test skips and counts exactly the
+/// triangles the per-triangle `setup_occluded` does, and sets up the rest
+/// identically: groups of 4 random triangles, some hidden, some in front,
+/// some back-facing, compared triangle list, planes and counts.
+#[test]
+fn four_wide_setup_occludes_like_the_scalar_setup() {
+    use specula_raster::setup::TriPlanes;
+    let target = Target::new(W, H).unwrap();
+    let mut depth = vec![0.0f32; target.buffer_len()];
+    for y in 0..H {
+        for x in 0..W {
+            depth[target.index(x, y)] = scene_depth(x as f64 + 0.5, y as f64 + 0.5);
+        }
+    }
+    let mut bounds = DepthBounds::default();
+    bounds.build(&target, &depth);
+    let ctx = SetupContext {
+        width: W,
+        height: H,
+        guard: GuardBand::for_image(W, H),
+    };
+    let mut rng = rand::rngs::StdRng::seed_from_u64(11);
+    let mut occluded = 0;
+    for group in 0..2_000u32 {
+        let v: [[[f32; 4]; 3]; 4] = std::array::from_fn(|_| {
+            let (cx, cy) = (rng.random_range(-5.0..155.0), rng.random_range(-5.0..105.0));
+            let size: f64 = [0.5f64, 4.0, 20.0][rng.random_range(0..3)];
+            // Behind the buffer (0.01), at it, or in front (0.2); reversed depth.
+            let z: f64 = [0.01, 0.05, 0.2][rng.random_range(0..3)];
+            std::array::from_fn(|_| {
+                let (x, y) = (
+                    cx + rng.random_range(-size..size),
+                    cy + rng.random_range(-size..size),
+                );
+                let w: f64 = rng.random_range(0.5..4.0);
+                let (nx, ny) = (2.0 * x / W as f64 - 1.0, 1.0 - 2.0 * y / H as f64);
+                [(nx * w) as f32, (ny * w) as f32, (z * w) as f32, w as f32]
+            })
+        });
+        let cull = [Cull::Back, Cull::None, Cull::Back, Cull::Front];
+        let first = group * 4;
+        let (mut tris4, mut counts4) = (Vec::new(), SetupCounts::default());
+        let mut planes4 = [TriPlanes::default(); 4];
+        ctx.setup_x4_occluded(
+            first,
+            &v,
+            cull,
+            Some(&bounds),
+            &mut planes4,
+            &mut tris4,
+            &mut counts4,
+        );
+        let (mut tris1, mut counts1) = (Vec::new(), SetupCounts::default());
+        let mut planes1 = [TriPlanes::default(); 4];
+        for t in 0..4 {
+            let id = first + t as u32;
+            if let Some(p) =
+                ctx.setup_occluded(id, v[t], cull[t], Some(&bounds), &mut tris1, &mut counts1)
+            {
+                planes1[t] = p;
+            }
+        }
+        assert_eq!(counts4, counts1, "group {group}");
+        assert_eq!(format!("{tris4:?}"), format!("{tris1:?}"), "group {group}");
+        assert_eq!(
+            format!("{planes4:?}"),
+            format!("{planes1:?}"),
+            "group {group}"
+        );
+        occluded += counts1.culled_occluded;
+    }
+    assert!(occluded > 500, "only {occluded} triangles hidden");
+}
