@@ -166,6 +166,14 @@ fn srgb_cells() -> &'static [i32] {
         let code = |v: f32| t.partition_point(|&th| th <= v);
         let first = CELL_FLOOR.to_bits() >> CELL_BITS;
         let last = 1.0f32.to_bits() >> CELL_BITS;
+        // Floats below the floor read cell 0: it must say code 0 with no
+        // threshold, as every one of them encodes to 0.
+        let end_of_first = f32::from_bits(((first + 1) << CELL_BITS) - 1);
+        assert_eq!(
+            code(end_of_first),
+            0,
+            "the first sRGB cell holds a threshold"
+        );
         (first..=last)
             .map(|cell| {
                 let lo = f32::from_bits(cell << CELL_BITS);
