@@ -176,45 +176,94 @@ struct Problem<'a> {
     pts: &'a [(f64, f64)],
 }
 
-fn params_to_m(p: &[f64]) -> [f64; 4] {
+/// M's (a, b, c, d) from a cosine's fitted parameters (ln a, ln c, b, d).
+pub(crate) fn params_to_m(p: &[f64]) -> [f64; 4] {
     [p[0].exp(), p[2], p[1].exp(), p[3]]
+}
+
+/// Whether a cosine's parameters (ln a, ln c, b, d) leave the region the
+/// fit searches: a or c beyond e^±12, |b| > 1e4, or det M ≤ 0. The costs
+/// return 1e9 there, keeping the simplex out of absurd transforms.
+pub(crate) fn outside_search(p: &[f64]) -> bool {
+    let m = params_to_m(p);
+    p[0].abs() > 12.0 || p[1].abs() > 12.0 || p[2].abs() > 1e4 || m[0] - m[1] * m[3] <= 1e-9
+}
+
+/// Nelder–Mead from `x0` with the simplex's other points at x0 + step(k)
+/// along each axis k, at most `iters` iterations; the best point and its
+/// cost.
+pub(crate) fn nelder_mead<P>(
+    problem: P,
+    x0: &[f64],
+    step: impl Fn(usize) -> f64,
+    iters: u64,
+) -> (Vec<f64>, f64)
+where
+    P: CostFunction<Param = Vec<f64>, Output = f64>,
+{
+    let mut simplex = vec![x0.to_vec()];
+    for k in 0..x0.len() {
+        let mut x = x0.to_vec();
+        x[k] += step(k);
+        simplex.push(x);
+    }
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(1e-7)
+        .expect("a positive tolerance");
+    let res = Executor::new(problem, solver)
+        .configure(|s| s.max_iters(iters))
+        .run()
+        .expect("the cost never fails");
+    let best = res.state().get_best_param().expect("a best point").clone();
+    (best, res.state().get_best_cost())
+}
+
+/// The fitters' progress bar on stderr (hidden when not `show`).
+pub(crate) fn progress_bar(name: &str, cells: usize, show: bool) -> ProgressBar {
+    if !show {
+        return ProgressBar::hidden();
+    }
+    let b = ProgressBar::new(cells as u64);
+    b.set_style(
+        ProgressStyle::with_template(&format!(
+            "{name} {{bar:40}} {{pos}}/{{len}} cells, {{elapsed}} (eta {{eta}})"
+        ))
+        .expect("a valid template"),
+    );
+    b
 }
 
 impl CostFunction for Problem<'_> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, Error> {
-        // Keep the simplex out of absurd transforms (a, c within e^±12).
-        let m = params_to_m(p);
-        if p[0].abs() > 12.0 || p[1].abs() > 12.0 || p[2].abs() > 1e4 || m[0] - m[1] * m[3] <= 1e-9
-        {
+        if outside_search(p) {
             return Ok(1e9);
         }
         Ok(l1_error(self.lobe, params_to_m(p), self.pts))
     }
 }
 
+/// The initial simplex step of a cosine's parameter k (ln a, ln c, b, d)
+/// from `x0`.
+pub(crate) fn cosine_step(x0: &[f64], k: usize) -> f64 {
+    match k {
+        2 => 0.1 * (1.0 + x0[2].abs()),
+        3 => 0.1,
+        _ => 0.15,
+    }
+}
+
 /// Fits one cell from a starting M; returns the cell and its L1 error.
 pub fn fit_cell(alpha: f64, mu_o: f64, start: [f64; 4], pts: &[(f64, f64)]) -> (Cell, f64) {
     let lobe = Lobe::new(alpha, mu_o);
-    let x0 = vec![start[0].ln(), start[2].ln(), start[1], start[3]];
-    let step = [0.15, 0.15, 0.1 * (1.0 + start[1].abs()), 0.1];
-    let mut simplex = vec![x0.clone()];
-    for k in 0..4 {
-        let mut x = x0.clone();
-        x[k] += step[k];
-        simplex.push(x);
-    }
-    let problem = Problem { lobe: &lobe, pts };
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(1e-7)
-        .expect("a positive tolerance");
-    let res = Executor::new(problem, solver)
-        .configure(|s| s.max_iters(600))
-        .run()
-        .expect("the cost never fails");
-    let best = res.state().get_best_param().expect("a best point").clone();
-    let err = res.state().get_best_cost();
+    let x0 = [start[0].ln(), start[2].ln(), start[1], start[3]];
+    let (best, err) = nelder_mead(
+        Problem { lobe: &lobe, pts },
+        &x0,
+        |k| cosine_step(&x0, k),
+        600,
+    );
     let m = params_to_m(&best);
     (
         Cell {
@@ -240,18 +289,7 @@ pub fn node(i: usize, j: usize) -> (f64, f64) {
 /// progress bar on stderr when `progress`.
 pub fn fit_table(progress: bool) -> (Vec<Vec<Cell>>, Vec<Vec<f64>>) {
     let pts = points();
-    let bar = if progress {
-        let b = ProgressBar::new((N * N) as u64);
-        b.set_style(
-            ProgressStyle::with_template(
-                "fit-ltc {bar:40} {pos}/{len} cells, {elapsed} (eta {eta})",
-            )
-            .expect("a valid template"),
-        );
-        b
-    } else {
-        ProgressBar::hidden()
-    };
+    let bar = progress_bar("fit-ltc", N * N, progress);
     // The α = 1 row (x = N − 1), from the normal view outward.
     let mut start = [1.0, 0.0, 1.0, 0.0];
     let mut top = Vec::with_capacity(N);

@@ -29,10 +29,11 @@
 //! instead, neighbouring columns at grazing views held them in different
 //! orders, and a coat between two α nodes erred by up to 16 %).
 
-use crate::fit_ltc::{ltc_density, ltc_sample, points, MU_MIN};
-use argmin::core::{CostFunction, Error, Executor, State};
-use argmin::solver::neldermead::NelderMead;
-use indicatif::{ProgressBar, ProgressStyle};
+use crate::fit_ltc::{
+    cosine_step, ltc_density, ltc_sample, nelder_mead, outside_search, params_to_m, points,
+    progress_bar, MU_MIN,
+};
+use argmin::core::{CostFunction, Error};
 use rayon::prelude::*;
 use specula_core::ltc::coat::{CoatCell, K, NX, NY, X_AXIS, Y_AXIS};
 use specula_core::models::disney::{Disney, DisneyParams, Lobe};
@@ -125,10 +126,7 @@ pub type Params = [f64; N_PARAMS];
 
 /// (Mₖ, wₖ) of a parameter vector.
 pub fn unpack(p: &[f64]) -> ([[f64; 4]; K], [f64; K]) {
-    let m = core::array::from_fn(|k| {
-        let q = &p[4 * k..4 * k + 4];
-        [q[0].exp(), q[2], q[1].exp(), q[3]]
-    });
+    let m = core::array::from_fn(|k| params_to_m(&p[4 * k..4 * k + 4]));
     let e: [f64; K] = core::array::from_fn(|k| if k == 0 { 1.0 } else { p[4 * K + k - 1].exp() });
     let sum: f64 = e.iter().sum();
     (m, e.map(|x| x / sum))
@@ -180,13 +178,8 @@ impl CostFunction for Problem<'_> {
     type Param = Vec<f64>;
     type Output = f64;
     fn cost(&self, p: &Vec<f64>) -> Result<f64, Error> {
-        // Keep the simplex out of absurd transforms (a, c within e^±12,
-        // no weight pinned to 0, det M > 0).
-        let (m, _) = unpack(p);
-        let bad = |m: &[f64; 4], q: &[f64]| {
-            q[0].abs() > 12.0 || q[1].abs() > 12.0 || q[2].abs() > 1e4 || m[0] - m[1] * m[3] <= 1e-9
-        };
-        if (0..K).any(|k| bad(&m[k], &p[4 * k..4 * k + 4]))
+        // Each cosine inside the search region, no weight pinned to 0.
+        if (0..K).any(|k| outside_search(&p[4 * k..4 * k + 4]))
             || p[4 * K..].iter().any(|l| l.abs() > 20.0)
         {
             return Ok(1e9);
@@ -195,27 +188,14 @@ impl CostFunction for Problem<'_> {
     }
 }
 
-fn nelder_mead(problem: Problem, x0: &[f64], iters: u64) -> (Vec<f64>, f64) {
-    let mut simplex = vec![x0.to_vec()];
-    for k in 0..x0.len() {
-        let mut x = x0.to_vec();
-        x[k] += match k {
-            _ if k >= 4 * K => 0.5,
-            _ if k % 4 == 2 => 0.1 * (1.0 + x0[k].abs()),
-            _ if k % 4 == 3 => 0.1,
-            _ => 0.15,
-        };
-        simplex.push(x);
+/// The initial simplex step of parameter k: the cosines' as in `fit-ltc`,
+/// 0.5 for the weights' logits.
+fn step(x0: &[f64], k: usize) -> f64 {
+    if k >= 4 * K {
+        0.5
+    } else {
+        cosine_step(&x0[4 * (k / 4)..], k % 4)
     }
-    let solver = NelderMead::new(simplex)
-        .with_sd_tolerance(1e-7)
-        .expect("a positive tolerance");
-    let res = Executor::new(problem, solver)
-        .configure(|s| s.max_iters(iters))
-        .run()
-        .expect("the cost never fails");
-    let best = res.state().get_best_param().expect("a best point").clone();
-    (best, res.state().get_best_cost())
 }
 
 /// Fits one cell from a starting parameter vector; returns the cell, its
@@ -227,8 +207,13 @@ pub fn fit_cell(
     pts: &[(f64, f64)],
 ) -> (CoatCell, Params, f64) {
     let lobe = CoatLobe::new(alpha, mu_o);
-    let (x, _) = nelder_mead(Problem { lobe: &lobe, pts }, start, 4000);
-    let (x, err) = nelder_mead(Problem { lobe: &lobe, pts }, &x, 3000);
+    let (x, _) = nelder_mead(
+        Problem { lobe: &lobe, pts },
+        start,
+        |k| step(start, k),
+        4000,
+    );
+    let (x, err) = nelder_mead(Problem { lobe: &lobe, pts }, &x, |k| step(&x, k), 3000);
     let p: Params = core::array::from_fn(|k| x[k]);
     let (m, w) = unpack(&p);
     (CoatCell { m, w, n: lobe.n }, p, err)
@@ -268,18 +253,7 @@ fn log(progress: bool, i: usize, j: usize, r: &(CoatCell, Params, f64)) {
 /// progress bar on stderr when `progress`.
 pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
     let pts = points();
-    let bar = if progress {
-        let b = ProgressBar::new((NX * NY) as u64);
-        b.set_style(
-            ProgressStyle::with_template(
-                "fit-ltc-coat {bar:40} {pos}/{len} cells, {elapsed} (eta {eta})",
-            )
-            .expect("a valid template"),
-        );
-        b
-    } else {
-        ProgressBar::hidden()
-    };
+    let bar = progress_bar("fit-ltc-coat", NX * NY, progress);
     // The α = 0.001 column, from the normal view to grazing.
     let mut start = first_start(node(0, 0).0);
     let mut first = Vec::with_capacity(NY);

@@ -13,6 +13,7 @@
 //! ```
 
 use specula::label::{draw_labels, text_width, LabelDesc};
+use specula::render::median;
 use tiny_skia::{Color, Paint, PathBuilder, Pixmap, Rect, Stroke, Transform};
 
 /// The passes of a frame, in order, with their JSON keys and colours.
@@ -39,18 +40,6 @@ struct Row {
     ms: [f64; 6],
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n == 0 {
-        0.0
-    } else if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
 fn read_row(path: &str) -> Result<Row, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("{path}: {e}"))?;
     let json: serde_json::Value =
@@ -69,7 +58,8 @@ fn read_row(path: &str) -> Result<Row, String> {
                     .ok_or_else(|| format!("{path}: a frame has no {key:?}"))
             })
             .collect::<Result<Vec<f64>, String>>()?;
-        ms[k] = median(values);
+        // The median `--stats` reports, so the bars match its table.
+        ms[k] = median(&values);
     }
     let threads = json["threads"].as_u64().unwrap_or(0);
     let shading = json["shading"].as_str().unwrap_or("");

@@ -138,6 +138,13 @@ fn stats(errs: &mut [f64]) -> (f64, f64, f64) {
     )
 }
 
+/// p90 and max of the errors of the cases that `keep`.
+fn p90_max_where(cases: &[Case], keep: impl Fn(&Case) -> bool) -> (f64, f64) {
+    let mut e: Vec<f64> = cases.iter().filter(|c| keep(c)).map(|c| c.err).collect();
+    let (_, p90, max) = stats(&mut e);
+    (p90, max)
+}
+
 /// A label and the parameter a table groups cases by.
 type Group<'a> = (&'a str, &'a dyn Fn(&DisneyParams) -> f32);
 
@@ -247,12 +254,7 @@ fn disney_ltc_error_table_over_the_parameter_grid() {
     // tail is anisotropic = 1 at grazing views: p90 6.4 %; isotropic
     // p90 2.1 %, max 10.9 %).
     assert!(p90 < 0.045 && max < 0.55, "p90 {p90}, max {max}");
-    let mut iso: Vec<f64> = cases
-        .iter()
-        .filter(|c| c.params.anisotropic == 0.0)
-        .map(|c| c.err)
-        .collect();
-    let (_, p90, max) = stats(&mut iso);
+    let (p90, max) = p90_max_where(&cases, |c| c.params.anisotropic == 0.0);
     assert!(p90 < 0.03 && max < 0.13, "isotropic: p90 {p90}, max {max}");
 }
 
@@ -312,12 +314,7 @@ fn disney_ltc_error_of_each_lobe_alone() {
     // p90 2.7 %, max 15.5 %).
     assert!(p90 < 0.06 && max < 0.42, "specular: p90 {p90}, max {max}");
     // The isotropic lobe alone: the GGX fit with separable Smith.
-    let mut iso: Vec<f64> = spec_cases
-        .iter()
-        .filter(|c| c.params.anisotropic == 0.0)
-        .map(|c| c.err)
-        .collect();
-    let (_, p90, max) = stats(&mut iso);
+    let (p90, max) = p90_max_where(&spec_cases, |c| c.params.anisotropic == 0.0);
     assert!(
         p90 < 0.015 && max < 0.10,
         "isotropic specular: p90 {p90}, max {max}"
@@ -336,12 +333,7 @@ fn disney_ltc_error_of_each_lobe_alone() {
         p90 < 0.21 && max < 0.35,
         "coated black dielectric: p90 {p90}, max {max}"
     );
-    let mut near: Vec<f64> = coat_cases
-        .iter()
-        .filter(|c| VIEWS[c.view] <= 30.0)
-        .map(|c| c.err)
-        .collect();
-    let (_, p90, max) = stats(&mut near);
+    let (p90, max) = p90_max_where(&coat_cases, |c| VIEWS[c.view] <= 30.0);
     assert!(
         p90 < 0.06 && max < 0.10,
         "coated black dielectric, θo ≤ 30°: p90 {p90}, max {max}"

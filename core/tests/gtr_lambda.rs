@@ -35,6 +35,22 @@ fn d_gtr(gamma: f64, alpha: f64, cos_m: f64) -> f64 {
 /// `panels` per dimension: 24 resolve D for γ ≤ 10 at α ≥ 0.05; γ = 128
 /// at α = 0.05 (lobe ~α/√γ wide) needs 64.
 fn lambda_direct(gamma: f64, alpha: f64, mu: f64, panels: usize) -> f64 {
+    lambda_direct_with(gamma, alpha, mu, panels, |theta_lo| {
+        (0..=panels)
+            .map(|k| theta_lo + (PI / 2.0 - theta_lo) * k as f64 / panels as f64)
+            .collect()
+    })
+}
+
+/// The quadrature of [`lambda_direct`] with the θ panels' boundaries
+/// (from θ_lo to π/2) given per φ by `theta_bounds(θ_lo)`.
+fn lambda_direct_with(
+    gamma: f64,
+    alpha: f64,
+    mu: f64,
+    panels: usize,
+    theta_bounds: impl Fn(f64) -> Vec<f64>,
+) -> f64 {
     let s = (1.0 - mu * mu).sqrt();
     let gl = GaussLegendre::new(16);
     let mut sum = 0.0;
@@ -50,12 +66,8 @@ fn lambda_direct(gamma: f64, alpha: f64, mu: f64, panels: usize) -> f64 {
             }
             let theta_lo = (mu / (s * -c)).atan();
             let mut inner = 0.0;
-            for tp in 0..panels {
-                let (t0, t1) = (
-                    theta_lo + (PI / 2.0 - theta_lo) * tp as f64 / panels as f64,
-                    theta_lo + (PI / 2.0 - theta_lo) * (tp + 1) as f64 / panels as f64,
-                );
-                let [v] = gl.integrate(t0, t1, |th| {
+            for w in theta_bounds(theta_lo).windows(2) {
+                let [v] = gl.integrate(w[0], w[1], |th| {
                     let vm = s * th.sin() * c + mu * th.cos();
                     [(-vm).max(0.0) * d_gtr(gamma, alpha, th.cos()) * th.sin()]
                 });
@@ -123,38 +135,14 @@ fn table_matches_a_direct_quadrature_for_extreme_gamma() {
 /// at θ_lo + (π/2 − θ_lo) 10^(−8 + 8k/panels), k = 0 … panels, after a
 /// first panel from θ_lo.
 fn lambda_direct_graded(gamma: f64, alpha: f64, mu: f64, panels: usize) -> f64 {
-    let s = (1.0 - mu * mu).sqrt();
-    let gl = GaussLegendre::new(16);
-    let mut sum = 0.0;
-    for pp in 0..panels {
-        let (p0, p1) = (
-            PI / 2.0 + PI * pp as f64 / panels as f64,
-            PI / 2.0 + PI * (pp + 1) as f64 / panels as f64,
-        );
-        let [part] = gl.integrate(p0, p1, |phi| {
-            let c = phi.cos();
-            if c >= 0.0 {
-                return [0.0];
-            }
-            let theta_lo = (mu / (s * -c)).atan();
-            let span = PI / 2.0 - theta_lo;
-            let mut bounds = vec![theta_lo];
-            for k in 0..=panels {
-                bounds.push(theta_lo + span * 10f64.powf(-8.0 + 8.0 * k as f64 / panels as f64));
-            }
-            let mut inner = 0.0;
-            for w in bounds.windows(2) {
-                let [v] = gl.integrate(w[0], w[1], |th| {
-                    let vm = s * th.sin() * c + mu * th.cos();
-                    [(-vm).max(0.0) * d_gtr(gamma, alpha, th.cos()) * th.sin()]
-                });
-                inner += v;
-            }
-            [inner]
-        });
-        sum += part;
-    }
-    sum / mu
+    lambda_direct_with(gamma, alpha, mu, panels, |theta_lo| {
+        let span = PI / 2.0 - theta_lo;
+        let mut bounds = vec![theta_lo];
+        for k in 0..=panels {
+            bounds.push(theta_lo + span * 10f64.powf(-8.0 + 8.0 * k as f64 / panels as f64));
+        }
+        bounds
+    })
 }
 
 /// Small α (a material's α goes down to 1e-3; the tables above start at

@@ -14,6 +14,7 @@ use crate::target::{Target, TILE};
 pub const CHUNK: usize = 4096;
 
 /// One chunk's screen triangles and its per-tile index lists.
+#[derive(Default)]
 pub struct BinnedChunk {
     pub tris: Vec<RasterTri>,
     /// Tile t's entries are `items[offsets[t]..offsets[t + 1]]`.
@@ -53,14 +54,6 @@ pub fn bin_chunk(target: &Target, tris: Vec<RasterTri>) -> BinnedChunk {
 }
 
 impl BinnedChunk {
-    pub fn new() -> BinnedChunk {
-        BinnedChunk {
-            tris: Vec::new(),
-            offsets: Vec::new(),
-            items: Vec::new(),
-        }
-    }
-
     /// (Re)builds the per-tile lists of `self.tris`, reusing the vectors'
     /// allocations: a frame drawn after frame keeps its chunks, and fresh
     /// ones cost ~1,500 page faults a 1080p frame (`perf stat`).
@@ -71,12 +64,6 @@ impl BinnedChunk {
             items,
         } = self;
         bin_into(target, tris, offsets, items);
-    }
-}
-
-impl Default for BinnedChunk {
-    fn default() -> Self {
-        Self::new()
     }
 }
 

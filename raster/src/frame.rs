@@ -147,7 +147,7 @@ fn geometry_pass(
     let ids = pass.ids();
     let n_chunks = range.len().div_ceil(CHUNK);
     if out.chunks.len() < n_chunks {
-        out.chunks.resize_with(n_chunks, BinnedChunk::new);
+        out.chunks.resize_with(n_chunks, BinnedChunk::default);
     }
     let chunks = &mut out.chunks[..n_chunks];
     let set_up: Vec<(SetupCounts, f64)> = scene.triangles[range.clone()]

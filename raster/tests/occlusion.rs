@@ -32,8 +32,9 @@ fn scene_depth(x: f64, y: f64) -> f32 {
     }
 }
 
-#[test]
-fn triangles_called_hidden_write_no_pixel() {
+/// The image, its depth buffer (`scene_depth` at pixel centres), the
+/// bounds built from it and a setup context.
+fn scene() -> (Target, Vec<f32>, DepthBounds, SetupContext) {
     let target = Target::new(W, H).unwrap();
     let mut depth = vec![0.0f32; target.buffer_len()];
     for y in 0..H {
@@ -48,6 +49,12 @@ fn triangles_called_hidden_write_no_pixel() {
         height: H,
         guard: GuardBand::for_image(W, H),
     };
+    (target, depth, bounds, ctx)
+}
+
+#[test]
+fn triangles_called_hidden_write_no_pixel() {
+    let (target, depth, bounds, ctx) = scene();
     let mut rng = rand::rngs::StdRng::seed_from_u64(10);
     let (mut hidden, mut writers) = (0, 0);
     for n in 0..8_000 {
@@ -156,20 +163,7 @@ fn triangles_called_hidden_write_no_pixel() {
 #[test]
 fn four_wide_setup_occludes_like_the_scalar_setup() {
     use specula_raster::setup::TriPlanes;
-    let target = Target::new(W, H).unwrap();
-    let mut depth = vec![0.0f32; target.buffer_len()];
-    for y in 0..H {
-        for x in 0..W {
-            depth[target.index(x, y)] = scene_depth(x as f64 + 0.5, y as f64 + 0.5);
-        }
-    }
-    let mut bounds = DepthBounds::default();
-    bounds.build(&target, &depth);
-    let ctx = SetupContext {
-        width: W,
-        height: H,
-        guard: GuardBand::for_image(W, H),
-    };
+    let (_, _, bounds, ctx) = scene();
     let mut rng = rand::rngs::StdRng::seed_from_u64(11);
     let mut occluded = 0;
     for group in 0..2_000u32 {
