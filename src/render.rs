@@ -4,7 +4,7 @@
 use crate::scene::LoadedScene;
 use serde::Serialize;
 use specula_raster::frame::{render_into, render_with, Frame, FrameStats, ShadePath};
-use specula_raster::post::{downsample, Post, PostStage, Stage, Tonemap};
+use specula_raster::post::{downsample, Post, PostOutput, PostStage, Stage, Tonemap};
 use specula_raster::{BufferSet, Target};
 use std::sync::Arc;
 use std::time::Instant;
@@ -173,26 +173,23 @@ pub fn render_scene(
     let buffers = settings.buffers.union(post.buffers());
     pool.install(|| {
         let mut frames = Vec::new();
-        let mut last: Option<(Vec<u8>, Frame)> = None;
+        let mut last: Option<(PostOutput, Frame)> = None;
         for _ in 0..repeat {
             let t0 = Instant::now();
             // Later frames reuse the previous frame's buffers, as a renderer
             // drawing frame after frame would.
             let (frame, recycled) = match last.take() {
-                Some((ldr, mut f)) => {
+                Some((out, mut f)) => {
                     render_into(&scene.data, &mut f, settings.path);
-                    (f, ldr)
+                    (f, out)
                 }
                 None => (
                     render_with(&scene.data, target, settings.path, buffers),
-                    Vec::new(),
+                    PostOutput::default(),
                 ),
             };
             let tp = Instant::now();
-            let ldr = post
-                .run_reusing(&frame.buffers, recycled)?
-                .ldr
-                .unwrap_or_default();
+            let out = post.run_reusing(&frame.buffers, recycled)?;
             let post = tp.elapsed().as_secs_f64() * 1e3;
             let total = t0.elapsed().as_secs_f64() * 1e3;
             let t = frame.stats.times;
@@ -205,9 +202,10 @@ pub fn render_scene(
                 post,
                 frame: total,
             });
-            last = Some((ldr, frame));
+            last = Some((out, frame));
         }
-        let (mut ldr, frame) = last.ok_or("no frame rendered")?;
+        let (out, frame) = last.ok_or("no frame rendered")?;
+        let mut ldr = out.ldr.unwrap_or_default();
         // Labels are placed in the scene's own pixels; --width rescales.
         let scale = settings.width as f32 / scene.output.width.max(1) as f32;
         crate::label::draw_labels(

@@ -8,6 +8,7 @@ use specula::render::{render_scene, RenderSettings};
 use specula::scene::{load_scene, LoadedScene};
 use specula::{demo, output};
 use specula_raster::frame::ShadePath;
+use specula_raster::post::PostOutput;
 
 fn benchmark() -> LoadedScene {
     load_scene(&fixtures().join("scenes/sphere-grid.toml")).expect("benchmark scene")
@@ -192,7 +193,10 @@ fn a_frame_drawn_into_reused_buffers_equals_a_fresh_one() {
     settings.ssaa = 1;
     let post = settings.post();
     let expected = post.run(&fresh.buffers).expect("post").ldr;
-    let dirty = vec![0xA5u8; 480 * 270 * 3 + 1000];
+    let dirty = PostOutput {
+        ldr: Some(vec![0xA5u8; 480 * 270 * 3 + 1000]),
+        ..PostOutput::default()
+    };
     let got = post.run_reusing(&fresh.buffers, dirty).expect("post").ldr;
     assert!(got == expected, "8-bit output");
 }

@@ -374,7 +374,7 @@ impl Stage {
 /// What the post list produced: the final HDR image (after the last stage
 /// before `Encode`) unless the fused path ran, and the 8-bit sRGB pixels
 /// (RGB, row-major) if the list encodes.
-#[derive(Debug)]
+#[derive(Debug, Default)]
 pub struct PostOutput {
     pub width: u32,
     pub height: u32,
@@ -455,39 +455,78 @@ impl Post {
         }
     }
 
-    /// Runs the stages over the frame's colour.
-    pub fn run(&self, frame: &FrameBuffers) -> Result<PostOutput, String> {
-        self.run_reusing(frame, Vec::new())
+    /// The fused head's parameters when the list starts resolve, exposure,
+    /// tone map (custom stages and the encode after them).
+    fn fused_head(&self) -> Option<(u32, f32, Tonemap)> {
+        match self.stages.as_slice() {
+            [Stage::Resolve { ssaa }, Stage::Exposure { stops }, Stage::Tonemap(t), ..]
+                if self.fuse =>
+            {
+                Some((*ssaa, *stops, *t))
+            }
+            _ => None,
+        }
     }
 
-    /// [`Post::run`] writing the 8-bit pixels into `recycled`, the `ldr` of
-    /// an earlier frame's output, whose allocation is reused: a fresh 6 MB
-    /// vector for a 1080p frame costs ~1,300 page faults (measured with
-    /// `perf stat -e page-faults`), each the kernel zeroing a page that the
-    /// encode then overwrites anyway.
+    /// Runs the stages over the frame's colour.
+    pub fn run(&self, frame: &FrameBuffers) -> Result<PostOutput, String> {
+        self.run_reusing(frame, PostOutput::default())
+    }
+
+    /// [`Post::run`] writing into the buffers of `recycled`, an earlier
+    /// frame's output, whose allocations are reused (their contents are
+    /// all overwritten): a fresh 1080p frame's 8-bit pixels (6 MB) and HDR
+    /// planes (25 MB) are ~7,600 pages, each a page fault in which the
+    /// kernel zeroes what the post then overwrites anyway (the Sobel
+    /// outline frame: 12.6k -> 6.1k faults a frame, `perf stat -e
+    /// page-faults` over `--repeat 10`).
+    ///
+    /// With `fuse` set, the standard list runs as one pass over the samples
+    /// ([`resolve_ldr`]), and a list that starts with resolve, exposure and
+    /// tone map and then has custom stages runs that head as one pass into
+    /// the HDR image ([`resolve_hdr_into`]); both give the bytes of the
+    /// stage-by-stage list (tested).
     pub fn run_reusing(
         &self,
         frame: &FrameBuffers,
-        mut recycled: Vec<u8>,
+        recycled: PostOutput,
     ) -> Result<PostOutput, String> {
         self.validate(frame.width, frame.height)?;
+        let mut ldr_buf = recycled.ldr.unwrap_or_default();
         if let Some((ssaa, stops, tonemap)) = self.fused_form() {
-            resolve_ldr_into(frame, ssaa, tonemap, stops, &mut recycled);
+            resolve_ldr_into(frame, ssaa, tonemap, stops, &mut ldr_buf);
             return Ok(PostOutput {
                 width: frame.width / ssaa,
                 height: frame.height / ssaa,
                 hdr: None,
-                ldr: Some(recycled),
+                ldr: Some(ldr_buf),
             });
         }
-        let mut img = HdrImage {
-            width: frame.width,
-            height: frame.height,
-            rgb: frame.color.clone(),
+        let mut rgb = recycled.hdr.map(|h| h.rgb).unwrap_or_default();
+        let (mut img, rest) = match self.fused_head() {
+            Some((ssaa, stops, tonemap)) => {
+                resolve_hdr_into(frame, ssaa, tonemap, stops, &mut rgb);
+                let img = HdrImage {
+                    width: frame.width / ssaa,
+                    height: frame.height / ssaa,
+                    rgb,
+                };
+                (img, &self.stages[3..])
+            }
+            None => {
+                copy_planes(&frame.color, &mut rgb);
+                let img = HdrImage {
+                    width: frame.width,
+                    height: frame.height,
+                    rgb,
+                };
+                (img, &self.stages[..])
+            }
         };
         let mut ldr = None;
-        for s in &self.stages {
+        for s in rest {
             match s {
+                Stage::Resolve { ssaa: 1 } => {}
                 Stage::Resolve { ssaa } => img = downsample(&img.rgb, img.width, img.height, *ssaa),
                 Stage::Exposure { stops } => {
                     let k = stops.exp2();
@@ -502,8 +541,8 @@ impl Post {
                     }
                 }
                 Stage::Encode => {
-                    encode_ldr_into(&img.rgb, &mut recycled);
-                    ldr = Some(std::mem::take(&mut recycled));
+                    encode_ldr_into(&img.rgb, &mut ldr_buf);
+                    ldr = Some(std::mem::take(&mut ldr_buf));
                 }
                 Stage::Custom(c) => c.apply(&mut img, frame),
             }
@@ -514,6 +553,100 @@ impl Post {
             hdr: Some(img),
             ldr,
         })
+    }
+}
+
+/// Copies `src` into `dst`, reusing `dst`'s allocations.
+fn copy_planes(src: &Planes3, dst: &mut Planes3) {
+    for (d, s) in [
+        (&mut dst.r, &src.r),
+        (&mut dst.g, &src.g),
+        (&mut dst.b, &src.b),
+    ] {
+        d.clear();
+        d.extend_from_slice(s);
+    }
+}
+
+/// Supersampling resolve, exposure (in stops) and tone mapping in one pass
+/// over the samples, into `out` (planes of (width / ssaa) × (height /
+/// ssaa), their allocations reused): the values the three stages give one
+/// after the other (the same products in the same order), without the
+/// copies and passes in between. The head of a post list with custom
+/// stages.
+pub fn resolve_hdr_into(
+    frame: &FrameBuffers,
+    ssaa: u32,
+    tonemap: Tonemap,
+    exposure: f32,
+    out: &mut Planes3,
+) {
+    match tonemap {
+        Tonemap::Clamp => resolve_hdr_with::<0>(frame, ssaa, exposure, out),
+        Tonemap::Reinhard => resolve_hdr_with::<1>(frame, ssaa, exposure, out),
+        Tonemap::Aces => resolve_hdr_with::<2>(frame, ssaa, exposure, out),
+    }
+}
+
+fn resolve_hdr_with<const CURVE: u8>(
+    frame: &FrameBuffers,
+    ssaa: u32,
+    exposure: f32,
+    out: &mut Planes3,
+) {
+    let curve = curve_of::<CURVE>();
+    let (sw, ssaa) = (frame.width as usize, ssaa as usize);
+    let (w, h) = (sw / ssaa, frame.height as usize / ssaa);
+    let color = &frame.color;
+    let (inv_n, k) = (1.0 / (ssaa * ssaa) as f32, exposure.exp2());
+    for p in [&mut out.r, &mut out.g, &mut out.b] {
+        // Every value is written below: zeros only where the plane grows.
+        p.truncate(w * h);
+        p.resize(w * h, 0.0);
+    }
+    let full = w / 8 * 8;
+    out.r
+        .par_chunks_mut(w.max(1))
+        .zip(out.g.par_chunks_mut(w.max(1)))
+        .zip(out.b.par_chunks_mut(w.max(1)))
+        .enumerate()
+        .for_each(|(y, ((r, g), b))| {
+            for x0 in (0..full).step_by(8) {
+                let s: [f32x8; 3] = if ssaa == 1 {
+                    let i = y * sw + x0;
+                    [load8(&color.r, i), load8(&color.g, i), load8(&color.b, i)]
+                } else {
+                    let sums: [[f32; 3]; 8] =
+                        std::array::from_fn(|lane| box_sum(color, sw, ssaa, x0 + lane, y));
+                    [0, 1, 2].map(|c| f32x8::from(sums.map(|v| v[c])))
+                };
+                let mapped = |ch: f32x8| {
+                    let v = ch * f32x8::splat(inv_n) * f32x8::splat(k);
+                    curve.apply_x8(v).to_array()
+                };
+                r[x0..x0 + 8].copy_from_slice(&mapped(s[0]));
+                g[x0..x0 + 8].copy_from_slice(&mapped(s[1]));
+                b[x0..x0 + 8].copy_from_slice(&mapped(s[2]));
+            }
+            for x in full..w {
+                let s = if ssaa == 1 {
+                    color.get(y * sw + x)
+                } else {
+                    box_sum(color, sw, ssaa, x, y)
+                };
+                r[x] = curve.apply(s[0] * inv_n * k);
+                g[x] = curve.apply(s[1] * inv_n * k);
+                b[x] = curve.apply(s[2] * inv_n * k);
+            }
+        });
+}
+
+/// The tone curve a monomorphized post loop was built for.
+fn curve_of<const CURVE: u8>() -> Tonemap {
+    match CURVE {
+        0 => Tonemap::Clamp,
+        1 => Tonemap::Reinhard,
+        _ => Tonemap::Aces,
     }
 }
 
@@ -558,11 +691,7 @@ fn resolve_ldr_with<const CURVE: u8>(
     exposure: f32,
     out: &mut Vec<u8>,
 ) {
-    let curve = match CURVE {
-        0 => Tonemap::Clamp,
-        1 => Tonemap::Reinhard,
-        _ => Tonemap::Aces,
-    };
+    let curve = curve_of::<CURVE>();
     let (sw, ssaa) = (frame.width as usize, ssaa as usize);
     let (w, h) = (sw / ssaa, frame.height as usize / ssaa);
     let color = &frame.color;
@@ -780,6 +909,82 @@ mod tests {
                 assert!(a.hdr.is_none() && b.hdr.is_some());
                 assert_eq!((a.width, a.height), (150 / ssaa, 90 / ssaa));
                 assert_eq!(a.ldr, b.ldr, "ssaa {ssaa} {tonemap:?}");
+            }
+        }
+    }
+
+    /// A custom stage for the tests: scales each pixel by a factor that
+    /// depends on its position, so a stage that saw the wrong image, size
+    /// or stale values would change the output.
+    #[derive(Debug)]
+    struct Ramp;
+
+    impl PostStage for Ramp {
+        fn name(&self) -> &str {
+            "ramp"
+        }
+
+        fn apply(&self, img: &mut HdrImage, _frame: &FrameBuffers) {
+            let w = img.width as usize;
+            for p in [&mut img.rgb.r, &mut img.rgb.g, &mut img.rgb.b] {
+                for (i, v) in p.iter_mut().enumerate() {
+                    *v *= 0.5 + (i % w) as f32 / w as f32;
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn fused_head_equals_the_stage_list_and_reuses_dirty_buffers() {
+        let t = crate::Target::new(150, 90).unwrap();
+        let mut fb = FrameBuffers::new(&t, BufferSet::default());
+        for i in 0..fb.color.len() {
+            let v = |c: f32| match i % 89 {
+                0 => f32::NAN,
+                1 => f32::INFINITY,
+                2 => -0.5,
+                _ => ((i as f32 * 0.23 + c).cos() * 1.7).abs() * (1 + i % 3) as f32,
+            };
+            fb.color.r[i] = v(0.0);
+            fb.color.g[i] = v(1.0);
+            fb.color.b[i] = v(2.0);
+        }
+        for ssaa in [1, 3] {
+            for tonemap in [Tonemap::Clamp, Tonemap::Reinhard, Tonemap::Aces] {
+                let mut fused = Post::standard(ssaa, -0.75, tonemap);
+                let encode = fused.stages.pop().unwrap();
+                fused.stages.push(Stage::Custom(std::sync::Arc::new(Ramp)));
+                fused.stages.push(encode);
+                let mut staged = fused.clone();
+                staged.fuse = false;
+                let want = staged.run(&fb).unwrap();
+                // Buffers of another size full of garbage, as a recycled
+                // frame of a different scene would leave.
+                let dirty = || PostOutput {
+                    width: 7,
+                    height: 3,
+                    hdr: Some(HdrImage {
+                        width: 7,
+                        height: 3,
+                        rgb: Planes3 {
+                            r: vec![9.0; 60_000],
+                            g: vec![f32::NAN; 21],
+                            b: vec![],
+                        },
+                    }),
+                    ldr: Some(vec![0x5A; 100]),
+                };
+                for got in [
+                    fused.run(&fb).unwrap(),
+                    fused.run_reusing(&fb, dirty()).unwrap(),
+                ] {
+                    let tag = format!("ssaa {ssaa} {tonemap:?}");
+                    assert_eq!((got.width, got.height), (150 / ssaa, 90 / ssaa), "{tag}");
+                    assert!(got.hdr == want.hdr, "HDR image, {tag}");
+                    assert!(got.ldr == want.ldr, "8-bit image, {tag}");
+                }
+                let staged_reused = staged.run_reusing(&fb, dirty()).unwrap();
+                assert!(staged_reused.hdr == want.hdr && staged_reused.ldr == want.ldr);
             }
         }
     }
