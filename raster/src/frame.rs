@@ -170,7 +170,8 @@ fn geometry_pass(
                 c => c,
             };
             let id = |i: usize| ids.start as u32 + (base + i) as u32;
-            let vertices = |tri: &[u32; 3]| tri.map(|k| clip[k as usize]);
+            let vertices =
+                |&[a, b, c]: &[u32; 3]| [clip[a as usize], clip[b as usize], clip[c as usize]];
             // 4 triangles at a time (bit-identical to `setup` per triangle,
             // passes after the first with the occlusion test), the chunk's
             // last 0–3 one at a time.
@@ -181,8 +182,16 @@ fn geometry_pass(
                 .enumerate()
             {
                 let i = q * LANES;
-                let v = std::array::from_fn(|t| vertices(&tris4[t]));
-                let cull4 = std::array::from_fn(|t| cull(i + t));
+                const { assert!(LANES == 4) };
+                // Spelled out: `array::from_fn` here compiled to copies
+                // through the stack that cost as much as the setup itself.
+                let v = [
+                    vertices(&tris4[0]),
+                    vertices(&tris4[1]),
+                    vertices(&tris4[2]),
+                    vertices(&tris4[3]),
+                ];
+                let cull4 = [cull(i), cull(i + 1), cull(i + 2), cull(i + 3)];
                 let planes4 = planes4.try_into().expect("chunks of LANES");
                 ctx.setup_x4_occluded(id(i), &v, cull4, occluder, planes4, raster, &mut counts);
             }
