@@ -309,17 +309,17 @@ impl SetupContext {
             counts.triangles += 1;
             let id = first + t as u32;
             let rt = if bit(exact, t) {
-                bit(edges.some, t).then(|| edges.lane(t, id))
+                None
             } else {
                 hit(6);
                 let [p0, p1, p2] = snapped.map(|[sx, sy]| [to_int(sx)[t], to_int(sy)[t]]);
                 self.edges(id, p0, p1, p2)
             };
-            let Some(rt) = rt else {
+            if !(bit(exact, t) && bit(edges.some, t) || rt.is_some()) {
                 counts.no_samples += 1;
                 hit(4);
                 continue;
-            };
+            }
             // Planes beyond the bound (a vertex at a subnormal w, say):
             // skipped as degenerate, see `setup`.
             if !bit(bounded, t) {
@@ -327,7 +327,10 @@ impl SetupContext {
                 hit(5);
                 continue;
             }
-            out.push(rt);
+            // The exact lanes' triangle is built in the push: made on the
+            // stack by narrow stores and then copied with wide loads, it
+            // stalled on store forwarding.
+            out.push(rt.unwrap_or_else(|| edges.lane(t, id)));
             counts.drawn += 1;
             hit(3);
             let lane3 = |p: &[[f32; 4]; 3]| [p[0][t], p[1][t], p[2][t]];
@@ -444,21 +447,35 @@ struct EdgesX4 {
 impl EdgesX4 {
     /// Lane `t`'s screen triangle, as `edges` builds it.
     #[inline(always)]
+    ///
+    /// Arrays spelled out element by element: `array::from_fn` and `map`
+    /// here compiled to copies through the stack.
     fn lane(&self, t: usize, tri: u32) -> RasterTri {
-        let edges: [Edge; 3] = std::array::from_fn(|k| Edge {
+        let edge = |k: usize| Edge {
             a: self.a[k][t],
             b: self.b[k][t],
             c: self.c[k][t],
-        });
+        };
+        let (e0, e1, e2) = (edge(0), edge(1), edge(2));
+        let fixed = |v: i64| (v * SUBPIXEL_ONE) as i32;
         RasterTri {
             small: bit(self.small, t).then(|| SmallEdges {
-                e0: std::array::from_fn(|k| self.e0[k][t] as i32),
-                a: edges.map(|e| (e.a * SUBPIXEL_ONE) as i32),
-                b: edges.map(|e| (e.b * SUBPIXEL_ONE) as i32),
+                e0: [
+                    self.e0[0][t] as i32,
+                    self.e0[1][t] as i32,
+                    self.e0[2][t] as i32,
+                ],
+                a: [fixed(e0.a), fixed(e1.a), fixed(e2.a)],
+                b: [fixed(e0.b), fixed(e1.b), fixed(e2.b)],
             }),
-            inv_step: std::array::from_fn(|k| self.inv_step[k][t]),
-            edges,
-            bbox: std::array::from_fn(|i| self.bbox[i][t] as i32),
+            inv_step: [self.inv_step[0][t], self.inv_step[1][t], self.inv_step[2][t]],
+            edges: [e0, e1, e2],
+            bbox: [
+                self.bbox[0][t] as i32,
+                self.bbox[1][t] as i32,
+                self.bbox[2][t] as i32,
+                self.bbox[3][t] as i32,
+            ],
             tri,
         }
     }
