@@ -165,6 +165,11 @@ impl IdMap {
         IdMap { ranges, identity }
     }
 
+    /// Ids are the scene's triangle indices (one pass, no override).
+    pub fn is_identity(&self) -> bool {
+        self.identity
+    }
+
     /// The source triangle and material of `id`, an id some pass wrote.
     #[inline(always)]
     pub fn look_up(&self, id: u32, tri_material: &[u32]) -> (u32, u32) {

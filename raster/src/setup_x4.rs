@@ -468,7 +468,11 @@ impl EdgesX4 {
                 a: [fixed(e0.a), fixed(e1.a), fixed(e2.a)],
                 b: [fixed(e0.b), fixed(e1.b), fixed(e2.b)],
             }),
-            inv_step: [self.inv_step[0][t], self.inv_step[1][t], self.inv_step[2][t]],
+            inv_step: [
+                self.inv_step[0][t],
+                self.inv_step[1][t],
+                self.inv_step[2][t],
+            ],
             edges: [e0, e1, e2],
             bbox: [
                 self.bbox[0][t] as i32,

@@ -80,6 +80,12 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
         while lx < tile_w {
             let at = row * TILE + lx;
             let n_px = R::LANES.min(tile_w - lx);
+            // The next packet's first and last triangles (a new triangle
+            // in a packet is almost always at one of its ends).
+            if let (Some(&a), Some(&b)) = (ids.get(at + R::LANES), ids.get(at + 2 * R::LANES - 1)) {
+                ctx.prefetch(a);
+                ctx.prefetch(b);
+            }
             tris.fill(&ids[at..], R::LANES, Some(ctx));
             let mut rgb: Rgb<R> = Rgb::from_f32(background);
             let mut w = R::splat(f64::INFINITY);
