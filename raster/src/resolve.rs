@@ -54,6 +54,9 @@ pub struct ResolveContext<'a> {
     pub needs_surface: Vec<bool>,
     /// Some material's shader does.
     pub any_needs_surface: bool,
+    /// 2 / width and 2 / height of the view (pixel → NDC), as `resolve`
+    /// rounds them: divided once here instead of in every packet.
+    ndc_scale: [f32; 2],
 }
 
 impl<'a> ResolveContext<'a> {
@@ -70,6 +73,10 @@ impl<'a> ResolveContext<'a> {
             ids: IdMap::new(&scene.geometry),
             any_needs_surface: needs_surface.contains(&true),
             needs_surface,
+            ndc_scale: [
+                (2.0 / view.width as f64) as f32,
+                (2.0 / view.height as f64) as f32,
+            ],
         }
     }
 }
@@ -277,8 +284,9 @@ impl ResolveContext<'_> {
         // The primary ray through the pixel centre (camera.rs); its point at
         // view depth w is the surface point.
         let v = self.view;
-        let nx = px * R::splat(2.0 / v.width as f64) - R::ONE;
-        let ny = R::ONE - py * R::splat(2.0 / v.height as f64);
+        let (sx, sy) = (R::splat(self.ndc_scale[0] as f64), R::splat(self.ndc_scale[1] as f64));
+        let nx = px * sx - R::ONE;
+        let ny = R::ONE - py * sy;
         let ray = V3::from_f32(v.forward.to_array())
             + V3::from_f32(v.right.to_array()) * (nx * R::splat(v.tan_x as f64))
             + V3::from_f32(v.up.to_array()) * (ny * R::splat(v.tan_y as f64));
