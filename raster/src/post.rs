@@ -612,14 +612,7 @@ fn resolve_hdr_with<const CURVE: u8>(
         .enumerate()
         .for_each(|(y, ((r, g), b))| {
             for x0 in (0..full).step_by(8) {
-                let s: [f32x8; 3] = if ssaa == 1 {
-                    let i = y * sw + x0;
-                    [load8(&color.r, i), load8(&color.g, i), load8(&color.b, i)]
-                } else {
-                    let sums: [[f32; 3]; 8] =
-                        std::array::from_fn(|lane| box_sum(color, sw, ssaa, x0 + lane, y));
-                    [0, 1, 2].map(|c| f32x8::from(sums.map(|v| v[c])))
-                };
+                let s = sums8(color, sw, ssaa, x0, y);
                 let mapped = |ch: f32x8| {
                     let v = ch * f32x8::splat(inv_n) * f32x8::splat(k);
                     curve.apply_x8(v).to_array()
@@ -629,11 +622,7 @@ fn resolve_hdr_with<const CURVE: u8>(
                 b[x0..x0 + 8].copy_from_slice(&mapped(s[2]));
             }
             for x in full..w {
-                let s = if ssaa == 1 {
-                    color.get(y * sw + x)
-                } else {
-                    box_sum(color, sw, ssaa, x, y)
-                };
+                let s = sum1(color, sw, ssaa, x, y);
                 r[x] = curve.apply(s[0] * inv_n * k);
                 g[x] = curve.apply(s[1] * inv_n * k);
                 b[x] = curve.apply(s[2] * inv_n * k);
@@ -705,29 +694,42 @@ fn resolve_ldr_with<const CURVE: u8>(
         // two table reads) was ~50 cycles a pixel.
         let full = w / 8 * 8;
         for (x0, px8) in (0..full).step_by(8).zip(row.chunks_exact_mut(24)) {
-            let s: [f32x8; 3] = if ssaa == 1 {
-                let i = y * sw + x0;
-                [load8(&color.r, i), load8(&color.g, i), load8(&color.b, i)]
-            } else {
-                let sums: [[f32; 3]; 8] =
-                    std::array::from_fn(|lane| box_sum(color, sw, ssaa, x0 + lane, y));
-                [0, 1, 2].map(|c| f32x8::from(sums.map(|v| v[c])))
-            };
+            let s = sums8(color, sw, ssaa, x0, y);
             let code = |ch| ldr_code(&enc8, curve, ch, inv_n, k);
             let (r, g, b) = (code(s[0]), code(s[1]), code(s[2]));
             store_rgb8(px8, [r, g, b]);
         }
         for (x, px) in row.chunks_exact_mut(3).enumerate().skip(full) {
-            let s = if ssaa == 1 {
-                color.get(y * sw + x)
-            } else {
-                box_sum(color, sw, ssaa, x, y)
-            };
+            let s = sum1(color, sw, ssaa, x, y);
             for c in 0..3 {
                 px[c] = enc.encode(curve.apply(s[c] * inv_n * k));
             }
         }
     });
+}
+
+/// The sample sums of output pixels (x0.., y), 8 of them, per channel:
+/// the samples themselves at ssaa 1.
+#[inline(always)]
+fn sums8(color: &Planes3, sw: usize, ssaa: usize, x0: usize, y: usize) -> [f32x8; 3] {
+    if ssaa == 1 {
+        let i = y * sw + x0;
+        [load8(&color.r, i), load8(&color.g, i), load8(&color.b, i)]
+    } else {
+        let sums: [[f32; 3]; 8] =
+            std::array::from_fn(|lane| box_sum(color, sw, ssaa, x0 + lane, y));
+        [0, 1, 2].map(|c| f32x8::from(sums.map(|v| v[c])))
+    }
+}
+
+/// [`sums8`] for one pixel.
+#[inline(always)]
+fn sum1(color: &Planes3, sw: usize, ssaa: usize, x: usize, y: usize) -> [f32; 3] {
+    if ssaa == 1 {
+        color.get(y * sw + x)
+    } else {
+        box_sum(color, sw, ssaa, x, y)
+    }
 }
 
 /// p[i..i + 8] as one vector load (filling an array lane by lane and

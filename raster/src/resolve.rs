@@ -284,7 +284,10 @@ impl ResolveContext<'_> {
         // The primary ray through the pixel centre (camera.rs); its point at
         // view depth w is the surface point.
         let v = self.view;
-        let (sx, sy) = (R::splat(self.ndc_scale[0] as f64), R::splat(self.ndc_scale[1] as f64));
+        let (sx, sy) = (
+            R::splat(self.ndc_scale[0] as f64),
+            R::splat(self.ndc_scale[1] as f64),
+        );
         let nx = px * sx - R::ONE;
         let ny = R::ONE - py * sy;
         let ray = V3::from_f32(v.forward.to_array())
