@@ -80,11 +80,14 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
         while lx < tile_w {
             let at = row * TILE + lx;
             let n_px = R::LANES.min(tile_w - lx);
-            // The next packet's first and last triangles (a new triangle
-            // in a packet is almost always at one of its ends).
-            if let (Some(&a), Some(&b)) = (ids.get(at + R::LANES), ids.get(at + 2 * R::LANES - 1)) {
-                ctx.prefetch(a);
-                ctx.prefetch(b);
+            // Every 8 pixels (each packet; every 8th pixel of the scalar
+            // twin), the first and last triangles of the next 8 (a new
+            // triangle in a packet is almost always at one of its ends).
+            if lx % 8 == 0 {
+                if let (Some(&a), Some(&b)) = (ids.get(at + 8), ids.get(at + 15)) {
+                    ctx.prefetch(a);
+                    ctx.prefetch(b);
+                }
             }
             tris.fill(&ids[at..], R::LANES, Some(ctx));
             let mut rgb: Rgb<R> = Rgb::from_f32(background);
