@@ -15,7 +15,7 @@ use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
 use crate::setup::{SetupContext, SetupCounts, TriPlanes};
-use crate::setup_x4::LANES;
+use crate::setup_x4::{Vertices4, LANES};
 use crate::shade::{shade_tile, ShadeTargets};
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use rayon::prelude::*;
@@ -181,10 +181,10 @@ fn geometry_pass(
                 .enumerate()
             {
                 let i = q * LANES;
-                let v = std::array::from_fn(|t| vertices(&tris4[t]));
+                let v = Vertices4::gather(clip, tris4.try_into().expect("chunks of LANES"));
                 let cull4 = std::array::from_fn(|t| cull(i + t));
                 let planes4 = planes4.try_into().expect("chunks of LANES");
-                ctx.setup_x4_occluded(id(i), &v, cull4, occluder, planes4, raster, &mut counts);
+                ctx.setup_x4_vertices(id(i), &v, cull4, occluder, planes4, raster, &mut counts);
             }
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
                 if let Some(p) =
