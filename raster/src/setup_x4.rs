@@ -264,22 +264,10 @@ impl SetupContext {
         let det = x[0] * adj[0][0] + y[0] * adj[0][1] + w[0] * adj[0][2];
         let degenerate = det.simd_eq(zero) | !det.is_finite();
 
-        // Guard band: `GuardBand::needs_clip`'s distances, any below 0.
-        let (kx, ky) = (f64x4::splat(self.guard.kx), f64x4::splat(self.guard.ky));
-        let mut clip = f64x4::ZERO;
-        for j in 0..3 {
-            clip |= (w[j] - z[j]).simd_lt(zero)
-                | (kx * w[j] - x[j]).simd_lt(zero)
-                | (kx * w[j] + x[j]).simd_lt(zero)
-                | (ky * w[j] - y[j]).simd_lt(zero)
-                | (ky * w[j] + y[j]).simd_lt(zero);
-        }
-
-        let (valid, outside, degenerate, clip) = (
+        let (valid, outside, degenerate) = (
             valid.to_bitmask(),
             outside.to_bitmask(),
             degenerate.to_bitmask(),
-            clip.to_bitmask(),
         );
         let (negative, positive) = (
             det.simd_lt(zero).to_bitmask(),
@@ -301,6 +289,23 @@ impl SetupContext {
             [one; 3]
         };
         let occluded = occluder.map_or(0, |o| o.hides_x4(v, &inv_w, drawn));
+        // Guard band: `GuardBand::needs_clip`'s distances, any below 0
+        // (only lanes still to draw need it: the outline passes' culled
+        // and hidden groups skip it).
+        let clip = if drawn & !occluded != 0 {
+            let (kx, ky) = (f64x4::splat(self.guard.kx), f64x4::splat(self.guard.ky));
+            let mut clip = f64x4::ZERO;
+            for j in 0..3 {
+                clip |= (w[j] - z[j]).simd_lt(zero)
+                    | (kx * w[j] - x[j]).simd_lt(zero)
+                    | (kx * w[j] + x[j]).simd_lt(zero)
+                    | (ky * w[j] - y[j]).simd_lt(zero)
+                    | (ky * w[j] + y[j]).simd_lt(zero);
+            }
+            clip.to_bitmask()
+        } else {
+            0
+        };
         let fast = drawn & !occluded & !clip;
         let lanes: [Lane; LANES] = std::array::from_fn(|t| {
             if bit(fast, t) {
