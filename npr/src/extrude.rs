@@ -89,12 +89,13 @@ pub struct Extrude {
     /// The last view's clip positions and what they were made for (an
     /// outline's passes, closed and open runs, share one vertex stage and
     /// one frame, so the later passes copy them), and the per-view work
-    /// vectors (~11 MB on the benchmark scene), kept from view to view so
-    /// a moving camera allocates nothing. (glibc reused the freed ones
-    /// without page faults too, once its mmap threshold had grown past
-    /// them; this does not depend on it.) A stage belongs to the scene it
-    /// was built for, whose positions do not change; frames run one at a
-    /// time, so the lock is uncontended.
+    /// vectors (~9.5 MB on the benchmark scene), kept from view to view:
+    /// with the camera moving every frame the stage took 2.0 ms instead of
+    /// 3.0 ms with vectors allocated and freed per view (2 threads; no page
+    /// faults either way), at ~2,100 more page faults in a render's first
+    /// frame (the frame's later allocations no longer reuse that memory).
+    /// A stage belongs to the scene it was built for, whose positions do
+    /// not change; frames run one at a time, so the lock is uncontended.
     state: Mutex<ViewState>,
 }
 
