@@ -15,7 +15,7 @@ use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
 use crate::setup::{SetupContext, SetupCounts, TriPlanes};
-use crate::setup_x4::LANES;
+use crate::setup_x4::{Vertices4, LANES};
 use crate::shade::{shade_tile, ShadeTargets};
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use rayon::prelude::*;
@@ -182,18 +182,12 @@ fn geometry_pass(
                 .enumerate()
             {
                 let i = q * LANES;
-                const { assert!(LANES == 4) };
-                // Spelled out: `array::from_fn` here compiled to copies
-                // through the stack that cost as much as the setup itself.
-                let v = [
-                    vertices(&tris4[0]),
-                    vertices(&tris4[1]),
-                    vertices(&tris4[2]),
-                    vertices(&tris4[3]),
-                ];
+                let v = Vertices4::gather(clip, tris4.try_into().expect("chunks of LANES"));
+                // Spelled out: `array::from_fn` compiled to copies through
+                // the stack here, which stalled on store forwarding.
                 let cull4 = [cull(i), cull(i + 1), cull(i + 2), cull(i + 3)];
                 let planes4 = planes4.try_into().expect("chunks of LANES");
-                ctx.setup_x4_occluded(id(i), &v, cull4, occluder, planes4, raster, &mut counts);
+                ctx.setup_x4_vertices(id(i), &v, cull4, occluder, planes4, raster, &mut counts);
             }
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
                 if let Some(p) =

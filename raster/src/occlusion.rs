@@ -18,8 +18,10 @@
 //! 97k on the benchmark scene (62k with 8×8 blocks; the rest lie within
 //! a few pixels of a silhouette, where the ring is, and must be drawn).
 
+use crate::setup_x4::{Vertices4, LANES};
 use crate::target::{Target, TILE, TILE_PIXELS};
 use rayon::prelude::*;
+use wide::f64x4;
 
 /// Block edge in pixels; a divisor of `TILE`. 4 skips 5k more of the
 /// benchmark's back faces than 8 (2.4 M instructions a frame less).
@@ -139,6 +141,71 @@ impl DepthBounds {
         if !z.is_finite() {
             return false;
         }
+        self.behind_blocks([x_lo, x_hi, y_lo, y_hi], z)
+    }
+
+    /// [`DepthBounds::hides`] of the 4 triangles `v` whose bits are set in
+    /// `lanes`, given `inv_w[j] = 1 / v.w[j]`: bit t of the result is
+    /// `hides` of triangle t (0 outside `lanes`). The same IEEE operations
+    /// in the same order, lane by lane, so the same answers (tested); the
+    /// block loop runs per lane.
+    pub fn hides_x4(&self, v: &Vertices4, inv_w: &[f64x4; 3], lanes: u32) -> u32 {
+        if lanes == 0 {
+            return 0;
+        }
+        let (zero, one) = (f64x4::ZERO, f64x4::ONE);
+        let ahead = v.w[0].simd_gt(zero) & v.w[1].simd_gt(zero) & v.w[2].simd_gt(zero);
+        let (w, h) = (self.width as f64, self.height as f64);
+        let (hw, hh) = (f64x4::splat(0.5 * w), f64x4::splat(0.5 * h));
+        let project = |j: usize| {
+            (
+                (v.x[j] * inv_w[j] + one) * hw,
+                (one - v.y[j] * inv_w[j]) * hh,
+                v.z[j] * inv_w[j],
+            )
+        };
+        let (x0, y0, z0) = project(0);
+        let (x1, y1, z1) = project(1);
+        let (x2, y2, z2) = project(2);
+        let (ux, uy, uz) = (x1 - x0, y1 - y0, z1 - z0);
+        let (vx, vy, vz) = (x2 - x0, y2 - y0, z2 - z0);
+        let inv_d = one / (ux * vy - vx * uy);
+        let gx = (uz * vy - vz * uy) * inv_d;
+        let gy = (ux * vz - vx * uz) * inv_d;
+        // `hides`' min3 and max3, NaN cases included.
+        let min3 = |a: f64x4, b: f64x4, c: f64x4| {
+            let m = b.simd_lt(a).select(b, a);
+            c.simd_lt(m).select(c, m)
+        };
+        let max3 = |a: f64x4, b: f64x4, c: f64x4| -min3(-a, -b, -c);
+        let (x_lo, x_hi) = (min3(x0, x1, x2) - one, max3(x0, x1, x2) + one);
+        let (y_lo, y_hi) = (min3(y0, y1, y2) - one, max3(y0, y1, y2) + one);
+        let on_image = x_hi.simd_ge(zero)
+            & y_hi.simd_ge(zero)
+            & x_lo.simd_le(f64x4::splat(w))
+            & y_lo.simd_le(f64x4::splat(h));
+        let z_hi = max3(z0, z1, z2);
+        let (ax, ay) = (gx.abs(), gy.abs());
+        let z = z_hi
+            + (ax + ay) * f64x4::splat(1.0 / 256.0)
+            + f64x4::splat(1e-6) * (z_hi.abs() + ax * (x_hi - x_lo) + ay * (y_hi - y_lo));
+        let judged = (ahead & on_image & z.is_finite()).to_bitmask() & lanes;
+        if judged == 0 {
+            return 0;
+        }
+        let [x_lo, x_hi, y_lo, y_hi, z] = [x_lo, x_hi, y_lo, y_hi, z].map(|c| c.to_array());
+        (0..LANES)
+            .filter(|&t| judged >> t & 1 != 0)
+            .filter(|&t| self.behind_blocks([x_lo[t], x_hi[t], y_lo[t], y_hi[t]], z[t]))
+            .fold(0, |m, t| m | 1 << t)
+    }
+
+    /// The end of [`DepthBounds::hides`]: whether depth bound `z` (finite)
+    /// is at most the least depth of every block the pixel rectangle
+    /// `[x_lo, x_hi] × [y_lo, y_hi]` (which meets the image) touches.
+    #[inline(always)]
+    fn behind_blocks(&self, [x_lo, x_hi, y_lo, y_hi]: [f64; 4], z: f64) -> bool {
+        let (w, h) = (self.width as f64, self.height as f64);
         // z as f32 rounded up, so a bound exactly at a block's depth
         // still compares right.
         let z32 = z as f32;
@@ -215,6 +282,67 @@ mod tests {
         }
         // The partial blocks past the right edge see the padding's 0.
         assert_eq!(b.min[130 / BLOCK], 0.0);
+    }
+
+    /// `hides_x4` answers `hides` lane by lane, for lanes asked about, on
+    /// random triangles (hidden, in front, straddling the hole, off the
+    /// image) and on the inputs `hides` declines: a vertex at or behind
+    /// the eye, NaN and infinite coordinates, collinear vertices.
+    #[test]
+    fn four_lanes_answer_as_one() {
+        use rand::{Rng, SeedableRng};
+        let b = bounds_with_hole((100, 60), 0.1);
+        let mut rng = rand::rngs::StdRng::seed_from_u64(3);
+        let special = [f32::NAN, f32::INFINITY, -f32::INFINITY, 0.0, -0.0, 1e30];
+        let (mut yes, mut no) = (0, 0);
+        for n in 0..20_000 {
+            let v: [[[f32; 4]; 3]; LANES] = std::array::from_fn(|_| {
+                let (cx, cy) = (
+                    rng.random_range(-20.0..150.0),
+                    rng.random_range(-20.0..90.0),
+                );
+                let size: f64 = [0.5f64, 5.0, 30.0][rng.random_range(0..3)];
+                let z: f64 = [0.4, 0.5, 0.6][rng.random_range(0..3)];
+                let mut p = tri(
+                    std::array::from_fn(|_| {
+                        [
+                            cx + rng.random_range(-size..size),
+                            cy + rng.random_range(-size..size),
+                        ]
+                    }),
+                    z,
+                )
+                .map(|c| c.map(|x| x as f32));
+                if n % 5 == 0 {
+                    let (j, c) = (rng.random_range(0..3), rng.random_range(0..4));
+                    p[j][c] = special[rng.random_range(0..special.len())];
+                }
+                if n % 11 == 0 {
+                    p[2] = p[1]; // collinear
+                }
+                p
+            });
+            let lanes = rng.random_range(0..16u32);
+            let v4 = Vertices4::from_arrays(&v);
+            let inv_w = v4.w.map(|w| f64x4::ONE / w);
+            let got = b.hides_x4(&v4, &inv_w, lanes);
+            for (t, tri) in v.iter().enumerate() {
+                let want = lanes >> t & 1 != 0 && b.hides(&tri.map(|p| p.map(|c| c as f64)));
+                assert_eq!(
+                    got >> t & 1 != 0,
+                    want,
+                    "lane {t} of {v:?}, lanes {lanes:b}"
+                );
+                if lanes >> t & 1 != 0 {
+                    if want {
+                        yes += 1;
+                    } else {
+                        no += 1;
+                    }
+                }
+            }
+        }
+        assert!(yes > 2_000 && no > 2_000, "{yes} hidden, {no} not");
     }
 
     #[test]

@@ -98,6 +98,89 @@ fn to_f32(x: f64x4) -> ([f32; 4], f64x4) {
     (n, f64x4::new(n.map(f64::from)))
 }
 
+/// Clip-space vertices of 4 triangles, structure of arrays in f64 (exact:
+/// they come from f32): `x[j]` holds vertex j's x of the 4 triangles.
+#[derive(Clone, Copy, Debug)]
+pub struct Vertices4 {
+    pub x: [f64x4; 3],
+    pub y: [f64x4; 3],
+    pub z: [f64x4; 3],
+    pub w: [f64x4; 3],
+}
+
+impl Vertices4 {
+    /// From per-triangle arrays `v[t][j]` (vertex j of triangle t).
+    #[inline(always)]
+    pub fn from_arrays(v: &[[[f32; 4]; 3]; LANES]) -> Vertices4 {
+        let coord = |j: usize, c: usize| f64x4::new(std::array::from_fn(|t| v[t][j][c] as f64));
+        Vertices4 {
+            x: std::array::from_fn(|j| coord(j, 0)),
+            y: std::array::from_fn(|j| coord(j, 1)),
+            z: std::array::from_fn(|j| coord(j, 2)),
+            w: std::array::from_fn(|j| coord(j, 3)),
+        }
+    }
+
+    /// The vertices of triangles `tris` (indices into `clip`), read
+    /// straight into registers: one 16-byte load a vertex, widened to
+    /// f64 and transposed. (Copying them into an array of triangles first,
+    /// as `from_arrays` takes them, cost the frame's setup loop a
+    /// store-forwarding stall a vertex: `perf annotate`, about a third of
+    /// its time.) Panics, as indexing does, on an index past `clip`.
+    #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+    #[inline(always)]
+    pub fn gather(clip: &[[f32; 4]], tris: &[[u32; 3]; LANES]) -> Vertices4 {
+        use core::arch::x86_64::{
+            __m256d, _mm256_cvtps_pd, _mm256_permute2f128_pd, _mm256_unpackhi_pd,
+            _mm256_unpacklo_pd, _mm_loadu_ps,
+        };
+        let load = |i: u32| -> __m256d {
+            let p: &[f32; 4] = &clip[i as usize];
+            // SAFETY: AVX is enabled (cfg); `p` is 16 readable bytes.
+            unsafe { _mm256_cvtps_pd(_mm_loadu_ps(p.as_ptr())) }
+        };
+        // Vertex j of the 4 triangles: (a, b, c, d) rows of (x, y, z, w)
+        // to columns: unpack pairs, then swap 128-bit halves.
+        let column = |j: usize| -> [f64x4; 4] {
+            let (a, b) = (load(tris[0][j]), load(tris[1][j]));
+            let (c, d) = (load(tris[2][j]), load(tris[3][j]));
+            // SAFETY: AVX is enabled (cfg).
+            unsafe {
+                let (ab_xz, ab_yw) = (_mm256_unpacklo_pd(a, b), _mm256_unpackhi_pd(a, b));
+                let (cd_xz, cd_yw) = (_mm256_unpacklo_pd(c, d), _mm256_unpackhi_pd(c, d));
+                [
+                    bytemuck::cast(_mm256_permute2f128_pd::<0x20>(ab_xz, cd_xz)),
+                    bytemuck::cast(_mm256_permute2f128_pd::<0x20>(ab_yw, cd_yw)),
+                    bytemuck::cast(_mm256_permute2f128_pd::<0x31>(ab_xz, cd_xz)),
+                    bytemuck::cast(_mm256_permute2f128_pd::<0x31>(ab_yw, cd_yw)),
+                ]
+            }
+        };
+        let (c0, c1, c2) = (column(0), column(1), column(2));
+        Vertices4 {
+            x: [c0[0], c1[0], c2[0]],
+            y: [c0[1], c1[1], c2[1]],
+            z: [c0[2], c1[2], c2[2]],
+            w: [c0[3], c1[3], c2[3]],
+        }
+    }
+
+    /// See the AVX version.
+    #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+    #[inline(always)]
+    pub fn gather(clip: &[[f32; 4]], tris: &[[u32; 3]; LANES]) -> Vertices4 {
+        Vertices4::from_arrays(&tris.map(|t| t.map(|i| clip[i as usize])))
+    }
+
+    /// Triangle `t`'s vertices as f32 (exact: they were f32).
+    #[inline(always)]
+    pub fn lane(&self, t: usize) -> [[f32; 4]; 3] {
+        std::array::from_fn(|j| {
+            [self.x[j], self.y[j], self.z[j], self.w[j]].map(|c| c.to_array()[t] as f32)
+        })
+    }
+}
+
 impl SetupContext {
     /// [`SetupContext::setup`] of the 4 triangles of ids `first..first + 4`
     /// (clip-space vertices `v[t]`, cull mode `cull[t]`), as if called for
@@ -130,12 +213,25 @@ impl SetupContext {
         out: &mut Vec<RasterTri>,
         counts: &mut SetupCounts,
     ) {
-        // Structure of arrays: x[j] holds vertex j's x of the 4 triangles.
-        let coord = |j: usize, c: usize| f64x4::new(std::array::from_fn(|t| v[t][j][c] as f64));
-        let x: [f64x4; 3] = std::array::from_fn(|j| coord(j, 0));
-        let y: [f64x4; 3] = std::array::from_fn(|j| coord(j, 1));
-        let z: [f64x4; 3] = std::array::from_fn(|j| coord(j, 2));
-        let w: [f64x4; 3] = std::array::from_fn(|j| coord(j, 3));
+        let v = Vertices4::from_arrays(v);
+        self.setup_x4_vertices(first, &v, cull, occluder, planes, out, counts);
+    }
+
+    /// [`SetupContext::setup_x4_occluded`] of vertices already in
+    /// structure-of-arrays form ([`Vertices4::gather`] reads them straight
+    /// from a clip-position array, as the frame does).
+    #[allow(clippy::too_many_arguments)]
+    pub fn setup_x4_vertices(
+        &self,
+        first: u32,
+        v: &Vertices4,
+        cull: [Cull; LANES],
+        occluder: Option<&DepthBounds>,
+        planes: &mut [TriPlanes; LANES],
+        out: &mut Vec<RasterTri>,
+        counts: &mut SetupCounts,
+    ) {
+        let Vertices4 { x, y, z, w } = *v;
 
         // `!(|c| ≤ MAX)` is the scalar `c.is_nan() || c.abs() > MAX`.
         let max = f64x4::splat(MAX_CLIP_COORD);
@@ -168,22 +264,10 @@ impl SetupContext {
         let det = x[0] * adj[0][0] + y[0] * adj[0][1] + w[0] * adj[0][2];
         let degenerate = det.simd_eq(zero) | !det.is_finite();
 
-        // Guard band: `GuardBand::needs_clip`'s distances, any below 0.
-        let (kx, ky) = (f64x4::splat(self.guard.kx), f64x4::splat(self.guard.ky));
-        let mut clip = f64x4::ZERO;
-        for j in 0..3 {
-            clip |= (w[j] - z[j]).simd_lt(zero)
-                | (kx * w[j] - x[j]).simd_lt(zero)
-                | (kx * w[j] + x[j]).simd_lt(zero)
-                | (ky * w[j] - y[j]).simd_lt(zero)
-                | (ky * w[j] + y[j]).simd_lt(zero);
-        }
-
-        let (valid, outside, degenerate, clip) = (
+        let (valid, outside, degenerate) = (
             valid.to_bitmask(),
             outside.to_bitmask(),
             degenerate.to_bitmask(),
-            clip.to_bitmask(),
         );
         let (negative, positive) = (
             det.simd_lt(zero).to_bitmask(),
@@ -195,13 +279,34 @@ impl SetupContext {
         let outside = valid & outside;
         let kept = valid & !outside & !degenerate;
         let culled = kept & (with(Cull::Back) & negative | with(Cull::Front) & positive);
-        let occluded = occluder.map_or(0, |o| {
-            (0..LANES)
-                .filter(|&t| bit(kept & !culled, t))
-                .filter(|&t| o.hides(&v[t].map(|p| p.map(|c| c as f64))))
-                .fold(0, |m, t| m | 1 << t)
-        });
-        let fast = kept & !culled & !occluded & !clip;
+        let drawn = kept & !culled;
+        // 1/w per vertex, for the occlusion test and the projection below
+        // (the same division in both); not needed by a group culled whole.
+        let one = f64x4::ONE;
+        let inv_w: [f64x4; 3] = if drawn != 0 {
+            std::array::from_fn(|j| one / w[j])
+        } else {
+            [one; 3]
+        };
+        let occluded = occluder.map_or(0, |o| o.hides_x4(v, &inv_w, drawn));
+        // Guard band: `GuardBand::needs_clip`'s distances, any below 0
+        // (only lanes still to draw need it: the outline passes' culled
+        // and hidden groups skip it).
+        let clip = if drawn & !occluded != 0 {
+            let (kx, ky) = (f64x4::splat(self.guard.kx), f64x4::splat(self.guard.ky));
+            let mut clip = f64x4::ZERO;
+            for j in 0..3 {
+                clip |= (w[j] - z[j]).simd_lt(zero)
+                    | (kx * w[j] - x[j]).simd_lt(zero)
+                    | (kx * w[j] + x[j]).simd_lt(zero)
+                    | (ky * w[j] - y[j]).simd_lt(zero)
+                    | (ky * w[j] + y[j]).simd_lt(zero);
+            }
+            clip.to_bitmask()
+        } else {
+            0
+        };
+        let fast = drawn & !occluded & !clip;
         let lanes: [Lane; LANES] = std::array::from_fn(|t| {
             if bit(fast, t) {
                 Lane::Fast
@@ -227,7 +332,7 @@ impl SetupContext {
 
         // Projection and snapping, as `setup`'s `project`.
         let (wd, hd) = (self.width as f64, self.height as f64);
-        let (one, half) = (f64x4::ONE, f64x4::splat(0.5));
+        let half = f64x4::splat(0.5);
         let (ws, hs) = (f64x4::splat(wd), f64x4::splat(hd));
         let (lo, hi) = (f64x4::splat(-GUARD_BAND_PX), f64x4::splat(GUARD_BAND_PX));
         let fixed = f64x4::splat(SUBPIXEL_ONE as f64);
@@ -236,9 +341,8 @@ impl SetupContext {
         let mut min_y = f64x4::splat(f64::INFINITY);
         let mut snapped = [[f64x4::ZERO; 2]; 3];
         for j in 0..3 {
-            let inv_w = one / w[j];
-            let sx = (x[j] * inv_w + one) * half * ws;
-            let sy = (one - y[j] * inv_w) * half * hs;
+            let sx = (x[j] * inv_w[j] + one) * half * ws;
+            let sy = (one - y[j] * inv_w[j]) * half * hs;
             finite &= sx.is_finite() & sy.is_finite();
             // Lanes that are not finite go to the scalar path; on the others
             // max/min are `f64::clamp` and `f64::min` (no NaN, and no −0:
@@ -301,7 +405,7 @@ impl SetupContext {
             }
             if !bit(finite, t) {
                 hit(0);
-                if let Some(p) = self.setup(first + t as u32, v[t], cull[t], out, counts) {
+                if let Some(p) = self.setup(first + t as u32, v.lane(t), cull[t], out, counts) {
                     planes[t] = p;
                 }
                 continue;
@@ -354,7 +458,7 @@ impl SetupContext {
         lane: Lane,
         first: u32,
         t: usize,
-        v: &[[[f32; 4]; 3]; LANES],
+        v: &Vertices4,
         cull: [Cull; LANES],
         plane: &mut TriPlanes,
         out: &mut Vec<RasterTri>,
@@ -377,7 +481,7 @@ impl SetupContext {
             }
             Lane::Scalar | Lane::Fast => {
                 hit(0);
-                if let Some(p) = self.setup(first + t as u32, v[t], cull[t], out, counts) {
+                if let Some(p) = self.setup(first + t as u32, v.lane(t), cull[t], out, counts) {
                     *plane = p;
                 }
             }

@@ -339,3 +339,40 @@ fn snap_matches_the_scalar_snap_at_ties_and_extremes() {
         assert_eq!(got, v.map(crate::fixed::snap), "{v:?}");
     }
 }
+
+/// `Vertices4::gather` (the frame's loads straight from the clip array)
+/// holds the same lanes as `from_arrays` of the same triangles, NaN and
+/// infinite coordinates included, and `lane` gives each triangle back.
+#[test]
+fn gathered_vertices_match_the_arrays() {
+    use super::Vertices4;
+    let mut rng = StdRng::seed_from_u64(12);
+    let special = [f32::NAN, f32::INFINITY, -0.0, f32::MIN_POSITIVE / 4.0, 3e38];
+    let clip: Vec<[f32; 4]> = (0..50)
+        .map(|i| {
+            std::array::from_fn(|c| {
+                if i % 7 == 0 && c == i % 4 {
+                    special[i % special.len()]
+                } else {
+                    rng.random_range(-1e3..1e3)
+                }
+            })
+        })
+        .collect();
+    let bits =
+        |v: &Vertices4| [v.x, v.y, v.z, v.w].map(|a| a.map(|c| c.to_array().map(f64::to_bits)));
+    for _ in 0..200 {
+        let tris: [[u32; 3]; LANES] =
+            std::array::from_fn(|_| std::array::from_fn(|_| rng.random_range(0..50u32)));
+        let arrays = tris.map(|t| t.map(|i| clip[i as usize]));
+        let (g, a) = (
+            Vertices4::gather(&clip, &tris),
+            Vertices4::from_arrays(&arrays),
+        );
+        assert_eq!(bits(&g), bits(&a), "{tris:?}");
+        for (t, tri) in arrays.iter().enumerate() {
+            let back = g.lane(t).map(|p| p.map(f32::to_bits));
+            assert_eq!(back, tri.map(|p| p.map(f32::to_bits)));
+        }
+    }
+}
