@@ -1,6 +1,6 @@
 //! Outline by image: edges in the frame buffers (`detect_edges`), widened
 //! to the line width by a Euclidean distance transform (`dilate`), and
-//! blended over the image ([`crate::outline::composite`]).
+//! blended over the image (as [`crate::outline::composite`] does).
 //!
 //! Each source has its own measure and threshold; a sample is on an edge
 //! when any source's measure exceeds its threshold. With the Sobel weights
@@ -29,14 +29,31 @@
 //! (anti-aliased), or 1 where d ≤ W/2 − ½ (aliased). Every stage works on
 //! rows or columns in parallel, each written by one task, so the result
 //! does not depend on the thread count.
+//!
+//! The stage allocates nothing in a steady frame (a 1080p frame's
+//! whole-frame buffers were 26 MB, each page of them a kernel page fault):
+//! - 1/w, the material labels and the luminance are computed per band of
+//!   [`BAND_ROWS`] rows (and the row above and below it) inside the
+//!   detection, not as whole-frame buffers;
+//! - the marks are bits ([`EdgeMask`]), kept in the stage with the other
+//!   scratch ([`Scratch`]) from frame to frame;
+//! - the line is widened row by row ([`dilate_row`]) straight into the
+//!   blend, and only near marks: rows with no mark within the line's
+//!   reach and 64-sample words with none are skipped, so there is no
+//!   frame-size coverage map either.
 
-use crate::outline::{composite, ssaa_of, Selection};
+use crate::outline::{blend, blend_row, composite, ssaa_of, sum_samples, Selection};
 use rayon::prelude::*;
 use specula_core::{Mask, Real};
 use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::target::MISS;
-use specula_raster::{BufferSet, FrameBuffers};
+use specula_raster::{BufferSet, FrameBuffers, Planes3};
+use std::sync::Mutex;
 use wide::f32x8;
+
+pub use crate::dilate::{
+    dilate, dilate_row, distance, Cover, EdgeMask, Pool, RowScratch, BOUNDED_RADIUS,
+};
 
 /// What a Sobel outline looks at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,9 +76,65 @@ pub struct Sobel {
     /// Material of each visibility-buffer id (for the id source).
     pub id_material: Vec<u32>,
     pub selection: Selection,
+    /// Buffers kept from frame to frame (`Scratch::default()`).
+    pub scratch: Scratch,
 }
 
-/// Read-only views of the buffers a detection reads, at frame size.
+/// The buffers a [`Sobel`] stage keeps from frame to frame, so that a
+/// steady frame neither allocates nor touches fresh pages. None carries a
+/// value from one frame to the next: each is written before it is read,
+/// so the output is that of fresh buffers. Frames run one at a time; a
+/// second concurrent `apply` on the same stage waits. A clone starts empty.
+#[derive(Default)]
+pub struct Scratch(Mutex<Buffers>);
+
+#[derive(Default)]
+struct Buffers {
+    mask: EdgeMask,
+    marked: Vec<bool>,
+    /// The id source's label of each id ([`material_labels`]).
+    label_of_id: Vec<f32>,
+    bands: Pool<BandScratch>,
+    rows: Pool<RowsScratch>,
+}
+
+impl Clone for Scratch {
+    fn clone(&self) -> Scratch {
+        Scratch::default()
+    }
+}
+
+impl std::fmt::Debug for Scratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Scratch")
+    }
+}
+
+/// A detection task's per-band inputs (rows of the band and its halo).
+#[derive(Default)]
+struct BandScratch {
+    inv_depth: Vec<f32>,
+    material: Vec<f32>,
+    luma: Vec<f32>,
+}
+
+/// A blend task's scratch: the dilation's, and at ssaa > 1 the coverage
+/// of a pixel row's sample rows and their sums.
+#[derive(Default)]
+struct RowsScratch {
+    dilate: RowScratch,
+    coverage: Vec<f32>,
+    acc: Vec<f32>,
+}
+
+/// Rows a detection task reads its inputs for at once: 1/w, labels and
+/// luminance of BAND_ROWS + 2 rows (with the halo rows above and below,
+/// recomputed by both neighbouring bands: 2/16 more of that cheap work)
+/// stay in the core's cache while the band's three-row windows read them.
+pub const BAND_ROWS: usize = 16;
+
+/// Read-only views of the buffers a detection reads, at frame size (or a
+/// band's rows of them: the detection only reads the rows it is given).
 pub struct EdgeInput<'a> {
     pub width: usize,
     pub height: usize,
@@ -81,121 +154,152 @@ const W: [f32; 3] = [0.25, 0.5, 0.25];
 /// q = 1/w per sample, 0 where nothing is hit (w infinite, NaN or ≤ 0).
 pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
     let mut q = vec![0.0f32; depth.len()];
-    // Chunks with a plain loop (a select per sample) vectorize; a
-    // per-element parallel map does not.
     q.par_chunks_mut(4096)
         .zip(depth.par_chunks(4096))
-        .for_each(|(q, d)| {
-            for (q, &d) in q.iter_mut().zip(d) {
-                *q = if d.is_finite() && d > 0.0 {
-                    1.0 / d
-                } else {
-                    0.0
-                };
-            }
-        });
+        .for_each(|(q, d)| inverse_depth_into(d, q));
     q
+}
+
+/// [`inverse_depth`] into `q` (same length).
+pub fn inverse_depth_into(depth: &[f32], q: &mut [f32]) {
+    // A plain loop (a select per sample) vectorizes.
+    for (q, &d) in q.iter_mut().zip(depth) {
+        *q = if d.is_finite() && d > 0.0 {
+            1.0 / d
+        } else {
+            0.0
+        };
+    }
 }
 
 /// The id source's labels: the material index of each sample's id as a
 /// number (exact below 2²⁴ materials), −1 where nothing is hit or the id
 /// has no material.
 pub fn material_labels(ids: &[u32], id_material: &[u32]) -> Vec<f32> {
-    // The label of each id once (ids are far fewer than samples); then a
-    // plain loop over chunks, as `inverse_depth`: a table read a sample.
-    // MISS (u32::MAX) is past the table's end and reads −1.
-    let of_id: Vec<f32> = id_material
-        .iter()
-        .enumerate()
-        .map(|(id, &m)| {
-            if id as u32 != MISS && m != u32::MAX {
-                m as f32
-            } else {
-                -1.0
-            }
-        })
-        .collect();
+    let mut of_id = Vec::new();
+    label_of_id(id_material, &mut of_id);
     let mut labels = vec![-1.0f32; ids.len()];
     labels
         .par_chunks_mut(4096)
         .zip(ids.par_chunks(4096))
-        .for_each(|(labels, ids)| {
-            for (l, &id) in labels.iter_mut().zip(ids) {
-                *l = of_id.get(id as usize).copied().unwrap_or(-1.0);
-            }
-        });
+        .for_each(|(labels, ids)| labels_into(ids, &of_id, labels));
     labels
 }
 
-/// Lane bits (lane l = bit l) of an 8-lane mask as the 8 booleans.
-const LANE_BOOLS: [[bool; 8]; 256] = {
-    let mut t = [[false; 8]; 256];
-    let mut m = 0;
-    while m < 256 {
-        let mut l = 0;
-        while l < 8 {
-            t[m][l] = m & (1 << l) != 0;
-            l += 1;
+/// The label of each id once (ids are far fewer than samples), into `out`.
+fn label_of_id(id_material: &[u32], out: &mut Vec<f32>) {
+    out.clear();
+    out.extend(id_material.iter().enumerate().map(|(id, &m)| {
+        if id as u32 != MISS && m != u32::MAX {
+            m as f32
+        } else {
+            -1.0
         }
-        m += 1;
+    }));
+}
+
+/// [`material_labels`] with the per-id labels `of_id`, into `labels`: a
+/// table read a sample. MISS (u32::MAX) is past the table's end and reads
+/// −1.
+fn labels_into(ids: &[u32], of_id: &[f32], labels: &mut [f32]) {
+    for (l, &id) in labels.iter_mut().zip(ids) {
+        *l = of_id.get(id as usize).copied().unwrap_or(-1.0);
     }
-    t
-};
+}
+
+/// The colour source's luminance of samples `range` of `color` into `out`:
+/// each channel clamped to [0, 1] (NaN to 0), Rec. 709 weights.
+fn luma_into(color: &Planes3, range: std::ops::Range<usize>, out: &mut [f32]) {
+    let clamp = |v: f32| if v > 0.0 { v.min(1.0) } else { 0.0 };
+    let (r, g, b) = (
+        &color.r[range.clone()],
+        &color.g[range.clone()],
+        &color.b[range],
+    );
+    for (((o, &r), &g), &b) in out.iter_mut().zip(r).zip(g).zip(b) {
+        *o = 0.2126 * clamp(r) + 0.7152 * clamp(g) + 0.0722 * clamp(b);
+    }
+}
 
 /// Marks edge samples (1) in a `width × height` mask; see the module docs.
 /// `keep(i)` says whether sample i may carry a line (material selection).
-///
-/// Row by row; inside a row, 8 samples at a time ([`measure_lanes`] on
-/// f32x8) wherever the 3×3 neighbourhoods of all 8 lie inside the image
-/// along x, the first and last column by the clamped scalar [`measure`].
-/// The lanes run the scalar code's operations in its order (no FMA), so
-/// the mask is the one [`measure`] gives sample by sample (tested).
+/// [`detect_row`] on every row of the whole-frame `input`.
 pub fn detect_edges(
     input: &EdgeInput,
     sources: &[(Source, f32)],
     keep: &(dyn Fn(usize) -> bool + Sync),
 ) -> Vec<bool> {
     let (w, h) = (input.width, input.height);
-    let mut out = vec![false; w * h];
-    let thresholds: Vec<(Source, f32x8)> =
-        sources.iter().map(|&(s, t)| (s, f32x8::splat(t))).collect();
-    out.par_chunks_mut(w.max(1))
+    let mut mask = EdgeMask::new(w, h);
+    let words = mask.words();
+    mask.bits_mut()
+        .par_chunks_mut(words.max(1))
         .enumerate()
-        .for_each(|(y, row)| {
-            let rows = [y.saturating_sub(1) * w, y * w, (y + 1).min(h - 1) * w];
-            let scalar = |x: usize| sources.iter().any(|&(s, t)| measure(input, s, x, y) > t);
-            // Interior columns 1..w−1 in packets of 8; the last packet is
-            // moved back to end at w − 1 (it recomputes a few samples).
-            let interior = w.saturating_sub(2);
-            let mut x = 1;
-            while interior >= 8 && x < w - 1 {
-                let x0 = x.min(w - 1 - 8);
-                let mut edge = 0u32;
-                for (s, t) in &thresholds {
-                    edge |= measure_lanes::<f32x8>(input, *s, rows, x0).gt(*t).bits();
-                }
-                let out = &mut row[x0..x0 + 8];
-                out.copy_from_slice(&LANE_BOOLS[edge as usize]);
-                // `keep` only where there is an edge (most samples have none).
-                let mut set = edge;
-                while set != 0 {
-                    let l = set.trailing_zeros() as usize;
-                    out[l] = keep(y * w + x0 + l);
-                    set &= set - 1;
-                }
-                x = x0 + 8;
-            }
-            let scalar = |x: usize| scalar(x) && keep(y * w + x);
-            if interior >= 8 {
-                row[0] = scalar(0);
-                row[w - 1] = scalar(w - 1);
-            } else {
-                for (x, o) in row.iter_mut().enumerate() {
-                    *o = scalar(x);
-                }
-            }
+        .for_each(|(y, out)| {
+            let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)].map(|r| r * w);
+            detect_row(input, sources, rows, &|x| keep(y * w + x), out);
         });
-    out
+    mask.to_bools()
+}
+
+/// Marks the edge samples of one row into its mask words `out` (every
+/// word written). `rows` are the offsets in `input`'s slices of the row
+/// above, the row and the row below (clamped by the caller at the image's
+/// top and bottom); `keep(x)` says whether sample x of the row may carry
+/// a line.
+///
+/// 8 samples at a time ([`measure_lanes`] on f32x8) wherever the 3×3
+/// neighbourhoods of all 8 lie inside the image along x, the first and
+/// last column by the clamped scalar [`measure`]. The lanes run the
+/// scalar code's operations in its order (no FMA), so the mask is the one
+/// [`measure`] gives sample by sample (tested).
+pub fn detect_row(
+    input: &EdgeInput,
+    sources: &[(Source, f32)],
+    rows: [usize; 3],
+    keep: &dyn Fn(usize) -> bool,
+    out: &mut [u64],
+) {
+    let w = input.width;
+    out.fill(0);
+    let scalar = |x: usize| {
+        let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
+        let nb = rows.map(|r| xs.map(|x| r + x));
+        sources.iter().any(|&(s, t)| measure_at(input, s, &nb) > t) && keep(x)
+    };
+    let mut mark = |x: usize| out[x / 64] |= 1 << (x % 64);
+    let interior = w.saturating_sub(2);
+    if interior < 8 {
+        for x in (0..w).filter(|&x| scalar(x)) {
+            mark(x);
+        }
+        return;
+    }
+    for x in [0, w - 1].into_iter().filter(|&x| scalar(x)) {
+        mark(x);
+    }
+    // Interior columns 1..w−1 in packets of 8; the last packet is moved
+    // back to end at w − 1 (it recomputes a few samples, the same bits).
+    let mut x = 1;
+    while x < w - 1 {
+        let x0 = x.min(w - 1 - 8);
+        let mut edge = 0u32;
+        for &(s, t) in sources {
+            edge |= measure_lanes::<f32x8>(input, s, rows, x0)
+                .gt(f32x8::splat(t))
+                .bits();
+        }
+        // `keep` only where there is an edge (most samples have none).
+        let mut set = edge;
+        while set != 0 {
+            let l = set.trailing_zeros() as usize;
+            if keep(x0 + l) {
+                mark(x0 + l);
+            }
+            set &= set - 1;
+        }
+        x = x0 + 8;
+    }
 }
 
 /// The measure of source `s` at the `R::LANES` samples (x.., y) whose
@@ -349,237 +453,116 @@ fn measure_at(input: &EdgeInput, s: Source, nb: &[[usize; 3]; 3]) -> f32 {
     }
 }
 
-/// Squared distance transform in one dimension [Felzenszwalb12]: d[q] =
-/// min_p (q − p)² + f[p], by the lower envelope of parabolas.
-///
-/// The parabola intersections are in f64: q² of a supersampled row
-/// (7680² at 1920 × ssaa 4) is past f32's exact integers.
-fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f64]) {
-    let n = f.len();
-    if n == 0 {
-        return;
-    }
-    let mut k = 0;
-    v[0] = 0;
-    z[0] = f64::NEG_INFINITY;
-    z[1] = f64::INFINITY;
-    for q in 1..n {
-        loop {
-            let p = v[k];
-            let s = ((f[q] as f64 + (q * q) as f64) - (f[p] as f64 + (p * p) as f64))
-                / (2.0 * (q - p) as f64);
-            if s <= z[k] && k > 0 {
-                k -= 1;
-                continue;
-            }
-            if s <= z[k] {
-                // k == 0 and the new parabola is below everywhere left.
-                v[0] = q;
-                z[0] = f64::NEG_INFINITY;
-                z[1] = f64::INFINITY;
-                break;
-            }
-            k += 1;
-            v[k] = q;
-            z[k] = s;
-            z[k + 1] = f64::INFINITY;
-            break;
-        }
-    }
-    k = 0;
-    for (q, dq) in d.iter_mut().enumerate() {
-        while z[k + 1] < q as f64 {
-            k += 1;
-        }
-        let p = v[k];
-        let dx = q as f64 - p as f64;
-        *dq = (dx * dx + f[p] as f64) as f32;
-    }
-}
-
-/// "Infinitely" far, squared: finite so the parabola algebra stays finite.
-const FAR2: f32 = 1e20;
-
-/// Euclidean distance from every sample to the nearest marked one
-/// (`FAR2.sqrt()` when there is none): columns, then rows.
-pub fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
-    // Columns: the mask is binary, so its 1-D transform is the squared
-    // distance to the nearest mark above or below (two sweeps).
-    let mut cols = vec![0.0f32; w * h]; // column-major
-    cols.par_chunks_mut(h.max(1))
-        .enumerate()
-        .for_each(|(x, out)| {
-            let mut last: Option<usize> = None;
-            for (y, o) in out.iter_mut().enumerate() {
-                if mask[y * w + x] {
-                    last = Some(y);
-                }
-                *o = last.map_or(FAR2, |l| ((y - l) as f32).powi(2));
-            }
-            let mut next: Option<usize> = None;
-            for (y, o) in out.iter_mut().enumerate().rev() {
-                if mask[y * w + x] {
-                    next = Some(y);
-                }
-                if let Some(n) = next {
-                    *o = o.min(((n - y) as f32).powi(2));
-                }
-            }
-        });
-    let mut d = vec![0.0f32; w * h];
-    d.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-        || (vec![0.0f32; w], vec![0usize; w], vec![0.0f64; w + 1]),
-        |(f, v, z), (y, out)| {
-            for x in 0..w {
-                f[x] = cols[x * h + y];
-            }
-            edt_1d(f, out, v, z);
-            for o in out.iter_mut() {
-                *o = o.sqrt();
-            }
-        },
-    );
-    d
-}
-
-/// Widest half line (samples) [`dilate`] searches for marks around each
-/// sample directly; wider lines use the distance transform.
-pub const BOUNDED_RADIUS: usize = 16;
-
-/// Coverage of a line `width` samples wide around the marked band (module
-/// docs).
-///
-/// Only samples within half the width of a mark get ink, so up to
-/// [`BOUNDED_RADIUS`] the distance is searched for in the window of radius
-/// r = ⌈width/2⌉ around each sample: the vertical distance to the nearest
-/// mark in each column of the rows y ± r, then the least dx² + dy² along
-/// the row within ±r (rows with no mark within r rows are skipped). Within the window that is the exact Euclidean
-/// distance (in f32 integers, as the transform's), and a mark outside it
-/// is farther than r ≥ width/2, where both give no ink: the coverage is
-/// the transform's bit for bit (tested), for 2(2r + 1) steps a sample
-/// instead of the transform's ~175 instructions.
-pub fn dilate(mask: &[bool], w: usize, h: usize, width: f32, antialias: bool) -> Vec<f32> {
-    let half = width * 0.5;
-    let cover = |d: f32| {
-        if antialias {
-            (half - d).clamp(0.0, 1.0)
-        } else if d <= (half - 0.5).max(0.0) {
-            1.0
-        } else {
-            0.0
-        }
-    };
-    let r = half.ceil().max(0.0) as usize;
-    if r > BOUNDED_RADIUS {
-        return distance(mask, w, h).into_par_iter().map(cover).collect();
-    }
-    let mut out = vec![0.0f32; w * h];
-    // Past r: "no mark within the window". The squared column distances
-    // are padded with it by r on both sides so the row pass needs no
-    // bounds; the padding is written once per task, and every other entry
-    // of the scratch rows is assigned before it is read (no per-row fill).
-    let far = r as u32 + 1;
-    let far2 = far * far;
-    let row_has: Vec<bool> = mask
-        .par_chunks(w.max(1))
-        .map(|m| m.contains(&true))
-        .collect();
-    out.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-        || (vec![0u32; w], vec![far2; w + 2 * r], vec![0u32; w]),
-        |(col, sq, d2), (y, row)| {
-            let rows = y.saturating_sub(r)..(y + r + 1).min(h);
-            if !row_has[rows.clone()].contains(&true) {
-                return; // no ink within r rows
-            }
-            // dy where marked, far elsewhere, without a branch.
-            let first = rows.start;
-            let near = |on: bool, dy: u32| far - u32::from(on) * (far - dy);
-            let dy = first.abs_diff(y) as u32;
-            for (c, &on) in col.iter_mut().zip(&mask[first * w..(first + 1) * w]) {
-                *c = near(on, dy);
-            }
-            for yy in first + 1..rows.end {
-                let dy = yy.abs_diff(y) as u32;
-                for (c, &on) in col.iter_mut().zip(&mask[yy * w..(yy + 1) * w]) {
-                    *c = (*c).min(near(on, dy));
-                }
-            }
-            for (s, &c) in sq[r..r + w].iter_mut().zip(col.iter()) {
-                *s = c * c;
-            }
-            for k in 0..=2 * r {
-                let dx2 = (k.abs_diff(r) * k.abs_diff(r)) as u32;
-                let s = &sq[k..k + w];
-                if k == 0 {
-                    for (d, &c) in d2.iter_mut().zip(s) {
-                        *d = dx2 + c;
-                    }
-                } else {
-                    for (d, &c) in d2.iter_mut().zip(s) {
-                        *d = (*d).min(dx2 + c);
-                    }
-                }
-            }
-            // d² ≥ (r + 1)² is past half the width: no ink, and `out` is
-            // already 0 there. Blocks of 8 with no nearer mark are skipped.
-            for (o, d) in row.chunks_mut(8).zip(d2.chunks(8)) {
-                if d.iter().fold(u32::MAX, |a, &b| a.min(b)) >= far2 {
-                    continue;
-                }
-                for (o, &d) in o.iter_mut().zip(d) {
-                    *o = cover((d as f32).sqrt());
-                }
-            }
-        },
-    );
-    out
-}
-
 impl Sobel {
     fn has(&self, s: Source) -> bool {
         self.sources.iter().any(|(t, _)| *t == s)
     }
 
+    /// Marks the frame's edge samples into `mask`: [`detect_row`] on
+    /// bands of [`BAND_ROWS`] rows, each band computing its own 1/w,
+    /// labels and luminance (rows of the band and one each side).
+    fn detect(&self, frame: &FrameBuffers, b: &mut Buffers) {
+        let (w, h) = (frame.width as usize, frame.height as usize);
+        b.mask.resize(w, h);
+        let words = b.mask.words();
+        let (depth, normal, id, color) = (
+            self.has(Source::Depth),
+            self.has(Source::Normal),
+            self.has(Source::Id),
+            self.has(Source::Color),
+        );
+        if id {
+            label_of_id(&self.id_material, &mut b.label_of_id);
+        }
+        let (of_id, pool) = (&b.label_of_id, &b.bands);
+        let ids = &frame.id;
+        let needs_ids = self.selection.needs_ids();
+        b.mask
+            .bits_mut()
+            .par_chunks_mut((words * BAND_ROWS).max(1))
+            .enumerate()
+            .for_each(|(band, out)| {
+                let y0 = band * BAND_ROWS;
+                let y1 = (y0 + BAND_ROWS).min(h);
+                let (ya, yb) = (y0.saturating_sub(1), (y1 + 1).min(h));
+                let range = ya * w..yb * w;
+                let n = range.len();
+                pool.with(|s| {
+                    if depth {
+                        s.inv_depth.resize(n, 0.0);
+                        inverse_depth_into(&frame.depth[range.clone()], &mut s.inv_depth[..n]);
+                    }
+                    if id {
+                        s.material.resize(n, 0.0);
+                        labels_into(&frame.id[range.clone()], of_id, &mut s.material[..n]);
+                    }
+                    if color {
+                        s.luma.resize(n, 0.0);
+                        luma_into(&frame.color, range.clone(), &mut s.luma[..n]);
+                    }
+                    let nrm = &frame.normal;
+                    let input = EdgeInput {
+                        width: w,
+                        height: yb - ya,
+                        inv_depth: part(depth, &s.inv_depth, 0..n),
+                        normal: [&nrm.r, &nrm.g, &nrm.b].map(|c| part(normal, c, range.clone())),
+                        material: part(id, &s.material, 0..n),
+                        luma: part(color, &s.luma, 0..n),
+                    };
+                    for (y, out) in (y0..y1).zip(out.chunks_mut(words.max(1))) {
+                        let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)];
+                        let rows = rows.map(|r| (r - ya) * w);
+                        let keep = |x: usize| !needs_ids || self.selection.contains(ids[y * w + x]);
+                        detect_row(&input, &self.sources, rows, &keep, out);
+                    }
+                });
+            });
+        b.mask.rows_marked(&mut b.marked);
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Buffers> {
+        // Scratch only: a panic of an earlier frame leaves nothing that
+        // is read before it is written.
+        self.scratch.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
     /// Per-sample coverage over `frame` for a stage at supersampling `ssaa`.
     pub fn coverage_map(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<f32> {
+        let mut b = self.lock();
+        self.detect(frame, &mut b);
+        let cover = Cover::new(self.width * ssaa as f32, self.antialias);
         let (w, h) = (frame.width as usize, frame.height as usize);
-        let material = if self.has(Source::Id) {
-            material_labels(&frame.id, &self.id_material)
-        } else {
-            Vec::new()
-        };
-        let luma: Vec<f32> = if self.has(Source::Color) {
-            let c = &frame.color;
-            (0..c.len())
-                .into_par_iter()
-                .with_min_len(4096)
-                .map(|i| {
-                    let [r, g, b] = c.get(i).map(|v| if v > 0.0 { v.min(1.0) } else { 0.0 });
-                    0.2126 * r + 0.7152 * g + 0.0722 * b
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let inv_depth = if self.has(Source::Depth) {
-            inverse_depth(&frame.depth)
-        } else {
-            Vec::new()
-        };
-        let input = EdgeInput {
-            width: w,
-            height: h,
-            inv_depth: &inv_depth,
-            normal: [&frame.normal.r, &frame.normal.g, &frame.normal.b],
-            material: &material,
-            luma: &luma,
-        };
-        let ids = &frame.id;
-        let keep = |i: usize| !self.selection.needs_ids() || self.selection.contains(ids[i]);
-        let mask = detect_edges(&input, &self.sources, &keep);
-        dilate(&mask, w, h, self.width * ssaa as f32, self.antialias)
+        if cover.radius() > BOUNDED_RADIUS {
+            return dilate(
+                &b.mask.to_bools(),
+                w,
+                h,
+                self.width * ssaa as f32,
+                self.antialias,
+            );
+        }
+        let mut out = vec![0.0f32; w * h];
+        let (mask, marked, pool) = (&b.mask, &b.marked, &b.rows);
+        out.par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(y, row)| {
+                pool.with(|s| dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| row[x] = c));
+            });
+        out
     }
 }
+
+/// `v[range]` for a source in use, else empty (its buffer may be absent).
+fn part(on: bool, v: &[f32], range: std::ops::Range<usize>) -> &[f32] {
+    if on {
+        &v[range]
+    } else {
+        &[]
+    }
+}
+
+/// Output rows a blend task takes at once.
+const BLEND_ROWS: usize = 8;
 
 impl PostStage for Sobel {
     fn name(&self) -> &str {
@@ -594,9 +577,73 @@ impl PostStage for Sobel {
         }
     }
 
+    /// Detection, then the dilation row by row straight into the blend.
+    /// The blend is [`composite`]'s: the same coverage per sample, summed
+    /// in the same order, the same products. It is skipped where the
+    /// coverage is 0 (no mark within the line's reach), where composite's
+    /// c·(1 − 0) + colour·0 gives back c: the same value, and the same
+    /// bits except that −0 would become +0 (the tone map, before this
+    /// stage, writes no −0; and either encodes to code 0).
     fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
-        let cov = self.coverage_map(frame, ssaa_of(img, frame));
-        composite(img, frame, &cov, self.color);
+        let ssaa = ssaa_of(img, frame);
+        let mut b = self.lock();
+        self.detect(frame, &mut b);
+        let cover = Cover::new(self.width * ssaa as f32, self.antialias);
+        if cover.radius() > BOUNDED_RADIUS {
+            let (w, h) = (frame.width as usize, frame.height as usize);
+            let cov = dilate(
+                &b.mask.to_bools(),
+                w,
+                h,
+                self.width * ssaa as f32,
+                self.antialias,
+            );
+            composite(img, frame, &cov, self.color);
+            return;
+        }
+        let (w, sw) = (img.width as usize, frame.width as usize);
+        let inv = 1.0 / (ssaa * ssaa) as f32;
+        let color = self.color;
+        let (mask, marked, pool) = (&b.mask, &b.marked, &b.rows);
+        let band = (w * BLEND_ROWS).max(1);
+        let p = &mut img.rgb;
+        p.r.par_chunks_mut(band)
+            .zip(p.g.par_chunks_mut(band))
+            .zip(p.b.par_chunks_mut(band))
+            .enumerate()
+            .for_each(|(k, ((r, g), b))| {
+                pool.with(|s| {
+                    let rows = r.chunks_mut(w).zip(g.chunks_mut(w)).zip(b.chunks_mut(w));
+                    for (y, ((r, g), b)) in (k * BLEND_ROWS..).zip(rows) {
+                        if ssaa == 1 {
+                            dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| {
+                                blend([&mut r[x], &mut g[x], &mut b[x]], c * inv, color)
+                            });
+                            continue;
+                        }
+                        // The row's ssaa sample rows' coverage, then
+                        // composite's sums and blend.
+                        let RowsScratch {
+                            dilate,
+                            coverage,
+                            acc,
+                        } = s;
+                        coverage.clear();
+                        coverage.resize(ssaa * sw, 0.0);
+                        let mut ink = false;
+                        for (sy, row) in coverage.chunks_mut(sw).enumerate() {
+                            dilate_row(mask, marked, y * ssaa + sy, cover, dilate, |x, c| {
+                                row[x] = c;
+                                ink = true;
+                            });
+                        }
+                        if ink {
+                            sum_samples(acc, w, ssaa, |sy| &coverage[sy * sw..][..w * ssaa]);
+                            blend_row([r, g, b], acc, inv, color);
+                        }
+                    }
+                });
+            });
     }
 }
 
