@@ -116,6 +116,8 @@ struct BandScratch {
     inv_depth: Vec<f32>,
     material: Vec<f32>,
     luma: Vec<f32>,
+    /// One row of one source's measure.
+    measure: Vec<f32>,
 }
 
 /// A blend task's scratch: the dilation's, and at ssaa > 1 the coverage
@@ -235,9 +237,9 @@ pub fn detect_edges(
     mask.bits_mut()
         .par_chunks_mut(words.max(1))
         .enumerate()
-        .for_each(|(y, out)| {
+        .for_each_init(Vec::new, |m, (y, out)| {
             let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)].map(|r| r * w);
-            detect_row(input, sources, rows, &|x| keep(y * w + x), out);
+            detect_row(input, sources, rows, &|x| keep(y * w + x), out, m);
         });
     mask.to_bools()
 }
@@ -246,66 +248,178 @@ pub fn detect_edges(
 /// word written). `rows` are the offsets in `input`'s slices of the row
 /// above, the row and the row below (clamped by the caller at the image's
 /// top and bottom); `keep(x)` says whether sample x of the row may carry
-/// a line.
+/// a line; `m` is scratch (a row of measures).
 ///
-/// 8 samples at a time ([`measure_lanes`] on f32x8) wherever the 3×3
-/// neighbourhoods of all 8 lie inside the image along x, the first and
-/// last column by the clamped scalar [`measure`]. The lanes run the
-/// scalar code's operations in its order (no FMA), so the mask is the one
-/// [`measure`] gives sample by sample (tested).
+/// Each source's measure along the row ([`measure_row`]), compared with
+/// its threshold 8 samples at a time; a sample is marked when any source
+/// exceeds its threshold and `keep` allows it (asked only where a source
+/// does: most samples have no edge).
 pub fn detect_row(
     input: &EdgeInput,
     sources: &[(Source, f32)],
     rows: [usize; 3],
     keep: &dyn Fn(usize) -> bool,
     out: &mut [u64],
+    m: &mut Vec<f32>,
 ) {
     let w = input.width;
     out.fill(0);
-    let scalar = |x: usize| {
-        let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
-        let nb = rows.map(|r| xs.map(|x| r + x));
-        sources.iter().any(|&(s, t)| measure_at(input, s, &nb) > t) && keep(x)
-    };
-    let mut mark = |x: usize| out[x / 64] |= 1 << (x % 64);
-    let interior = w.saturating_sub(2);
-    if interior < 8 {
-        for x in (0..w).filter(|&x| scalar(x)) {
-            mark(x);
+    m.resize(w, 0.0);
+    for &(s, t) in sources {
+        measure_row(input, s, rows, m);
+        // 8 samples a compare; a chunk of 8 starts on a multiple of 8, so
+        // its bits never straddle two words.
+        let t8 = f32x8::splat(t);
+        let mut chunks = m.chunks_exact(8);
+        for (k, c) in (&mut chunks).enumerate() {
+            let v = f32x8::from(<[f32; 8]>::try_from(c).unwrap_or_default());
+            out[k / 8] |= u64::from(v.gt(t8).bits()) << (8 * (k % 8));
         }
-        return;
-    }
-    for x in [0, w - 1].into_iter().filter(|&x| scalar(x)) {
-        mark(x);
-    }
-    // Interior columns 1..w−1 in packets of 8; the last packet is moved
-    // back to end at w − 1 (it recomputes a few samples, the same bits).
-    let mut x = 1;
-    while x < w - 1 {
-        let x0 = x.min(w - 1 - 8);
-        let mut edge = 0u32;
-        for &(s, t) in sources {
-            edge |= measure_lanes::<f32x8>(input, s, rows, x0)
-                .gt(f32x8::splat(t))
-                .bits();
+        let tail = w - chunks.remainder().len();
+        for (x, &v) in (tail..).zip(chunks.remainder()) {
+            out[x / 64] |= u64::from(v > t) << (x % 64);
         }
-        // `keep` only where there is an edge (most samples have none).
-        let mut set = edge;
+    }
+    for (j, word) in out.iter_mut().enumerate() {
+        let mut set = *word;
         while set != 0 {
-            let l = set.trailing_zeros() as usize;
-            if keep(x0 + l) {
-                mark(x0 + l);
+            let b = set.trailing_zeros() as usize;
+            if !keep(64 * j + b) {
+                *word &= !(1 << b);
             }
             set &= set - 1;
         }
-        x = x0 + 8;
     }
 }
 
-/// The measure of source `s` at the `R::LANES` samples (x.., y) whose
+/// The measure of source `s` at every sample of a row (`rows` as in
+/// [`detect_row`]) into `out` (the row's width): the clamped scalar
+/// [`measure_at`] at the first and last column, and between them the
+/// interior kernels, which run [`measure_at`]'s operations in its order
+/// on whole rows (no FMA; the compiler vectorizes the plain loops over
+/// slices of one length, with no bounds checks inside), so every value is
+/// [`measure`]'s bit for bit (tested against it).
+pub fn measure_row(input: &EdgeInput, s: Source, rows: [usize; 3], out: &mut [f32]) {
+    let w = input.width;
+    let at = |x: usize| {
+        let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
+        measure_at(input, s, &rows.map(|r| xs.map(|x| r + x)))
+    };
+    if w < 3 {
+        for (x, o) in out.iter_mut().enumerate() {
+            *o = at(x);
+        }
+        return;
+    }
+    out[0] = at(0);
+    out[w - 1] = at(w - 1);
+    let inner = &mut out[1..w - 1];
+    match s {
+        Source::Depth => depth_row(&Window::new(input.inv_depth, rows, w), inner),
+        Source::Normal => {
+            // measure_at sums 0 + g²(r) + g²(g) + g²(b); g² is +0, positive
+            // or NaN, for which 0 + g² is g² itself (a quiet NaN keeps its
+            // bits), so the first field writes instead of adding to zeros.
+            let [r, g, b] = input.normal;
+            gradient2_row::<false>(&Window::new(r, rows, w), inner);
+            gradient2_row::<true>(&Window::new(g, rows, w), inner);
+            gradient2_row::<true>(&Window::new(b, rows, w), inner);
+            inner.iter_mut().for_each(|v| *v = v.sqrt());
+        }
+        Source::Id => id_row(&Window::new(input.material, rows, w), inner),
+        Source::Color => {
+            gradient2_row::<false>(&Window::new(input.luma, rows, w), inner);
+            inner.iter_mut().for_each(|v| *v = v.sqrt());
+        }
+    }
+}
+
+/// The 3×3 neighbourhoods of a row's interior samples x = 1..w−1 as nine
+/// slices of one length w − 2: `n[r][c][i]` is the field at row r (0
+/// above, 2 below) and column x + c − 1 for x = i + 1.
+struct Window<'a> {
+    n: [[&'a [f32]; 3]; 3],
+}
+
+impl<'a> Window<'a> {
+    /// The window of the row whose rows above, at and below start at
+    /// `rows` in `f`; `w` ≥ 3.
+    fn new(f: &'a [f32], rows: [usize; 3], w: usize) -> Window<'a> {
+        let m = w - 2;
+        Window {
+            n: rows.map(|r| [&f[r..r + m], &f[r + 1..r + 1 + m], &f[r + 2..r + 2 + m]]),
+        }
+    }
+}
+
+/// [`measure_at`]'s depth measure along a row's interior.
+fn depth_row(f: &Window, out: &mut [f32]) {
+    let m = out.len();
+    let n = f.n.map(|r| r.map(|c| &c[..m]));
+    for (i, o) in out.iter_mut().enumerate() {
+        let at = |r: usize, c: usize| n[r][c][i];
+        let (mut dxx, mut dyy, mut qmax) = (0.0f32, 0.0f32, 0.0f32);
+        for (k, wk) in W.iter().enumerate() {
+            dxx += wk * (at(k, 2) + at(k, 0) - 2.0 * at(k, 1));
+            dyy += wk * (at(2, k) + at(0, k) - 2.0 * at(1, k));
+            qmax = Real::max(Real::max(Real::max(qmax, at(k, 0)), at(k, 1)), at(k, 2));
+        }
+        *o = if qmax > 0.0 {
+            Real::max(dxx.abs(), dyy.abs()) / qmax
+        } else {
+            0.0
+        };
+    }
+}
+
+/// Gx² + Gy² of one field along a row's interior ([`gradient`]'s sums),
+/// added to `out` (ADD) or written to it.
+fn gradient2_row<const ADD: bool>(f: &Window, out: &mut [f32]) {
+    let m = out.len();
+    let n = f.n.map(|r| r.map(|c| &c[..m]));
+    for (i, o) in out.iter_mut().enumerate() {
+        let at = |r: usize, c: usize| n[r][c][i];
+        let (mut gx, mut gy) = (0.0f32, 0.0f32);
+        for (k, wk) in W.iter().enumerate() {
+            gx += wk * (at(k, 2) - at(k, 0));
+            gy += wk * (at(2, k) - at(0, k));
+        }
+        let g2 = gx * gx + gy * gy;
+        *o = if ADD { *o + g2 } else { g2 };
+    }
+}
+
+/// [`measure_at`]'s id measure along a row's interior. Labels are never
+/// NaN, so "differs" is the lanes' ordered lt | gt and measure_at's `!=`
+/// alike.
+fn id_row(f: &Window, out: &mut [f32]) {
+    let m = out.len();
+    let n = f.n.map(|r| r.map(|c| &c[..m]));
+    for (i, o) in out.iter_mut().enumerate() {
+        let at = |r: usize, c: usize| n[r][c][i];
+        let centre = at(1, 1);
+        let mut sum = 0.0f32;
+        for r in 0..3 {
+            for c in 0..3 {
+                let weight = if r == 1 || c == 1 { 2.0 } else { 1.0 };
+                let o = at(r, c);
+                sum += if o < centre || o > centre {
+                    weight
+                } else {
+                    0.0
+                };
+            }
+        }
+        *o = sum / 12.0;
+    }
+}
+
+/// The lane form of [`measure`] (the tests check the two agree): the
+/// measure of source `s` at the `R::LANES` samples (x.., y) whose
 /// neighbourhood rows start at `rows` (above, at, below; clamped by the
 /// caller), for 1 ≤ x and x + LANES < width (no clamping along x). The
 /// same operations in the same order as [`measure_at`].
+#[cfg(test)]
 #[inline(always)]
 fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usize) -> R {
     // The 3×3 neighbourhood of f, [row][column offset + 1] (row 0 above,
@@ -513,7 +627,7 @@ impl Sobel {
                         let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)];
                         let rows = rows.map(|r| (r - ya) * w);
                         let keep = |x: usize| !needs_ids || self.selection.contains(ids[y * w + x]);
-                        detect_row(&input, &self.sources, rows, &keep, out);
+                        detect_row(&input, &self.sources, rows, &keep, out, &mut s.measure);
                     }
                 });
             });
