@@ -414,9 +414,9 @@ fn gradient2_row<const ADD: bool>(f: &Window, out: &mut [f32]) {
     }
 }
 
-/// [`measure_at`]'s id measure along a row's interior. Labels are never
-/// NaN, so "differs" is the lanes' ordered lt | gt and measure_at's `!=`
-/// alike.
+/// [`measure_at`]'s id measure along a row's interior (its `!=`; labels
+/// are never NaN, so the lanes' ordered lt | gt is the same). The sums
+/// are of small integers, exact in any order.
 fn id_row(f: &Window, out: &mut [f32]) {
     let m = out.len();
     let n = f.n.map(|r| r.map(|c| &c[..m]));
@@ -428,11 +428,7 @@ fn id_row(f: &Window, out: &mut [f32]) {
             for c in 0..3 {
                 let weight = if r == 1 || c == 1 { 2.0 } else { 1.0 };
                 let o = at(r, c);
-                sum += if o < centre || o > centre {
-                    weight
-                } else {
-                    0.0
-                };
+                sum += if o != centre { weight } else { 0.0 };
             }
         }
         *o = sum / 12.0;
@@ -1018,6 +1014,235 @@ mod tests {
                             "{density} {width} {aa} {i}"
                         );
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn labels_read_the_material_of_each_id_and_minus_one_past_the_table() {
+        // Materials with holes (u32::MAX: no pass writes the id), ids past
+        // the table and MISS, at lengths around the 8-lane packets.
+        let id_material: Vec<u32> = (0..37u32)
+            .map(|i| if i % 5 == 3 { u32::MAX } else { i % 4 })
+            .collect();
+        for n in [0usize, 1, 7, 8, 9, 23, 64, 65] {
+            let ids: Vec<u32> = (0..n as u32)
+                .map(|i| match i % 6 {
+                    0 => MISS,
+                    1 => 37 + i, // past the table
+                    _ => (i * 7) % 37,
+                })
+                .collect();
+            let got = material_labels(&ids, &id_material);
+            for (k, &id) in ids.iter().enumerate() {
+                let want = match id_material.get(id as usize) {
+                    Some(&m) if m != u32::MAX => m as f32,
+                    _ => -1.0,
+                };
+                assert_eq!(got[k], want, "n {n} id {id}");
+            }
+        }
+    }
+
+    /// A frame of noisy patches: depth steps and misses, normals, ids whose
+    /// materials change across patches (some with none), and colour.
+    fn patchy_frame(w: usize, h: usize) -> (FrameBuffers, Vec<u32>) {
+        let hash = |i: usize, k: u32| {
+            let v = (i as u32)
+                .wrapping_mul(2654435761)
+                .wrapping_add(k.wrapping_mul(97));
+            (v ^ (v >> 13)).wrapping_mul(1274126177) >> 8
+        };
+        let unit = |i: usize, k: u32| hash(i, k) as f32 / (1u32 << 24) as f32;
+        // Patches of 16 × 12 samples share their values.
+        let patch = |i: usize| (i % w) / 16 + 1000 * ((i / w) / 12);
+        let n = w * h;
+        let plane = |k: u32| -> Vec<f32> { (0..n).map(|i| unit(patch(i), k)).collect() };
+        let depth = (0..n)
+            .map(|i| match hash(patch(i), 1) % 7 {
+                0 => f32::INFINITY,
+                1 => 2.0,
+                _ => 1.0 + 4.0 * unit(patch(i), 2),
+            })
+            .collect();
+        let ids: Vec<u32> = (0..n)
+            .map(|i| match hash(patch(i), 3) % 9 {
+                0 => MISS,
+                k => k * 3 + (i % 3) as u32, // three ids a patch, one material
+            })
+            .collect();
+        let id_material = (0..40u32)
+            .map(|id| if id % 11 == 7 { u32::MAX } else { id / 3 % 4 })
+            .collect();
+        let rgb = |k: u32| Planes3 {
+            r: plane(k),
+            g: plane(k + 1),
+            b: plane(k + 2),
+        };
+        let frame = FrameBuffers {
+            width: w as u32,
+            height: h as u32,
+            color: rgb(10),
+            depth,
+            normal: rgb(20),
+            id: ids,
+        };
+        (frame, id_material)
+    }
+
+    #[test]
+    fn the_stage_equals_its_parts_composited_bit_for_bit_for_any_thread_count() {
+        // The stage (bands with their own 1/w, labels and luminance; the
+        // dilation per row straight into a sparse blend; buffers kept from
+        // call to call) against the whole-frame parts: detect_edges on
+        // whole-frame inputs, dilate, composite.
+        let sources = vec![
+            (Source::Depth, 0.1),
+            (Source::Normal, 0.6),
+            (Source::Id, 0.3),
+            (Source::Color, 0.45),
+        ];
+        let pools: Vec<rayon::ThreadPool> = [1, 3]
+            .iter()
+            .map(|&n| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .unwrap()
+            })
+            .collect();
+        for (w, h, ssaa) in [(131, 70, 1), (130, 72, 2), (99, 69, 3)] {
+            let (frame, id_material) = patchy_frame(w, h);
+            let (iw, ih) = (w / ssaa, h / ssaa);
+            let image = |k: usize| -> Vec<f32> {
+                (0..iw * ih)
+                    .map(|i| ((i * 37 + k) % 101) as f32 / 100.0)
+                    .collect()
+            };
+            let img0 = HdrImage {
+                width: iw as u32,
+                height: ih as u32,
+                rgb: Planes3 {
+                    r: image(1),
+                    g: image(2),
+                    b: image(3),
+                },
+            };
+            let inv = inverse_depth(&frame.depth);
+            let mat = material_labels(&frame.id, &id_material);
+            let c = &frame.color;
+            let clamp = |v: f32| if v > 0.0 { v.min(1.0) } else { 0.0 };
+            let luma: Vec<f32> = (0..w * h)
+                .map(|i| 0.2126 * clamp(c.r[i]) + 0.7152 * clamp(c.g[i]) + 0.0722 * clamp(c.b[i]))
+                .collect();
+            let input = EdgeInput {
+                width: w,
+                height: h,
+                inv_depth: &inv,
+                normal: [&frame.normal.r, &frame.normal.g, &frame.normal.b],
+                material: &mat,
+                luma: &luma,
+            };
+            let selections = [
+                Selection::all(),
+                Selection::materials(&id_material, &[1, 2]),
+            ];
+            for selection in selections {
+                for width in [1.0f32, 2.0, 3.5, 9.0, 40.0] {
+                    for antialias in [true, false] {
+                        let stage = Sobel {
+                            sources: sources.clone(),
+                            width,
+                            color: [0.1, 0.2, 0.9],
+                            antialias,
+                            id_material: id_material.clone(),
+                            selection: selection.clone(),
+                            scratch: Scratch::default(),
+                        };
+                        let keep =
+                            |i: usize| !selection.needs_ids() || selection.contains(frame.id[i]);
+                        let mask = detect_edges(&input, &sources, &keep);
+                        let cov = dilate(&mask, w, h, width * ssaa as f32, antialias);
+                        let mut want = img0.clone();
+                        composite(&mut want, &frame, &cov, stage.color);
+                        // Ink somewhere, and narrow lines leave samples
+                        // without (the blend skips them).
+                        assert!(cov.iter().any(|&c| c > 0.0));
+                        assert!(width * ssaa as f32 > 4.0 || cov.contains(&0.0));
+                        for pool in &pools {
+                            // Twice: the second call reuses the buffers.
+                            for _ in 0..2 {
+                                let mut got = img0.clone();
+                                pool.install(|| stage.apply(&mut got, &frame));
+                                let planes = |i: &HdrImage| {
+                                    [&i.rgb.r, &i.rgb.g, &i.rgb.b]
+                                        .map(|p| p.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+                                };
+                                assert!(
+                                    planes(&got) == planes(&want),
+                                    "{w}×{h} ssaa {ssaa} width {width} aa {antialias}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn dilation_across_mask_words_equals_the_distance_transform() {
+        // Rows of several 64-sample words with lone marks just before and
+        // after word boundaries (and at the ends), so that ink reaches into
+        // words holding no mark of their own, and rows with none.
+        let (w, h) = (197, 29);
+        let cols = [0usize, 3, 62, 63, 64, 66, 127, 128, 150, 191, 192, 196];
+        let widths = [0.5f32, 1.0, 2.0, 3.0, 4.5, 8.0, 13.0, 32.0];
+        // One mark every other row, alone in its row; and sparse noise,
+        // whose rows leave the scratch of a task holding distances that
+        // the next row must not read.
+        let lone = |k: usize, i: usize| {
+            let (x, y) = (i % w, i / w);
+            y % 2 == k % 2 && x == cols[(y / 2 + k) % cols.len()]
+        };
+        let noise = |k: usize, i: usize| (i * 7919 + k * 31).is_multiple_of(60 + 40 * (k % 3));
+        let cases = widths
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &width)| [(k, width, false), (k, width, true)]);
+        for (k, width, noisy) in cases {
+            let mask: Vec<bool> = (0..w * h)
+                .map(|i| if noisy { noise(k, i) } else { lone(k, i) })
+                .collect();
+            assert!(mask.contains(&true));
+            let d = distance(&mask, w, h);
+            for aa in [true, false] {
+                let want: Vec<u32> = d
+                    .iter()
+                    .map(|&d| Cover::new(width, aa).at(d).to_bits())
+                    .collect();
+                let got: Vec<u32> = dilate(&mask, w, h, width, aa)
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect();
+                assert!(got == want, "width {width} aa {aa}");
+                // Row by row with one scratch, the rows out of order: each
+                // row must not read what another left in it.
+                let bits = EdgeMask::from_bools(&mask, w, h);
+                let mut marked = Vec::new();
+                bits.rows_marked(&mut marked);
+                let mut s = RowScratch::default();
+                for y in (0..h).map(|k| (k * 11 + 5) % h) {
+                    let mut row = vec![0.0f32; w];
+                    dilate_row(&bits, &marked, y, Cover::new(width, aa), &mut s, |x, c| {
+                        row[x] = c
+                    });
+                    let row: Vec<u32> = row.iter().map(|v| v.to_bits()).collect();
+                    assert!(
+                        row == want[y * w..(y + 1) * w],
+                        "width {width} aa {aa} row {y}"
+                    );
                 }
             }
         }
