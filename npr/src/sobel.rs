@@ -531,8 +531,9 @@ fn gradient(f: &[f32], nb: &[[usize; 3]; 3]) -> (f32, f32) {
 }
 
 /// The measure of one source at (x, y); see the module docs. The scalar
-/// reference of [`detect_edges`]' packets, and what it uses at the
-/// image's left and right columns.
+/// reference of [`measure_row`]'s row loops (and of the lane form the
+/// tests keep), and what [`measure_row`] uses at the image's left and
+/// right columns.
 pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
     measure_at(input, s, &neighbours(input, x, y))
 }
