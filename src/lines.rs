@@ -494,6 +494,7 @@ pub fn build(
                     antialias: *antialias,
                     id_material: id_material.clone(),
                     selection: selection(materials),
+                    scratch: Default::default(),
                 }));
             }
         }

@@ -89,6 +89,7 @@ fn benches(c: &mut Criterion) {
         antialias: true,
         id_material: id_materials(&plain),
         selection: Selection::all(),
+        scratch: Default::default(),
     };
     g.bench_function("sobel", |b| {
         b.iter(|| {

@@ -12,6 +12,7 @@
 //! their visibility and chaining) and `overlay` (drawing them with
 //! tiny-skia, and SVG).
 
+pub mod dilate;
 pub mod edges;
 pub mod extrude;
 pub mod hatching;

@@ -102,37 +102,62 @@ pub fn composite(img: &mut HdrImage, frame: &FrameBuffers, coverage: &[f32], col
         .zip(p.b.par_chunks_mut(w.max(1)))
         .enumerate()
         .for_each_init(Vec::new, |acc, (y, ((r, g), b))| {
-            // Row by row over the pixel's samples: the same sums in the
-            // same order as pixel by pixel, without the per-pixel slicing.
             // At ssaa 1 the sum is the sample itself (0 + c = c): read the
             // coverage row in place, no scratch row to clear and copy.
             let acc: &[f32] = if ssaa == 1 {
                 &coverage[y * sw..y * sw + r.len()]
             } else {
-                acc.clear();
-                acc.resize(r.len(), 0.0f32);
-                for sy in 0..ssaa {
-                    let row = (y * ssaa + sy) * sw;
-                    let samples = &coverage[row..row + r.len() * ssaa];
-                    for (a, c) in acc.iter_mut().zip(samples.chunks_exact(ssaa)) {
-                        *a += c.iter().sum::<f32>();
-                    }
-                }
+                sum_samples(acc, r.len(), ssaa, |sy| {
+                    &coverage[(y * ssaa + sy) * sw..][..r.len() * ssaa]
+                });
                 acc
             };
-            // Where a = 0 the blend gives c·1 + colour·0 = c: no branch.
-            for (((r, g), b), &a) in r
-                .iter_mut()
-                .zip(g.iter_mut())
-                .zip(b.iter_mut())
-                .zip(acc.iter())
-            {
-                let a = a * inv;
-                *r = *r * (1.0 - a) + color[0] * a;
-                *g = *g * (1.0 - a) + color[1] * a;
-                *b = *b * (1.0 - a) + color[2] * a;
-            }
+            blend_row([r, g, b], acc, inv, color);
         });
+}
+
+/// Each of `n` pixels' coverage summed over its ssaa² samples into `acc`;
+/// `sample_row(sy)` is the pixels' sample row sy (n·ssaa samples). Row by
+/// row over the pixel's samples: the same sums in the same order as
+/// pixel by pixel, without the per-pixel slicing.
+pub(crate) fn sum_samples<'a>(
+    acc: &mut Vec<f32>,
+    n: usize,
+    ssaa: usize,
+    sample_row: impl Fn(usize) -> &'a [f32],
+) {
+    acc.clear();
+    acc.resize(n, 0.0f32);
+    for sy in 0..ssaa {
+        for (a, c) in acc.iter_mut().zip(sample_row(sy).chunks_exact(ssaa)) {
+            *a += c.iter().sum::<f32>();
+        }
+    }
+}
+
+/// [`blend`] along a row: `acc` is each pixel's summed coverage, `inv`
+/// 1/ssaa².
+#[inline]
+pub(crate) fn blend_row(rgb: [&mut [f32]; 3], acc: &[f32], inv: f32, color: [f32; 3]) {
+    let [r, g, b] = rgb;
+    // Where a = 0 the blend gives c·1 + colour·0 = c: no branch.
+    for (((r, g), b), &a) in r
+        .iter_mut()
+        .zip(g.iter_mut())
+        .zip(b.iter_mut())
+        .zip(acc.iter())
+    {
+        blend([r, g, b], a * inv, color);
+    }
+}
+
+/// c = c·(1 − a) + colour·a per channel (a pixel's coverage a).
+#[inline(always)]
+pub(crate) fn blend(rgb: [&mut f32; 3], a: f32, color: [f32; 3]) {
+    let [r, g, b] = rgb;
+    *r = *r * (1.0 - a) + color[0] * a;
+    *g = *g * (1.0 - a) + color[1] * a;
+    *b = *b * (1.0 - a) + color[2] * a;
 }
 
 /// Outline by shading (module docs): coverage 1 where n·v ≤ t − s/2, 0

@@ -1,6 +1,6 @@
 //! Outline by image: edges in the frame buffers (`detect_edges`), widened
 //! to the line width by a Euclidean distance transform (`dilate`), and
-//! blended over the image ([`crate::outline::composite`]).
+//! blended over the image (as [`crate::outline::composite`] does).
 //!
 //! Each source has its own measure and threshold; a sample is on an edge
 //! when any source's measure exceeds its threshold. With the Sobel weights
@@ -29,14 +29,31 @@
 //! (anti-aliased), or 1 where d ≤ W/2 − ½ (aliased). Every stage works on
 //! rows or columns in parallel, each written by one task, so the result
 //! does not depend on the thread count.
+//!
+//! The stage allocates nothing in a steady frame (a 1080p frame's
+//! whole-frame buffers were 26 MB, each page of them a kernel page fault):
+//! - 1/w, the material labels and the luminance are computed per band of
+//!   [`BAND_ROWS`] rows (and the row above and below it) inside the
+//!   detection, not as whole-frame buffers;
+//! - the marks are bits ([`EdgeMask`]), kept in the stage with the other
+//!   scratch ([`Scratch`]) from frame to frame;
+//! - the line is widened row by row ([`dilate_row`]) straight into the
+//!   blend, and only near marks: rows with no mark within the line's
+//!   reach and 64-sample words with none are skipped, so there is no
+//!   frame-size coverage map either.
 
-use crate::outline::{composite, ssaa_of, Selection};
+use crate::outline::{blend, blend_row, composite, ssaa_of, sum_samples, Selection};
 use rayon::prelude::*;
 use specula_core::{Mask, Real};
 use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::target::MISS;
-use specula_raster::{BufferSet, FrameBuffers};
-use wide::f32x8;
+use specula_raster::{BufferSet, FrameBuffers, Planes3};
+use std::sync::Mutex;
+use wide::{f32x8, i32x8, u32x8};
+
+pub use crate::dilate::{
+    dilate, dilate_row, distance, Cover, EdgeMask, Pool, RowScratch, BOUNDED_RADIUS,
+};
 
 /// What a Sobel outline looks at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -59,9 +76,68 @@ pub struct Sobel {
     /// Material of each visibility-buffer id (for the id source).
     pub id_material: Vec<u32>,
     pub selection: Selection,
+    /// Buffers kept from frame to frame (`Scratch::default()`).
+    pub scratch: Scratch,
 }
 
-/// Read-only views of the buffers a detection reads, at frame size.
+/// The buffers a [`Sobel`] stage keeps from frame to frame, so that a
+/// steady frame neither allocates nor touches fresh pages. None carries a
+/// value from one frame to the next: each is written before it is read,
+/// so the output is that of fresh buffers. Frames run one at a time; a
+/// second concurrent `apply` on the same stage waits. A clone starts empty.
+#[derive(Default)]
+pub struct Scratch(Mutex<Buffers>);
+
+#[derive(Default)]
+struct Buffers {
+    mask: EdgeMask,
+    marked: Vec<bool>,
+    /// The id source's label of each id ([`material_labels`]).
+    label_of_id: Vec<f32>,
+    bands: Pool<BandScratch>,
+    rows: Pool<RowsScratch>,
+}
+
+impl Clone for Scratch {
+    fn clone(&self) -> Scratch {
+        Scratch::default()
+    }
+}
+
+impl std::fmt::Debug for Scratch {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Scratch")
+    }
+}
+
+/// A detection task's per-band inputs (rows of the band and its halo).
+#[derive(Default)]
+struct BandScratch {
+    inv_depth: Vec<f32>,
+    material: Vec<f32>,
+    luma: Vec<f32>,
+    /// One row of one source's measure.
+    measure: Vec<f32>,
+}
+
+/// A blend task's scratch: the dilation's, and at ssaa > 1 the coverage
+/// of a pixel row's sample rows and their sums.
+#[derive(Default)]
+struct RowsScratch {
+    dilate: RowScratch,
+    coverage: Vec<f32>,
+    acc: Vec<f32>,
+}
+
+/// Rows a detection task reads its inputs for at once: 1/w, labels and
+/// luminance of BAND_ROWS + 2 rows (with the halo rows above and below,
+/// read and recomputed by both neighbouring bands: 2/32 more of that
+/// work) stay in the core's cache (250 KB each at 1920 wide) while the
+/// band's three-row windows read them; 34 tasks at 1080p.
+pub const BAND_ROWS: usize = 32;
+
+/// Read-only views of the buffers a detection reads, at frame size (or a
+/// band's rows of them: the detection only reads the rows it is given).
 pub struct EdgeInput<'a> {
     pub width: usize,
     pub height: usize,
@@ -81,127 +157,290 @@ const W: [f32; 3] = [0.25, 0.5, 0.25];
 /// q = 1/w per sample, 0 where nothing is hit (w infinite, NaN or ≤ 0).
 pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
     let mut q = vec![0.0f32; depth.len()];
-    // Chunks with a plain loop (a select per sample) vectorize; a
-    // per-element parallel map does not.
     q.par_chunks_mut(4096)
         .zip(depth.par_chunks(4096))
-        .for_each(|(q, d)| {
-            for (q, &d) in q.iter_mut().zip(d) {
-                *q = if d.is_finite() && d > 0.0 {
-                    1.0 / d
-                } else {
-                    0.0
-                };
-            }
-        });
+        .for_each(|(q, d)| inverse_depth_into(d, q));
     q
+}
+
+/// [`inverse_depth`] into `q` (same length).
+pub fn inverse_depth_into(depth: &[f32], q: &mut [f32]) {
+    // A plain loop (a select per sample) vectorizes.
+    for (q, &d) in q.iter_mut().zip(depth) {
+        *q = if d.is_finite() && d > 0.0 {
+            1.0 / d
+        } else {
+            0.0
+        };
+    }
 }
 
 /// The id source's labels: the material index of each sample's id as a
 /// number (exact below 2²⁴ materials), −1 where nothing is hit or the id
 /// has no material.
 pub fn material_labels(ids: &[u32], id_material: &[u32]) -> Vec<f32> {
-    // The label of each id once (ids are far fewer than samples); then a
-    // plain loop over chunks, as `inverse_depth`: a table read a sample.
-    // MISS (u32::MAX) is past the table's end and reads −1.
-    let of_id: Vec<f32> = id_material
-        .iter()
-        .enumerate()
-        .map(|(id, &m)| {
-            if id as u32 != MISS && m != u32::MAX {
-                m as f32
-            } else {
-                -1.0
-            }
-        })
-        .collect();
+    let mut of_id = Vec::new();
+    label_of_id(id_material, &mut of_id);
     let mut labels = vec![-1.0f32; ids.len()];
     labels
         .par_chunks_mut(4096)
         .zip(ids.par_chunks(4096))
-        .for_each(|(labels, ids)| {
-            for (l, &id) in labels.iter_mut().zip(ids) {
-                *l = of_id.get(id as usize).copied().unwrap_or(-1.0);
-            }
-        });
+        .for_each(|(labels, ids)| labels_into(ids, &of_id, labels));
     labels
 }
 
-/// Lane bits (lane l = bit l) of an 8-lane mask as the 8 booleans.
-const LANE_BOOLS: [[bool; 8]; 256] = {
-    let mut t = [[false; 8]; 256];
-    let mut m = 0;
-    while m < 256 {
-        let mut l = 0;
-        while l < 8 {
-            t[m][l] = m & (1 << l) != 0;
-            l += 1;
+/// The label of each id once (ids are far fewer than samples), into `out`,
+/// then −1 once more: the label of every id past the table (MISS, u32::MAX,
+/// among them).
+fn label_of_id(id_material: &[u32], out: &mut Vec<f32>) {
+    out.clear();
+    out.extend(id_material.iter().enumerate().map(|(id, &m)| {
+        if id as u32 != MISS && m != u32::MAX {
+            m as f32
+        } else {
+            -1.0
         }
-        m += 1;
+    }));
+    out.push(-1.0);
+}
+
+/// [`material_labels`] with the per-id labels `of_id` ([`label_of_id`]),
+/// into `labels`: a table read a sample, ids past the table clamped to
+/// its last entry (−1), so the loop has no branch and no bounds check.
+fn labels_into(ids: &[u32], of_id: &[f32], labels: &mut [f32]) {
+    let last = of_id.len() - 1;
+    let table = &of_id[..=last];
+    let mut done = 0;
+    // 8 at a time by the hardware gather ([`Real::gather`], whose f32
+    // index lanes are exact below 2²⁴ ids): ~10 instructions a sample
+    // scalar, the largest part of the stage's preparation.
+    if last < 1 << 24 {
+        let last8 = u32x8::splat(last as u32);
+        for (l, i) in labels.chunks_exact_mut(8).zip(ids.chunks_exact(8)) {
+            let i = u32x8::new(<[u32; 8]>::try_from(i).unwrap_or_default()).min(last8);
+            let index = i32x8::new(i.to_array().map(|v| v as i32)).round_float();
+            <f32x8 as Real>::gather(table, index).store(l);
+            done += 8;
+        }
     }
-    t
-};
+    for (l, &id) in labels[done..].iter_mut().zip(&ids[done..]) {
+        *l = table[(id as usize).min(last)];
+    }
+}
+
+/// The colour source's luminance of samples `range` of `color` into `out`:
+/// each channel clamped to [0, 1] (NaN to 0), Rec. 709 weights.
+fn luma_into(color: &Planes3, range: std::ops::Range<usize>, out: &mut [f32]) {
+    let clamp = |v: f32| if v > 0.0 { v.min(1.0) } else { 0.0 };
+    let (r, g, b) = (
+        &color.r[range.clone()],
+        &color.g[range.clone()],
+        &color.b[range],
+    );
+    for (((o, &r), &g), &b) in out.iter_mut().zip(r).zip(g).zip(b) {
+        *o = 0.2126 * clamp(r) + 0.7152 * clamp(g) + 0.0722 * clamp(b);
+    }
+}
 
 /// Marks edge samples (1) in a `width × height` mask; see the module docs.
 /// `keep(i)` says whether sample i may carry a line (material selection).
-///
-/// Row by row; inside a row, 8 samples at a time ([`measure_lanes`] on
-/// f32x8) wherever the 3×3 neighbourhoods of all 8 lie inside the image
-/// along x, the first and last column by the clamped scalar [`measure`].
-/// The lanes run the scalar code's operations in its order (no FMA), so
-/// the mask is the one [`measure`] gives sample by sample (tested).
+/// [`detect_row`] on every row of the whole-frame `input`.
 pub fn detect_edges(
     input: &EdgeInput,
     sources: &[(Source, f32)],
     keep: &(dyn Fn(usize) -> bool + Sync),
 ) -> Vec<bool> {
     let (w, h) = (input.width, input.height);
-    let mut out = vec![false; w * h];
-    let thresholds: Vec<(Source, f32x8)> =
-        sources.iter().map(|&(s, t)| (s, f32x8::splat(t))).collect();
-    out.par_chunks_mut(w.max(1))
+    let mut mask = EdgeMask::new(w, h);
+    let words = mask.words();
+    mask.bits_mut()
+        .par_chunks_mut(words.max(1))
         .enumerate()
-        .for_each(|(y, row)| {
-            let rows = [y.saturating_sub(1) * w, y * w, (y + 1).min(h - 1) * w];
-            let scalar = |x: usize| sources.iter().any(|&(s, t)| measure(input, s, x, y) > t);
-            // Interior columns 1..w−1 in packets of 8; the last packet is
-            // moved back to end at w − 1 (it recomputes a few samples).
-            let interior = w.saturating_sub(2);
-            let mut x = 1;
-            while interior >= 8 && x < w - 1 {
-                let x0 = x.min(w - 1 - 8);
-                let mut edge = 0u32;
-                for (s, t) in &thresholds {
-                    edge |= measure_lanes::<f32x8>(input, *s, rows, x0).gt(*t).bits();
-                }
-                let out = &mut row[x0..x0 + 8];
-                out.copy_from_slice(&LANE_BOOLS[edge as usize]);
-                // `keep` only where there is an edge (most samples have none).
-                let mut set = edge;
-                while set != 0 {
-                    let l = set.trailing_zeros() as usize;
-                    out[l] = keep(y * w + x0 + l);
-                    set &= set - 1;
-                }
-                x = x0 + 8;
-            }
-            let scalar = |x: usize| scalar(x) && keep(y * w + x);
-            if interior >= 8 {
-                row[0] = scalar(0);
-                row[w - 1] = scalar(w - 1);
-            } else {
-                for (x, o) in row.iter_mut().enumerate() {
-                    *o = scalar(x);
-                }
-            }
+        .for_each_init(Vec::new, |m, (y, out)| {
+            let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)].map(|r| r * w);
+            detect_row(input, sources, rows, &|x| keep(y * w + x), out, m);
         });
-    out
+    mask.to_bools()
 }
 
-/// The measure of source `s` at the `R::LANES` samples (x.., y) whose
+/// Marks the edge samples of one row into its mask words `out` (every
+/// word written). `rows` are the offsets in `input`'s slices of the row
+/// above, the row and the row below (clamped by the caller at the image's
+/// top and bottom); `keep(x)` says whether sample x of the row may carry
+/// a line; `m` is scratch (a row of measures).
+///
+/// Each source's measure along the row ([`measure_row`]), compared with
+/// its threshold 8 samples at a time; a sample is marked when any source
+/// exceeds its threshold and `keep` allows it (asked only where a source
+/// does: most samples have no edge).
+pub fn detect_row(
+    input: &EdgeInput,
+    sources: &[(Source, f32)],
+    rows: [usize; 3],
+    keep: &dyn Fn(usize) -> bool,
+    out: &mut [u64],
+    m: &mut Vec<f32>,
+) {
+    let w = input.width;
+    out.fill(0);
+    m.resize(w, 0.0);
+    for &(s, t) in sources {
+        measure_row(input, s, rows, m);
+        // A word's 64 samples 8 a compare, the row's last partial word
+        // one at a time.
+        let t8 = f32x8::splat(t);
+        let mut blocks = m.chunks_exact(64);
+        for (o, block) in out.iter_mut().zip(&mut blocks) {
+            let mut word = 0u64;
+            for (k, c) in block.chunks_exact(8).enumerate() {
+                let v = f32x8::from(<[f32; 8]>::try_from(c).unwrap_or_default());
+                word |= u64::from(v.gt(t8).bits()) << (8 * k);
+            }
+            *o |= word;
+        }
+        let tail = w - blocks.remainder().len();
+        for (x, &v) in (tail..).zip(blocks.remainder()) {
+            out[x / 64] |= u64::from(v > t) << (x % 64);
+        }
+    }
+    for (j, word) in out.iter_mut().enumerate() {
+        let mut set = *word;
+        while set != 0 {
+            let b = set.trailing_zeros() as usize;
+            if !keep(64 * j + b) {
+                *word &= !(1 << b);
+            }
+            set &= set - 1;
+        }
+    }
+}
+
+/// The measure of source `s` at every sample of a row (`rows` as in
+/// [`detect_row`]) into `out` (the row's width): the clamped scalar
+/// [`measure_at`] at the first and last column, and between them the
+/// interior kernels, which run [`measure_at`]'s operations in its order
+/// on whole rows (no FMA; the compiler vectorizes the plain loops over
+/// slices of one length, with no bounds checks inside), so every value is
+/// [`measure`]'s bit for bit (tested against it).
+pub fn measure_row(input: &EdgeInput, s: Source, rows: [usize; 3], out: &mut [f32]) {
+    let w = input.width;
+    let at = |x: usize| {
+        let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
+        measure_at(input, s, &rows.map(|r| xs.map(|x| r + x)))
+    };
+    if w < 3 {
+        for (x, o) in out.iter_mut().enumerate() {
+            *o = at(x);
+        }
+        return;
+    }
+    let inner = &mut out[1..w - 1];
+    match s {
+        Source::Depth => depth_row(&Window::new(input.inv_depth, rows, w), inner),
+        Source::Normal => {
+            // measure_at sums 0 + g²(r) + g²(g) + g²(b); g² is +0, positive
+            // or NaN, for which 0 + g² is g² itself (a quiet NaN keeps its
+            // bits), so the first field writes instead of adding to zeros.
+            let [r, g, b] = input.normal;
+            gradient2_row::<false>(&Window::new(r, rows, w), inner);
+            gradient2_row::<true>(&Window::new(g, rows, w), inner);
+            gradient2_row::<true>(&Window::new(b, rows, w), inner);
+            inner.iter_mut().for_each(|v| *v = v.sqrt());
+        }
+        Source::Id => id_row(&Window::new(input.material, rows, w), inner),
+        Source::Color => {
+            gradient2_row::<false>(&Window::new(input.luma, rows, w), inner);
+            inner.iter_mut().for_each(|v| *v = v.sqrt());
+        }
+    }
+    // The ends last: the interior loops stream the rows in, the ends'
+    // scalar reads then hit the cache.
+    out[0] = at(0);
+    out[w - 1] = at(w - 1);
+}
+
+/// The 3×3 neighbourhoods of a row's interior samples x = 1..w−1 as nine
+/// slices of one length w − 2: `n[r][c][i]` is the field at row r (0
+/// above, 2 below) and column x + c − 1 for x = i + 1.
+struct Window<'a> {
+    n: [[&'a [f32]; 3]; 3],
+}
+
+impl<'a> Window<'a> {
+    /// The window of the row whose rows above, at and below start at
+    /// `rows` in `f`; `w` ≥ 3.
+    fn new(f: &'a [f32], rows: [usize; 3], w: usize) -> Window<'a> {
+        let m = w - 2;
+        Window {
+            n: rows.map(|r| [&f[r..r + m], &f[r + 1..r + 1 + m], &f[r + 2..r + 2 + m]]),
+        }
+    }
+}
+
+/// [`measure_at`]'s depth measure along a row's interior.
+fn depth_row(f: &Window, out: &mut [f32]) {
+    let m = out.len();
+    let n = f.n.map(|r| r.map(|c| &c[..m]));
+    for (i, o) in out.iter_mut().enumerate() {
+        let at = |r: usize, c: usize| n[r][c][i];
+        let (mut dxx, mut dyy, mut qmax) = (0.0f32, 0.0f32, 0.0f32);
+        for (k, wk) in W.iter().enumerate() {
+            dxx += wk * (at(k, 2) + at(k, 0) - 2.0 * at(k, 1));
+            dyy += wk * (at(2, k) + at(0, k) - 2.0 * at(1, k));
+            qmax = Real::max(Real::max(Real::max(qmax, at(k, 0)), at(k, 1)), at(k, 2));
+        }
+        *o = if qmax > 0.0 {
+            Real::max(dxx.abs(), dyy.abs()) / qmax
+        } else {
+            0.0
+        };
+    }
+}
+
+/// Gx² + Gy² of one field along a row's interior ([`gradient`]'s sums),
+/// added to `out` (ADD) or written to it.
+fn gradient2_row<const ADD: bool>(f: &Window, out: &mut [f32]) {
+    let m = out.len();
+    let n = f.n.map(|r| r.map(|c| &c[..m]));
+    for (i, o) in out.iter_mut().enumerate() {
+        let at = |r: usize, c: usize| n[r][c][i];
+        let (mut gx, mut gy) = (0.0f32, 0.0f32);
+        for (k, wk) in W.iter().enumerate() {
+            gx += wk * (at(k, 2) - at(k, 0));
+            gy += wk * (at(2, k) - at(0, k));
+        }
+        let g2 = gx * gx + gy * gy;
+        *o = if ADD { *o + g2 } else { g2 };
+    }
+}
+
+/// [`measure_at`]'s id measure along a row's interior (its `!=`; labels
+/// are never NaN, so the lanes' ordered lt | gt is the same). The sums
+/// are of small integers, exact in any order.
+fn id_row(f: &Window, out: &mut [f32]) {
+    let m = out.len();
+    let n = f.n.map(|r| r.map(|c| &c[..m]));
+    for (i, o) in out.iter_mut().enumerate() {
+        let at = |r: usize, c: usize| n[r][c][i];
+        let centre = at(1, 1);
+        let mut sum = 0.0f32;
+        for r in 0..3 {
+            for c in 0..3 {
+                let weight = if r == 1 || c == 1 { 2.0 } else { 1.0 };
+                let o = at(r, c);
+                sum += if o != centre { weight } else { 0.0 };
+            }
+        }
+        *o = sum / 12.0;
+    }
+}
+
+/// The lane form of [`measure`] (the tests check the two agree): the
+/// measure of source `s` at the `R::LANES` samples (x.., y) whose
 /// neighbourhood rows start at `rows` (above, at, below; clamped by the
 /// caller), for 1 ≤ x and x + LANES < width (no clamping along x). The
 /// same operations in the same order as [`measure_at`].
+#[cfg(test)]
 #[inline(always)]
 fn measure_lanes<R: Real>(input: &EdgeInput, s: Source, rows: [usize; 3], x: usize) -> R {
     // The 3×3 neighbourhood of f, [row][column offset + 1] (row 0 above,
@@ -292,8 +531,9 @@ fn gradient(f: &[f32], nb: &[[usize; 3]; 3]) -> (f32, f32) {
 }
 
 /// The measure of one source at (x, y); see the module docs. The scalar
-/// reference of [`detect_edges`]' packets, and what it uses at the
-/// image's left and right columns.
+/// reference of [`measure_row`]'s row loops (and of the lane form the
+/// tests keep), and what [`measure_row`] uses at the image's left and
+/// right columns.
 pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
     measure_at(input, s, &neighbours(input, x, y))
 }
@@ -349,237 +589,116 @@ fn measure_at(input: &EdgeInput, s: Source, nb: &[[usize; 3]; 3]) -> f32 {
     }
 }
 
-/// Squared distance transform in one dimension [Felzenszwalb12]: d[q] =
-/// min_p (q − p)² + f[p], by the lower envelope of parabolas.
-///
-/// The parabola intersections are in f64: q² of a supersampled row
-/// (7680² at 1920 × ssaa 4) is past f32's exact integers.
-fn edt_1d(f: &[f32], d: &mut [f32], v: &mut [usize], z: &mut [f64]) {
-    let n = f.len();
-    if n == 0 {
-        return;
-    }
-    let mut k = 0;
-    v[0] = 0;
-    z[0] = f64::NEG_INFINITY;
-    z[1] = f64::INFINITY;
-    for q in 1..n {
-        loop {
-            let p = v[k];
-            let s = ((f[q] as f64 + (q * q) as f64) - (f[p] as f64 + (p * p) as f64))
-                / (2.0 * (q - p) as f64);
-            if s <= z[k] && k > 0 {
-                k -= 1;
-                continue;
-            }
-            if s <= z[k] {
-                // k == 0 and the new parabola is below everywhere left.
-                v[0] = q;
-                z[0] = f64::NEG_INFINITY;
-                z[1] = f64::INFINITY;
-                break;
-            }
-            k += 1;
-            v[k] = q;
-            z[k] = s;
-            z[k + 1] = f64::INFINITY;
-            break;
-        }
-    }
-    k = 0;
-    for (q, dq) in d.iter_mut().enumerate() {
-        while z[k + 1] < q as f64 {
-            k += 1;
-        }
-        let p = v[k];
-        let dx = q as f64 - p as f64;
-        *dq = (dx * dx + f[p] as f64) as f32;
-    }
-}
-
-/// "Infinitely" far, squared: finite so the parabola algebra stays finite.
-const FAR2: f32 = 1e20;
-
-/// Euclidean distance from every sample to the nearest marked one
-/// (`FAR2.sqrt()` when there is none): columns, then rows.
-pub fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
-    // Columns: the mask is binary, so its 1-D transform is the squared
-    // distance to the nearest mark above or below (two sweeps).
-    let mut cols = vec![0.0f32; w * h]; // column-major
-    cols.par_chunks_mut(h.max(1))
-        .enumerate()
-        .for_each(|(x, out)| {
-            let mut last: Option<usize> = None;
-            for (y, o) in out.iter_mut().enumerate() {
-                if mask[y * w + x] {
-                    last = Some(y);
-                }
-                *o = last.map_or(FAR2, |l| ((y - l) as f32).powi(2));
-            }
-            let mut next: Option<usize> = None;
-            for (y, o) in out.iter_mut().enumerate().rev() {
-                if mask[y * w + x] {
-                    next = Some(y);
-                }
-                if let Some(n) = next {
-                    *o = o.min(((n - y) as f32).powi(2));
-                }
-            }
-        });
-    let mut d = vec![0.0f32; w * h];
-    d.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-        || (vec![0.0f32; w], vec![0usize; w], vec![0.0f64; w + 1]),
-        |(f, v, z), (y, out)| {
-            for x in 0..w {
-                f[x] = cols[x * h + y];
-            }
-            edt_1d(f, out, v, z);
-            for o in out.iter_mut() {
-                *o = o.sqrt();
-            }
-        },
-    );
-    d
-}
-
-/// Widest half line (samples) [`dilate`] searches for marks around each
-/// sample directly; wider lines use the distance transform.
-pub const BOUNDED_RADIUS: usize = 16;
-
-/// Coverage of a line `width` samples wide around the marked band (module
-/// docs).
-///
-/// Only samples within half the width of a mark get ink, so up to
-/// [`BOUNDED_RADIUS`] the distance is searched for in the window of radius
-/// r = ⌈width/2⌉ around each sample: the vertical distance to the nearest
-/// mark in each column of the rows y ± r, then the least dx² + dy² along
-/// the row within ±r (rows with no mark within r rows are skipped). Within the window that is the exact Euclidean
-/// distance (in f32 integers, as the transform's), and a mark outside it
-/// is farther than r ≥ width/2, where both give no ink: the coverage is
-/// the transform's bit for bit (tested), for 2(2r + 1) steps a sample
-/// instead of the transform's ~175 instructions.
-pub fn dilate(mask: &[bool], w: usize, h: usize, width: f32, antialias: bool) -> Vec<f32> {
-    let half = width * 0.5;
-    let cover = |d: f32| {
-        if antialias {
-            (half - d).clamp(0.0, 1.0)
-        } else if d <= (half - 0.5).max(0.0) {
-            1.0
-        } else {
-            0.0
-        }
-    };
-    let r = half.ceil().max(0.0) as usize;
-    if r > BOUNDED_RADIUS {
-        return distance(mask, w, h).into_par_iter().map(cover).collect();
-    }
-    let mut out = vec![0.0f32; w * h];
-    // Past r: "no mark within the window". The squared column distances
-    // are padded with it by r on both sides so the row pass needs no
-    // bounds; the padding is written once per task, and every other entry
-    // of the scratch rows is assigned before it is read (no per-row fill).
-    let far = r as u32 + 1;
-    let far2 = far * far;
-    let row_has: Vec<bool> = mask
-        .par_chunks(w.max(1))
-        .map(|m| m.contains(&true))
-        .collect();
-    out.par_chunks_mut(w.max(1)).enumerate().for_each_init(
-        || (vec![0u32; w], vec![far2; w + 2 * r], vec![0u32; w]),
-        |(col, sq, d2), (y, row)| {
-            let rows = y.saturating_sub(r)..(y + r + 1).min(h);
-            if !row_has[rows.clone()].contains(&true) {
-                return; // no ink within r rows
-            }
-            // dy where marked, far elsewhere, without a branch.
-            let first = rows.start;
-            let near = |on: bool, dy: u32| far - u32::from(on) * (far - dy);
-            let dy = first.abs_diff(y) as u32;
-            for (c, &on) in col.iter_mut().zip(&mask[first * w..(first + 1) * w]) {
-                *c = near(on, dy);
-            }
-            for yy in first + 1..rows.end {
-                let dy = yy.abs_diff(y) as u32;
-                for (c, &on) in col.iter_mut().zip(&mask[yy * w..(yy + 1) * w]) {
-                    *c = (*c).min(near(on, dy));
-                }
-            }
-            for (s, &c) in sq[r..r + w].iter_mut().zip(col.iter()) {
-                *s = c * c;
-            }
-            for k in 0..=2 * r {
-                let dx2 = (k.abs_diff(r) * k.abs_diff(r)) as u32;
-                let s = &sq[k..k + w];
-                if k == 0 {
-                    for (d, &c) in d2.iter_mut().zip(s) {
-                        *d = dx2 + c;
-                    }
-                } else {
-                    for (d, &c) in d2.iter_mut().zip(s) {
-                        *d = (*d).min(dx2 + c);
-                    }
-                }
-            }
-            // d² ≥ (r + 1)² is past half the width: no ink, and `out` is
-            // already 0 there. Blocks of 8 with no nearer mark are skipped.
-            for (o, d) in row.chunks_mut(8).zip(d2.chunks(8)) {
-                if d.iter().fold(u32::MAX, |a, &b| a.min(b)) >= far2 {
-                    continue;
-                }
-                for (o, &d) in o.iter_mut().zip(d) {
-                    *o = cover((d as f32).sqrt());
-                }
-            }
-        },
-    );
-    out
-}
-
 impl Sobel {
     fn has(&self, s: Source) -> bool {
         self.sources.iter().any(|(t, _)| *t == s)
     }
 
+    /// Marks the frame's edge samples into `mask`: [`detect_row`] on
+    /// bands of [`BAND_ROWS`] rows, each band computing its own 1/w,
+    /// labels and luminance (rows of the band and one each side).
+    fn detect(&self, frame: &FrameBuffers, b: &mut Buffers) {
+        let (w, h) = (frame.width as usize, frame.height as usize);
+        b.mask.resize(w, h);
+        let words = b.mask.words();
+        let (depth, normal, id, color) = (
+            self.has(Source::Depth),
+            self.has(Source::Normal),
+            self.has(Source::Id),
+            self.has(Source::Color),
+        );
+        if id {
+            label_of_id(&self.id_material, &mut b.label_of_id);
+        }
+        let (of_id, pool) = (&b.label_of_id, &b.bands);
+        let ids = &frame.id;
+        let needs_ids = self.selection.needs_ids();
+        b.mask
+            .bits_mut()
+            .par_chunks_mut((words * BAND_ROWS).max(1))
+            .enumerate()
+            .for_each(|(band, out)| {
+                let y0 = band * BAND_ROWS;
+                let y1 = (y0 + BAND_ROWS).min(h);
+                let (ya, yb) = (y0.saturating_sub(1), (y1 + 1).min(h));
+                let range = ya * w..yb * w;
+                let n = range.len();
+                pool.with(|s| {
+                    if depth {
+                        s.inv_depth.resize(n, 0.0);
+                        inverse_depth_into(&frame.depth[range.clone()], &mut s.inv_depth[..n]);
+                    }
+                    if id {
+                        s.material.resize(n, 0.0);
+                        labels_into(&frame.id[range.clone()], of_id, &mut s.material[..n]);
+                    }
+                    if color {
+                        s.luma.resize(n, 0.0);
+                        luma_into(&frame.color, range.clone(), &mut s.luma[..n]);
+                    }
+                    let nrm = &frame.normal;
+                    let input = EdgeInput {
+                        width: w,
+                        height: yb - ya,
+                        inv_depth: part(depth, &s.inv_depth, 0..n),
+                        normal: [&nrm.r, &nrm.g, &nrm.b].map(|c| part(normal, c, range.clone())),
+                        material: part(id, &s.material, 0..n),
+                        luma: part(color, &s.luma, 0..n),
+                    };
+                    for (y, out) in (y0..y1).zip(out.chunks_mut(words.max(1))) {
+                        let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)];
+                        let rows = rows.map(|r| (r - ya) * w);
+                        let keep = |x: usize| !needs_ids || self.selection.contains(ids[y * w + x]);
+                        detect_row(&input, &self.sources, rows, &keep, out, &mut s.measure);
+                    }
+                });
+            });
+        b.mask.rows_marked(&mut b.marked);
+    }
+
+    fn lock(&self) -> std::sync::MutexGuard<'_, Buffers> {
+        // Scratch only: a panic of an earlier frame leaves nothing that
+        // is read before it is written.
+        self.scratch.0.lock().unwrap_or_else(|e| e.into_inner())
+    }
+
     /// Per-sample coverage over `frame` for a stage at supersampling `ssaa`.
     pub fn coverage_map(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<f32> {
+        let mut b = self.lock();
+        self.detect(frame, &mut b);
+        let cover = Cover::new(self.width * ssaa as f32, self.antialias);
         let (w, h) = (frame.width as usize, frame.height as usize);
-        let material = if self.has(Source::Id) {
-            material_labels(&frame.id, &self.id_material)
-        } else {
-            Vec::new()
-        };
-        let luma: Vec<f32> = if self.has(Source::Color) {
-            let c = &frame.color;
-            (0..c.len())
-                .into_par_iter()
-                .with_min_len(4096)
-                .map(|i| {
-                    let [r, g, b] = c.get(i).map(|v| if v > 0.0 { v.min(1.0) } else { 0.0 });
-                    0.2126 * r + 0.7152 * g + 0.0722 * b
-                })
-                .collect()
-        } else {
-            Vec::new()
-        };
-        let inv_depth = if self.has(Source::Depth) {
-            inverse_depth(&frame.depth)
-        } else {
-            Vec::new()
-        };
-        let input = EdgeInput {
-            width: w,
-            height: h,
-            inv_depth: &inv_depth,
-            normal: [&frame.normal.r, &frame.normal.g, &frame.normal.b],
-            material: &material,
-            luma: &luma,
-        };
-        let ids = &frame.id;
-        let keep = |i: usize| !self.selection.needs_ids() || self.selection.contains(ids[i]);
-        let mask = detect_edges(&input, &self.sources, &keep);
-        dilate(&mask, w, h, self.width * ssaa as f32, self.antialias)
+        if cover.radius() > BOUNDED_RADIUS {
+            return dilate(
+                &b.mask.to_bools(),
+                w,
+                h,
+                self.width * ssaa as f32,
+                self.antialias,
+            );
+        }
+        let mut out = vec![0.0f32; w * h];
+        let (mask, marked, pool) = (&b.mask, &b.marked, &b.rows);
+        out.par_chunks_mut(w.max(1))
+            .enumerate()
+            .for_each(|(y, row)| {
+                pool.with(|s| dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| row[x] = c));
+            });
+        out
     }
 }
+
+/// `v[range]` for a source in use, else empty (its buffer may be absent).
+fn part(on: bool, v: &[f32], range: std::ops::Range<usize>) -> &[f32] {
+    if on {
+        &v[range]
+    } else {
+        &[]
+    }
+}
+
+/// Output rows a blend task takes at once.
+const BLEND_ROWS: usize = 8;
 
 impl PostStage for Sobel {
     fn name(&self) -> &str {
@@ -594,9 +713,73 @@ impl PostStage for Sobel {
         }
     }
 
+    /// Detection, then the dilation row by row straight into the blend.
+    /// The blend is [`composite`]'s: the same coverage per sample, summed
+    /// in the same order, the same products. It is skipped where the
+    /// coverage is 0 (no mark within the line's reach), where composite's
+    /// c·(1 − 0) + colour·0 gives back c: the same value, and the same
+    /// bits except that −0 would become +0 (the tone map, before this
+    /// stage, writes no −0; and either encodes to code 0).
     fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
-        let cov = self.coverage_map(frame, ssaa_of(img, frame));
-        composite(img, frame, &cov, self.color);
+        let ssaa = ssaa_of(img, frame);
+        let mut b = self.lock();
+        self.detect(frame, &mut b);
+        let cover = Cover::new(self.width * ssaa as f32, self.antialias);
+        if cover.radius() > BOUNDED_RADIUS {
+            let (w, h) = (frame.width as usize, frame.height as usize);
+            let cov = dilate(
+                &b.mask.to_bools(),
+                w,
+                h,
+                self.width * ssaa as f32,
+                self.antialias,
+            );
+            composite(img, frame, &cov, self.color);
+            return;
+        }
+        let (w, sw) = (img.width as usize, frame.width as usize);
+        let inv = 1.0 / (ssaa * ssaa) as f32;
+        let color = self.color;
+        let (mask, marked, pool) = (&b.mask, &b.marked, &b.rows);
+        let band = (w * BLEND_ROWS).max(1);
+        let p = &mut img.rgb;
+        p.r.par_chunks_mut(band)
+            .zip(p.g.par_chunks_mut(band))
+            .zip(p.b.par_chunks_mut(band))
+            .enumerate()
+            .for_each(|(k, ((r, g), b))| {
+                pool.with(|s| {
+                    let rows = r.chunks_mut(w).zip(g.chunks_mut(w)).zip(b.chunks_mut(w));
+                    for (y, ((r, g), b)) in (k * BLEND_ROWS..).zip(rows) {
+                        if ssaa == 1 {
+                            dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| {
+                                blend([&mut r[x], &mut g[x], &mut b[x]], c * inv, color)
+                            });
+                            continue;
+                        }
+                        // The row's ssaa sample rows' coverage, then
+                        // composite's sums and blend.
+                        let RowsScratch {
+                            dilate,
+                            coverage,
+                            acc,
+                        } = s;
+                        coverage.clear();
+                        coverage.resize(ssaa * sw, 0.0);
+                        let mut ink = false;
+                        for (sy, row) in coverage.chunks_mut(sw).enumerate() {
+                            dilate_row(mask, marked, y * ssaa + sy, cover, dilate, |x, c| {
+                                row[x] = c;
+                                ink = true;
+                            });
+                        }
+                        if ink {
+                            sum_samples(acc, w, ssaa, |sy| &coverage[sy * sw..][..w * ssaa]);
+                            blend_row([r, g, b], acc, inv, color);
+                        }
+                    }
+                });
+            });
     }
 }
 
@@ -832,6 +1015,235 @@ mod tests {
                             "{density} {width} {aa} {i}"
                         );
                     }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn labels_read_the_material_of_each_id_and_minus_one_past_the_table() {
+        // Materials with holes (u32::MAX: no pass writes the id), ids past
+        // the table and MISS, at lengths around the 8-lane packets.
+        let id_material: Vec<u32> = (0..37u32)
+            .map(|i| if i % 5 == 3 { u32::MAX } else { i % 4 })
+            .collect();
+        for n in [0usize, 1, 7, 8, 9, 23, 64, 65] {
+            let ids: Vec<u32> = (0..n as u32)
+                .map(|i| match i % 6 {
+                    0 => MISS,
+                    1 => 37 + i, // past the table
+                    _ => (i * 7) % 37,
+                })
+                .collect();
+            let got = material_labels(&ids, &id_material);
+            for (k, &id) in ids.iter().enumerate() {
+                let want = match id_material.get(id as usize) {
+                    Some(&m) if m != u32::MAX => m as f32,
+                    _ => -1.0,
+                };
+                assert_eq!(got[k], want, "n {n} id {id}");
+            }
+        }
+    }
+
+    /// A frame of noisy patches: depth steps and misses, normals, ids whose
+    /// materials change across patches (some with none), and colour.
+    fn patchy_frame(w: usize, h: usize) -> (FrameBuffers, Vec<u32>) {
+        let hash = |i: usize, k: u32| {
+            let v = (i as u32)
+                .wrapping_mul(2654435761)
+                .wrapping_add(k.wrapping_mul(97));
+            (v ^ (v >> 13)).wrapping_mul(1274126177) >> 8
+        };
+        let unit = |i: usize, k: u32| hash(i, k) as f32 / (1u32 << 24) as f32;
+        // Patches of 16 × 12 samples share their values.
+        let patch = |i: usize| (i % w) / 16 + 1000 * ((i / w) / 12);
+        let n = w * h;
+        let plane = |k: u32| -> Vec<f32> { (0..n).map(|i| unit(patch(i), k)).collect() };
+        let depth = (0..n)
+            .map(|i| match hash(patch(i), 1) % 7 {
+                0 => f32::INFINITY,
+                1 => 2.0,
+                _ => 1.0 + 4.0 * unit(patch(i), 2),
+            })
+            .collect();
+        let ids: Vec<u32> = (0..n)
+            .map(|i| match hash(patch(i), 3) % 9 {
+                0 => MISS,
+                k => k * 3 + (i % 3) as u32, // three ids a patch, one material
+            })
+            .collect();
+        let id_material = (0..40u32)
+            .map(|id| if id % 11 == 7 { u32::MAX } else { id / 3 % 4 })
+            .collect();
+        let rgb = |k: u32| Planes3 {
+            r: plane(k),
+            g: plane(k + 1),
+            b: plane(k + 2),
+        };
+        let frame = FrameBuffers {
+            width: w as u32,
+            height: h as u32,
+            color: rgb(10),
+            depth,
+            normal: rgb(20),
+            id: ids,
+        };
+        (frame, id_material)
+    }
+
+    #[test]
+    fn the_stage_equals_its_parts_composited_bit_for_bit_for_any_thread_count() {
+        // The stage (bands with their own 1/w, labels and luminance; the
+        // dilation per row straight into a sparse blend; buffers kept from
+        // call to call) against the whole-frame parts: detect_edges on
+        // whole-frame inputs, dilate, composite.
+        let sources = vec![
+            (Source::Depth, 0.1),
+            (Source::Normal, 0.6),
+            (Source::Id, 0.3),
+            (Source::Color, 0.45),
+        ];
+        let pools: Vec<rayon::ThreadPool> = [1, 3]
+            .iter()
+            .map(|&n| {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(n)
+                    .build()
+                    .unwrap()
+            })
+            .collect();
+        for (w, h, ssaa) in [(131, 70, 1), (130, 72, 2), (99, 69, 3)] {
+            let (frame, id_material) = patchy_frame(w, h);
+            let (iw, ih) = (w / ssaa, h / ssaa);
+            let image = |k: usize| -> Vec<f32> {
+                (0..iw * ih)
+                    .map(|i| ((i * 37 + k) % 101) as f32 / 100.0)
+                    .collect()
+            };
+            let img0 = HdrImage {
+                width: iw as u32,
+                height: ih as u32,
+                rgb: Planes3 {
+                    r: image(1),
+                    g: image(2),
+                    b: image(3),
+                },
+            };
+            let inv = inverse_depth(&frame.depth);
+            let mat = material_labels(&frame.id, &id_material);
+            let c = &frame.color;
+            let clamp = |v: f32| if v > 0.0 { v.min(1.0) } else { 0.0 };
+            let luma: Vec<f32> = (0..w * h)
+                .map(|i| 0.2126 * clamp(c.r[i]) + 0.7152 * clamp(c.g[i]) + 0.0722 * clamp(c.b[i]))
+                .collect();
+            let input = EdgeInput {
+                width: w,
+                height: h,
+                inv_depth: &inv,
+                normal: [&frame.normal.r, &frame.normal.g, &frame.normal.b],
+                material: &mat,
+                luma: &luma,
+            };
+            let selections = [
+                Selection::all(),
+                Selection::materials(&id_material, &[1, 2]),
+            ];
+            for selection in selections {
+                for width in [1.0f32, 2.0, 3.5, 9.0, 40.0] {
+                    for antialias in [true, false] {
+                        let stage = Sobel {
+                            sources: sources.clone(),
+                            width,
+                            color: [0.1, 0.2, 0.9],
+                            antialias,
+                            id_material: id_material.clone(),
+                            selection: selection.clone(),
+                            scratch: Scratch::default(),
+                        };
+                        let keep =
+                            |i: usize| !selection.needs_ids() || selection.contains(frame.id[i]);
+                        let mask = detect_edges(&input, &sources, &keep);
+                        let cov = dilate(&mask, w, h, width * ssaa as f32, antialias);
+                        let mut want = img0.clone();
+                        composite(&mut want, &frame, &cov, stage.color);
+                        // Ink somewhere, and narrow lines leave samples
+                        // without (the blend skips them).
+                        assert!(cov.iter().any(|&c| c > 0.0));
+                        assert!(width * ssaa as f32 > 4.0 || cov.contains(&0.0));
+                        for pool in &pools {
+                            // Twice: the second call reuses the buffers.
+                            for _ in 0..2 {
+                                let mut got = img0.clone();
+                                pool.install(|| stage.apply(&mut got, &frame));
+                                let planes = |i: &HdrImage| {
+                                    [&i.rgb.r, &i.rgb.g, &i.rgb.b]
+                                        .map(|p| p.iter().map(|v| v.to_bits()).collect::<Vec<_>>())
+                                };
+                                assert!(
+                                    planes(&got) == planes(&want),
+                                    "{w}×{h} ssaa {ssaa} width {width} aa {antialias}"
+                                );
+                            }
+                        }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn dilation_across_mask_words_equals_the_distance_transform() {
+        // Rows of several 64-sample words with lone marks just before and
+        // after word boundaries (and at the ends), so that ink reaches into
+        // words holding no mark of their own, and rows with none.
+        let (w, h) = (197, 29);
+        let cols = [0usize, 3, 62, 63, 64, 66, 127, 128, 150, 191, 192, 196];
+        let widths = [0.5f32, 1.0, 2.0, 3.0, 4.5, 8.0, 13.0, 32.0];
+        // One mark every other row, alone in its row; and sparse noise,
+        // whose rows leave the scratch of a task holding distances that
+        // the next row must not read.
+        let lone = |k: usize, i: usize| {
+            let (x, y) = (i % w, i / w);
+            y % 2 == k % 2 && x == cols[(y / 2 + k) % cols.len()]
+        };
+        let noise = |k: usize, i: usize| (i * 7919 + k * 31).is_multiple_of(60 + 40 * (k % 3));
+        let cases = widths
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &width)| [(k, width, false), (k, width, true)]);
+        for (k, width, noisy) in cases {
+            let mask: Vec<bool> = (0..w * h)
+                .map(|i| if noisy { noise(k, i) } else { lone(k, i) })
+                .collect();
+            assert!(mask.contains(&true));
+            let d = distance(&mask, w, h);
+            for aa in [true, false] {
+                let want: Vec<u32> = d
+                    .iter()
+                    .map(|&d| Cover::new(width, aa).at(d).to_bits())
+                    .collect();
+                let got: Vec<u32> = dilate(&mask, w, h, width, aa)
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect();
+                assert!(got == want, "width {width} aa {aa}");
+                // Row by row with one scratch, the rows out of order: each
+                // row must not read what another left in it.
+                let bits = EdgeMask::from_bools(&mask, w, h);
+                let mut marked = Vec::new();
+                bits.rows_marked(&mut marked);
+                let mut s = RowScratch::default();
+                for y in (0..h).map(|k| (k * 11 + 5) % h) {
+                    let mut row = vec![0.0f32; w];
+                    dilate_row(&bits, &marked, y, Cover::new(width, aa), &mut s, |x, c| {
+                        row[x] = c
+                    });
+                    let row: Vec<u32> = row.iter().map(|v| v.to_bits()).collect();
+                    assert!(
+                        row == want[y * w..(y + 1) * w],
+                        "width {width} aa {aa} row {y}"
+                    );
                 }
             }
         }
