@@ -13,10 +13,12 @@
 
 use crate::edges::{chain, visible_pieces, DepthView, EdgeKind, MeshEdges, Polyline};
 use crate::outline::ssaa_of;
+use rayon::prelude::*;
 use specula_raster::post::{srgb_encode, HdrImage, PostStage};
 use specula_raster::{BufferSet, Camera, FrameBuffers};
+use std::sync::Mutex;
+use tiny_skia::{FillRule, Paint, Path, PathBuilder, Pixmap, Stroke, Transform};
 pub use tiny_skia::{LineCap, LineJoin};
-use tiny_skia::{Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 /// How strokes look.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,108 +34,349 @@ pub struct StrokeStyle {
     pub cap: LineCap,
 }
 
-/// The stroke overlay stage.
-#[derive(Clone, Debug)]
+/// The stroke overlay stage. Built once per scene ([`Strokes::new`]): the
+/// edges and the camera are fixed, so which edges are drawn (silhouettes
+/// included) is found once; a frame tests their visibility, chains and
+/// draws them.
 pub struct Strokes {
-    pub edges: MeshEdges,
-    pub camera: Camera,
+    edges: MeshEdges,
+    camera: Camera,
     pub style: StrokeStyle,
+    /// [`MeshEdges::classify`] from the camera's eye.
+    drawn: Vec<(u32, u32, EdgeKind)>,
+    /// Kept from frame to frame (frames run one at a time).
+    canvases: Mutex<Canvases>,
+}
+
+impl std::fmt::Debug for Strokes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Strokes")
+            .field("edges", &self.edges.edge_count())
+            .field("camera", &self.camera)
+            .field("style", &self.style)
+            .field("drawn", &self.drawn.len())
+            .finish()
+    }
 }
 
 impl Strokes {
+    pub fn new(edges: MeshEdges, camera: Camera, style: StrokeStyle) -> Strokes {
+        let drawn = edges.classify(camera.eye);
+        Strokes {
+            edges,
+            camera,
+            style,
+            drawn,
+            canvases: Mutex::new(Canvases::default()),
+        }
+    }
+
+    pub fn edges(&self) -> &MeshEdges {
+        &self.edges
+    }
+
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
     /// The visible polylines of a frame (whose buffers hold depth), in
     /// output pixels of a `ssaa`-times smaller image.
     pub fn polylines(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<Polyline> {
         let view = self.camera.view(frame.width, frame.height);
-        let edges = self.edges.classify(self.camera.eye);
         let depth = DepthView {
             depth: &frame.depth,
             width: frame.width as usize,
             height: frame.height as usize,
             ssaa,
         };
-        let pieces = visible_pieces(&self.edges, &edges, &view, self.camera.near, &depth);
+        let pieces = visible_pieces(&self.edges, &self.drawn, &view, self.camera.near, &depth);
         chain(&pieces)
     }
 }
 
-/// Stroke coverage (alpha in [0, 1]) of `lines` on a `width × height`
-/// image, row-major.
-pub fn draw(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Vec<f32> {
-    match draw_pixmap(lines, style, width, height) {
-        Some(pm) => pm
-            .pixels()
-            .iter()
-            .map(|p| p.alpha() as f32 / 255.0)
-            .collect(),
-        None => vec![0.0; (width * height) as usize],
-    }
-}
-
-/// The strokes drawn white on a transparent pixmap (None if tiny-skia
-/// cannot make one of that size).
-fn draw_pixmap(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Option<Pixmap> {
-    let mut pm = Pixmap::new(width.max(1), height.max(1))?;
-    let mut paint = Paint::default();
-    paint.set_color_rgba8(255, 255, 255, 255);
-    paint.anti_alias = true;
+/// The tiny-skia strokes that draw `line`, in order: the whole polyline,
+/// or with a taper one round-capped segment at a time, each at the width
+/// of its middle's distance (along the line) from the nearer end.
+fn strokes_of(line: &Polyline, style: &StrokeStyle) -> Vec<(Path, Stroke)> {
     let stroke = |w: f32| Stroke {
         width: w,
         line_cap: style.cap,
         line_join: style.join,
         ..Stroke::default()
     };
-    for l in lines {
-        if l.points.len() < 2 {
-            continue;
-        }
-        if style.taper > 0.0 && !l.closed {
-            // Segment by segment with round caps, each at the width of its
-            // middle's distance (along the line) from the nearer end.
-            let seg_len =
-                |a: [f32; 2], b: [f32; 2]| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
-            let total: f32 = l.points.windows(2).map(|w| seg_len(w[0], w[1])).sum();
-            let mut s = 0.0;
-            for w in l.points.windows(2) {
-                let len = seg_len(w[0], w[1]);
-                let mid = s + len * 0.5;
-                s += len;
-                let u = if total > 0.0 {
-                    (mid.min(total - mid) / (total * 0.5)).clamp(0.0, 1.0)
-                } else {
-                    1.0
-                };
-                let wd = style.width * ((1.0 - style.taper) + style.taper * u);
-                let mut pb = PathBuilder::new();
-                pb.move_to(w[0][0], w[0][1]);
-                pb.line_to(w[1][0], w[1][1]);
-                if let (Some(path), true) = (pb.finish(), wd > 0.0) {
-                    let mut st = stroke(wd);
-                    st.line_cap = LineCap::Round;
-                    pm.stroke_path(&path, &paint, &st, Transform::identity(), None);
-                }
+    let mut out = Vec::new();
+    if line.points.len() < 2 {
+        return out;
+    }
+    if style.taper > 0.0 && !line.closed {
+        let seg_len =
+            |a: [f32; 2], b: [f32; 2]| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let total: f32 = line.points.windows(2).map(|w| seg_len(w[0], w[1])).sum();
+        let mut s = 0.0;
+        for w in line.points.windows(2) {
+            let len = seg_len(w[0], w[1]);
+            let mid = s + len * 0.5;
+            s += len;
+            let u = if total > 0.0 {
+                (mid.min(total - mid) / (total * 0.5)).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            let wd = style.width * ((1.0 - style.taper) + style.taper * u);
+            let mut pb = PathBuilder::new();
+            pb.move_to(w[0][0], w[0][1]);
+            pb.line_to(w[1][0], w[1][1]);
+            if let (Some(path), true) = (pb.finish(), wd > 0.0) {
+                let mut st = stroke(wd);
+                st.line_cap = LineCap::Round;
+                out.push((path, st));
             }
-            continue;
         }
-        let mut pb = PathBuilder::new();
-        pb.move_to(l.points[0][0], l.points[0][1]);
-        for p in &l.points[1..] {
-            pb.line_to(p[0], p[1]);
-        }
-        if l.closed {
-            pb.close();
-        }
-        if let Some(path) = pb.finish() {
-            pm.stroke_path(
-                &path,
-                &paint,
-                &stroke(style.width),
-                Transform::identity(),
-                None,
-            );
+        return out;
+    }
+    let mut pb = PathBuilder::new();
+    pb.move_to(line.points[0][0], line.points[0][1]);
+    for p in &line.points[1..] {
+        pb.line_to(p[0], p[1]);
+    }
+    if line.closed {
+        pb.close();
+    }
+    if let Some(path) = pb.finish() {
+        out.push((path, stroke(style.width)));
+    }
+    out
+}
+
+/// Opaque white, anti-aliased: the strokes' alpha is their coverage.
+fn white() -> Paint<'static> {
+    let mut paint = Paint::default();
+    paint.set_color_rgba8(255, 255, 255, 255);
+    paint.anti_alias = true;
+    paint
+}
+
+/// Stroke coverage (alpha in [0, 1]) of `lines` on a `width × height`
+/// image, row-major: every stroke drawn in order on one fresh pixmap with
+/// `Pixmap::stroke_path`. The plain form of what [`Strokes`] draws (the
+/// reference its banded drawing is tested against).
+pub fn draw(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Vec<f32> {
+    let Some(mut pm) = Pixmap::new(width.max(1), height.max(1)) else {
+        return vec![0.0; (width * height) as usize];
+    };
+    let paint = white();
+    for l in lines {
+        for (path, stroke) in strokes_of(l, style) {
+            pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
         }
     }
-    Some(pm)
+    pm.pixels()
+        .iter()
+        .map(|p| p.alpha() as f32 / 255.0)
+        .collect()
+}
+
+/// One tiny-skia draw of the overlay and the pixels it may change.
+struct Draw {
+    shape: Shape,
+    /// [x0, x1) × [y0, y1), within the image, holding every pixel the
+    /// draw can change.
+    rect: [usize; 4],
+    /// Points of the path tiny-skia scans (a cost estimate).
+    points: usize,
+}
+
+enum Shape {
+    /// A stroke wider than 1 px: `Pixmap::stroke_path` turns it into this
+    /// outline path (no transform, so resolution scale 1) and fills it
+    /// with the winding rule; [`draw_bands`] does the same two steps.
+    Outline(Path),
+    /// A stroke of at most 1 px, which tiny-skia draws as a hairline
+    /// (coverage-modulated): drawn with `stroke_path` itself.
+    Hairline(Path, Stroke),
+}
+
+/// The draws of `lines` in drawing order (outlines stroked in parallel,
+/// each on its own), with their pixel rectangles on a `w × h` image;
+/// draws that cannot touch the image are left out.
+fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Draw> {
+    let per_line: Vec<Vec<Draw>> = lines
+        .par_iter()
+        .map(|l| {
+            strokes_of(l, style)
+                .into_iter()
+                .filter_map(|(path, stroke)| {
+                    // tiny-skia's own test (treat_as_hairline with the
+                    // identity transform and anti-aliasing).
+                    let (shape, bounds, margin) = if stroke.width <= 1.0 {
+                        // A hairline reaches ≤ ½ px past its ends (caps)
+                        // and its coverage ≤ 1 px to the side.
+                        let b = path.bounds();
+                        (Shape::Hairline(path, stroke), b, 3.0)
+                    } else {
+                        let outline = path.stroke(&stroke, 1.0)?;
+                        // The filled path's bounds, rounded out, hold
+                        // every pixel its scan converter writes.
+                        let b = outline.bounds();
+                        (Shape::Outline(outline), b, 1.0)
+                    };
+                    let points = match &shape {
+                        Shape::Outline(p) | Shape::Hairline(p, _) => p.len(),
+                    };
+                    let clamp = |v: f32, hi: usize| (v.max(0.0) as usize).min(hi);
+                    let rect = [
+                        clamp((bounds.left() - margin).floor(), w),
+                        clamp((bounds.right() + margin).ceil(), w),
+                        clamp((bounds.top() - margin).floor(), h),
+                        clamp((bounds.bottom() + margin).ceil(), h),
+                    ];
+                    (rect[0] < rect[1] && rect[2] < rect[3]).then_some(Draw {
+                        shape,
+                        rect,
+                        points,
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    per_line.into_iter().flatten().collect()
+}
+
+/// Bands of image rows at most [`draw_bands`] draws in parallel: a canvas
+/// each, so at most this many image-sized pixmaps are kept.
+const MAX_BANDS: usize = 4;
+
+/// Splits rows `0..h` into `k` bands of about equal drawing cost (each
+/// draw's points spread over its rows); returns the k + 1 boundaries.
+fn band_rows(draws: &[Draw], h: usize, k: usize) -> Vec<usize> {
+    let mut cost = vec![0.0f64; h + 1];
+    for d in draws {
+        let [_, _, y0, y1] = d.rect;
+        let c = d.points as f64 / (y1 - y0) as f64;
+        cost[y0] += c;
+        cost[y1] -= c;
+    }
+    let mut rows = vec![0.0f64; h];
+    let mut run = 0.0;
+    for (r, c) in rows.iter_mut().zip(&cost) {
+        run += c;
+        *r = run.max(0.0);
+    }
+    let total: f64 = rows.iter().sum();
+    let mut bounds = vec![0];
+    let mut acc = 0.0;
+    for (y, r) in rows.iter().enumerate() {
+        acc += r;
+        if bounds.len() < k && acc >= total * bounds.len() as f64 / k as f64 {
+            bounds.push(y + 1);
+        }
+    }
+    bounds.resize(k, h);
+    bounds.push(h);
+    bounds
+}
+
+/// The image-sized pixmaps the overlay draws on, kept from frame to frame
+/// and transparent between frames.
+#[derive(Debug, Default)]
+pub struct Canvases {
+    pixmaps: Vec<Pixmap>,
+}
+
+impl Canvases {
+    /// Draws `lines` in `style` over `img`: c = c·(1 − a) + colour·a with
+    /// a the strokes' alpha, the same bytes as blending [`draw`]'s
+    /// coverage (see [`draw_bands`]).
+    pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
+        let draws = draws(lines, style, img.width as usize, img.height as usize);
+        draw_bands(&mut self.pixmaps, &draws, img, style.color);
+    }
+}
+
+/// Draws `draws` and blends them over `img` in `color`.
+///
+/// Rows are split into bands drawn in parallel, each on its own
+/// image-sized canvas: a band draws, in order, every draw whose rectangle
+/// reaches its rows, at the draw's own image coordinates (so tiny-skia
+/// sees the very same paths and clip as on one pixmap), then blends its
+/// own rows. A pixel's alpha is then the same sequence of draws over it as
+/// on one pixmap, whatever the band count: the bytes do not depend on the
+/// thread count. A draw that spans two bands is drawn by both.
+///
+/// The canvases are kept transparent between frames: only the union of
+/// the rectangles drawn is blended and cleared, and no image-sized buffer
+/// is allocated once the canvases exist.
+fn draw_bands(canvases: &mut Vec<Pixmap>, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
+    let (w, h) = (img.width as usize, img.height as usize);
+    if draws.is_empty() || w == 0 || h == 0 {
+        return;
+    }
+    let k = rayon::current_num_threads()
+        .clamp(1, MAX_BANDS)
+        .min(draws.len());
+    canvases.retain(|pm| pm.width() as usize == w && pm.height() as usize == h);
+    while canvases.len() < k {
+        let Some(pm) = Pixmap::new(img.width, img.height) else {
+            return;
+        };
+        canvases.push(pm);
+    }
+    canvases.truncate(k);
+    let rows = band_rows(draws, h, k);
+    // Each band's rows of the three colour planes.
+    let mut bands = Vec::with_capacity(k);
+    let (mut r, mut g, mut b) = (&mut img.rgb.r[..], &mut img.rgb.g[..], &mut img.rgb.b[..]);
+    for (i, pm) in canvases.iter_mut().enumerate() {
+        let n = (rows[i + 1] - rows[i]) * w;
+        let (r0, r1) = std::mem::take(&mut r).split_at_mut(n);
+        let (g0, g1) = std::mem::take(&mut g).split_at_mut(n);
+        let (b0, b1) = std::mem::take(&mut b).split_at_mut(n);
+        (r, g, b) = (r1, g1, b1);
+        bands.push((pm, rows[i], rows[i + 1], [r0, g0, b0]));
+    }
+    let paint = white();
+    bands.into_par_iter().for_each(|(pm, lo, hi, [r, g, b])| {
+        // The union of the rectangles drawn: [x0, x1) × [y0, y1).
+        let mut dirty = [w, 0, h, 0];
+        for d in draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo) {
+            match &d.shape {
+                Shape::Outline(p) => {
+                    pm.fill_path(p, &paint, FillRule::Winding, Transform::identity(), None)
+                }
+                Shape::Hairline(p, s) => pm.stroke_path(p, &paint, s, Transform::identity(), None),
+            }
+            dirty = [
+                dirty[0].min(d.rect[0]),
+                dirty[1].max(d.rect[1]),
+                dirty[2].min(d.rect[2]),
+                dirty[3].max(d.rect[3]),
+            ];
+        }
+        let [x0, x1, y0, y1] = dirty;
+        if x0 >= x1 || y0 >= y1 {
+            return;
+        }
+        let px = pm.pixels();
+        for y in y0.max(lo)..y1.min(hi) {
+            let (src, dst) = (y * w, (y - lo) * w);
+            for x in x0..x1 {
+                // Straight from the alpha bytes (most are 0): the same a
+                // as draw's.
+                let a8 = px[src + x].alpha();
+                if a8 != 0 {
+                    let a = a8 as f32 / 255.0;
+                    let i = dst + x;
+                    r[i] = r[i] * (1.0 - a) + color[0] * a;
+                    g[i] = g[i] * (1.0 - a) + color[1] * a;
+                    b[i] = b[i] * (1.0 - a) + color[2] * a;
+                }
+            }
+        }
+        let data = pm.data_mut();
+        for y in y0..y1 {
+            data[(y * w + x0) * 4..(y * w + x1) * 4].fill(0);
+        }
+    });
 }
 
 impl PostStage for Strokes {
@@ -150,20 +393,14 @@ impl PostStage for Strokes {
 
     fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
         let lines = self.polylines(frame, ssaa_of(img, frame));
-        let Some(pm) = draw_pixmap(&lines, &self.style, img.width, img.height) else {
-            return;
-        };
-        let c = self.style.color;
-        let p = &mut img.rgb;
-        // Straight from the alpha bytes (most are 0): the same a as draw's.
-        for (i, px) in pm.pixels().iter().enumerate() {
-            if px.alpha() != 0 {
-                let a = px.alpha() as f32 / 255.0;
-                p.r[i] = p.r[i] * (1.0 - a) + c[0] * a;
-                p.g[i] = p.g[i] * (1.0 - a) + c[1] * a;
-                p.b[i] = p.b[i] * (1.0 - a) + c[2] * a;
-            }
-        }
+        // A panic mid-draw (none is known) could leave paint on a canvas:
+        // start again from fresh ones.
+        let mut canvases = self.canvases.lock().unwrap_or_else(|e| {
+            let mut c = e.into_inner();
+            *c = Canvases::default();
+            c
+        });
+        canvases.blend(&lines, &self.style, img);
     }
 }
 
