@@ -716,7 +716,31 @@ fn the_banded_stroke_drawing_gives_the_bytes_of_one_pixmap_for_any_thread_count(
             g: (0..n).map(|i| (i % 11) as f32 * 0.05).collect(),
             b: vec![0.5; n],
         };
-        let lines = random_polylines(f as u64 + 1, 60, *w as f32, *h as f32);
+        let mut lines = random_polylines(f as u64 + 1, 60, *w as f32, *h as f32);
+        // With miter-clip joins tiny-skia strokes this open line with a
+        // spike reaching from (148, 68) up to (205, 0), far past w/2 × the
+        // miter limit: a band must find it from the drawn outline.
+        let spike = [
+            [133.54846, 73.255135],
+            [122.72453, 71.96292],
+            [137.09325, 70.19038],
+            [131.85338, 78.02054],
+            [129.19615, 90.21964],
+            [135.63847, 90.2817],
+            [144.09708, 79.71104],
+            [138.30843, 87.255394],
+            [145.40562, 94.43113],
+            [150.02773, 103.904434],
+            [139.26172, 94.97095],
+            [141.4594, 80.00783],
+            [147.84268, 82.69324],
+            [148.95003, 68.15663],
+        ];
+        lines.push(specula_npr::edges::Polyline {
+            kind: EdgeKind::Silhouette,
+            points: spike.to_vec(),
+            closed: false,
+        });
         // The reference: every stroke on one fresh pixmap, the coverage
         // blended pixel by pixel.
         let cov = draw(&lines, style, *w, *h);

@@ -22,8 +22,8 @@ fn main() {
         std::process::exit(2);
     };
     let n: usize = n;
-    let scene = specula::scene::load_scene(std::path::Path::new(path))
-        .unwrap_or_else(|e| panic!("{e}"));
+    let scene =
+        specula::scene::load_scene(std::path::Path::new(path)).unwrap_or_else(|e| panic!("{e}"));
     let stage = scene
         .lines
         .strokes
@@ -42,7 +42,10 @@ fn main() {
         )
         .rgb,
     };
-    for t in args[2..].iter().map(|t| t.parse::<usize>().expect("threads")) {
+    for t in args[2..]
+        .iter()
+        .map(|t| t.parse::<usize>().expect("threads"))
+    {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(t)
             .build()

@@ -178,50 +178,47 @@ pub fn draw(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) ->
 
 /// One tiny-skia draw of the overlay and the pixels it may change.
 struct Draw {
-    shape: Shape,
-    /// [x0, x1) × [y0, y1), within the image, holding every pixel the
-    /// draw can change.
+    /// The stroke's centre line.
+    centre: Path,
+    stroke: Stroke,
+    /// For a stroke wider than 1 px, the outline path `Pixmap::stroke_path`
+    /// turns it into (no transform, so resolution scale 1) and fills with
+    /// the winding rule; [`Canvas::draw`] does the same two steps. None for
+    /// a stroke of at most 1 px, which tiny-skia draws as a
+    /// (coverage-modulated) hairline: drawn with `stroke_path` itself.
+    outline: Option<Path>,
+    /// [x0, x1) × [y0, y1) within the image, holding every pixel the draw
+    /// can change.
     rect: [usize; 4],
-    /// Points of the path tiny-skia scans (a cost estimate).
-    points: usize,
-}
-
-enum Shape {
-    /// A stroke wider than 1 px: `Pixmap::stroke_path` turns it into this
-    /// outline path (no transform, so resolution scale 1) and fills it
-    /// with the winding rule; [`draw_bands`] does the same two steps.
-    Outline(Path),
-    /// A stroke of at most 1 px, which tiny-skia draws as a hairline
-    /// (coverage-modulated): drawn with `stroke_path` itself.
-    Hairline(Path, Stroke),
+    /// A drawing cost estimate: the points tiny-skia scans and the rows.
+    cost: f64,
 }
 
 /// The draws of `lines` in drawing order (outlines stroked in parallel,
-/// each on its own), with their pixel rectangles on a `w × h` image;
-/// draws that cannot touch the image are left out.
+/// each on its own) on a `w × h` image; draws that cannot touch the image
+/// are left out.
 fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Draw> {
     let per_line: Vec<Vec<Draw>> = lines
         .par_iter()
         .map(|l| {
             strokes_of(l, style)
                 .into_iter()
-                .filter_map(|(path, stroke)| {
+                .filter_map(|(centre, stroke)| {
                     // tiny-skia's own test (treat_as_hairline with the
                     // identity transform and anti-aliasing).
-                    let (shape, bounds, margin) = if stroke.width <= 1.0 {
-                        // A hairline reaches ≤ ½ px past its ends (caps)
-                        // and its coverage ≤ 1 px to the side.
-                        let b = path.bounds();
-                        (Shape::Hairline(path, stroke), b, 3.0)
+                    let (outline, bounds, margin) = if stroke.width <= 1.0 {
+                        // A hairline's coverage stays within 1 px of the
+                        // line, caps (½ px) included.
+                        (None, centre.bounds(), 3.0)
                     } else {
-                        let outline = path.stroke(&stroke, 1.0)?;
-                        // The filled path's bounds, rounded out, hold
-                        // every pixel its scan converter writes.
+                        // The scan converter writes only within the filled
+                        // path's bounds, rounded out. (Not the stroke's
+                        // theoretical reach from the centre line: with
+                        // miter-clip joins tiny-skia can draw spikes far
+                        // beyond it.)
+                        let outline = centre.stroke(&stroke, 1.0)?;
                         let b = outline.bounds();
-                        (Shape::Outline(outline), b, 1.0)
-                    };
-                    let points = match &shape {
-                        Shape::Outline(p) | Shape::Hairline(p, _) => p.len(),
+                        (Some(outline), b, 1.0)
                     };
                     let clamp = |v: f32, hi: usize| (v.max(0.0) as usize).min(hi);
                     let rect = [
@@ -230,10 +227,13 @@ fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Dra
                         clamp((bounds.top() - margin).floor(), h),
                         clamp((bounds.bottom() + margin).ceil(), h),
                     ];
+                    let points = outline.as_ref().unwrap_or(&centre).len();
                     (rect[0] < rect[1] && rect[2] < rect[3]).then_some(Draw {
-                        shape,
+                        centre,
+                        stroke,
+                        outline,
                         rect,
-                        points,
+                        cost: (points + rect[3] - rect[2]) as f64,
                     })
                 })
                 .collect()
@@ -246,41 +246,158 @@ fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Dra
 /// each, so at most this many image-sized pixmaps are kept.
 const MAX_BANDS: usize = 4;
 
-/// Splits rows `0..h` into `k` bands of about equal drawing cost (each
-/// draw's points spread over its rows); returns the k + 1 boundaries.
+/// Splits rows `0..h` into at most `k` bands (returns the boundaries,
+/// from 0 to h) so that the largest band cost is least, a band's cost
+/// being that of every draw reaching its rows (a draw over two bands is
+/// drawn by both).
 fn band_rows(draws: &[Draw], h: usize, k: usize) -> Vec<usize> {
-    let mut cost = vec![0.0f64; h + 1];
+    // starts[y]: cost of the draws beginning above row y; ends[y]: of those
+    // ending at or above it. A band [lo, hi) costs starts[hi] − ends[lo].
+    let (mut starts, mut ends) = (vec![0.0f64; h + 1], vec![0.0f64; h + 1]);
     for d in draws {
-        let [_, _, y0, y1] = d.rect;
-        let c = d.points as f64 / (y1 - y0) as f64;
-        cost[y0] += c;
-        cost[y1] -= c;
+        starts[d.rect[2] + 1] += d.cost;
+        ends[d.rect[3]] += d.cost;
     }
-    let mut rows = vec![0.0f64; h];
-    let mut run = 0.0;
-    for (r, c) in rows.iter_mut().zip(&cost) {
-        run += c;
-        *r = run.max(0.0);
+    for y in 1..=h {
+        starts[y] += starts[y - 1];
+        ends[y] += ends[y - 1];
     }
-    let total: f64 = rows.iter().sum();
-    let mut bounds = vec![0];
-    let mut acc = 0.0;
-    for (y, r) in rows.iter().enumerate() {
-        acc += r;
-        if bounds.len() < k && acc >= total * bounds.len() as f64 / k as f64 {
-            bounds.push(y + 1);
+    // Greedy bands of cost at most c: each as tall as fits (at least a
+    // row); bisect on c for the least that needs at most k bands.
+    let split = |c: f64| {
+        let mut bounds = vec![0];
+        let mut lo = 0;
+        while lo < h {
+            let fits = starts[lo + 1..=h].partition_point(|s| s - ends[lo] <= c);
+            lo += fits.max(1);
+            bounds.push(lo);
+        }
+        bounds
+    };
+    let (mut lo, mut hi) = (0.0, starts[h]);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if split(mid).len() <= k + 1 {
+            hi = mid;
+        } else {
+            lo = mid;
         }
     }
-    bounds.resize(k, h);
-    bounds.push(h);
-    bounds
+    split(hi)
 }
 
-/// The image-sized pixmaps the overlay draws on, kept from frame to frame
-/// and transparent between frames.
+/// An image-sized pixmap the overlay draws on, transparent between frames,
+/// and which of its 8-pixel row chunks a frame's draws may have touched
+/// (their rectangles: the union of the draws' rectangles would hold the
+/// empty space between objects too).
+#[derive(Debug)]
+struct Canvas {
+    pixmap: Pixmap,
+    /// One bit per 8-pixel chunk of a row, `words` u64 a row.
+    touched: Vec<u64>,
+    words: usize,
+    /// Rows that may hold touched chunks.
+    rows: [usize; 2],
+}
+
+impl Canvas {
+    fn new(w: u32, h: u32) -> Option<Canvas> {
+        let words = (w as usize).div_ceil(8).div_ceil(64);
+        Some(Canvas {
+            pixmap: Pixmap::new(w, h)?,
+            touched: vec![0; words * h as usize],
+            words,
+            rows: [h as usize, 0],
+        })
+    }
+
+    /// Draws `d` and marks the chunks of its rectangle.
+    fn draw(&mut self, d: &Draw, paint: &Paint) {
+        match &d.outline {
+            Some(p) => {
+                self.pixmap
+                    .fill_path(p, paint, FillRule::Winding, Transform::identity(), None)
+            }
+            None => {
+                self.pixmap
+                    .stroke_path(&d.centre, paint, &d.stroke, Transform::identity(), None)
+            }
+        }
+        let [x0, x1, y0, y1] = d.rect;
+        self.rows = [self.rows[0].min(y0), self.rows[1].max(y1)];
+        for y in y0..y1 {
+            let row = &mut self.touched[y * self.words..][..self.words];
+            for c in x0 / 8..x1.div_ceil(8) {
+                row[c / 64] |= 1 << (c % 64);
+            }
+        }
+    }
+
+    /// The touched pixels of row `y` as ranges, left to right: runs of
+    /// touched chunks.
+    fn spans(&self, y: usize) -> Vec<std::ops::Range<usize>> {
+        let w = self.pixmap.width() as usize;
+        let row = &self.touched[y * self.words..][..self.words];
+        let mut out: Vec<std::ops::Range<usize>> = Vec::new();
+        for (k, &word) in row.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let c0 = bits.trailing_zeros() as usize;
+                let len = (bits >> c0).trailing_ones() as usize;
+                bits &= !(u64::MAX >> (64 - len) << c0);
+                let (x0, x1) = ((k * 64 + c0) * 8, ((k * 64 + c0 + len) * 8).min(w));
+                match out.last_mut() {
+                    Some(r) if r.end == x0 => r.end = x1,
+                    _ => out.push(x0..x1),
+                }
+            }
+        }
+        out
+    }
+
+    /// Back to transparent, marks cleared.
+    fn clear(&mut self) {
+        let w = self.pixmap.width() as usize;
+        for y in self.rows[0]..self.rows[1] {
+            for r in self.spans(y) {
+                self.pixmap.data_mut()[(y * w + r.start) * 4..(y * w + r.end) * 4].fill(0);
+            }
+            self.touched[y * self.words..][..self.words].fill(0);
+        }
+        self.rows = [self.pixmap.height() as usize, 0];
+    }
+}
+
+/// c = c·(1 − a) + colour·a over one span of pixels, a from the alpha
+/// bytes of `rgba` (straight: the same a as [`draw`]'s), skipping the
+/// 8-pixel groups with no coverage.
+fn blend_span(rgba: &[u8], r: &mut [f32], g: &mut [f32], b: &mut [f32], color: [f32; 3]) {
+    let groups = rgba
+        .chunks(32)
+        .zip(r.chunks_mut(8))
+        .zip(g.chunks_mut(8))
+        .zip(b.chunks_mut(8));
+    for (((px, r), g), b) in groups {
+        // A transparent premultiplied pixel is four zero bytes.
+        if px.iter().fold(0, |acc, &byte| acc | byte) == 0 {
+            continue;
+        }
+        for (((p, r), g), b) in px.chunks_exact(4).zip(r).zip(g).zip(b) {
+            if p[3] != 0 {
+                let a = p[3] as f32 / 255.0;
+                *r = *r * (1.0 - a) + color[0] * a;
+                *g = *g * (1.0 - a) + color[1] * a;
+                *b = *b * (1.0 - a) + color[2] * a;
+            }
+        }
+    }
+}
+
+/// The image-sized canvases the overlay draws on, kept from frame to
+/// frame and transparent between frames.
 #[derive(Debug, Default)]
 pub struct Canvases {
-    pixmaps: Vec<Pixmap>,
+    canvases: Vec<Canvas>,
 }
 
 impl Canvases {
@@ -289,94 +406,73 @@ impl Canvases {
     /// coverage (see [`draw_bands`]).
     pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
         let draws = draws(lines, style, img.width as usize, img.height as usize);
-        draw_bands(&mut self.pixmaps, &draws, img, style.color);
+        draw_bands(&mut self.canvases, &draws, img, style.color);
     }
 }
 
 /// Draws `draws` and blends them over `img` in `color`.
 ///
 /// Rows are split into bands drawn in parallel, each on its own
-/// image-sized canvas: a band draws, in order, every draw whose rectangle
-/// reaches its rows, at the draw's own image coordinates (so tiny-skia
-/// sees the very same paths and clip as on one pixmap), then blends its
-/// own rows. A pixel's alpha is then the same sequence of draws over it as
-/// on one pixmap, whatever the band count: the bytes do not depend on the
-/// thread count. A draw that spans two bands is drawn by both.
+/// image-sized canvas: a band draws, in order, every draw that reaches its
+/// rows, at the draw's own image coordinates (so tiny-skia sees the very
+/// same paths and clip as on one pixmap), then blends its own rows. A
+/// pixel's alpha is then the same sequence of draws over it as on one
+/// pixmap, whatever the bands: the bytes do not depend on the thread
+/// count. A draw that spans two bands is drawn by both; the bands are cut
+/// where that costs least ([`band_rows`]).
 ///
-/// The canvases are kept transparent between frames: only the union of
-/// the rectangles drawn is blended and cleared, and no image-sized buffer
-/// is allocated once the canvases exist.
-fn draw_bands(canvases: &mut Vec<Pixmap>, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
+/// The canvases are kept transparent between frames: a band blends and
+/// clears only the 8-pixel row chunks of its draws' rectangles, and no
+/// image-sized buffer is allocated once the canvases exist.
+fn draw_bands(canvases: &mut Vec<Canvas>, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
     let (w, h) = (img.width as usize, img.height as usize);
     if draws.is_empty() || w == 0 || h == 0 {
         return;
     }
-    let k = rayon::current_num_threads()
-        .clamp(1, MAX_BANDS)
-        .min(draws.len());
-    canvases.retain(|pm| pm.width() as usize == w && pm.height() as usize == h);
+    let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
+    let rows = band_rows(draws, h, k);
+    let k = rows.len() - 1;
+    canvases.retain(|c| c.pixmap.width() as usize == w && c.pixmap.height() as usize == h);
     while canvases.len() < k {
-        let Some(pm) = Pixmap::new(img.width, img.height) else {
+        let Some(c) = Canvas::new(img.width, img.height) else {
             return;
         };
-        canvases.push(pm);
+        canvases.push(c);
     }
     canvases.truncate(k);
-    let rows = band_rows(draws, h, k);
     // Each band's rows of the three colour planes.
     let mut bands = Vec::with_capacity(k);
     let (mut r, mut g, mut b) = (&mut img.rgb.r[..], &mut img.rgb.g[..], &mut img.rgb.b[..]);
-    for (i, pm) in canvases.iter_mut().enumerate() {
+    for (i, canvas) in canvases.iter_mut().enumerate() {
         let n = (rows[i + 1] - rows[i]) * w;
         let (r0, r1) = std::mem::take(&mut r).split_at_mut(n);
         let (g0, g1) = std::mem::take(&mut g).split_at_mut(n);
         let (b0, b1) = std::mem::take(&mut b).split_at_mut(n);
         (r, g, b) = (r1, g1, b1);
-        bands.push((pm, rows[i], rows[i + 1], [r0, g0, b0]));
+        bands.push((canvas, rows[i], rows[i + 1], [r0, g0, b0]));
     }
     let paint = white();
-    bands.into_par_iter().for_each(|(pm, lo, hi, [r, g, b])| {
-        // The union of the rectangles drawn: [x0, x1) × [y0, y1).
-        let mut dirty = [w, 0, h, 0];
-        for d in draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo) {
-            match &d.shape {
-                Shape::Outline(p) => {
-                    pm.fill_path(p, &paint, FillRule::Winding, Transform::identity(), None)
-                }
-                Shape::Hairline(p, s) => pm.stroke_path(p, &paint, s, Transform::identity(), None),
+    bands
+        .into_par_iter()
+        .for_each(|(canvas, lo, hi, [r, g, b])| {
+            for d in draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo) {
+                canvas.draw(d, &paint);
             }
-            dirty = [
-                dirty[0].min(d.rect[0]),
-                dirty[1].max(d.rect[1]),
-                dirty[2].min(d.rect[2]),
-                dirty[3].max(d.rect[3]),
-            ];
-        }
-        let [x0, x1, y0, y1] = dirty;
-        if x0 >= x1 || y0 >= y1 {
-            return;
-        }
-        let px = pm.pixels();
-        for y in y0.max(lo)..y1.min(hi) {
-            let (src, dst) = (y * w, (y - lo) * w);
-            for x in x0..x1 {
-                // Straight from the alpha bytes (most are 0): the same a
-                // as draw's.
-                let a8 = px[src + x].alpha();
-                if a8 != 0 {
-                    let a = a8 as f32 / 255.0;
-                    let i = dst + x;
-                    r[i] = r[i] * (1.0 - a) + color[0] * a;
-                    g[i] = g[i] * (1.0 - a) + color[1] * a;
-                    b[i] = b[i] * (1.0 - a) + color[2] * a;
+            let data = canvas.pixmap.data();
+            for y in canvas.rows[0].max(lo)..canvas.rows[1].min(hi) {
+                let row = (y - lo) * w;
+                for x in canvas.spans(y) {
+                    blend_span(
+                        &data[(y * w + x.start) * 4..(y * w + x.end) * 4],
+                        &mut r[row + x.start..row + x.end],
+                        &mut g[row + x.start..row + x.end],
+                        &mut b[row + x.start..row + x.end],
+                        color,
+                    );
                 }
             }
-        }
-        let data = pm.data_mut();
-        for y in y0..y1 {
-            data[(y * w + x0) * 4..(y * w + x1) * 4].fill(0);
-        }
-    });
+            canvas.clear();
+        });
 }
 
 impl PostStage for Strokes {
