@@ -511,11 +511,11 @@ pub fn build(
                 EdgeKindDesc::Material => EdgeKind::Material,
             })
             .collect();
-        let stage = Arc::new(specula_npr::overlay::Strokes {
-            edges: MeshEdges::from_scene(data, &kinds, st.crease_angle),
-            camera: data.camera.clone(),
-            style: st.style(),
-        });
+        let stage = Arc::new(specula_npr::overlay::Strokes::new(
+            MeshEdges::from_scene(data, &kinds, st.crease_angle),
+            data.camera.clone(),
+            st.style(),
+        ));
         out.post.push(stage.clone());
         out.strokes = Some(stage);
     }

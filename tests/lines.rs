@@ -689,6 +689,147 @@ fn uv_sphere_silhouette_is_one_closed_polyline_and_the_svg_matches_the_png() {
     }
 }
 
+/// Random polylines over a `w × h` image (some reaching past its edges),
+/// from a xorshift64* generator seeded with `seed`.
+fn random_polylines(seed: u64, n: usize, w: f32, h: f32) -> Vec<specula_npr::edges::Polyline> {
+    let mut state = seed.max(1);
+    let mut next = move || {
+        state ^= state >> 12;
+        state ^= state << 25;
+        state ^= state >> 27;
+        (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+    };
+    (0..n)
+        .map(|_| {
+            let mut p = [next() * (w + 40.0) - 20.0, next() * (h + 40.0) - 20.0];
+            let len = 2 + (next() * 30.0) as usize;
+            let points = (0..len)
+                .map(|_| {
+                    p = [p[0] + next() * 30.0 - 15.0, p[1] + next() * 30.0 - 15.0];
+                    p
+                })
+                .collect();
+            specula_npr::edges::Polyline {
+                kind: EdgeKind::Silhouette,
+                points,
+                closed: next() < 0.3,
+            }
+        })
+        .collect()
+}
+
+#[test]
+fn the_banded_stroke_drawing_gives_the_bytes_of_one_pixmap_for_any_thread_count() {
+    use specula_npr::overlay::{draw, Canvases, LineCap, LineJoin, StrokeStyle};
+    use specula_raster::post::HdrImage;
+    use specula_raster::Planes3;
+    // Frames in sequence on the same canvases (which must come back
+    // transparent), in several styles: plain, tapered and wide with
+    // miters, hairlines (≤ 1 px, which tiny-skia draws another way), and
+    // an image of another size.
+    let style = |width, taper, join, cap| StrokeStyle {
+        width,
+        color: [0.1, 0.7, 0.3],
+        taper,
+        join,
+        cap,
+    };
+    let frames = [
+        (
+            320u32,
+            180u32,
+            style(1.5, 0.0, LineJoin::Round, LineCap::Round),
+        ),
+        (320, 180, style(4.0, 0.6, LineJoin::Miter, LineCap::Butt)),
+        (320, 180, style(0.8, 0.0, LineJoin::Bevel, LineCap::Square)),
+        (
+            211,
+            97,
+            style(2.5, 0.0, LineJoin::MiterClip, LineCap::Square),
+        ),
+        (320, 180, style(1.5, 1.0, LineJoin::Round, LineCap::Round)),
+    ];
+    let mut canvases: Vec<(usize, Canvases)> = [1, 2, 3, 5]
+        .into_iter()
+        .map(|t| (t, Canvases::default()))
+        .collect();
+    for (f, (w, h, style)) in frames.iter().enumerate() {
+        let n = (*w * *h) as usize;
+        let base = Planes3 {
+            r: (0..n).map(|i| (i % 7) as f32 * 0.1).collect(),
+            g: (0..n).map(|i| (i % 11) as f32 * 0.05).collect(),
+            b: vec![0.5; n],
+        };
+        let mut lines = random_polylines(f as u64 + 1, 60, *w as f32, *h as f32);
+        // With miter-clip joins tiny-skia strokes this open line with a
+        // spike reaching from (148, 68) up to (205, 0), far past w/2 × the
+        // miter limit: a band must find it from the drawn outline.
+        let spike = [
+            [133.54846, 73.255135],
+            [122.72453, 71.96292],
+            [137.09325, 70.19038],
+            [131.85338, 78.02054],
+            [129.19615, 90.21964],
+            [135.63847, 90.2817],
+            [144.09708, 79.71104],
+            [138.30843, 87.255394],
+            [145.40562, 94.43113],
+            [150.02773, 103.904434],
+            [139.26172, 94.97095],
+            [141.4594, 80.00783],
+            [147.84268, 82.69324],
+            [148.95003, 68.15663],
+        ];
+        lines.push(specula_npr::edges::Polyline {
+            kind: EdgeKind::Silhouette,
+            points: spike.to_vec(),
+            closed: false,
+        });
+        // The reference: every stroke on one fresh pixmap, the coverage
+        // blended pixel by pixel.
+        let cov = draw(&lines, style, *w, *h);
+        let mut reference = base.clone();
+        let c = style.color;
+        for (i, &a) in cov.iter().enumerate() {
+            if a > 0.0 {
+                reference.r[i] = reference.r[i] * (1.0 - a) + c[0] * a;
+                reference.g[i] = reference.g[i] * (1.0 - a) + c[1] * a;
+                reference.b[i] = reference.b[i] * (1.0 - a) + c[2] * a;
+            }
+        }
+        assert!(
+            cov.iter().filter(|&&a| a > 0.0).count() > n / 20,
+            "frame {f}: few strokes"
+        );
+        for (threads, cv) in canvases.iter_mut() {
+            let mut img = HdrImage {
+                width: *w,
+                height: *h,
+                rgb: base.clone(),
+            };
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(*threads)
+                .build()
+                .unwrap();
+            pool.install(|| cv.blend(&lines, style, &mut img));
+            for (name, got, want) in [
+                ("r", &img.rgb.r, &reference.r),
+                ("g", &img.rgb.g, &reference.g),
+                ("b", &img.rgb.b, &reference.b),
+            ] {
+                let bad = got
+                    .iter()
+                    .zip(want.iter())
+                    .position(|(a, b)| a.to_bits() != b.to_bits());
+                assert!(
+                    bad.is_none(),
+                    "frame {f}, {threads} threads: {name} differs at pixel {bad:?}"
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn a_partly_hidden_silhouette_is_one_polyline_per_visible_run() {
     // A sphere whose outline a box hides on the right and a thin bar

@@ -4,9 +4,13 @@
 //!   with the extrusion outline pass (back faces pushed 2 px);
 //! - `lines/sobel`: the Sobel outline stage (depth, normal, id; edge
 //!   detection, distance-transform dilation, blend) on the frame buffers;
-//! - `lines/strokes`: silhouette + crease + boundary extraction for the
-//!   view, visibility against the depth buffer, chaining and tiny-skia
-//!   drawing; `lines/strokes_topology` the once-per-scene edge table.
+//! - `lines/strokes`: the stroke overlay stage of a steady frame
+//!   (silhouette + crease + boundary edges of the view, found once per
+//!   scene; per frame their visibility against the depth buffer, chaining,
+//!   tiny-skia drawing in row bands and the blend);
+//!   `lines/strokes_one_pixmap` the same lines drawn the plain way (one
+//!   fresh pixmap, a coverage image); `lines/strokes_topology` the
+//!   once-per-scene edge table.
 //!
 //! - `lines/frame`: the benchmark frame itself (render + post, as
 //!   `frame/full` without the PNG encode), in the same run, so each pass
@@ -103,18 +107,28 @@ fn benches(c: &mut Criterion) {
     g.bench_function("strokes_topology", |b| {
         b.iter(|| MeshEdges::from_scene(&plain, &kinds, 60.0))
     });
-    let strokes = Strokes {
-        edges: MeshEdges::from_scene(&plain, &kinds, 60.0),
-        camera: plain.camera.clone(),
-        style: StrokeStyle {
+    let strokes = Strokes::new(
+        MeshEdges::from_scene(&plain, &kinds, 60.0),
+        plain.camera.clone(),
+        StrokeStyle {
             width: 1.5,
             color: [0.0; 3],
             taper: 0.0,
             join: LineJoin::Round,
             cap: LineCap::Round,
         },
-    };
+    );
+    // The stage as a frame runs it: one image kept across iterations (the
+    // strokes blend over it again; the cost does not depend on its values)
+    // and the stage's canvases kept, as from frame to frame.
+    let mut im = img.clone();
     g.bench_function("strokes", |b| {
+        b.iter(|| p.install(|| strokes.apply(&mut im, &frame.buffers)))
+    });
+    // Before the banded drawing: the same polylines drawn on one fresh
+    // pixmap, turned into a coverage image (what `lines/strokes` measured
+    // until 2026-12-01's second session).
+    g.bench_function("strokes_one_pixmap", |b| {
         b.iter(|| {
             p.install(|| {
                 let lines = strokes.polylines(&frame.buffers, 1);

@@ -276,11 +276,12 @@ impl DepthView<'_> {
             return false;
         }
         let (x, y, r) = (sx as usize, sy as usize, self.ssaa.max(1));
+        let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(self.width));
+        // Row by row as slices (the order of a max does not change it).
         let mut dmax = 0.0f32;
         for yy in y.saturating_sub(r)..(y + r + 1).min(self.height) {
-            for xx in x.saturating_sub(r)..(x + r + 1).min(self.width) {
-                dmax = dmax.max(self.depth[yy * self.width + xx]);
-            }
+            let row = &self.depth[yy * self.width..][x0..x1];
+            dmax = row.iter().fold(dmax, |m, &d| m.max(d));
         }
         w <= dmax * (1.0 + DEPTH_BIAS)
     }
@@ -294,79 +295,92 @@ pub fn visible_pieces(
     near: f32,
     depth: &DepthView,
 ) -> Vec<Piece> {
-    let m = view.view_proj;
-    let (sw, sh) = (depth.width as f32, depth.height as f32);
-    let inv_ss = 1.0 / depth.ssaa as f32;
-    let pieces: Vec<Vec<Piece>> = edges
+    // One output vector per parallel chunk of edges, not one per edge;
+    // joined in edge order.
+    let chunks: Vec<Vec<Piece>> = edges
         .par_iter()
         .with_min_len(256)
-        .map(|&(a, b, kind)| {
-            let mut out = Vec::new();
-            let ca = m * Vec4::from((mesh.points[a as usize], 1.0));
-            let cb = m * Vec4::from((mesh.points[b as usize], 1.0));
-            // Keep the part in front of the near plane (clip space is
-            // linear along the edge).
-            let (mut t0, mut t1) = (0.0f32, 1.0f32);
-            if ca.w < near && cb.w < near {
-                return out;
-            }
-            if ca.w < near {
-                t0 = (near - ca.w) / (cb.w - ca.w);
-            } else if cb.w < near {
-                t1 = (near - ca.w) / (cb.w - ca.w);
-            }
-            let at = |t: f32| {
-                let c = ca + (cb - ca) * t;
-                let (sx, sy) = ((c.x / c.w * 0.5 + 0.5) * sw, (0.5 - c.y / c.w * 0.5) * sh);
-                (sx, sy, c.w)
-            };
-            let (p0, p1) = (at(t0), at(t1));
-            let len = ((p1.0 - p0.0).powi(2) + (p1.1 - p0.1).powi(2)).sqrt();
-            if !len.is_finite() {
-                return out;
-            }
-            // One test per sample along the edge; edges far off screen are
-            // capped (their points outside the image are hidden anyway).
-            let n = (len.ceil() as usize).clamp(1, 4 * (depth.width + depth.height)) + 1;
-            let mut run: Option<(usize, (f32, f32))> = None;
-            let mut close = |start: (usize, (f32, f32)), end: (usize, (f32, f32))| {
-                out.push(Piece {
-                    kind,
-                    a: [start.1 .0 * inv_ss, start.1 .1 * inv_ss],
-                    b: [end.1 .0 * inv_ss, end.1 .1 * inv_ss],
-                    ends: [
-                        (t0 == 0.0 && start.0 == 0).then_some(a),
-                        (t1 == 1.0 && end.0 == n - 1).then_some(b),
-                    ],
-                });
-            };
-            let mut last = (0usize, (0.0f32, 0.0f32));
-            for i in 0..n {
-                // Perspective-correct: the clip-space point at parameter t.
-                let t = t0 + (t1 - t0) * i as f32 / (n - 1) as f32;
-                let (sx, sy, w) = at(t);
-                let seen = depth.seen(sx, sy, w);
-                match (seen, run) {
-                    (true, None) => run = Some((i, (sx, sy))),
-                    (false, Some(start)) => {
-                        if last.0 > start.0 {
-                            close(start, last);
-                        }
-                        run = None;
-                    }
-                    _ => {}
-                }
-                last = (i, (sx, sy));
-            }
-            if let Some(start) = run {
-                if last.0 > start.0 {
-                    close(start, last);
-                }
-            }
+        .fold(Vec::new, |mut out, &edge| {
+            edge_pieces(mesh, edge, view, near, depth, &mut out);
             out
         })
         .collect();
-    pieces.into_iter().flatten().collect()
+    chunks.concat()
+}
+
+/// Appends the visible pieces of one edge to `out`.
+fn edge_pieces(
+    mesh: &MeshEdges,
+    (a, b, kind): (u32, u32, EdgeKind),
+    view: &View,
+    near: f32,
+    depth: &DepthView,
+    out: &mut Vec<Piece>,
+) {
+    let m = view.view_proj;
+    let (sw, sh) = (depth.width as f32, depth.height as f32);
+    let inv_ss = 1.0 / depth.ssaa as f32;
+    let ca = m * Vec4::from((mesh.points[a as usize], 1.0));
+    let cb = m * Vec4::from((mesh.points[b as usize], 1.0));
+    // Keep the part in front of the near plane (clip space is linear along
+    // the edge).
+    let (mut t0, mut t1) = (0.0f32, 1.0f32);
+    if ca.w < near && cb.w < near {
+        return;
+    }
+    if ca.w < near {
+        t0 = (near - ca.w) / (cb.w - ca.w);
+    } else if cb.w < near {
+        t1 = (near - ca.w) / (cb.w - ca.w);
+    }
+    let at = |t: f32| {
+        let c = ca + (cb - ca) * t;
+        let (sx, sy) = ((c.x / c.w * 0.5 + 0.5) * sw, (0.5 - c.y / c.w * 0.5) * sh);
+        (sx, sy, c.w)
+    };
+    let (p0, p1) = (at(t0), at(t1));
+    let len = ((p1.0 - p0.0).powi(2) + (p1.1 - p0.1).powi(2)).sqrt();
+    if !len.is_finite() {
+        return;
+    }
+    // One test per sample along the edge; edges far off screen are capped
+    // (their points outside the image are hidden anyway).
+    let n = (len.ceil() as usize).clamp(1, 4 * (depth.width + depth.height)) + 1;
+    let mut run: Option<(usize, (f32, f32))> = None;
+    let mut close = |start: (usize, (f32, f32)), end: (usize, (f32, f32))| {
+        out.push(Piece {
+            kind,
+            a: [start.1 .0 * inv_ss, start.1 .1 * inv_ss],
+            b: [end.1 .0 * inv_ss, end.1 .1 * inv_ss],
+            ends: [
+                (t0 == 0.0 && start.0 == 0).then_some(a),
+                (t1 == 1.0 && end.0 == n - 1).then_some(b),
+            ],
+        });
+    };
+    let mut last = (0usize, (0.0f32, 0.0f32));
+    for i in 0..n {
+        // Perspective-correct: the clip-space point at parameter t.
+        let t = t0 + (t1 - t0) * i as f32 / (n - 1) as f32;
+        let (sx, sy, w) = at(t);
+        let seen = depth.seen(sx, sy, w);
+        match (seen, run) {
+            (true, None) => run = Some((i, (sx, sy))),
+            (false, Some(start)) => {
+                if last.0 > start.0 {
+                    close(start, last);
+                }
+                run = None;
+            }
+            _ => {}
+        }
+        last = (i, (sx, sy));
+    }
+    if let Some(start) = run {
+        if last.0 > start.0 {
+            close(start, last);
+        }
+    }
 }
 
 /// Chains pieces into polylines (module docs), kinds in [`EdgeKind`]
@@ -376,15 +390,23 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
     for kind in EdgeKind::ALL {
         let ps: Vec<&Piece> = pieces.iter().filter(|p| p.kind == kind).collect();
         let point = |i: usize, end: usize| if end == 0 { ps[i].a } else { ps[i].b };
-        // Vertex → the piece ends (piece, end) at it.
-        let mut at: HashMap<u32, Vec<(usize, usize)>> = HashMap::new();
-        for (i, p) in ps.iter().enumerate() {
-            for (end, v) in p.ends.iter().enumerate() {
-                if let Some(v) = v {
-                    at.entry(*v).or_default().push((i, end));
-                }
-            }
-        }
+        // The piece ends at vertices, (vertex, piece, end) sorted: the ends
+        // at a vertex are a run, in piece order.
+        let mut ends: Vec<(u32, u32, u32)> = ps
+            .iter()
+            .enumerate()
+            .flat_map(|(i, p)| {
+                (0..2).filter_map(move |end| p.ends[end].map(|v| (v, i as u32, end as u32)))
+            })
+            .collect();
+        ends.sort_unstable();
+        let at = |v: u32| {
+            let lo = ends.partition_point(|e| e.0 < v);
+            let hi = lo + ends[lo..].partition_point(|e| e.0 == v);
+            ends[lo..hi]
+                .iter()
+                .map(|&(_, i, e)| (i as usize, e as usize))
+        };
         let mut used = vec![false; ps.len()];
         // Walks from end `end` of piece `first` through the pieces after it.
         let walk = |first: usize, end: usize, used: &mut [bool]| {
@@ -404,10 +426,9 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
                 // Go on along the unused piece that turns least on screen.
                 let (p, q) = (point(piece, from), point(piece, to));
                 let dir = norm2([q[0] - p[0], q[1] - p[1]]);
-                let next = at[&v]
-                    .iter()
+                let next = at(v)
                     .filter(|(i, _)| !used[*i])
-                    .map(|&(i, e)| {
+                    .map(|(i, e)| {
                         let r = point(i, 1 - e);
                         let d = norm2([r[0] - q[0], r[1] - q[1]]);
                         (d[0] * dir[0] + d[1] * dir[1], i, e)
@@ -437,13 +458,20 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
                 out.push(walk(i, end, &mut used));
             }
         }
-        let mut verts: Vec<u32> = at.keys().copied().collect();
-        verts.sort_unstable();
-        let odd = verts.iter().filter(|v| at[*v].len() % 2 == 1);
-        let starts: Vec<u32> = odd.chain(verts.iter()).copied().collect();
-        for v in starts {
-            while let Some(&(i, e)) = at[&v].iter().find(|(i, _)| !used[*i]) {
-                out.push(walk(i, e, &mut used));
+        // Each vertex once, ascending, with its run of ends.
+        let mut runs: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
+        for (k, e) in ends.iter().enumerate() {
+            match runs.last_mut() {
+                Some((v, r)) if *v == e.0 => r.end = k + 1,
+                _ => runs.push((e.0, k..k + 1)),
+            }
+        }
+        let odd = runs.iter().filter(|(_, r)| r.len() % 2 == 1);
+        let starts: Vec<std::ops::Range<usize>> =
+            odd.chain(runs.iter()).map(|(_, r)| r.clone()).collect();
+        for r in starts {
+            while let Some(&(_, i, e)) = ends[r.clone()].iter().find(|e| !used[e.1 as usize]) {
+                out.push(walk(i as usize, e as usize, &mut used));
             }
         }
     }

@@ -13,10 +13,12 @@
 
 use crate::edges::{chain, visible_pieces, DepthView, EdgeKind, MeshEdges, Polyline};
 use crate::outline::ssaa_of;
+use rayon::prelude::*;
 use specula_raster::post::{srgb_encode, HdrImage, PostStage};
 use specula_raster::{BufferSet, Camera, FrameBuffers};
+use std::sync::Mutex;
+use tiny_skia::{FillRule, Paint, Path, PathBuilder, Pixmap, Stroke, Transform};
 pub use tiny_skia::{LineCap, LineJoin};
-use tiny_skia::{Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 /// How strokes look.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,108 +34,445 @@ pub struct StrokeStyle {
     pub cap: LineCap,
 }
 
-/// The stroke overlay stage.
-#[derive(Clone, Debug)]
+/// The stroke overlay stage. Built once per scene ([`Strokes::new`]): the
+/// edges and the camera are fixed, so which edges are drawn (silhouettes
+/// included) is found once; a frame tests their visibility, chains and
+/// draws them.
 pub struct Strokes {
-    pub edges: MeshEdges,
-    pub camera: Camera,
+    edges: MeshEdges,
+    camera: Camera,
     pub style: StrokeStyle,
+    /// [`MeshEdges::classify`] from the camera's eye.
+    drawn: Vec<(u32, u32, EdgeKind)>,
+    /// Kept from frame to frame (frames run one at a time).
+    canvases: Mutex<Canvases>,
+}
+
+impl std::fmt::Debug for Strokes {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Strokes")
+            .field("edges", &self.edges.edge_count())
+            .field("camera", &self.camera)
+            .field("style", &self.style)
+            .field("drawn", &self.drawn.len())
+            .finish()
+    }
 }
 
 impl Strokes {
+    pub fn new(edges: MeshEdges, camera: Camera, style: StrokeStyle) -> Strokes {
+        let drawn = edges.classify(camera.eye);
+        Strokes {
+            edges,
+            camera,
+            style,
+            drawn,
+            canvases: Mutex::new(Canvases::default()),
+        }
+    }
+
+    pub fn edges(&self) -> &MeshEdges {
+        &self.edges
+    }
+
+    pub fn camera(&self) -> &Camera {
+        &self.camera
+    }
+
     /// The visible polylines of a frame (whose buffers hold depth), in
     /// output pixels of a `ssaa`-times smaller image.
     pub fn polylines(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<Polyline> {
         let view = self.camera.view(frame.width, frame.height);
-        let edges = self.edges.classify(self.camera.eye);
         let depth = DepthView {
             depth: &frame.depth,
             width: frame.width as usize,
             height: frame.height as usize,
             ssaa,
         };
-        let pieces = visible_pieces(&self.edges, &edges, &view, self.camera.near, &depth);
+        let pieces = visible_pieces(&self.edges, &self.drawn, &view, self.camera.near, &depth);
         chain(&pieces)
     }
 }
 
-/// Stroke coverage (alpha in [0, 1]) of `lines` on a `width × height`
-/// image, row-major.
-pub fn draw(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Vec<f32> {
-    match draw_pixmap(lines, style, width, height) {
-        Some(pm) => pm
-            .pixels()
-            .iter()
-            .map(|p| p.alpha() as f32 / 255.0)
-            .collect(),
-        None => vec![0.0; (width * height) as usize],
-    }
-}
-
-/// The strokes drawn white on a transparent pixmap (None if tiny-skia
-/// cannot make one of that size).
-fn draw_pixmap(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Option<Pixmap> {
-    let mut pm = Pixmap::new(width.max(1), height.max(1))?;
-    let mut paint = Paint::default();
-    paint.set_color_rgba8(255, 255, 255, 255);
-    paint.anti_alias = true;
+/// The tiny-skia strokes that draw `line`, in order: the whole polyline,
+/// or with a taper one round-capped segment at a time, each at the width
+/// of its middle's distance (along the line) from the nearer end.
+fn strokes_of(line: &Polyline, style: &StrokeStyle) -> Vec<(Path, Stroke)> {
     let stroke = |w: f32| Stroke {
         width: w,
         line_cap: style.cap,
         line_join: style.join,
         ..Stroke::default()
     };
-    for l in lines {
-        if l.points.len() < 2 {
-            continue;
-        }
-        if style.taper > 0.0 && !l.closed {
-            // Segment by segment with round caps, each at the width of its
-            // middle's distance (along the line) from the nearer end.
-            let seg_len =
-                |a: [f32; 2], b: [f32; 2]| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
-            let total: f32 = l.points.windows(2).map(|w| seg_len(w[0], w[1])).sum();
-            let mut s = 0.0;
-            for w in l.points.windows(2) {
-                let len = seg_len(w[0], w[1]);
-                let mid = s + len * 0.5;
-                s += len;
-                let u = if total > 0.0 {
-                    (mid.min(total - mid) / (total * 0.5)).clamp(0.0, 1.0)
-                } else {
-                    1.0
-                };
-                let wd = style.width * ((1.0 - style.taper) + style.taper * u);
-                let mut pb = PathBuilder::new();
-                pb.move_to(w[0][0], w[0][1]);
-                pb.line_to(w[1][0], w[1][1]);
-                if let (Some(path), true) = (pb.finish(), wd > 0.0) {
-                    let mut st = stroke(wd);
-                    st.line_cap = LineCap::Round;
-                    pm.stroke_path(&path, &paint, &st, Transform::identity(), None);
-                }
+    let mut out = Vec::new();
+    if line.points.len() < 2 {
+        return out;
+    }
+    if style.taper > 0.0 && !line.closed {
+        let seg_len =
+            |a: [f32; 2], b: [f32; 2]| ((b[0] - a[0]).powi(2) + (b[1] - a[1]).powi(2)).sqrt();
+        let total: f32 = line.points.windows(2).map(|w| seg_len(w[0], w[1])).sum();
+        let mut s = 0.0;
+        for w in line.points.windows(2) {
+            let len = seg_len(w[0], w[1]);
+            let mid = s + len * 0.5;
+            s += len;
+            let u = if total > 0.0 {
+                (mid.min(total - mid) / (total * 0.5)).clamp(0.0, 1.0)
+            } else {
+                1.0
+            };
+            let wd = style.width * ((1.0 - style.taper) + style.taper * u);
+            let mut pb = PathBuilder::new();
+            pb.move_to(w[0][0], w[0][1]);
+            pb.line_to(w[1][0], w[1][1]);
+            if let (Some(path), true) = (pb.finish(), wd > 0.0) {
+                let mut st = stroke(wd);
+                st.line_cap = LineCap::Round;
+                out.push((path, st));
             }
-            continue;
         }
-        let mut pb = PathBuilder::new();
-        pb.move_to(l.points[0][0], l.points[0][1]);
-        for p in &l.points[1..] {
-            pb.line_to(p[0], p[1]);
-        }
-        if l.closed {
-            pb.close();
-        }
-        if let Some(path) = pb.finish() {
-            pm.stroke_path(
-                &path,
-                &paint,
-                &stroke(style.width),
-                Transform::identity(),
-                None,
-            );
+        return out;
+    }
+    let mut pb = PathBuilder::new();
+    pb.move_to(line.points[0][0], line.points[0][1]);
+    for p in &line.points[1..] {
+        pb.line_to(p[0], p[1]);
+    }
+    if line.closed {
+        pb.close();
+    }
+    if let Some(path) = pb.finish() {
+        out.push((path, stroke(style.width)));
+    }
+    out
+}
+
+/// Opaque white, anti-aliased: the strokes' alpha is their coverage.
+fn white() -> Paint<'static> {
+    let mut paint = Paint::default();
+    paint.set_color_rgba8(255, 255, 255, 255);
+    paint.anti_alias = true;
+    paint
+}
+
+/// Stroke coverage (alpha in [0, 1]) of `lines` on a `width × height`
+/// image, row-major: every stroke drawn in order on one fresh pixmap with
+/// `Pixmap::stroke_path`. The plain form of what [`Strokes`] draws (the
+/// reference its banded drawing is tested against).
+pub fn draw(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> Vec<f32> {
+    let Some(mut pm) = Pixmap::new(width.max(1), height.max(1)) else {
+        return vec![0.0; (width * height) as usize];
+    };
+    let paint = white();
+    for l in lines {
+        for (path, stroke) in strokes_of(l, style) {
+            pm.stroke_path(&path, &paint, &stroke, Transform::identity(), None);
         }
     }
-    Some(pm)
+    pm.pixels()
+        .iter()
+        .map(|p| p.alpha() as f32 / 255.0)
+        .collect()
+}
+
+/// One tiny-skia draw of the overlay and the pixels it may change.
+struct Draw {
+    /// The stroke's centre line.
+    centre: Path,
+    stroke: Stroke,
+    /// For a stroke wider than 1 px, the outline path `Pixmap::stroke_path`
+    /// turns it into (no transform, so resolution scale 1) and fills with
+    /// the winding rule; [`Canvas::draw`] does the same two steps. None for
+    /// a stroke of at most 1 px, which tiny-skia draws as a
+    /// (coverage-modulated) hairline: drawn with `stroke_path` itself.
+    outline: Option<Path>,
+    /// [x0, x1) × [y0, y1) within the image, holding every pixel the draw
+    /// can change.
+    rect: [usize; 4],
+    /// A drawing cost estimate: the points tiny-skia scans and the rows.
+    cost: f64,
+}
+
+/// The draws of `lines` in drawing order (outlines stroked in parallel,
+/// each on its own) on a `w × h` image; draws that cannot touch the image
+/// are left out.
+fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Draw> {
+    let per_line: Vec<Vec<Draw>> = lines
+        .par_iter()
+        .map(|l| {
+            strokes_of(l, style)
+                .into_iter()
+                .filter_map(|(centre, stroke)| {
+                    // tiny-skia's own test (treat_as_hairline with the
+                    // identity transform and anti-aliasing).
+                    let (outline, bounds, margin) = if stroke.width <= 1.0 {
+                        // A hairline's coverage stays within 1 px of the
+                        // line, caps (½ px) included.
+                        (None, centre.bounds(), 3.0)
+                    } else {
+                        // The scan converter writes only within the filled
+                        // path's bounds, rounded out. (Not the stroke's
+                        // theoretical reach from the centre line: with
+                        // miter-clip joins tiny-skia can draw spikes far
+                        // beyond it.)
+                        let outline = centre.stroke(&stroke, 1.0)?;
+                        let b = outline.bounds();
+                        (Some(outline), b, 1.0)
+                    };
+                    let clamp = |v: f32, hi: usize| (v.max(0.0) as usize).min(hi);
+                    let rect = [
+                        clamp((bounds.left() - margin).floor(), w),
+                        clamp((bounds.right() + margin).ceil(), w),
+                        clamp((bounds.top() - margin).floor(), h),
+                        clamp((bounds.bottom() + margin).ceil(), h),
+                    ];
+                    let points = outline.as_ref().unwrap_or(&centre).len();
+                    (rect[0] < rect[1] && rect[2] < rect[3]).then_some(Draw {
+                        centre,
+                        stroke,
+                        outline,
+                        rect,
+                        cost: (points + rect[3] - rect[2]) as f64,
+                    })
+                })
+                .collect()
+        })
+        .collect();
+    per_line.into_iter().flatten().collect()
+}
+
+/// Bands of image rows at most [`draw_bands`] draws in parallel: a canvas
+/// each, so at most this many image-sized pixmaps are kept.
+const MAX_BANDS: usize = 4;
+
+/// Splits rows `0..h` into at most `k` bands (returns the boundaries,
+/// from 0 to h) so that the largest band cost is least, a band's cost
+/// being that of every draw reaching its rows (a draw over two bands is
+/// drawn by both).
+fn band_rows(draws: &[Draw], h: usize, k: usize) -> Vec<usize> {
+    // starts[y]: cost of the draws beginning above row y; ends[y]: of those
+    // ending at or above it. A band [lo, hi) costs starts[hi] − ends[lo].
+    let (mut starts, mut ends) = (vec![0.0f64; h + 1], vec![0.0f64; h + 1]);
+    for d in draws {
+        starts[d.rect[2] + 1] += d.cost;
+        ends[d.rect[3]] += d.cost;
+    }
+    for y in 1..=h {
+        starts[y] += starts[y - 1];
+        ends[y] += ends[y - 1];
+    }
+    // Greedy bands of cost at most c: each as tall as fits (at least a
+    // row); bisect on c for the least that needs at most k bands.
+    let split = |c: f64| {
+        let mut bounds = vec![0];
+        let mut lo = 0;
+        while lo < h {
+            let fits = starts[lo + 1..=h].partition_point(|s| s - ends[lo] <= c);
+            lo += fits.max(1);
+            bounds.push(lo);
+        }
+        bounds
+    };
+    let (mut lo, mut hi) = (0.0, starts[h]);
+    for _ in 0..40 {
+        let mid = 0.5 * (lo + hi);
+        if split(mid).len() <= k + 1 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    split(hi)
+}
+
+/// An image-sized pixmap the overlay draws on, transparent between frames,
+/// and which of its 8-pixel row chunks a frame's draws may have touched
+/// (their rectangles: the union of the draws' rectangles would hold the
+/// empty space between objects too).
+#[derive(Debug)]
+struct Canvas {
+    pixmap: Pixmap,
+    /// One bit per 8-pixel chunk of a row, `words` u64 a row.
+    touched: Vec<u64>,
+    words: usize,
+    /// Rows that may hold touched chunks.
+    rows: [usize; 2],
+}
+
+impl Canvas {
+    fn new(w: u32, h: u32) -> Option<Canvas> {
+        let words = (w as usize).div_ceil(8).div_ceil(64);
+        Some(Canvas {
+            pixmap: Pixmap::new(w, h)?,
+            touched: vec![0; words * h as usize],
+            words,
+            rows: [h as usize, 0],
+        })
+    }
+
+    /// Draws `d` and marks the chunks of its rectangle.
+    fn draw(&mut self, d: &Draw, paint: &Paint) {
+        match &d.outline {
+            Some(p) => {
+                self.pixmap
+                    .fill_path(p, paint, FillRule::Winding, Transform::identity(), None)
+            }
+            None => {
+                self.pixmap
+                    .stroke_path(&d.centre, paint, &d.stroke, Transform::identity(), None)
+            }
+        }
+        let [x0, x1, y0, y1] = d.rect;
+        self.rows = [self.rows[0].min(y0), self.rows[1].max(y1)];
+        for y in y0..y1 {
+            let row = &mut self.touched[y * self.words..][..self.words];
+            for c in x0 / 8..x1.div_ceil(8) {
+                row[c / 64] |= 1 << (c % 64);
+            }
+        }
+    }
+
+    /// The touched pixels of row `y` as ranges, left to right: runs of
+    /// touched chunks.
+    fn spans(&self, y: usize) -> Vec<std::ops::Range<usize>> {
+        let w = self.pixmap.width() as usize;
+        let row = &self.touched[y * self.words..][..self.words];
+        let mut out: Vec<std::ops::Range<usize>> = Vec::new();
+        for (k, &word) in row.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                let c0 = bits.trailing_zeros() as usize;
+                let len = (bits >> c0).trailing_ones() as usize;
+                bits &= !(u64::MAX >> (64 - len) << c0);
+                let (x0, x1) = ((k * 64 + c0) * 8, ((k * 64 + c0 + len) * 8).min(w));
+                match out.last_mut() {
+                    Some(r) if r.end == x0 => r.end = x1,
+                    _ => out.push(x0..x1),
+                }
+            }
+        }
+        out
+    }
+
+    /// Back to transparent, marks cleared.
+    fn clear(&mut self) {
+        let w = self.pixmap.width() as usize;
+        for y in self.rows[0]..self.rows[1] {
+            for r in self.spans(y) {
+                self.pixmap.data_mut()[(y * w + r.start) * 4..(y * w + r.end) * 4].fill(0);
+            }
+            self.touched[y * self.words..][..self.words].fill(0);
+        }
+        self.rows = [self.pixmap.height() as usize, 0];
+    }
+}
+
+/// c = c·(1 − a) + colour·a over one span of pixels, a from the alpha
+/// bytes of `rgba` (straight: the same a as [`draw`]'s), skipping the
+/// 8-pixel groups with no coverage.
+fn blend_span(rgba: &[u8], r: &mut [f32], g: &mut [f32], b: &mut [f32], color: [f32; 3]) {
+    let groups = rgba
+        .chunks(32)
+        .zip(r.chunks_mut(8))
+        .zip(g.chunks_mut(8))
+        .zip(b.chunks_mut(8));
+    for (((px, r), g), b) in groups {
+        // A transparent premultiplied pixel is four zero bytes.
+        if px.iter().fold(0, |acc, &byte| acc | byte) == 0 {
+            continue;
+        }
+        for (((p, r), g), b) in px.chunks_exact(4).zip(r).zip(g).zip(b) {
+            if p[3] != 0 {
+                let a = p[3] as f32 / 255.0;
+                *r = *r * (1.0 - a) + color[0] * a;
+                *g = *g * (1.0 - a) + color[1] * a;
+                *b = *b * (1.0 - a) + color[2] * a;
+            }
+        }
+    }
+}
+
+/// The image-sized canvases the overlay draws on, kept from frame to
+/// frame and transparent between frames.
+#[derive(Debug, Default)]
+pub struct Canvases {
+    canvases: Vec<Canvas>,
+}
+
+impl Canvases {
+    /// Draws `lines` in `style` over `img`: c = c·(1 − a) + colour·a with
+    /// a the strokes' alpha, the same bytes as blending [`draw`]'s
+    /// coverage (see [`draw_bands`]).
+    pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
+        let draws = draws(lines, style, img.width as usize, img.height as usize);
+        draw_bands(&mut self.canvases, &draws, img, style.color);
+    }
+}
+
+/// Draws `draws` and blends them over `img` in `color`.
+///
+/// Rows are split into bands drawn in parallel, each on its own
+/// image-sized canvas: a band draws, in order, every draw that reaches its
+/// rows, at the draw's own image coordinates (so tiny-skia sees the very
+/// same paths and clip as on one pixmap), then blends its own rows. A
+/// pixel's alpha is then the same sequence of draws over it as on one
+/// pixmap, whatever the bands: the bytes do not depend on the thread
+/// count. A draw that spans two bands is drawn by both; the bands are cut
+/// where that costs least ([`band_rows`]).
+///
+/// The canvases are kept transparent between frames: a band blends and
+/// clears only the 8-pixel row chunks of its draws' rectangles, and no
+/// image-sized buffer is allocated once the canvases exist.
+fn draw_bands(canvases: &mut Vec<Canvas>, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
+    let (w, h) = (img.width as usize, img.height as usize);
+    if draws.is_empty() || w == 0 || h == 0 {
+        return;
+    }
+    let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
+    let rows = band_rows(draws, h, k);
+    let k = rows.len() - 1;
+    canvases.retain(|c| c.pixmap.width() as usize == w && c.pixmap.height() as usize == h);
+    while canvases.len() < k {
+        let Some(c) = Canvas::new(img.width, img.height) else {
+            return;
+        };
+        canvases.push(c);
+    }
+    canvases.truncate(k);
+    // Each band's rows of the three colour planes.
+    let mut bands = Vec::with_capacity(k);
+    let (mut r, mut g, mut b) = (&mut img.rgb.r[..], &mut img.rgb.g[..], &mut img.rgb.b[..]);
+    for (i, canvas) in canvases.iter_mut().enumerate() {
+        let n = (rows[i + 1] - rows[i]) * w;
+        let (r0, r1) = std::mem::take(&mut r).split_at_mut(n);
+        let (g0, g1) = std::mem::take(&mut g).split_at_mut(n);
+        let (b0, b1) = std::mem::take(&mut b).split_at_mut(n);
+        (r, g, b) = (r1, g1, b1);
+        bands.push((canvas, rows[i], rows[i + 1], [r0, g0, b0]));
+    }
+    let paint = white();
+    bands
+        .into_par_iter()
+        .for_each(|(canvas, lo, hi, [r, g, b])| {
+            for d in draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo) {
+                canvas.draw(d, &paint);
+            }
+            let data = canvas.pixmap.data();
+            for y in canvas.rows[0].max(lo)..canvas.rows[1].min(hi) {
+                let row = (y - lo) * w;
+                for x in canvas.spans(y) {
+                    blend_span(
+                        &data[(y * w + x.start) * 4..(y * w + x.end) * 4],
+                        &mut r[row + x.start..row + x.end],
+                        &mut g[row + x.start..row + x.end],
+                        &mut b[row + x.start..row + x.end],
+                        color,
+                    );
+                }
+            }
+            canvas.clear();
+        });
 }
 
 impl PostStage for Strokes {
@@ -150,20 +489,14 @@ impl PostStage for Strokes {
 
     fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
         let lines = self.polylines(frame, ssaa_of(img, frame));
-        let Some(pm) = draw_pixmap(&lines, &self.style, img.width, img.height) else {
-            return;
-        };
-        let c = self.style.color;
-        let p = &mut img.rgb;
-        // Straight from the alpha bytes (most are 0): the same a as draw's.
-        for (i, px) in pm.pixels().iter().enumerate() {
-            if px.alpha() != 0 {
-                let a = px.alpha() as f32 / 255.0;
-                p.r[i] = p.r[i] * (1.0 - a) + c[0] * a;
-                p.g[i] = p.g[i] * (1.0 - a) + c[1] * a;
-                p.b[i] = p.b[i] * (1.0 - a) + c[2] * a;
-            }
-        }
+        // A panic mid-draw (none is known) could leave paint on a canvas:
+        // start again from fresh ones.
+        let mut canvases = self.canvases.lock().unwrap_or_else(|e| {
+            let mut c = e.into_inner();
+            *c = Canvases::default();
+            c
+        });
+        canvases.blend(&lines, &self.style, img);
     }
 }
 
