@@ -1,7 +1,8 @@
 //! NPR line passes on the benchmark frame (fixtures/scenes/sphere-grid.toml,
 //! 1920×1080, 194k triangles), each next to what it adds to:
 //! - `lines/visibility/{plain,extrusion}`: the geometry passes without and
-//!   with the extrusion outline pass (back faces pushed 2 px);
+//!   with the extrusion outline pass (back faces pushed 2 px), steady
+//!   frames (buffers reused);
 //! - `lines/sobel`: the Sobel outline stage (depth, normal, id; edge
 //!   detection, distance-transform dilation, blend) on the frame buffers;
 //! - `lines/strokes`: the stroke overlay stage of a steady frame
@@ -21,7 +22,7 @@
 //! shared machines move by ±10 % between runs; docs/PERFORMANCE.md gives
 //! the same fractions as callgrind instruction counts, which do not.
 
-use criterion::{criterion_group, criterion_main, Criterion};
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 use specula::render::{render_scene, RenderSettings};
 use specula_bench::{benchmark_scene, pool};
 use specula_npr::edges::{EdgeKind, MeshEdges};
@@ -30,7 +31,7 @@ use specula_npr::outline::id_materials;
 use specula_npr::outline::Selection;
 use specula_npr::overlay::{draw, LineCap, LineJoin, StrokeStyle, Strokes};
 use specula_npr::sobel::{Sobel, Source};
-use specula_raster::frame::{render_with, visibility, FrameStats, ShadePath};
+use specula_raster::frame::{render_with, visibility, visibility_into, FrameStats, ShadePath};
 use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::{BufferSet, Material, Target, Unlit};
 use std::sync::Arc;
@@ -65,9 +66,15 @@ fn benches(c: &mut Criterion) {
     g.bench_function("frame", |b| {
         b.iter(|| render_scene(&scene, &settings, 0.0).expect("render"))
     });
+    // Steady frames, as `--stats` and the llvmpipe ratio run them: the
+    // visibility buffers (and the extrusion stage's per-view vectors) of
+    // the previous iteration are reused.
     for (name, data) in [("plain", &plain), ("extrusion", &outlined)] {
+        let mut vis = p.install(|| visibility(data, &target, &mut FrameStats::default()));
         g.bench_function(format!("visibility/{name}"), |b| {
-            b.iter(|| p.install(|| visibility(data, &target, &mut FrameStats::default())))
+            b.iter(|| {
+                p.install(|| visibility_into(data, &target, &mut vis, &mut FrameStats::default()))
+            })
         });
     }
 
@@ -95,12 +102,14 @@ fn benches(c: &mut Criterion) {
         selection: Selection::all(),
         scratch: Default::default(),
     };
+    // The image is copied outside the timed part (a 25 MB clone per
+    // iteration is not the stage's work).
     g.bench_function("sobel", |b| {
-        b.iter(|| {
-            let mut im = img.clone();
-            p.install(|| sobel.apply(&mut im, &frame.buffers));
-            im
-        })
+        b.iter_batched_ref(
+            || img.clone(),
+            |im| p.install(|| sobel.apply(im, &frame.buffers)),
+            BatchSize::LargeInput,
+        )
     });
 
     let kinds = [EdgeKind::Silhouette, EdgeKind::Crease, EdgeKind::Boundary];
