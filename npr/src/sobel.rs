@@ -920,19 +920,25 @@ mod tests {
         }
     }
 
+    /// A 24-bit hash of (i, k): the tests' noise.
+    fn hash(i: usize, k: u32) -> u32 {
+        let v = (i as u32)
+            .wrapping_mul(2654435761)
+            .wrapping_add(k.wrapping_mul(97));
+        (v ^ (v >> 13)).wrapping_mul(1274126177) >> 8
+    }
+
+    /// [`hash`] as a value in [0, 1).
+    fn unit(i: usize, k: u32) -> f32 {
+        hash(i, k) as f32 / (1u32 << 24) as f32
+    }
+
     #[test]
     fn packets_give_the_scalar_measure_bit_for_bit() {
         // Noisy buffers with flat patches, steps, misses (q = 0) and
         // repeated labels, at widths around the packet size.
         for (w, h) in [(37, 9), (10, 4), (9, 3), (64, 5)] {
             let n = w * h;
-            let hash = |i: usize, k: u32| {
-                let v = (i as u32)
-                    .wrapping_mul(2654435761)
-                    .wrapping_add(k.wrapping_mul(97));
-                (v ^ (v >> 13)).wrapping_mul(1274126177) >> 8
-            };
-            let unit = |i: usize, k: u32| hash(i, k) as f32 / (1u32 << 24) as f32;
             let depth: Vec<f32> = (0..n)
                 .map(|i| match hash(i, 1) % 5 {
                     0 => f32::INFINITY,
@@ -1049,13 +1055,6 @@ mod tests {
     /// A frame of noisy patches: depth steps and misses, normals, ids whose
     /// materials change across patches (some with none), and colour.
     fn patchy_frame(w: usize, h: usize) -> (FrameBuffers, Vec<u32>) {
-        let hash = |i: usize, k: u32| {
-            let v = (i as u32)
-                .wrapping_mul(2654435761)
-                .wrapping_add(k.wrapping_mul(97));
-            (v ^ (v >> 13)).wrapping_mul(1274126177) >> 8
-        };
-        let unit = |i: usize, k: u32| hash(i, k) as f32 / (1u32 << 24) as f32;
         // Patches of 16 × 12 samples share their values.
         let patch = |i: usize| (i % w) / 16 + 1000 * ((i / w) / 12);
         let n = w * h;
