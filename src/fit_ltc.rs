@@ -89,11 +89,31 @@ impl Lobe {
         let sin_h = (1.0 - cos2).max(0.0).sqrt();
         let phi = 2.0 * PI * u2;
         let h = V3::new(sin_h * phi.cos(), sin_h * phi.sin(), cos_h);
-        let o_h = self.wo.dot(h);
-        let wi = h * (2.0 * o_h) - self.wo;
         let d = a2 / (PI * (cos2 * (a2 - 1.0) + 1.0).powi(2));
-        (wi, d * cos_h / (4.0 * o_h.abs().max(1e-12)))
+        reflect(self.wo, h, d * cos_h)
     }
+}
+
+/// `wo` reflected about the half vector `h`, drawn with density `d_cos`
+/// (D(h)(n·h)), and the reflected direction's density d_cos / (4 |wo·h|).
+pub(crate) fn reflect(wo: V3<f64>, h: V3<f64>, d_cos: f64) -> (V3<f64>, f64) {
+    let o_h = wo.dot(h);
+    (h * (2.0 * o_h) - wo, d_cos / (4.0 * o_h.abs().max(1e-12)))
+}
+
+/// The density at `wi` of [`reflect`]ed directions whose half vectors have
+/// density `d_cos(h)`: zero where h is below the horizon (never drawn).
+pub(crate) fn reflected_pdf(wo: V3<f64>, wi: V3<f64>, d_cos: impl Fn(V3<f64>) -> f64) -> f64 {
+    let s = wi + wo;
+    let l = s.length();
+    if l == 0.0 {
+        return 0.0;
+    }
+    let h = s * (1.0 / l);
+    if h.z <= 0.0 {
+        return 0.0;
+    }
+    d_cos(h) / (4.0 * wo.dot(h).abs().max(1e-12))
 }
 
 /// The LTC density D(ω) of M = [[a, 0, b], [0, c, 0], [0, 0, 1]] at unit ω.
@@ -156,19 +176,12 @@ pub fn l1_error(lobe: &Lobe, m: [f64; 4], pts: &[(f64, f64)]) -> f64 {
 /// The density of [`Lobe::sample`] at `wi`: D(h)(n·h) / (4 |wo·h|), h the
 /// half vector (zero when h is below the horizon: never sampled).
 fn lobe_pdf(lobe: &Lobe, wi: V3<f64>) -> f64 {
-    let s = wi + lobe.wo;
-    let l = s.length();
-    if l == 0.0 {
-        return 0.0;
-    }
-    let h = s * (1.0 / l);
-    if h.z <= 0.0 {
-        return 0.0;
-    }
-    let a2 = lobe.alpha * lobe.alpha;
-    let c2 = h.z * h.z;
-    let d = a2 / (PI * (c2 * (a2 - 1.0) + 1.0).powi(2));
-    d * h.z / (4.0 * lobe.wo.dot(h).abs().max(1e-12))
+    reflected_pdf(lobe.wo, wi, |h| {
+        let a2 = lobe.alpha * lobe.alpha;
+        let c2 = h.z * h.z;
+        let d = a2 / (PI * (c2 * (a2 - 1.0) + 1.0).powi(2));
+        d * h.z
+    })
 }
 
 struct Problem<'a> {

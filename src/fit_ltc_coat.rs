@@ -31,7 +31,7 @@
 
 use crate::fit_ltc::{
     cosine_step, ltc_density, ltc_sample, nelder_mead, outside_search, params_to_m, points,
-    progress_bar, MU_MIN,
+    progress_bar, reflect, reflected_pdf, MU_MIN,
 };
 use argmin::core::{CostFunction, Error};
 use rayon::prelude::*;
@@ -99,23 +99,12 @@ impl CoatLobe {
         let (cos_h, sin_h) = (cos2.sqrt(), (1.0 - cos2).sqrt());
         let phi = 2.0 * PI * u2;
         let h = V3::new(sin_h * phi.cos(), sin_h * phi.sin(), cos_h);
-        let o_h = self.wo.dot(h);
-        let wi = h * (2.0 * o_h) - self.wo;
-        (wi, self.d_cos(h) / (4.0 * o_h.abs().max(1e-12)))
+        reflect(self.wo, h, self.d_cos(h))
     }
 
     /// The density of [`CoatLobe::sample`] at `wi`.
     fn pdf(&self, wi: V3<f64>) -> f64 {
-        let s = wi + self.wo;
-        let l = s.length();
-        if l == 0.0 {
-            return 0.0;
-        }
-        let h = s * (1.0 / l);
-        if h.z <= 0.0 {
-            return 0.0;
-        }
-        self.d_cos(h) / (4.0 * self.wo.dot(h).abs().max(1e-12))
+        reflected_pdf(self.wo, wi, |h| self.d_cos(h))
     }
 }
 

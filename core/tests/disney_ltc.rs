@@ -43,6 +43,32 @@ fn rotate(p: V3<f64>, phi: f64) -> V3<f64> {
     v(c * p.x - s * p.y, s * p.x + c * p.y, p.z)
 }
 
+/// The views the tests measure, the azimuths cycled over them: (index,
+/// θo in degrees, θo, φo, wo).
+fn views() -> impl Iterator<Item = (usize, f64, f64, f64, V3<f64>)> {
+    VIEWS.iter().enumerate().map(|(vi, &deg)| {
+        let theta = deg.to_radians();
+        let phi = AZIMUTHS[vi % AZIMUTHS.len()].to_radians();
+        (
+            vi,
+            deg,
+            theta,
+            phi,
+            rotate(v(theta.sin(), 0.0, theta.cos()), phi),
+        )
+    })
+}
+
+/// A polygon as seen from one side: its vertices as given, or reversed
+/// for the back of a two-sided light.
+fn wound(q: &[V3<f64>], back: bool) -> Vec<V3<f64>> {
+    if back {
+        q.iter().rev().copied().collect()
+    } else {
+        q.to_vec()
+    }
+}
+
 /// The directional albedo per channel, by the model's lobe quadratures.
 fn albedo(m: &Disney, wo: V3<f64>) -> [f64; 3] {
     let p = m.prepare(wo);
@@ -61,10 +87,7 @@ fn albedo(m: &Disney, wo: V3<f64>) -> [f64; 3] {
 fn cases_of(params: &DisneyParams, two_sided: bool, kc: bool) -> Vec<Case> {
     let m = Disney::new_without_table(params.clone(), kc);
     let mut out = Vec::new();
-    for (vi, &deg) in VIEWS.iter().enumerate() {
-        let theta = deg.to_radians();
-        let phi = AZIMUTHS[vi % AZIMUTHS.len()].to_radians();
-        let wo = rotate(v(theta.sin(), 0.0, theta.cos()), phi);
+    for (vi, deg, theta, phi, wo) in views() {
         let p = m.prepare(wo);
         let pp = m.prepare_polygons(&p);
         let alb = albedo(&m, wo);
@@ -78,11 +101,7 @@ fn cases_of(params: &DisneyParams, two_sided: bool, kc: bool) -> Vec<Case> {
                 if sided && !two_sided {
                     continue;
                 }
-                let q: Vec<_> = if sided {
-                    q.iter().rev().copied().collect()
-                } else {
-                    q.clone()
-                };
+                let q = wound(&q, sided);
                 let r = integrate_polygon(&q, sided, &f, TOL);
                 let l = m.polygon_local_with(&p, &pp, &poly(&q, sided));
                 let err = [l.x, l.y, l.z]
@@ -444,37 +463,28 @@ fn lobe_errors(
     ltc: &dyn Fn(&DisneyPolygons<f64>, &PolygonLocal<f64>) -> f64,
 ) -> Vec<(usize, f64)> {
     let mut out = Vec::new();
-    for (vi, &deg) in VIEWS.iter().enumerate() {
-        let theta = deg.to_radians();
-        // The azimuths cycled over the views, as in `cases_of` (the coat
-        // is isotropic: every azimuth gives the same errors).
-        {
-            let phi = AZIMUTHS[vi % AZIMUTHS.len()].to_radians();
-            let wo = rotate(v(theta.sin(), 0.0, theta.cos()), phi);
-            let p = m.prepare(wo);
-            let pp = m.prepare_polygons(&p);
-            let alb = m.albedo_quadrature(&p, lobe)[0];
-            let f = |wi: V3<f64>| {
-                let (l, above) = m.lobes(&p, wi);
-                let x = match lobe {
-                    Lobe::Clearcoat => l.clearcoat,
-                    Lobe::Specular => l.specular.x,
-                    Lobe::Diffuse => l.diffuse.x,
-                };
-                [if above { x * wi.z } else { 0.0 }; 3]
+    // The views and azimuths of `cases_of` (the coat is isotropic: every
+    // azimuth gives the same errors).
+    for (vi, _, theta, phi, wo) in views() {
+        let p = m.prepare(wo);
+        let pp = m.prepare_polygons(&p);
+        let alb = m.albedo_quadrature(&p, lobe)[0];
+        let f = |wi: V3<f64>| {
+            let (l, above) = m.lobes(&p, wi);
+            let x = match lobe {
+                Lobe::Clearcoat => l.clearcoat,
+                Lobe::Specular => l.specular.x,
+                Lobe::Diffuse => l.diffuse.x,
             };
-            for (_, q) in polygons(theta) {
-                let q: Vec<_> = q.iter().map(|x| rotate(*x, phi)).collect();
-                for sided in [false, true] {
-                    let q: Vec<_> = if sided {
-                        q.iter().rev().copied().collect()
-                    } else {
-                        q.clone()
-                    };
-                    let r = integrate_polygon(&q, sided, &f, TOL).value[0];
-                    let l = ltc(&pp, &poly(&q, sided));
-                    out.push((vi, (l - r).abs() / alb));
-                }
+            [if above { x * wi.z } else { 0.0 }; 3]
+        };
+        for (_, q) in polygons(theta) {
+            let q: Vec<_> = q.iter().map(|x| rotate(*x, phi)).collect();
+            for sided in [false, true] {
+                let q = wound(&q, sided);
+                let r = integrate_polygon(&q, sided, &f, TOL).value[0];
+                let l = ltc(&pp, &poly(&q, sided));
+                out.push((vi, (l - r).abs() / alb));
             }
         }
     }

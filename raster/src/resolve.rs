@@ -1,6 +1,7 @@
 //! Resolve: from visibility-buffer ids back to surface attributes at pixel
 //! centres, R::LANES horizontally adjacent pixels at a time.
 
+use crate::buffers::prefetch;
 use crate::camera::View;
 use crate::geometry::IdMap;
 use crate::scene::SceneData;
@@ -201,13 +202,13 @@ impl ResolveContext<'_> {
         let Some(planes) = self.planes.get(id as usize) else {
             return;
         };
-        prefetch_bytes(planes);
+        prefetch(planes);
         if self.ids.is_identity() {
             if let Some(m) = self.scene.tri_material.get(id as usize) {
-                prefetch_bytes(m);
+                prefetch(m);
             }
             if let Some(t) = self.scene.triangles.get(id as usize) {
-                prefetch_bytes(t);
+                prefetch(t);
             }
         }
     }
@@ -392,26 +393,6 @@ impl ResolveContext<'_> {
             },
         }
     }
-}
-
-/// A hint to bring every cache line of `v` in.
-#[inline(always)]
-pub(crate) fn prefetch_bytes<T>(v: &T) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let p = v as *const T as *const i8;
-        let last = std::mem::size_of::<T>().saturating_sub(1);
-        // SAFETY: a prefetch never faults; both addresses are inside `v`
-        // (its first and last byte, so a value straddling two lines brings
-        // both).
-        unsafe {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            _mm_prefetch::<_MM_HINT_T0>(p);
-            _mm_prefetch::<_MM_HINT_T0>(p.add(last));
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = v;
 }
 
 #[cfg(test)]

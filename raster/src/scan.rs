@@ -2,6 +2,7 @@
 //! then an 8-pixel-wide depth test and visibility-buffer write.
 
 use crate::bin::BinnedChunk;
+use crate::buffers::prefetch;
 use crate::setup::{RasterTri, RectCoverage, TriPlanes};
 use crate::target::{Target, TILE};
 use specula_core::Real;
@@ -41,21 +42,6 @@ pub fn rasterize_tile(
             );
         }
     }
-}
-
-/// A hint to bring `v`'s cache lines in (no effect on results).
-#[inline(always)]
-fn prefetch<T>(v: &T) {
-    #[cfg(target_arch = "x86_64")]
-    for off in (0..std::mem::size_of::<T>()).step_by(64) {
-        // SAFETY: a prefetch never faults; the address is inside `v`.
-        unsafe {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            _mm_prefetch::<_MM_HINT_T0>((v as *const T as *const i8).add(off));
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = v;
 }
 
 /// Calls `emit(y, gx, mask)` for every row y in [y_lo, y_hi) and every
