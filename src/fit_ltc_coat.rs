@@ -370,19 +370,10 @@ mod tests {
         );
         let est = l1_error(&lobe, &p, &points());
         let (m, w) = unpack(&p);
-        let (nt, np) = (1600, 800);
-        let mut q = 0.0;
-        for a in 0..nt {
-            let z = -1.0 + 2.0 * (a as f64 + 0.5) / nt as f64;
-            let r = (1.0 - z * z).sqrt();
-            for b in 0..np {
-                let phi = 2.0 * PI * (b as f64 + 0.5) / np as f64;
-                let x = V3::new(r * phi.cos(), r * phi.sin(), z);
-                let d: f64 = (0..K).map(|k| w[k] * ltc_density(m[k], x)).sum();
-                q += (d - lobe.p(x)).abs();
-            }
-        }
-        q *= 4.0 * PI / (nt * np) as f64;
+        let q = crate::fit_ltc::sphere_midpoint(1600, 800, |x| {
+            let d: f64 = (0..K).map(|k| w[k] * ltc_density(m[k], x)).sum();
+            (d - lobe.p(x)).abs()
+        });
         assert!((est - q).abs() < 0.02 * q, "MIS {est} vs quadrature {q}");
     }
 }
