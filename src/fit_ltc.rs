@@ -384,6 +384,23 @@ pub(crate) fn write_table(out: &std::path::Path, bytes: &[u8]) -> Result<(), Str
     Ok(())
 }
 
+/// ∫ f over the unit sphere by the midpoint rule in (z, φ), `nt` × `np`
+/// cells (uniform in z = cos θ: equal areas): the fitters' tests'
+/// independent check of their L1 estimates.
+#[cfg(test)]
+pub(crate) fn sphere_midpoint(nt: usize, np: usize, f: impl Fn(V3<f64>) -> f64) -> f64 {
+    let mut q = 0.0;
+    for a in 0..nt {
+        let z = -1.0 + 2.0 * (a as f64 + 0.5) / nt as f64;
+        let r = (1.0 - z * z).sqrt();
+        for b in 0..np {
+            let phi = 2.0 * PI * (b as f64 + 0.5) / np as f64;
+            q += f(V3::new(r * phi.cos(), r * phi.sin(), z));
+        }
+    }
+    q * (4.0 * PI / (nt * np) as f64)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -444,21 +461,4 @@ mod tests {
         });
         assert!((est - q).abs() < 0.01 * q, "MIS {est} vs quadrature {q}");
     }
-}
-
-/// ∫ f over the unit sphere by the midpoint rule in (z, φ), `nt` × `np`
-/// cells (uniform in z = cos θ: equal areas): the fitters' tests'
-/// independent check of their L1 estimates.
-#[cfg(test)]
-pub(crate) fn sphere_midpoint(nt: usize, np: usize, f: impl Fn(V3<f64>) -> f64) -> f64 {
-    let mut q = 0.0;
-    for a in 0..nt {
-        let z = -1.0 + 2.0 * (a as f64 + 0.5) / nt as f64;
-        let r = (1.0 - z * z).sqrt();
-        for b in 0..np {
-            let phi = 2.0 * PI * (b as f64 + 0.5) / np as f64;
-            q += f(V3::new(r * phi.cos(), r * phi.sin(), z));
-        }
-    }
-    q * (4.0 * PI / (nt * np) as f64)
 }
