@@ -137,7 +137,8 @@ impl<R: Real> HalfAngles<R> {
         // angles depend only on s's direction, so such an s is first scaled
         // by 1/max|sₖ| (other lanes are untouched: the factor is exactly 1).
         // Behind a branch taken almost never: on every light of every
-        // packet the rescale cost ~5 % of the shading pass.
+        // packet the rescale cost ~5 % of the shading pass. (cos θd by the
+        // hardware root, not x·rsqrt(x): see `smith_ggx_root`.)
         let tiny = len2.lt(R::splat(1e-20));
         let (s, len2, unscale) = if tiny.any() {
             let m = s.x.abs().max(s.y.abs()).max(s.z.abs());
@@ -155,7 +156,7 @@ impl<R: Real> HalfAngles<R> {
             above,
             cos2_h: s.z * s.z * inv_len2,
             sin2_h: s.x.mul_add(s.x, s.y * s.y) * inv_len2,
-            cos_d: len2 * len2.rsqrt() * R::HALF * unscale,
+            cos_d: len2.sqrt() * R::HALF * unscale,
             s,
             inv_len2,
         }

@@ -82,6 +82,16 @@ impl<R: Real> V3<R> {
             z: self.z * o.z,
         }
     }
+    /// `self * o + acc` component by component (colour times colour,
+    /// accumulated), fused.
+    #[inline(always)]
+    pub fn mul_elem_add(self, o: Self, acc: Self) -> Self {
+        V3 {
+            x: self.x.mul_add(o.x, acc.x),
+            y: self.y.mul_add(o.y, acc.y),
+            z: self.z.mul_add(o.z, acc.z),
+        }
+    }
     /// `self * s + acc`, component-wise fused.
     #[inline(always)]
     pub fn mul_add(self, s: R, acc: Self) -> Self {

@@ -46,7 +46,7 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
                 acc += lights_from_polygon(brdf, &prepared, frag, frame, rest);
                 break;
             }
-            acc += delta_light(brdf, &prepared, frag, frame, light);
+            acc = add_delta_light(brdf, &prepared, frag, frame, light, acc);
             rest = tail;
         }
         if let Some(env) = self.env.environment {
@@ -56,15 +56,16 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
     }
 }
 
-/// A point or directional light's reflected radiance (zero for a polygon
-/// light, which [`lights_from_polygon`] shades).
+/// `acc` plus a point or directional light's reflected radiance (plus
+/// nothing for a polygon light, which [`lights_from_polygon`] shades).
 #[inline(always)]
-fn delta_light<B: Brdf, R: Real>(
+fn add_delta_light<B: Brdf, R: Real>(
     brdf: &B,
     prepared: &B::Prepared<R>,
     frag: &Fragment<R>,
     frame: &ShadingFrame<R>,
     light: &Light,
+    acc: Rgb<R>,
 ) -> Rgb<R> {
     match light {
         Light::Point {
@@ -75,8 +76,9 @@ fn delta_light<B: Brdf, R: Real>(
             let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
             let inv_d = d2.rsqrt();
             let wi = frame.to_local(to_light * inv_d);
-            let f_cos = brdf.f_cos_local(prepared, wi);
-            f_cos.mul_elem(V3::from_f32(*intensity)) * (inv_d * inv_d)
+            // f · cos θi · I / d², the two scalar factors multiplied first.
+            let k = wi.z.max(R::ZERO) * (inv_d * inv_d);
+            (brdf.f_local(prepared, wi) * k).mul_elem_add(V3::from_f32(*intensity), acc)
         }
         Light::Directional {
             to_light,
@@ -84,14 +86,14 @@ fn delta_light<B: Brdf, R: Real>(
         } => {
             let wi = frame.to_local(V3::from_f32(*to_light));
             let f_cos = brdf.f_cos_local(prepared, wi);
-            f_cos.mul_elem(V3::from_f32(*irradiance))
+            f_cos.mul_elem_add(V3::from_f32(*irradiance), acc)
         }
-        Light::Polygon { .. } => Rgb::zero(),
+        Light::Polygon { .. } => acc,
     }
 }
 
 /// The reflected radiance of `lights`, from the scene's first polygon
-/// light on (delta lights among them through [`delta_light`]). Out of
+/// light on (delta lights among them through [`add_delta_light`]). Out of
 /// line: inlined into the light loop, its clipping and reference
 /// integration made the register allocator spill the point-light path
 /// (+10 % instructions in the shading pass of a scene without polygon
@@ -122,7 +124,7 @@ fn lights_from_polygon<B: Brdf, R: Real>(
             method,
         } = light
         else {
-            acc += delta_light(brdf, prepared, frag, frame, light);
+            acc = add_delta_light(brdf, prepared, frag, frame, light, acc);
             continue;
         };
         poly.len = vertices.len();

@@ -9,11 +9,10 @@
 use crate::albedo_tables::AlbedoTables;
 use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::diffuse::f_lambert;
-use crate::fresnel::f_schlick;
+use crate::fresnel::schlick_weight;
 use crate::light::PolygonLocal;
 use crate::ltc::ggx::LtcGgx;
-use crate::masking::{smith_ggx_root, v_smith_ggx_correlated_roots};
-use crate::ndf::d_ggx;
+use crate::masking::{dv_ggx_correlated, smith_ggx_root};
 use crate::real::Real;
 use crate::vec3::{Rgb, V3};
 
@@ -78,8 +77,8 @@ impl Brdf for MetallicRoughness {
     fn f_local<R: Real>(&self, p: &MetallicRoughnessPrepared<R>, wi: V3<R>) -> Rgb<R> {
         let o = &p.o;
         let alpha = R::splat(self.alpha() as f64);
-        let f0 = Rgb::from_f32(self.f0());
-        let diffuse = Rgb::from_f32(self.diffuse_color());
+        let f0 = self.f0();
+        let kd = f_lambert(Rgb::from_f32(self.diffuse_color()));
 
         let HalfAngles {
             cos_i,
@@ -91,17 +90,28 @@ impl Brdf for MetallicRoughness {
             ..
         } = HalfAngles::new(wi, o);
 
-        let f = f_schlick(f0, cos_d);
-        let v = v_smith_ggx_correlated_roots(
+        let w = schlick_weight(cos_d);
+        let dv = dv_ggx_correlated(
+            alpha,
+            cos2_h,
+            sin2_h,
             cos_i,
             cos_o,
             smith_ggx_root(alpha, cos_i),
             p.smith_root_o,
         );
-        let dv = d_ggx(alpha, cos2_h, sin2_h) * v;
-        let specular = f * dv;
-        let diffuse = (Rgb::splat(R::ONE) - f).mul_elem(f_lambert(diffuse));
-        Rgb::select(above, specular + diffuse, Rgb::zero())
+        // F·DV + (1 − F)·kd = kd + F·(DV − kd), with Schlick's
+        // F = F0 + (1 − F0) w per channel: two fused steps a channel.
+        let channel = |f0: f32, kd: R| {
+            let f = R::splat(1.0 - f0 as f64).mul_add(w, R::splat(f0 as f64));
+            f.mul_add(dv - kd, kd)
+        };
+        let f = Rgb::new(
+            channel(f0[0], kd.x),
+            channel(f0[1], kd.y),
+            channel(f0[2], kd.z),
+        );
+        Rgb::select(above, f, Rgb::zero())
     }
 
     #[inline(always)]
