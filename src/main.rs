@@ -236,6 +236,9 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
         settings.ssaa as u64,
     );
     let hdr_images = a.exr.is_some() as u64 + is_hdr_name(&a.output) as u64;
+    // Only HDR outputs read the linear colour after the frame; without
+    // them the shading pass may encode the 8-bit image itself.
+    settings.keep_hdr = hdr_images > 0;
     memory::reserve(
         &format!("a {w}×{h} image with ssaa {ss}"),
         memory::image_bytes(w * h * ss * ss, w * h, aovs.len() as u64, hdr_images),

@@ -3,8 +3,10 @@
 
 use crate::scene::LoadedScene;
 use serde::Serialize;
-use specula_raster::frame::{render_into, render_with, Frame, FrameStats, ShadePath};
-use specula_raster::post::{downsample, Post, PostOutput, PostStage, Stage, Tonemap};
+use specula_raster::frame::{
+    render_into, render_ldr, render_ldr_into, render_with, Frame, FrameStats, ShadePath,
+};
+use specula_raster::post::{downsample, LdrEncoding, Post, PostOutput, PostStage, Stage, Tonemap};
 use specula_raster::{BufferSet, Target};
 use std::sync::Arc;
 use std::time::Instant;
@@ -25,6 +27,12 @@ pub struct RenderSettings {
     pub buffers: BufferSet,
     /// Image-space stages run after the tone map, before the encode.
     pub post_stages: Vec<Arc<dyn PostStage>>,
+    /// Keep the linear colour of the last frame ([`Rendered::hdr`]: EXR
+    /// outputs). Without it, a frame whose post list is the standard one
+    /// at ssaa 1 is encoded to 8 bits inside the shading pass, tile row by
+    /// tile row, with no colour planes written and read back (the same
+    /// bytes; `post` then times nothing).
+    pub keep_hdr: bool,
 }
 
 impl RenderSettings {
@@ -41,6 +49,7 @@ impl RenderSettings {
             repeat: 1,
             buffers: BufferSet::default(),
             post_stages: s.post_stages.clone(),
+            keep_hdr: true,
         }
     }
 
@@ -53,6 +62,12 @@ impl RenderSettings {
             .extend(self.post_stages.iter().cloned().map(Stage::Custom));
         p.stages.extend(encode);
         p
+    }
+
+    /// The 8-bit encoding the shading pass runs itself, when the post list
+    /// allows it and no HDR output needs the linear colour.
+    pub fn ldr_in_shading(&self) -> Option<LdrEncoding> {
+        self.post().ldr_in_shading().filter(|_| !self.keep_hdr)
     }
 
     /// The supersampled render target; checks sizes before anything is
@@ -101,6 +116,9 @@ pub struct RunStats {
     pub ssaa: u32,
     pub threads: usize,
     pub shading: &'static str,
+    /// The standard post list ran inside the shading pass (see
+    /// [`RenderSettings::keep_hdr`]): `shade` includes it, `post` is 0.
+    pub post_in_shading: bool,
     pub triangles_in: u64,
     pub culled_backface: u64,
     pub culled_outside: u64,
@@ -136,6 +154,10 @@ impl Rendered {
     /// Linear HDR, row-major, after the supersampling resolve (for EXR).
     pub fn hdr(&self) -> Vec<[f32; 3]> {
         let b = &self.frame.buffers;
+        assert!(
+            !b.color.is_empty(),
+            "the linear colour was not kept (RenderSettings::keep_hdr)"
+        );
         downsample(&b.color, b.width, b.height, self.ssaa).interleaved()
     }
 }
@@ -171,6 +193,7 @@ pub fn render_scene(
     let post = settings.post();
     post.validate(target.width, target.height)?;
     let buffers = settings.buffers.union(post.buffers());
+    let in_shading = settings.ldr_in_shading();
     pool.install(|| {
         let mut frames = Vec::new();
         let mut last: Option<(PostOutput, Frame)> = None;
@@ -178,19 +201,41 @@ pub fn render_scene(
             let t0 = Instant::now();
             // Later frames reuse the previous frame's buffers, as a renderer
             // drawing frame after frame would.
-            let (frame, recycled) = match last.take() {
-                Some((out, mut f)) => {
-                    render_into(&scene.data, &mut f, settings.path);
-                    (f, out)
-                }
-                None => (
-                    render_with(&scene.data, target, settings.path, buffers),
-                    PostOutput::default(),
-                ),
+            let (frame, out, post) = if let Some(enc) = in_shading {
+                let (recycled, frame) = match last.take() {
+                    Some((out, f)) => (out, Some(f)),
+                    None => (PostOutput::default(), None),
+                };
+                let mut ldr = recycled.ldr.unwrap_or_default();
+                let frame = match frame {
+                    Some(mut f) => {
+                        render_ldr_into(&scene.data, &mut f, settings.path, enc, &mut ldr);
+                        f
+                    }
+                    None => render_ldr(&scene.data, target, settings.path, buffers, enc, &mut ldr),
+                };
+                let out = PostOutput {
+                    width: target.width,
+                    height: target.height,
+                    hdr: None,
+                    ldr: Some(ldr),
+                };
+                (frame, out, 0.0)
+            } else {
+                let (frame, recycled) = match last.take() {
+                    Some((out, mut f)) => {
+                        render_into(&scene.data, &mut f, settings.path);
+                        (f, out)
+                    }
+                    None => (
+                        render_with(&scene.data, target, settings.path, buffers),
+                        PostOutput::default(),
+                    ),
+                };
+                let tp = Instant::now();
+                let out = post.run_reusing(&frame.buffers, recycled)?;
+                (frame, out, tp.elapsed().as_secs_f64() * 1e3)
             };
-            let tp = Instant::now();
-            let out = post.run_reusing(&frame.buffers, recycled)?;
-            let post = tp.elapsed().as_secs_f64() * 1e3;
             let total = t0.elapsed().as_secs_f64() * 1e3;
             let t = frame.stats.times;
             frames.push(FrameTimes {
@@ -255,6 +300,7 @@ fn run_stats(
             ShadePath::Simd => "simd",
             ShadePath::Scalar => "scalar",
         },
+        post_in_shading: settings.ldr_in_shading().is_some(),
         triangles_in: c.triangles,
         culled_backface: c.culled_backface,
         culled_outside: c.culled_outside,
@@ -313,7 +359,11 @@ impl RunStats {
             ("shade", col(|t| t.shade)),
             ("post", col(|t| t.post)),
         ] {
-            s += &format!("  {name:<11}{v:9.2}\n");
+            s += &format!("  {name:<11}{v:9.2}");
+            if name == "post" && self.post_in_shading {
+                s += "   (exposure, tone map, sRGB encode ran inside shade)";
+            }
+            s += "\n";
         }
         s += &format!("  {:<11}{:9.2}\n", "encode", self.encode_ms);
         s += &format!(

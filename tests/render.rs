@@ -200,3 +200,48 @@ fn a_frame_drawn_into_reused_buffers_equals_a_fresh_one() {
     let got = post.run_reusing(&fresh.buffers, dirty).expect("post").ldr;
     assert!(got == expected, "8-bit output");
 }
+
+/// The 8-bit image encoded inside the shading pass (no HDR output kept)
+/// is the post pass's, byte for byte: an odd size (partial packets and
+/// tiles), every tone curve, exposures, both shading paths, 1 and 3
+/// threads, and a second frame drawn into the first one's buffers.
+#[test]
+fn encoding_in_the_shading_pass_gives_the_post_pass_bytes() {
+    use specula_raster::post::Tonemap;
+    let scene = benchmark();
+    for (tonemap, exposure) in [
+        (Tonemap::Clamp, 0.0),
+        (Tonemap::Reinhard, 1.7),
+        (Tonemap::Aces, -2.3),
+    ] {
+        for path in [ShadePath::Simd, ShadePath::Scalar] {
+            for threads in [1, 3] {
+                let mut s = RenderSettings::from_scene(&scene);
+                (s.width, s.height, s.ssaa) = (203, 67, 1);
+                (s.tonemap, s.exposure, s.path) = (tonemap, exposure, path);
+                s.threads = Some(threads);
+                s.repeat = 2;
+                let want = render_scene(&scene, &s, 0.0).expect("post pass");
+                assert!(!want.stats.post_in_shading);
+                s.keep_hdr = false;
+                let got = render_scene(&scene, &s, 0.0).expect("in shading");
+                let case = format!("{tonemap:?} {exposure} {path:?} {threads} threads");
+                assert!(got.stats.post_in_shading, "{case}: not encoded in shading");
+                assert!(got.frame.buffers.color.is_empty(), "{case}: colour kept");
+                assert_eq!(got.ldr.len(), 203 * 67 * 3, "{case}");
+                assert!(got.ldr == want.ldr, "{case}: bytes differ");
+            }
+        }
+    }
+    // The benchmark frame itself, and a list with supersampling, which
+    // stays in the post pass.
+    let mut s = RenderSettings::from_scene(&scene);
+    let want = render_scene(&scene, &s, 0.0).expect("post pass");
+    s.keep_hdr = false;
+    let got = render_scene(&scene, &s, 0.0).expect("in shading");
+    assert!(got.stats.post_in_shading && got.ldr == want.ldr);
+    s.ssaa = 2;
+    s.width = 320;
+    s.height = 180;
+    assert!(!render_scene(&scene, &s, 0.0).unwrap().stats.post_in_shading);
+}

@@ -6,11 +6,12 @@
 //! does not depend on the thread count.
 
 use crate::bin::{BinnedChunk, CHUNK};
-use crate::buffers::{BufferSet, FrameBuffers, TileWriter};
+use crate::buffers::{BufferSet, FrameBuffers, Planes3, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
 use crate::geometry::{Cull, GeometryPass};
 use crate::occlusion::DepthBounds;
+use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
@@ -270,8 +271,23 @@ pub fn shade_into(
     buffers: &mut FrameBuffers,
     stats: &mut FrameStats,
 ) {
+    shade_impl(scene, target, v, path, buffers, None, stats);
+}
+
+/// [`shade_into`] that also encodes the 8-bit sRGB image into `ldr`
+/// (resized to width × height × 3) tile row by tile row; the linear colour
+/// planes are filled only if `buffers` has them (not empty).
+fn shade_impl(
+    scene: &SceneData,
+    target: &Target,
+    v: &Visibility,
+    path: ShadePath,
+    buffers: &mut FrameBuffers,
+    ldr: Option<(LdrEncoding, &mut Vec<u8>)>,
+    stats: &mut FrameStats,
+) {
     assert!(
-        buffers.fits(target, BufferSet::default()),
+        buffers.width == target.width && buffers.height == target.height,
         "frame buffers are for another target"
     );
     let t = Instant::now();
@@ -296,6 +312,11 @@ pub fn shade_into(
             TileWriter::new(&mut normal.b, target),
         ],
         id: TileWriter::new(id, target),
+        ldr: ldr.map(|(enc, bytes)| {
+            bytes.resize(target.pixel_count() * 3, 0);
+            let px: &mut [[u8; 3]] = bytes.as_mut_slice().as_chunks_mut().0;
+            (enc, TileWriter::new(px, target))
+        }),
     };
     let covered: u64 = v
         .vis
@@ -342,6 +363,65 @@ pub fn render_with(scene: &SceneData, target: Target, path: ShadePath, set: Buff
         buffers,
         stats,
     }
+}
+
+/// Renders one frame straight to 8-bit sRGB in `ldr` (the bytes the post
+/// list of `enc` gives; [`crate::post::Post::ldr_in_shading`]) without linear
+/// colour planes: the shading pass encodes each tile row while it is in
+/// cache. The frame keeps the optional buffers of `set`; its colour planes
+/// are empty.
+pub fn render_ldr(
+    scene: &SceneData,
+    target: Target,
+    path: ShadePath,
+    set: BufferSet,
+    enc: LdrEncoding,
+    ldr: &mut Vec<u8>,
+) -> Frame {
+    let mut stats = FrameStats::default();
+    let visibility = visibility(scene, &target, &mut stats);
+    let mut buffers = FrameBuffers::new(&target, set);
+    // Never touched, so never faulted in: freed at once.
+    buffers.color = Planes3::default();
+    shade_impl(
+        scene,
+        &target,
+        &visibility,
+        path,
+        &mut buffers,
+        Some((enc, ldr)),
+        &mut stats,
+    );
+    Frame {
+        target,
+        visibility,
+        buffers,
+        stats,
+    }
+}
+
+/// [`render_ldr`] again into `frame` (same target); its colour planes, if
+/// it has any, are dropped.
+pub fn render_ldr_into(
+    scene: &SceneData,
+    frame: &mut Frame,
+    path: ShadePath,
+    enc: LdrEncoding,
+    ldr: &mut Vec<u8>,
+) {
+    let mut stats = FrameStats::default();
+    visibility_into(scene, &frame.target, &mut frame.visibility, &mut stats);
+    frame.buffers.color = Planes3::default();
+    shade_impl(
+        scene,
+        &frame.target,
+        &frame.visibility,
+        path,
+        &mut frame.buffers,
+        Some((enc, ldr)),
+        &mut stats,
+    );
+    frame.stats = stats;
 }
 
 /// Renders the scene again into `frame`'s buffers (same target, same set).

@@ -40,8 +40,8 @@ pub mod unlit;
 pub use buffers::{BufferSet, FrameBuffers, Planes3};
 pub use camera::{Camera, View};
 pub use frame::{
-    render, render_into, render_with, shade, shade_into, visibility, visibility_into, Frame,
-    FrameStats, PassTimes, ShadePath, Visibility,
+    render, render_into, render_ldr, render_ldr_into, render_with, shade, shade_into, visibility,
+    visibility_into, Frame, FrameStats, PassTimes, ShadePath, Visibility,
 };
 pub use geometry::{Cull, GeometryPass, Project, VertexStage};
 pub use lit::Lit;

@@ -455,6 +455,15 @@ impl Post {
         }
     }
 
+    /// The list as an encoding the shading pass can run itself: the fused
+    /// standard list at ssaa 1 (no supersampling resolve, no custom stage).
+    pub fn ldr_in_shading(&self) -> Option<LdrEncoding> {
+        match self.fused_form()? {
+            (1, stops, tonemap) => Some(LdrEncoding::new(tonemap, stops)),
+            _ => None,
+        }
+    }
+
     /// The fused head's parameters when the list starts resolve, exposure,
     /// tone map (custom stages and the encode after them).
     fn fused_head(&self) -> Option<(u32, f32, Tonemap)> {
@@ -690,6 +699,14 @@ fn resolve_ldr_with<const CURVE: u8>(
     let enc8 = SrgbEncoderX8::new();
     size_output(out, w * h * 3);
     out.par_chunks_mut(3 * w).enumerate().for_each(|(y, row)| {
+        if ssaa == 1 {
+            // The pass the shading pass runs per tile row when it encodes
+            // in place (LdrEncoding): one function, so the same bytes.
+            let i = y * sw;
+            let [r, g, b] = [&color.r, &color.g, &color.b].map(|p| &p[i..i + w]);
+            encode_row_with::<CURVE>(r, g, b, k, row);
+            return;
+        }
         // Eight pixels at a time: the per-channel scalar chain (scale, curve,
         // two table reads) was ~50 cycles a pixel.
         let full = w / 8 * 8;
@@ -706,6 +723,60 @@ fn resolve_ldr_with<const CURVE: u8>(
             }
         }
     });
+}
+
+/// Exposure, tone curve and sRGB code of one run of pixels at ssaa 1:
+/// `out[3i..3i + 3]` from `r[i]`, `g[i]`, `b[i]`, 2^stops = `k`. The
+/// products are the resolve's (sample sum × 1/n × k, with n = 1, so
+/// bit for bit v × k).
+#[inline(always)]
+fn encode_row_with<const CURVE: u8>(r: &[f32], g: &[f32], b: &[f32], k: f32, out: &mut [u8]) {
+    let curve = curve_of::<CURVE>();
+    let n = r.len();
+    assert!(g.len() == n && b.len() == n && out.len() == 3 * n);
+    let (enc, enc8) = (SrgbEncoder::new(), SrgbEncoderX8::new());
+    let full = n / 8 * 8;
+    for (x0, px8) in (0..full).step_by(8).zip(out.chunks_exact_mut(24)) {
+        let code = |p: &[f32]| ldr_code(&enc8, curve, load8(p, x0), 1.0, k);
+        store_rgb8(px8, [code(r), code(g), code(b)]);
+    }
+    for (x, px) in out.chunks_exact_mut(3).enumerate().skip(full) {
+        for (c, p) in [r, g, b].into_iter().enumerate() {
+            px[c] = enc.encode(curve.apply(p[x] * 1.0 * k));
+        }
+    }
+}
+
+/// The standard post list at ssaa 1 (exposure, tone map, sRGB encode) as
+/// the shading pass can run it on each tile row while the row is in
+/// cache, instead of writing linear colour planes for the post to read
+/// back (see [`Post::ldr_in_shading`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LdrEncoding {
+    tonemap: Tonemap,
+    /// 2^exposure, as the resolve computes it (once here, not per row).
+    k: f32,
+}
+
+impl LdrEncoding {
+    /// Exposure `stops`, then `tonemap`, then the sRGB encode.
+    pub fn new(tonemap: Tonemap, stops: f32) -> LdrEncoding {
+        LdrEncoding {
+            tonemap,
+            k: stops.exp2(),
+        }
+    }
+
+    /// Codes of the pixels with linear colours `r[i]`, `g[i]`, `b[i]` into
+    /// `out[3i..3i + 3]`: the bytes [`resolve_ldr`] gives for them.
+    pub fn encode_row(&self, r: &[f32], g: &[f32], b: &[f32], out: &mut [u8]) {
+        let k = self.k;
+        match self.tonemap {
+            Tonemap::Clamp => encode_row_with::<0>(r, g, b, k, out),
+            Tonemap::Reinhard => encode_row_with::<1>(r, g, b, k, out),
+            Tonemap::Aces => encode_row_with::<2>(r, g, b, k, out),
+        }
+    }
 }
 
 /// The sample sums of output pixels (x0.., y), 8 of them, per channel:

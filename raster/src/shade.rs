@@ -3,6 +3,7 @@
 //! results go to the row-major frame buffers (buffers.rs).
 
 use crate::buffers::TileWriter;
+use crate::post::LdrEncoding;
 use crate::resolve::{PacketTris, ResolveContext};
 use crate::shader::{ShadeEnv, ShadeInput, ShadeLanes};
 use crate::target::{Target, TILE};
@@ -15,6 +16,9 @@ pub struct ShadeTargets<'a> {
     pub depth: TileWriter<'a, f32>,
     pub normal: [TileWriter<'a, f32>; 3],
     pub id: TileWriter<'a, u32>,
+    /// 8-bit sRGB output encoded here, tile row by tile row (the colour
+    /// then goes to the planes only if they are not empty).
+    pub ldr: Option<(LdrEncoding, TileWriter<'a, [u8; 3]>)>,
 }
 
 /// Writes the first `out.len()` lanes of `v` (fewer than R::LANES only in
@@ -52,6 +56,9 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
     let mut covered = 0u64;
     let tile_w = TILE.min((target.width - tx) as usize);
     let mut tris = PacketTris::default();
+    // A tile row's colour when the planes are not kept (LDR encoded in
+    // place): it stays in L1 from the shading to the encode.
+    let mut row_rgb = [[0.0f32; TILE]; 3];
     for plane in out.color.iter().chain(&out.normal).chain([&out.depth]) {
         plane.prefetch_row(tx as usize, ty as usize);
     }
@@ -59,7 +66,7 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
         let y = (ty as usize) + row;
         let x0 = tx as usize;
         // SAFETY: tile t is this call's alone (the function's contract).
-        let (color, depth, normal, id_out) = unsafe {
+        let (planes, depth, normal, id_out) = unsafe {
             let [r, g, b] = &out.color;
             let [nx, ny, nz] = &out.normal;
             (
@@ -69,12 +76,21 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
                 out.id.tile_row(x0, y),
             )
         };
+        let color = if planes[0].is_empty() {
+            let [r, g, b] = &mut row_rgb;
+            [&mut r[..tile_w], &mut g[..tile_w], &mut b[..tile_w]]
+        } else {
+            planes
+        };
         if !id_out.is_empty() {
             id_out.copy_from_slice(&ids[row * TILE..row * TILE + tile_w]);
         }
         // The next row's lines, fetched while this row is shaded.
         for plane in out.color.iter().chain(&out.normal).chain([&out.depth]) {
             plane.prefetch_row(x0, y + 1);
+        }
+        if let Some((_, ldr)) = &out.ldr {
+            ldr.prefetch_row(x0, y + 1);
         }
         let mut lx = 0;
         while lx < tile_w {
@@ -132,6 +148,11 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
                 store(n.z, &mut normal[2][px]);
             }
             lx += R::LANES;
+        }
+        if let Some((enc, ldr)) = &out.ldr {
+            // SAFETY: as the rows above.
+            let bytes = unsafe { ldr.tile_row(x0, y) };
+            enc.encode_row(color[0], color[1], color[2], bytes.as_flattened_mut());
         }
     }
     covered
