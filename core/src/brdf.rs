@@ -140,14 +140,17 @@ impl<R: Real> HalfAngles<R> {
         // packet the rescale cost ~5 % of the shading pass. (cos θd by the
         // hardware root, not x·rsqrt(x): see `smith_ggx_root`.)
         let tiny = len2.lt(R::splat(1e-20));
-        let (s, len2, unscale) = if tiny.any() {
+        // cos θd = |s| / 2 in each branch: the common one then has no
+        // multiply by an `unscale` of 1.
+        let (s, len2, cos_d) = if tiny.any() {
             let m = s.x.abs().max(s.y.abs()).max(s.z.abs());
             let tiny = tiny & m.gt(R::ZERO);
             let (scale, unscale) = (R::select(tiny, m.rcp(), R::ONE), R::select(tiny, m, R::ONE));
             let s = s * scale;
-            (s, s.length_squared(), unscale)
+            let len2 = s.length_squared();
+            (s, len2, len2.sqrt() * R::HALF * unscale)
         } else {
-            (s, len2, R::ONE)
+            (s, len2, len2.sqrt() * R::HALF)
         };
         let inv_len2 = len2.rcp();
         HalfAngles {
@@ -156,7 +159,7 @@ impl<R: Real> HalfAngles<R> {
             above,
             cos2_h: s.z * s.z * inv_len2,
             sin2_h: s.x.mul_add(s.x, s.y * s.y) * inv_len2,
-            cos_d: len2.sqrt() * R::HALF * unscale,
+            cos_d,
             s,
             inv_len2,
         }
