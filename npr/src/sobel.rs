@@ -267,12 +267,14 @@ pub fn detect_edges(
 /// word written). `rows` are the offsets in `input`'s slices of the row
 /// above, the row and the row below (clamped by the caller at the image's
 /// top and bottom); `keep(x)` says whether sample x of the row may carry
-/// a line; `m` is scratch (a row of measures).
+/// a line; `m` is scratch (a row of measures, for rows under
+/// [`FUSED_MIN_WIDTH`] samples).
 ///
-/// Each source's measure along the row ([`measure_row`]), compared with
-/// its threshold 8 samples at a time; a sample is marked when any source
-/// exceeds its threshold and `keep` allows it (asked only where a source
-/// does: most samples have no edge).
+/// A sample is marked when any source's measure exceeds its threshold and
+/// `keep` allows it (asked only where a source does: most samples have no
+/// edge). The row's interior goes 8 samples at a time through every
+/// source at once ([`detect_lanes`]); its first and last sample through
+/// the clamped scalar [`measure_at`].
 pub fn detect_row(
     input: &EdgeInput,
     sources: &[(Source, f32)],
@@ -281,26 +283,52 @@ pub fn detect_row(
     out: &mut [u64],
     m: &mut Vec<f32>,
 ) {
+    detect_row_ahead(input, sources, rows, None, keep, out, m);
+}
+
+/// [`detect_row`], prefetching the normals of the row starting at
+/// `ahead` (an offset in `input`'s slices) as it goes.
+fn detect_row_ahead(
+    input: &EdgeInput,
+    sources: &[(Source, f32)],
+    rows: [usize; 3],
+    ahead: Option<usize>,
+    keep: &dyn Fn(usize) -> bool,
+    out: &mut [u64],
+    m: &mut Vec<f32>,
+) {
     let w = input.width;
     out.fill(0);
-    m.resize(w, 0.0);
-    for &(s, t) in sources {
-        measure_row(input, s, rows, m);
-        // A word's 64 samples 8 a compare, the row's last partial word
-        // one at a time.
-        let t8 = f32x8::splat(t);
-        let mut blocks = m.chunks_exact(64);
-        for (o, block) in out.iter_mut().zip(&mut blocks) {
-            let mut word = 0u64;
-            for (k, c) in block.chunks_exact(8).enumerate() {
-                let v = f32x8::from(<[f32; 8]>::try_from(c).unwrap_or_default());
-                word |= u64::from(v.gt(t8).bits()) << (8 * k);
+    if w < FUSED_MIN_WIDTH {
+        measured_row(input, sources, rows, out, m);
+    } else {
+        let t = Thresholds::new(sources);
+        // Chunks x..x+8 with x = 1, 9, 17, …; the last one ends at w − 2,
+        // overlapping the one before where (w − 2) % 8 ≠ 0 (its marks are
+        // the same bits again).
+        let last = w - 9;
+        let starts = (1..last).step_by(8).chain(std::iter::once(last));
+        for x in starts {
+            if let Some(a) = ahead {
+                for f in input.normal {
+                    prefetch(f, a + x);
+                }
             }
-            *o |= word;
+            let bits = u64::from(detect_lanes(input, &t, rows, x));
+            let (j, sh) = (x / 64, x % 64);
+            out[j] |= bits << sh;
+            if sh > 56 {
+                out[j + 1] |= bits >> (64 - sh);
+            }
         }
-        let tail = w - blocks.remainder().len();
-        for (x, &v) in (tail..).zip(blocks.remainder()) {
-            out[x / 64] |= u64::from(v > t) << (x % 64);
+        for x in [0, w - 1] {
+            let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
+            let nb = rows.map(|r| xs.map(|x| r + x));
+            for &(s, t) in sources {
+                if measure_at(input, s, &nb) > t {
+                    out[x / 64] |= 1 << (x % 64);
+                }
+            }
         }
     }
     for (j, word) in out.iter_mut().enumerate() {
@@ -313,6 +341,142 @@ pub fn detect_row(
             set &= set - 1;
         }
     }
+}
+
+/// Rows narrower than this (no interior chunk of 8 samples with its
+/// neighbours) are measured source by source ([`measured_row`]).
+const FUSED_MIN_WIDTH: usize = 10;
+
+/// [`detect_row`]'s marks, source by source along the whole row
+/// ([`measure_row`]), for any width: `out` zeroed by the caller.
+fn measured_row(
+    input: &EdgeInput,
+    sources: &[(Source, f32)],
+    rows: [usize; 3],
+    out: &mut [u64],
+    m: &mut Vec<f32>,
+) {
+    m.resize(input.width, 0.0);
+    for &(s, t) in sources {
+        measure_row(input, s, rows, m);
+        for (x, &v) in m.iter().enumerate() {
+            out[x / 64] |= u64::from(v > t) << (x % 64);
+        }
+    }
+}
+
+/// Each source's threshold for [`detect_lanes`], `None` when it is not a
+/// source. A source listed twice marks where its measure exceeds either
+/// threshold, i.e. the lesser (a NaN threshold marks nothing: dropped).
+struct Thresholds {
+    depth: Option<f32x8>,
+    normal: Option<f32x8>,
+    id: Option<f32x8>,
+    color: Option<f32x8>,
+}
+
+impl Thresholds {
+    fn new(sources: &[(Source, f32)]) -> Thresholds {
+        let least = |s: Source| {
+            sources
+                .iter()
+                .filter(|&&(t, v)| t == s && !v.is_nan())
+                .map(|&(_, v)| v)
+                .reduce(f32::min)
+                .map(f32x8::splat)
+        };
+        Thresholds {
+            depth: least(Source::Depth),
+            normal: least(Source::Normal),
+            id: least(Source::Id),
+            color: least(Source::Color),
+        }
+    }
+}
+
+/// The 3×3 neighbourhoods of field `f` at the 8 samples x..x+8 of a row
+/// (`rows` as in [`detect_row`]; 1 ≤ x, x + 9 ≤ width): `[r][c]` holds
+/// the row r (0 above), column offset c − 1. One bounds check a row.
+#[inline(always)]
+fn around8(f: &[f32], rows: [usize; 3], x: usize) -> [[f32x8; 3]; 3] {
+    // No array `map` here: it was left as a call copying the arrays.
+    #[inline(always)]
+    fn load8(s: &[f32]) -> f32x8 {
+        f32x8::from(<[f32; 8]>::try_from(s).unwrap_or_default())
+    }
+    #[inline(always)]
+    fn row(f: &[f32], r: usize, x: usize) -> [f32x8; 3] {
+        let s = &f[r + x - 1..r + x + 9];
+        [load8(&s[..8]), load8(&s[1..9]), load8(&s[2..])]
+    }
+    [row(f, rows[0], x), row(f, rows[1], x), row(f, rows[2], x)]
+}
+
+/// Sobel gradient (Gx, Gy) over a neighbourhood, [`gradient`]'s sums in
+/// its order.
+#[inline(always)]
+fn gradient8(n: &[[f32x8; 3]; 3]) -> (f32x8, f32x8) {
+    let (mut gx, mut gy) = (f32x8::ZERO, f32x8::ZERO);
+    for (k, &wk) in W.iter().enumerate() {
+        let wk = f32x8::splat(wk);
+        gx += wk * (n[k][2] - n[k][0]);
+        gy += wk * (n[2][k] - n[0][k]);
+    }
+    (gx, gy)
+}
+
+/// Whether the 8 samples x..x+8 of a row (bit i: sample x + i) exceed any
+/// source's threshold: every source's measure at once, each [`measure_at`]'s
+/// operations in its order (no FMA), so the same values bit for bit
+/// (tested), from one read of the neighbourhood of each field.
+#[inline(always)]
+fn detect_lanes(input: &EdgeInput, t: &Thresholds, rows: [usize; 3], x: usize) -> u32 {
+    let zero = f32x8::ZERO;
+    let mut hit = zero;
+    if let Some(td) = t.depth {
+        let n = around8(input.inv_depth, rows, x);
+        let two = f32x8::splat(2.0);
+        let (mut dxx, mut dyy, mut qmax) = (zero, zero, zero);
+        for (k, &wk) in W.iter().enumerate() {
+            let wk = f32x8::splat(wk);
+            dxx += wk * (n[k][2] + n[k][0] - two * n[k][1]);
+            dyy += wk * (n[2][k] + n[0][k] - two * n[1][k]);
+            qmax = Real::max(Real::max(Real::max(qmax, n[k][0]), n[k][1]), n[k][2]);
+        }
+        // Lanes with q_max = 0 divide 0 by 0; the select drops them.
+        let d = Real::max(dxx.abs(), dyy.abs()) / qmax;
+        hit |= qmax.simd_gt(zero).select(d, zero).simd_gt(td);
+    }
+    if let Some(tn) = t.normal {
+        let mut g2 = zero;
+        for f in input.normal {
+            let (gx, gy) = gradient8(&around8(f, rows, x));
+            g2 += gx * gx + gy * gy;
+        }
+        hit |= g2.sqrt().simd_gt(tn);
+    }
+    if let Some(ti) = t.id {
+        // Labels are never NaN: the unordered ≠ is measure_at's !=. The
+        // sums are of small integers, exact in any order; the centre
+        // never differs.
+        let n = around8(input.material, rows, x);
+        let centre = n[1][1];
+        let mut f = zero;
+        for (r, nr) in n.iter().enumerate() {
+            for (c, &o) in nr.iter().enumerate() {
+                if r != 1 || c != 1 {
+                    let weight = f32x8::splat(if r == 1 || c == 1 { 2.0 } else { 1.0 });
+                    f += o.simd_ne(centre) & weight;
+                }
+            }
+        }
+        hit |= (f / f32x8::splat(12.0)).simd_gt(ti);
+    }
+    if let Some(tc) = t.color {
+        let (gx, gy) = gradient8(&around8(input.luma, rows, x));
+        hit |= (gx * gx + gy * gy).sqrt().simd_gt(tc);
+    }
+    hit.bits()
 }
 
 /// The measure of source `s` at every sample of a row (`rows` as in
@@ -623,6 +787,9 @@ impl Sobel {
                 let (ya, yb) = (y0.saturating_sub(1), (y1 + 1).min(h));
                 let range = ya * w..yb * w;
                 let n = range.len();
+                // The normals' slices reach two rows past the band, for
+                // the prefetch.
+                let yn = (yb + 2).min(h);
                 pool.with(|s| {
                     if depth {
                         s.inv_depth.resize(n, 0.0);
@@ -641,7 +808,7 @@ impl Sobel {
                         width: w,
                         height: yb - ya,
                         inv_depth: part(depth, &s.inv_depth, 0..n),
-                        normal: [&nrm.r, &nrm.g, &nrm.b].map(|c| part(normal, c, range.clone())),
+                        normal: [&nrm.r, &nrm.g, &nrm.b].map(|c| part(normal, c, ya * w..yn * w)),
                         material: part(id, &s.material, 0..n),
                         luma: part(color, &s.luma, 0..n),
                     };
@@ -649,7 +816,19 @@ impl Sobel {
                         let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)];
                         let rows = rows.map(|r| (r - ya) * w);
                         let keep = |x: usize| !needs_ids || self.selection.contains(ids[y * w + x]);
-                        detect_row(&input, &self.sources, rows, &keep, out, &mut s.measure);
+                        // The normals are read from the frame, two rows
+                        // ahead of their first use (the band's other
+                        // inputs were just computed and are in cache).
+                        let ahead = (normal && y + 2 < yn).then(|| (y + 2 - ya) * w);
+                        detect_row_ahead(
+                            &input,
+                            &self.sources,
+                            rows,
+                            ahead,
+                            &keep,
+                            out,
+                            &mut s.measure,
+                        );
                     }
                 });
             });
@@ -686,6 +865,23 @@ impl Sobel {
             });
         out
     }
+}
+
+/// A hint that the cache line of `v[i]` will be read soon (nothing past
+/// `v`'s end). No effect on results.
+#[inline(always)]
+fn prefetch(v: &[f32], i: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(p) = v.get(i) {
+        // SAFETY: a prefetch is a hint that never faults; the address is
+        // an element of `v`.
+        unsafe {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            _mm_prefetch::<_MM_HINT_T0>(p as *const f32 as *const i8);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (v, i);
 }
 
 /// `v[range]` for a source in use, else empty (its buffer may be absent).
@@ -984,6 +1180,57 @@ mod tests {
                             let want = measure(&input, s, x, y) > t && (y * w + x) % 11 != 4;
                             assert_eq!(e[y * w + x], want, "{s:?} t {t} ({x}, {y})");
                         }
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn rows_mark_exactly_where_the_scalar_measure_exceeds_a_threshold_at_it() {
+        // Thresholds equal to measures at chosen samples and one float
+        // below: a sample whose measure is the threshold is unmarked, one
+        // float less marks it, so every bit of the row kernels' values is
+        // checked there. Widths put 8-sample chunks across 64-sample words
+        // and an overlapping last chunk; a source listed twice marks above
+        // the lesser threshold.
+        for (w, h) in [(10, 3), (37, 5), (130, 6), (203, 4)] {
+            let n = w * h;
+            let depth: Vec<f32> = (0..n)
+                .map(|i| match hash(i, 1) % 5 {
+                    0 => f32::INFINITY,
+                    _ => 1.0 + 4.0 * unit(i, 2),
+                })
+                .collect();
+            let inv = inverse_depth(&depth);
+            let normal: Vec<Vec<f32>> = (0..3)
+                .map(|c| (0..n).map(|i| unit(i, 10 + c) * 2.0 - 1.0).collect())
+                .collect();
+            let mat: Vec<f32> = (0..n).map(|i| (hash(i, 5) % 3) as f32 - 1.0).collect();
+            let luma: Vec<f32> = (0..n).map(|i| unit(i, 7)).collect();
+            let input = EdgeInput {
+                width: w,
+                height: h,
+                inv_depth: &inv,
+                normal: [&normal[0], &normal[1], &normal[2]],
+                material: &mat,
+                luma: &luma,
+            };
+            let all = [Source::Depth, Source::Normal, Source::Id, Source::Color];
+            for s in all {
+                for k in 0..6 {
+                    let (x, y) = ((k * 29 + 3) % w, k % h);
+                    let at = measure(&input, s, x, y);
+                    for t in [at, at.next_down()] {
+                        let sources = [(s, t + 0.25), (s, t)];
+                        let e = detect_edges(&input, &sources, &|_| true);
+                        for yy in 0..h {
+                            for xx in 0..w {
+                                let want = measure(&input, s, xx, yy) > t;
+                                assert_eq!(e[yy * w + xx], want, "{w} {s:?} t {t} ({xx}, {yy})");
+                            }
+                        }
+                        assert_eq!(e[y * w + x], t < at);
                     }
                 }
             }
