@@ -303,18 +303,41 @@ fn detect_row_ahead(
         measured_row(input, sources, rows, out, m);
     } else {
         let t = Thresholds::new(sources);
-        // Chunks x..x+8 with x = 1, 9, 17, …; the last one ends at w − 2,
-        // overlapping the one before where (w − 2) % 8 ≠ 0 (its marks are
-        // the same bits again).
+        let f = fields(input);
+        let used = [
+            t.depth.is_some(),
+            t.normal.is_some(),
+            t.normal.is_some(),
+            t.normal.is_some(),
+            t.id.is_some(),
+            t.color.is_some(),
+        ];
+        // Blocks of 64 samples x..x+64 with x = 1, 65, …, then chunks of 8
+        // up to w − 2, the last one overlapping the one before where
+        // needed (its marks are the same bits again).
+        let mut x = 1;
+        while x + BLOCK < w {
+            if let Some(a) = ahead {
+                for f in input.normal {
+                    for k in (0..BLOCK).step_by(16) {
+                        prefetch(f, a + x + k);
+                    }
+                }
+            }
+            let bits = detect_block(&f, used, &t, rows, x);
+            out[x / 64] |= bits << 1;
+            out[x / 64 + 1] |= bits >> 63;
+            x += BLOCK;
+        }
         let last = w - 9;
-        let starts = (1..last).step_by(8).chain(std::iter::once(last));
+        let starts = (x..last).step_by(8).chain(std::iter::once(last));
         for x in starts {
             if let Some(a) = ahead {
                 for f in input.normal {
                     prefetch(f, a + x);
                 }
             }
-            let bits = u64::from(detect_lanes(input, &t, rows, x));
+            let bits = u64::from(detect_lanes(&t, |k| around8(f[k as usize], rows, x)));
             let (j, sh) = (x / 64, x % 64);
             out[j] |= bits << sh;
             if sh > 56 {
@@ -385,13 +408,102 @@ impl Thresholds {
                 .reduce(f32::min)
                 .map(f32x8::splat)
         };
+        // The gradients' thresholds apply to the squared magnitude.
+        let squared = |s| least(s).map(|t| f32x8::splat(below_sqrt(t.as_array()[0])));
         Thresholds {
             depth: least(Source::Depth),
-            normal: least(Source::Normal),
+            normal: squared(Source::Normal),
             id: least(Source::Id),
-            color: least(Source::Color),
+            color: squared(Source::Color),
         }
     }
+}
+
+/// The threshold on g² ≥ 0 that says what `√g² > t` says, without the
+/// square root: the largest x with √x ≤ t (f32, correctly rounded √ as
+/// the lanes' and measure_at's), so √g² > t ⟺ g² > x (√ is monotone; a
+/// NaN g² is neither). Every g² ≥ 0 has √ > t < 0: x = −1 then.
+fn below_sqrt(t: f32) -> f32 {
+    if t < 0.0 {
+        return -1.0;
+    }
+    if t == f32::INFINITY {
+        return t;
+    }
+    // t² is within a few ulps of x: step to it.
+    let mut x = t * t;
+    while x.sqrt() > t {
+        x = x.next_down();
+    }
+    while x < f32::INFINITY && x.next_up().sqrt() <= t {
+        x = x.next_up();
+    }
+    x
+}
+
+/// The fields a detection reads, indices into [`fields`].
+#[derive(Clone, Copy)]
+enum Field {
+    InvDepth,
+    NormalX,
+    NormalY,
+    NormalZ,
+    Label,
+    Luma,
+}
+
+/// `input`'s fields in [`Field`]'s order.
+fn fields<'a>(input: &EdgeInput<'a>) -> [&'a [f32]; 6] {
+    let [nx, ny, nz] = input.normal;
+    [input.inv_depth, nx, ny, nz, input.material, input.luma]
+}
+
+/// Samples [`detect_block`] takes at once.
+const BLOCK: usize = 64;
+
+/// [`detect_lanes`] on the 64 samples x..x+64 of a row (bit i: sample
+/// x + i; 1 ≤ x, x + 65 ≤ width). Each field row's 66 values are sliced
+/// once, and the eight chunks read them at constant offsets: no bounds
+/// checks inside (the chunk-by-chunk slicing was ~40 % of the detection's
+/// instructions).
+#[inline(never)]
+fn detect_block(
+    f: &[&[f32]; 6],
+    used: [bool; 6],
+    t: &Thresholds,
+    rows: [usize; 3],
+    x: usize,
+) -> u64 {
+    const UNUSED: [f32; BLOCK + 2] = [0.0; BLOCK + 2];
+    let row = |k: usize, r: usize| -> &[f32; BLOCK + 2] {
+        if used[k] {
+            <&[f32; BLOCK + 2]>::try_from(&f[k][rows[r] + x - 1..rows[r] + x + BLOCK + 1])
+                .unwrap_or(&UNUSED)
+        } else {
+            &UNUSED
+        }
+    };
+    // Written out: an array `map` here was left as a call (~8 M
+    // instructions a frame).
+    let rows3 = |k: usize| [row(k, 0), row(k, 1), row(k, 2)];
+    let a = [rows3(0), rows3(1), rows3(2), rows3(3), rows3(4), rows3(5)];
+    let mut bits = 0u64;
+    for i in 0..BLOCK / 8 {
+        let o = 8 * i;
+        let at = |f: Field| {
+            let a = &a[f as usize];
+            let load = |r: usize, c: usize| {
+                f32x8::from(<[f32; 8]>::try_from(&a[r][o + c..o + c + 8]).unwrap_or_default())
+            };
+            [
+                [load(0, 0), load(0, 1), load(0, 2)],
+                [load(1, 0), load(1, 1), load(1, 2)],
+                [load(2, 0), load(2, 1), load(2, 2)],
+            ]
+        };
+        bits |= u64::from(detect_lanes(t, at)) << o;
+    }
+    bits
 }
 
 /// The 3×3 neighbourhoods of field `f` at the 8 samples x..x+8 of a row
@@ -413,35 +525,42 @@ fn around8(f: &[f32], rows: [usize; 3], x: usize) -> [[f32x8; 3]; 3] {
 }
 
 /// Sobel gradient (Gx, Gy) over a neighbourhood, [`gradient`]'s sums in
-/// its order.
+/// its order but for its leading 0 + (see [`detect_lanes`]): for squaring.
 #[inline(always)]
 fn gradient8(n: &[[f32x8; 3]; 3]) -> (f32x8, f32x8) {
-    let (mut gx, mut gy) = (f32x8::ZERO, f32x8::ZERO);
-    for (k, &wk) in W.iter().enumerate() {
-        let wk = f32x8::splat(wk);
-        gx += wk * (n[k][2] - n[k][0]);
-        gy += wk * (n[2][k] - n[0][k]);
-    }
+    let w = W.map(f32x8::splat);
+    let gx = w[0] * (n[0][2] - n[0][0]) + w[1] * (n[1][2] - n[1][0]) + w[2] * (n[2][2] - n[2][0]);
+    let gy = w[0] * (n[2][0] - n[0][0]) + w[1] * (n[2][1] - n[0][1]) + w[2] * (n[2][2] - n[0][2]);
     (gx, gy)
 }
 
 /// Whether the 8 samples x..x+8 of a row (bit i: sample x + i) exceed any
 /// source's threshold: every source's measure at once, each [`measure_at`]'s
-/// operations in its order (no FMA), so the same values bit for bit
+/// operations in its order (no FMA) but for the leading 0 + of its sums
+/// (0 + p is p but for a zero's sign, which the squares and |·| drop),
+/// so the same values bit for bit
 /// (tested), from one read of the neighbourhood of each field.
 #[inline(always)]
-fn detect_lanes(input: &EdgeInput, t: &Thresholds, rows: [usize; 3], x: usize) -> u32 {
+fn detect_lanes(t: &Thresholds, around: impl Fn(Field) -> [[f32x8; 3]; 3]) -> u32 {
     let zero = f32x8::ZERO;
     let mut hit = zero;
     if let Some(td) = t.depth {
-        let n = around8(input.inv_depth, rows, x);
+        let n = around(Field::InvDepth);
         let two = f32x8::splat(2.0);
-        let (mut dxx, mut dyy, mut qmax) = (zero, zero, zero);
-        for (k, &wk) in W.iter().enumerate() {
-            let wk = f32x8::splat(wk);
-            dxx += wk * (n[k][2] + n[k][0] - two * n[k][1]);
-            dyy += wk * (n[2][k] + n[0][k] - two * n[1][k]);
-            qmax = Real::max(Real::max(Real::max(qmax, n[k][0]), n[k][1]), n[k][2]);
+        let w = W.map(f32x8::splat);
+        let ddx = |k: usize| w[k] * (n[k][2] + n[k][0] - two * n[k][1]);
+        let ddy = |k: usize| w[k] * (n[2][k] + n[0][k] - two * n[1][k]);
+        let (dxx, dyy) = (ddx(0) + ddx(1) + ddx(2), ddy(0) + ddy(1) + ddy(2));
+        // measure_at's maxima in its order, less its leading max(0, ·):
+        // that changes q_max only where every q ≤ 0 (or from a NaN on),
+        // and there q_max > 0 fails both ways (1/w is ≥ 0 anyway).
+        let mut qmax = n[0][0];
+        for (k, nk) in n.iter().enumerate() {
+            for (c, &v) in nk.iter().enumerate() {
+                if k + c > 0 {
+                    qmax = Real::max(qmax, v);
+                }
+            }
         }
         // Lanes with q_max = 0 divide 0 by 0; the select drops them.
         let d = Real::max(dxx.abs(), dyy.abs()) / qmax;
@@ -449,17 +568,17 @@ fn detect_lanes(input: &EdgeInput, t: &Thresholds, rows: [usize; 3], x: usize) -
     }
     if let Some(tn) = t.normal {
         let mut g2 = zero;
-        for f in input.normal {
-            let (gx, gy) = gradient8(&around8(f, rows, x));
+        for f in [Field::NormalX, Field::NormalY, Field::NormalZ] {
+            let (gx, gy) = gradient8(&around(f));
             g2 += gx * gx + gy * gy;
         }
-        hit |= g2.sqrt().simd_gt(tn);
+        hit |= g2.simd_gt(tn); // √g² > t (Thresholds)
     }
     if let Some(ti) = t.id {
         // Labels are never NaN: the unordered ≠ is measure_at's !=. The
         // sums are of small integers, exact in any order; the centre
         // never differs.
-        let n = around8(input.material, rows, x);
+        let n = around(Field::Label);
         let centre = n[1][1];
         let mut f = zero;
         for (r, nr) in n.iter().enumerate() {
@@ -473,8 +592,8 @@ fn detect_lanes(input: &EdgeInput, t: &Thresholds, rows: [usize; 3], x: usize) -
         hit |= (f / f32x8::splat(12.0)).simd_gt(ti);
     }
     if let Some(tc) = t.color {
-        let (gx, gy) = gradient8(&around8(input.luma, rows, x));
-        hit |= (gx * gx + gy * gy).sqrt().simd_gt(tc);
+        let (gx, gy) = gradient8(&around(Field::Luma));
+        hit |= (gx * gx + gy * gy).simd_gt(tc); // √ as above
     }
     hit.bits()
 }
@@ -884,6 +1003,37 @@ fn prefetch(v: &[f32], i: usize) {
     let _ = (v, i);
 }
 
+/// Prefetches the cache lines of row `y` of the image planes `rgb` (at
+/// the mask's size) that the line can ink: 16-sample lines with a mark
+/// within `reach` rows and (inside its 64-sample word) `reach` columns.
+/// A hint only: ink reaching across a word's edge is not looked for.
+fn prefetch_inked(mask: &EdgeMask, marked: &[bool], y: usize, reach: usize, rgb: [&[f32]; 3]) {
+    let h = mask.height();
+    let near = y.saturating_sub(reach)..(y + reach + 1).min(h);
+    if !marked[near.clone()].contains(&true) {
+        return;
+    }
+    for j in 0..mask.words() {
+        let v = near
+            .clone()
+            .filter(|&yy| marked[yy])
+            .fold(0u64, |v, yy| v | mask.row(yy)[j]);
+        if v == 0 {
+            continue;
+        }
+        for k in 0..4usize {
+            let lo = (16 * k).saturating_sub(reach);
+            let hi = (16 * k + 15 + reach).min(63);
+            let span = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+            if v & span != 0 {
+                for p in rgb {
+                    prefetch(p, 64 * j + 16 * k);
+                }
+            }
+        }
+    }
+}
+
 /// `v[range]` for a source in use, else empty (its buffer may be absent).
 fn part(on: bool, v: &[f32], range: std::ops::Range<usize>) -> &[f32] {
     if on {
@@ -945,14 +1095,33 @@ impl PostStage for Sobel {
             .enumerate()
             .for_each(|(k, ((r, g), b))| {
                 pool.with(|s| {
-                    let rows = r.chunks_mut(w).zip(g.chunks_mut(w)).zip(b.chunks_mut(w));
-                    for (y, ((r, g), b)) in (k * BLEND_ROWS..).zip(rows) {
-                        if ssaa == 1 {
+                    let n = r.len() / w.max(1);
+                    if ssaa == 1 {
+                        // The image lines the blend will read, two rows
+                        // ahead (the band's first two rows at its start):
+                        // they are far apart and come from memory.
+                        let reach = cover.radius();
+                        let ahead = |r: &[f32], g: &[f32], b: &[f32], i: usize| {
+                            if i < n {
+                                let planes = [r, g, b].map(|p| &p[i * w..(i + 1) * w]);
+                                prefetch_inked(mask, marked, k * BLEND_ROWS + i, reach, planes);
+                            }
+                        };
+                        ahead(r, g, b, 0);
+                        ahead(r, g, b, 1);
+                        for i in 0..n {
+                            ahead(r, g, b, i + 2);
+                            let y = k * BLEND_ROWS + i;
+                            let row = i * w..(i + 1) * w;
+                            let (r, g, b) = (&mut r[row.clone()], &mut g[row.clone()], &mut b[row]);
                             dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| {
                                 blend([&mut r[x], &mut g[x], &mut b[x]], c * inv, color)
                             });
-                            continue;
                         }
+                        return;
+                    }
+                    let rows = r.chunks_mut(w).zip(g.chunks_mut(w)).zip(b.chunks_mut(w));
+                    for (y, ((r, g), b)) in (k * BLEND_ROWS..).zip(rows) {
                         // The row's ssaa sample rows' coverage, then
                         // composite's sums and blend.
                         let RowsScratch {
@@ -1233,6 +1402,30 @@ mod tests {
                         assert_eq!(e[y * w + x], t < at);
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn the_squared_threshold_says_what_the_square_root_says() {
+        // Around each threshold's square, f32 by f32, and at the ends.
+        for t in [0.0f32, 1e-20, 0.1, 0.25, 0.4, 0.6, 1.0, 3.7, 1e19, 3e19] {
+            let x = below_sqrt(t);
+            let mut g2 = (t * t).max(f32::MIN_POSITIVE);
+            for _ in 0..8 {
+                g2 = g2.next_down();
+            }
+            for _ in 0..16 {
+                assert_eq!(g2.sqrt() > t, g2 > x, "t {t} g² {g2}");
+                g2 = g2.next_up();
+            }
+            for g2 in [0.0, f32::MIN_POSITIVE, f32::MAX, f32::INFINITY, f32::NAN] {
+                assert_eq!(g2.sqrt() > t, g2 > x, "t {t} g² {g2}");
+            }
+        }
+        for t in [-1.0f32, f32::INFINITY] {
+            for g2 in [0.0, 1.0, f32::MAX, f32::INFINITY, f32::NAN] {
+                assert_eq!(g2.sqrt() > t, g2 > below_sqrt(t), "t {t} g² {g2}");
             }
         }
     }
