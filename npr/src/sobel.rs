@@ -41,6 +41,14 @@
 //!   blend, and only near marks: rows with no mark within the line's
 //!   reach and 64-sample words with none are skipped, so there is no
 //!   frame-size coverage map either.
+//!
+//! Memory bounds it as much as arithmetic (a 1080p frame's depth, normals
+//! and ids are ~41 MB; perf annotate put most of the time on the first
+//! read of each row and on the blend's reads of the image), so the
+//! detection reads each field row once: every source's measure 8 samples
+//! at a time in one pass ([`detect_block`]), the frame's normals
+//! prefetched two rows ahead; and the blend prefetches the image lines
+//! near the marks two rows ahead (docs/PERFORMANCE.md).
 
 use crate::outline::{blend, blend_row, composite, ssaa_of, sum_samples, Selection};
 use rayon::prelude::*;
