@@ -41,6 +41,14 @@
 //!   blend, and only near marks: rows with no mark within the line's
 //!   reach and 64-sample words with none are skipped, so there is no
 //!   frame-size coverage map either.
+//!
+//! Memory bounds it as much as arithmetic (a 1080p frame's depth, normals
+//! and ids are ~41 MB; perf annotate put most of the time on the first
+//! read of each row and on the blend's reads of the image), so the
+//! detection reads each field row once: every source's measure 8 samples
+//! at a time in one pass ([`detect_block`]), the frame's normals
+//! prefetched two rows ahead; and the blend prefetches the image lines
+//! near the marks two rows ahead (docs/PERFORMANCE.md).
 
 use crate::outline::{blend, blend_row, composite, ssaa_of, sum_samples, Selection};
 use rayon::prelude::*;
@@ -267,12 +275,14 @@ pub fn detect_edges(
 /// word written). `rows` are the offsets in `input`'s slices of the row
 /// above, the row and the row below (clamped by the caller at the image's
 /// top and bottom); `keep(x)` says whether sample x of the row may carry
-/// a line; `m` is scratch (a row of measures).
+/// a line; `m` is scratch (a row of measures, for rows under
+/// [`FUSED_MIN_WIDTH`] samples).
 ///
-/// Each source's measure along the row ([`measure_row`]), compared with
-/// its threshold 8 samples at a time; a sample is marked when any source
-/// exceeds its threshold and `keep` allows it (asked only where a source
-/// does: most samples have no edge).
+/// A sample is marked when any source's measure exceeds its threshold and
+/// `keep` allows it (asked only where a source does: most samples have no
+/// edge). The row's interior goes 8 samples at a time through every
+/// source at once ([`detect_lanes`]); its first and last sample through
+/// the clamped scalar [`measure_at`].
 pub fn detect_row(
     input: &EdgeInput,
     sources: &[(Source, f32)],
@@ -281,26 +291,75 @@ pub fn detect_row(
     out: &mut [u64],
     m: &mut Vec<f32>,
 ) {
+    detect_row_ahead(input, sources, rows, None, keep, out, m);
+}
+
+/// [`detect_row`], prefetching the normals of the row starting at
+/// `ahead` (an offset in `input`'s slices) as it goes.
+fn detect_row_ahead(
+    input: &EdgeInput,
+    sources: &[(Source, f32)],
+    rows: [usize; 3],
+    ahead: Option<usize>,
+    keep: &dyn Fn(usize) -> bool,
+    out: &mut [u64],
+    m: &mut Vec<f32>,
+) {
     let w = input.width;
     out.fill(0);
-    m.resize(w, 0.0);
-    for &(s, t) in sources {
-        measure_row(input, s, rows, m);
-        // A word's 64 samples 8 a compare, the row's last partial word
-        // one at a time.
-        let t8 = f32x8::splat(t);
-        let mut blocks = m.chunks_exact(64);
-        for (o, block) in out.iter_mut().zip(&mut blocks) {
-            let mut word = 0u64;
-            for (k, c) in block.chunks_exact(8).enumerate() {
-                let v = f32x8::from(<[f32; 8]>::try_from(c).unwrap_or_default());
-                word |= u64::from(v.gt(t8).bits()) << (8 * k);
+    if w < FUSED_MIN_WIDTH {
+        measured_row(input, sources, rows, out, m);
+    } else {
+        let t = Thresholds::new(sources);
+        let f = fields(input);
+        let used = [
+            t.depth.is_some(),
+            t.normal.is_some(),
+            t.normal.is_some(),
+            t.normal.is_some(),
+            t.id.is_some(),
+            t.color.is_some(),
+        ];
+        // Blocks of 64 samples x..x+64 with x = 1, 65, …, then chunks of 8
+        // up to w − 2, the last one overlapping the one before where
+        // needed (its marks are the same bits again).
+        let mut x = 1;
+        while x + BLOCK < w {
+            if let Some(a) = ahead {
+                for f in input.normal {
+                    for k in (0..BLOCK).step_by(16) {
+                        prefetch(f, a + x + k);
+                    }
+                }
             }
-            *o |= word;
+            let bits = detect_block(&f, used, &t, rows, x);
+            out[x / 64] |= bits << 1;
+            out[x / 64 + 1] |= bits >> 63;
+            x += BLOCK;
         }
-        let tail = w - blocks.remainder().len();
-        for (x, &v) in (tail..).zip(blocks.remainder()) {
-            out[x / 64] |= u64::from(v > t) << (x % 64);
+        let last = w - 9;
+        let starts = (x..last).step_by(8).chain(std::iter::once(last));
+        for x in starts {
+            if let Some(a) = ahead {
+                for f in input.normal {
+                    prefetch(f, a + x);
+                }
+            }
+            let bits = u64::from(detect_lanes(&t, |k| around8(f[k as usize], rows, x)));
+            let (j, sh) = (x / 64, x % 64);
+            out[j] |= bits << sh;
+            if sh > 56 {
+                out[j + 1] |= bits >> (64 - sh);
+            }
+        }
+        for x in [0, w - 1] {
+            let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
+            let nb = rows.map(|r| xs.map(|x| r + x));
+            for &(s, t) in sources {
+                if measure_at(input, s, &nb) > t {
+                    out[x / 64] |= 1 << (x % 64);
+                }
+            }
         }
     }
     for (j, word) in out.iter_mut().enumerate() {
@@ -313,6 +372,238 @@ pub fn detect_row(
             set &= set - 1;
         }
     }
+}
+
+/// Rows narrower than this (no interior chunk of 8 samples with its
+/// neighbours) are measured source by source ([`measured_row`]).
+const FUSED_MIN_WIDTH: usize = 10;
+
+/// [`detect_row`]'s marks, source by source along the whole row
+/// ([`measure_row`]), for any width: `out` zeroed by the caller.
+fn measured_row(
+    input: &EdgeInput,
+    sources: &[(Source, f32)],
+    rows: [usize; 3],
+    out: &mut [u64],
+    m: &mut Vec<f32>,
+) {
+    m.resize(input.width, 0.0);
+    for &(s, t) in sources {
+        measure_row(input, s, rows, m);
+        for (x, &v) in m.iter().enumerate() {
+            out[x / 64] |= u64::from(v > t) << (x % 64);
+        }
+    }
+}
+
+/// Each source's threshold for [`detect_lanes`], `None` when it is not a
+/// source. A source listed twice marks where its measure exceeds either
+/// threshold, i.e. the lesser (a NaN threshold marks nothing: dropped).
+struct Thresholds {
+    depth: Option<f32x8>,
+    normal: Option<f32x8>,
+    id: Option<f32x8>,
+    color: Option<f32x8>,
+}
+
+impl Thresholds {
+    fn new(sources: &[(Source, f32)]) -> Thresholds {
+        let least = |s: Source| {
+            sources
+                .iter()
+                .filter(|&&(t, v)| t == s && !v.is_nan())
+                .map(|&(_, v)| v)
+                .reduce(f32::min)
+                .map(f32x8::splat)
+        };
+        // The gradients' thresholds apply to the squared magnitude.
+        let squared = |s| least(s).map(|t| f32x8::splat(below_sqrt(t.as_array()[0])));
+        Thresholds {
+            depth: least(Source::Depth),
+            normal: squared(Source::Normal),
+            id: least(Source::Id),
+            color: squared(Source::Color),
+        }
+    }
+}
+
+/// The threshold on g² ≥ 0 that says what `√g² > t` says, without the
+/// square root: the largest x with √x ≤ t (f32, correctly rounded √ as
+/// the lanes' and measure_at's), so √g² > t ⟺ g² > x (√ is monotone; a
+/// NaN g² is neither). Every g² ≥ 0 has √ > t < 0: x = −1 then.
+fn below_sqrt(t: f32) -> f32 {
+    if t < 0.0 {
+        return -1.0;
+    }
+    if t == f32::INFINITY {
+        return t;
+    }
+    // t² is within a few ulps of x: step to it.
+    let mut x = t * t;
+    while x.sqrt() > t {
+        x = x.next_down();
+    }
+    while x < f32::INFINITY && x.next_up().sqrt() <= t {
+        x = x.next_up();
+    }
+    x
+}
+
+/// The fields a detection reads, indices into [`fields`].
+#[derive(Clone, Copy)]
+enum Field {
+    InvDepth,
+    NormalX,
+    NormalY,
+    NormalZ,
+    Label,
+    Luma,
+}
+
+/// `input`'s fields in [`Field`]'s order.
+fn fields<'a>(input: &EdgeInput<'a>) -> [&'a [f32]; 6] {
+    let [nx, ny, nz] = input.normal;
+    [input.inv_depth, nx, ny, nz, input.material, input.luma]
+}
+
+/// Samples [`detect_block`] takes at once.
+const BLOCK: usize = 64;
+
+/// [`detect_lanes`] on the 64 samples x..x+64 of a row (bit i: sample
+/// x + i; 1 ≤ x, x + 65 ≤ width). Each field row's 66 values are sliced
+/// once, and the eight chunks read them at constant offsets: no bounds
+/// checks inside (the chunk-by-chunk slicing was ~40 % of the detection's
+/// instructions).
+#[inline(never)]
+fn detect_block(
+    f: &[&[f32]; 6],
+    used: [bool; 6],
+    t: &Thresholds,
+    rows: [usize; 3],
+    x: usize,
+) -> u64 {
+    const UNUSED: [f32; BLOCK + 2] = [0.0; BLOCK + 2];
+    let row = |k: usize, r: usize| -> &[f32; BLOCK + 2] {
+        if used[k] {
+            <&[f32; BLOCK + 2]>::try_from(&f[k][rows[r] + x - 1..rows[r] + x + BLOCK + 1])
+                .unwrap_or(&UNUSED)
+        } else {
+            &UNUSED
+        }
+    };
+    // Written out: an array `map` here was left as a call (~8 M
+    // instructions a frame).
+    let rows3 = |k: usize| [row(k, 0), row(k, 1), row(k, 2)];
+    let a = [rows3(0), rows3(1), rows3(2), rows3(3), rows3(4), rows3(5)];
+    let mut bits = 0u64;
+    for i in 0..BLOCK / 8 {
+        let o = 8 * i;
+        let at = |f: Field| {
+            let a = &a[f as usize];
+            let load = |r: usize, c: usize| {
+                f32x8::from(<[f32; 8]>::try_from(&a[r][o + c..o + c + 8]).unwrap_or_default())
+            };
+            [
+                [load(0, 0), load(0, 1), load(0, 2)],
+                [load(1, 0), load(1, 1), load(1, 2)],
+                [load(2, 0), load(2, 1), load(2, 2)],
+            ]
+        };
+        bits |= u64::from(detect_lanes(t, at)) << o;
+    }
+    bits
+}
+
+/// The 3×3 neighbourhoods of field `f` at the 8 samples x..x+8 of a row
+/// (`rows` as in [`detect_row`]; 1 ≤ x, x + 9 ≤ width): `[r][c]` holds
+/// the row r (0 above), column offset c − 1. One bounds check a row.
+#[inline(always)]
+fn around8(f: &[f32], rows: [usize; 3], x: usize) -> [[f32x8; 3]; 3] {
+    // No array `map` here: it was left as a call copying the arrays.
+    #[inline(always)]
+    fn load8(s: &[f32]) -> f32x8 {
+        f32x8::from(<[f32; 8]>::try_from(s).unwrap_or_default())
+    }
+    #[inline(always)]
+    fn row(f: &[f32], r: usize, x: usize) -> [f32x8; 3] {
+        let s = &f[r + x - 1..r + x + 9];
+        [load8(&s[..8]), load8(&s[1..9]), load8(&s[2..])]
+    }
+    [row(f, rows[0], x), row(f, rows[1], x), row(f, rows[2], x)]
+}
+
+/// Sobel gradient (Gx, Gy) over a neighbourhood, [`gradient`]'s sums in
+/// its order but for its leading 0 + (see [`detect_lanes`]): for squaring.
+#[inline(always)]
+fn gradient8(n: &[[f32x8; 3]; 3]) -> (f32x8, f32x8) {
+    let w = W.map(f32x8::splat);
+    let gx = w[0] * (n[0][2] - n[0][0]) + w[1] * (n[1][2] - n[1][0]) + w[2] * (n[2][2] - n[2][0]);
+    let gy = w[0] * (n[2][0] - n[0][0]) + w[1] * (n[2][1] - n[0][1]) + w[2] * (n[2][2] - n[0][2]);
+    (gx, gy)
+}
+
+/// Whether the 8 samples x..x+8 of a row (bit i: sample x + i) exceed any
+/// source's threshold: every source's measure at once, each [`measure_at`]'s
+/// operations in its order (no FMA) but for the leading 0 + of its sums
+/// (0 + p is p but for a zero's sign, which the squares and |·| drop),
+/// so the same values bit for bit
+/// (tested), from one read of the neighbourhood of each field.
+#[inline(always)]
+fn detect_lanes(t: &Thresholds, around: impl Fn(Field) -> [[f32x8; 3]; 3]) -> u32 {
+    let zero = f32x8::ZERO;
+    let mut hit = zero;
+    if let Some(td) = t.depth {
+        let n = around(Field::InvDepth);
+        let two = f32x8::splat(2.0);
+        let w = W.map(f32x8::splat);
+        let ddx = |k: usize| w[k] * (n[k][2] + n[k][0] - two * n[k][1]);
+        let ddy = |k: usize| w[k] * (n[2][k] + n[0][k] - two * n[1][k]);
+        let (dxx, dyy) = (ddx(0) + ddx(1) + ddx(2), ddy(0) + ddy(1) + ddy(2));
+        // measure_at's maxima in its order, less its leading max(0, ·):
+        // that changes q_max only where every q ≤ 0 (or from a NaN on),
+        // and there q_max > 0 fails both ways (1/w is ≥ 0 anyway).
+        let mut qmax = n[0][0];
+        for (k, nk) in n.iter().enumerate() {
+            for (c, &v) in nk.iter().enumerate() {
+                if k + c > 0 {
+                    qmax = Real::max(qmax, v);
+                }
+            }
+        }
+        // Lanes with q_max = 0 divide 0 by 0; the select drops them.
+        let d = Real::max(dxx.abs(), dyy.abs()) / qmax;
+        hit |= qmax.simd_gt(zero).select(d, zero).simd_gt(td);
+    }
+    if let Some(tn) = t.normal {
+        let mut g2 = zero;
+        for f in [Field::NormalX, Field::NormalY, Field::NormalZ] {
+            let (gx, gy) = gradient8(&around(f));
+            g2 += gx * gx + gy * gy;
+        }
+        hit |= g2.simd_gt(tn); // √g² > t (Thresholds)
+    }
+    if let Some(ti) = t.id {
+        // Labels are never NaN: the unordered ≠ is measure_at's !=. The
+        // sums are of small integers, exact in any order; the centre
+        // never differs.
+        let n = around(Field::Label);
+        let centre = n[1][1];
+        let mut f = zero;
+        for (r, nr) in n.iter().enumerate() {
+            for (c, &o) in nr.iter().enumerate() {
+                if r != 1 || c != 1 {
+                    let weight = f32x8::splat(if r == 1 || c == 1 { 2.0 } else { 1.0 });
+                    f += o.simd_ne(centre) & weight;
+                }
+            }
+        }
+        hit |= (f / f32x8::splat(12.0)).simd_gt(ti);
+    }
+    if let Some(tc) = t.color {
+        let (gx, gy) = gradient8(&around(Field::Luma));
+        hit |= (gx * gx + gy * gy).simd_gt(tc); // √ as above
+    }
+    hit.bits()
 }
 
 /// The measure of source `s` at every sample of a row (`rows` as in
@@ -623,6 +914,9 @@ impl Sobel {
                 let (ya, yb) = (y0.saturating_sub(1), (y1 + 1).min(h));
                 let range = ya * w..yb * w;
                 let n = range.len();
+                // The normals' slices reach two rows past the band, for
+                // the prefetch.
+                let yn = (yb + 2).min(h);
                 pool.with(|s| {
                     if depth {
                         s.inv_depth.resize(n, 0.0);
@@ -641,7 +935,7 @@ impl Sobel {
                         width: w,
                         height: yb - ya,
                         inv_depth: part(depth, &s.inv_depth, 0..n),
-                        normal: [&nrm.r, &nrm.g, &nrm.b].map(|c| part(normal, c, range.clone())),
+                        normal: [&nrm.r, &nrm.g, &nrm.b].map(|c| part(normal, c, ya * w..yn * w)),
                         material: part(id, &s.material, 0..n),
                         luma: part(color, &s.luma, 0..n),
                     };
@@ -649,7 +943,19 @@ impl Sobel {
                         let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)];
                         let rows = rows.map(|r| (r - ya) * w);
                         let keep = |x: usize| !needs_ids || self.selection.contains(ids[y * w + x]);
-                        detect_row(&input, &self.sources, rows, &keep, out, &mut s.measure);
+                        // The normals are read from the frame, two rows
+                        // ahead of their first use (the band's other
+                        // inputs were just computed and are in cache).
+                        let ahead = (normal && y + 2 < yn).then(|| (y + 2 - ya) * w);
+                        detect_row_ahead(
+                            &input,
+                            &self.sources,
+                            rows,
+                            ahead,
+                            &keep,
+                            out,
+                            &mut s.measure,
+                        );
                     }
                 });
             });
@@ -685,6 +991,54 @@ impl Sobel {
                 pool.with(|s| dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| row[x] = c));
             });
         out
+    }
+}
+
+/// A hint that the cache line of `v[i]` will be read soon (nothing past
+/// `v`'s end). No effect on results.
+#[inline(always)]
+fn prefetch(v: &[f32], i: usize) {
+    #[cfg(target_arch = "x86_64")]
+    if let Some(p) = v.get(i) {
+        // SAFETY: a prefetch is a hint that never faults; the address is
+        // an element of `v`.
+        unsafe {
+            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+            _mm_prefetch::<_MM_HINT_T0>(p as *const f32 as *const i8);
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (v, i);
+}
+
+/// Prefetches the cache lines of row `y` of the image planes `rgb` (at
+/// the mask's size) that the line can ink: 16-sample lines with a mark
+/// within `reach` rows and (inside its 64-sample word) `reach` columns.
+/// A hint only: ink reaching across a word's edge is not looked for.
+fn prefetch_inked(mask: &EdgeMask, marked: &[bool], y: usize, reach: usize, rgb: [&[f32]; 3]) {
+    let h = mask.height();
+    let near = y.saturating_sub(reach)..(y + reach + 1).min(h);
+    if !marked[near.clone()].contains(&true) {
+        return;
+    }
+    for j in 0..mask.words() {
+        let v = near
+            .clone()
+            .filter(|&yy| marked[yy])
+            .fold(0u64, |v, yy| v | mask.row(yy)[j]);
+        if v == 0 {
+            continue;
+        }
+        for k in 0..4usize {
+            let lo = (16 * k).saturating_sub(reach);
+            let hi = (16 * k + 15 + reach).min(63);
+            let span = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
+            if v & span != 0 {
+                for p in rgb {
+                    prefetch(p, 64 * j + 16 * k);
+                }
+            }
+        }
     }
 }
 
@@ -749,14 +1103,33 @@ impl PostStage for Sobel {
             .enumerate()
             .for_each(|(k, ((r, g), b))| {
                 pool.with(|s| {
-                    let rows = r.chunks_mut(w).zip(g.chunks_mut(w)).zip(b.chunks_mut(w));
-                    for (y, ((r, g), b)) in (k * BLEND_ROWS..).zip(rows) {
-                        if ssaa == 1 {
+                    let n = r.len() / w.max(1);
+                    if ssaa == 1 {
+                        // The image lines the blend will read, two rows
+                        // ahead (the band's first two rows at its start):
+                        // they are far apart and come from memory.
+                        let reach = cover.radius();
+                        let ahead = |r: &[f32], g: &[f32], b: &[f32], i: usize| {
+                            if i < n {
+                                let planes = [r, g, b].map(|p| &p[i * w..(i + 1) * w]);
+                                prefetch_inked(mask, marked, k * BLEND_ROWS + i, reach, planes);
+                            }
+                        };
+                        ahead(r, g, b, 0);
+                        ahead(r, g, b, 1);
+                        for i in 0..n {
+                            ahead(r, g, b, i + 2);
+                            let y = k * BLEND_ROWS + i;
+                            let row = i * w..(i + 1) * w;
+                            let (r, g, b) = (&mut r[row.clone()], &mut g[row.clone()], &mut b[row]);
                             dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| {
                                 blend([&mut r[x], &mut g[x], &mut b[x]], c * inv, color)
                             });
-                            continue;
                         }
+                        return;
+                    }
+                    let rows = r.chunks_mut(w).zip(g.chunks_mut(w)).zip(b.chunks_mut(w));
+                    for (y, ((r, g), b)) in (k * BLEND_ROWS..).zip(rows) {
                         // The row's ssaa sample rows' coverage, then
                         // composite's sums and blend.
                         let RowsScratch {
@@ -986,6 +1359,81 @@ mod tests {
                         }
                     }
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn rows_mark_exactly_where_the_scalar_measure_exceeds_a_threshold_at_it() {
+        // Thresholds equal to measures at chosen samples and one float
+        // below: a sample whose measure is the threshold is unmarked, one
+        // float less marks it, so every bit of the row kernels' values is
+        // checked there. Widths put 8-sample chunks across 64-sample words
+        // and an overlapping last chunk; a source listed twice marks above
+        // the lesser threshold.
+        for (w, h) in [(10, 3), (37, 5), (130, 6), (203, 4)] {
+            let n = w * h;
+            let depth: Vec<f32> = (0..n)
+                .map(|i| match hash(i, 1) % 5 {
+                    0 => f32::INFINITY,
+                    _ => 1.0 + 4.0 * unit(i, 2),
+                })
+                .collect();
+            let inv = inverse_depth(&depth);
+            let normal: Vec<Vec<f32>> = (0..3)
+                .map(|c| (0..n).map(|i| unit(i, 10 + c) * 2.0 - 1.0).collect())
+                .collect();
+            let mat: Vec<f32> = (0..n).map(|i| (hash(i, 5) % 3) as f32 - 1.0).collect();
+            let luma: Vec<f32> = (0..n).map(|i| unit(i, 7)).collect();
+            let input = EdgeInput {
+                width: w,
+                height: h,
+                inv_depth: &inv,
+                normal: [&normal[0], &normal[1], &normal[2]],
+                material: &mat,
+                luma: &luma,
+            };
+            let all = [Source::Depth, Source::Normal, Source::Id, Source::Color];
+            for s in all {
+                for k in 0..6 {
+                    let (x, y) = ((k * 29 + 3) % w, k % h);
+                    let at = measure(&input, s, x, y);
+                    for t in [at, at.next_down()] {
+                        let sources = [(s, t + 0.25), (s, t)];
+                        let e = detect_edges(&input, &sources, &|_| true);
+                        for yy in 0..h {
+                            for xx in 0..w {
+                                let want = measure(&input, s, xx, yy) > t;
+                                assert_eq!(e[yy * w + xx], want, "{w} {s:?} t {t} ({xx}, {yy})");
+                            }
+                        }
+                        assert_eq!(e[y * w + x], t < at);
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_squared_threshold_says_what_the_square_root_says() {
+        // Around each threshold's square, f32 by f32, and at the ends.
+        for t in [0.0f32, 1e-20, 0.1, 0.25, 0.4, 0.6, 1.0, 3.7, 1e19, 3e19] {
+            let x = below_sqrt(t);
+            let mut g2 = (t * t).max(f32::MIN_POSITIVE);
+            for _ in 0..8 {
+                g2 = g2.next_down();
+            }
+            for _ in 0..16 {
+                assert_eq!(g2.sqrt() > t, g2 > x, "t {t} g² {g2}");
+                g2 = g2.next_up();
+            }
+            for g2 in [0.0, f32::MIN_POSITIVE, f32::MAX, f32::INFINITY, f32::NAN] {
+                assert_eq!(g2.sqrt() > t, g2 > x, "t {t} g² {g2}");
+            }
+        }
+        for t in [-1.0f32, f32::INFINITY] {
+            for g2 in [0.0, 1.0, f32::MAX, f32::INFINITY, f32::NAN] {
+                assert_eq!(g2.sqrt() > t, g2 > below_sqrt(t), "t {t} g² {g2}");
             }
         }
     }
