@@ -1306,33 +1306,65 @@ mod tests {
         hash(i, k) as f32 / (1u32 << 24) as f32
     }
 
+    /// Noisy frame fields for the row-kernel tests: misses (q = 0) and
+    /// noise, plus (`patchy`) flat patches, steps and repeated labels.
+    struct Fields {
+        width: usize,
+        height: usize,
+        inv: Vec<f32>,
+        normal: [Vec<f32>; 3],
+        mat: Vec<f32>,
+        luma: Vec<f32>,
+    }
+
+    impl Fields {
+        fn noisy(width: usize, height: usize, patchy: bool) -> Fields {
+            let n = width * height;
+            let depth: Vec<f32> = (0..n)
+                .map(|i| match hash(i, 1) % 5 {
+                    0 => f32::INFINITY,
+                    1 if patchy => 2.0,
+                    _ => 1.0 + 4.0 * unit(i, 2),
+                })
+                .collect();
+            // Patches: normals shared by 3 samples, labels by 2, of 4.
+            let (normal_run, label_run, labels) = if patchy { (3, 2, 4) } else { (1, 1, 3) };
+            Fields {
+                width,
+                height,
+                inv: inverse_depth(&depth),
+                normal: [0, 1, 2].map(|c| {
+                    (0..n)
+                        .map(|i| unit(i / normal_run, 10 + c) * 2.0 - 1.0)
+                        .collect()
+                }),
+                mat: (0..n)
+                    .map(|i| (hash(i / label_run, 5) % labels) as f32 - 1.0)
+                    .collect(),
+                luma: (0..n).map(|i| unit(i, 7)).collect(),
+            }
+        }
+
+        fn input(&self) -> EdgeInput<'_> {
+            let [nx, ny, nz] = &self.normal;
+            EdgeInput {
+                width: self.width,
+                height: self.height,
+                inv_depth: &self.inv,
+                normal: [nx, ny, nz],
+                material: &self.mat,
+                luma: &self.luma,
+            }
+        }
+    }
+
     #[test]
     fn packets_give_the_scalar_measure_bit_for_bit() {
         // Noisy buffers with flat patches, steps, misses (q = 0) and
         // repeated labels, at widths around the packet size.
         for (w, h) in [(37, 9), (10, 4), (9, 3), (64, 5)] {
-            let n = w * h;
-            let depth: Vec<f32> = (0..n)
-                .map(|i| match hash(i, 1) % 5 {
-                    0 => f32::INFINITY,
-                    1 => 2.0,
-                    _ => 1.0 + 4.0 * unit(i, 2),
-                })
-                .collect();
-            let inv = inverse_depth(&depth);
-            let normal: Vec<Vec<f32>> = (0..3)
-                .map(|c| (0..n).map(|i| unit(i / 3, 10 + c) * 2.0 - 1.0).collect())
-                .collect();
-            let mat: Vec<f32> = (0..n).map(|i| (hash(i / 2, 5) % 4) as f32 - 1.0).collect();
-            let luma: Vec<f32> = (0..n).map(|i| unit(i, 7)).collect();
-            let input = EdgeInput {
-                width: w,
-                height: h,
-                inv_depth: &inv,
-                normal: [&normal[0], &normal[1], &normal[2]],
-                material: &mat,
-                luma: &luma,
-            };
+            let fields = Fields::noisy(w, h, true);
+            let input = fields.input();
             let all = [Source::Depth, Source::Normal, Source::Id, Source::Color];
             for s in all {
                 for y in 0..h {
@@ -1372,27 +1404,8 @@ mod tests {
         // and an overlapping last chunk; a source listed twice marks above
         // the lesser threshold.
         for (w, h) in [(10, 3), (37, 5), (130, 6), (203, 4)] {
-            let n = w * h;
-            let depth: Vec<f32> = (0..n)
-                .map(|i| match hash(i, 1) % 5 {
-                    0 => f32::INFINITY,
-                    _ => 1.0 + 4.0 * unit(i, 2),
-                })
-                .collect();
-            let inv = inverse_depth(&depth);
-            let normal: Vec<Vec<f32>> = (0..3)
-                .map(|c| (0..n).map(|i| unit(i, 10 + c) * 2.0 - 1.0).collect())
-                .collect();
-            let mat: Vec<f32> = (0..n).map(|i| (hash(i, 5) % 3) as f32 - 1.0).collect();
-            let luma: Vec<f32> = (0..n).map(|i| unit(i, 7)).collect();
-            let input = EdgeInput {
-                width: w,
-                height: h,
-                inv_depth: &inv,
-                normal: [&normal[0], &normal[1], &normal[2]],
-                material: &mat,
-                luma: &luma,
-            };
+            let fields = Fields::noisy(w, h, false);
+            let input = fields.input();
             let all = [Source::Depth, Source::Normal, Source::Id, Source::Color];
             for s in all {
                 for k in 0..6 {
