@@ -11,15 +11,13 @@
 //! edge kind) with the colour sRGB-encoded, as SVG colours are; a taper,
 //! which one SVG stroke cannot vary, is left out of the SVG.
 
-use crate::edges::{chain, visible_pieces, DepthView, EdgeKind, MeshEdges, Polyline};
+use crate::edges::{chain, prefetch, visible_pieces, DepthView, EdgeKind, MeshEdges, Polyline};
 use crate::outline::ssaa_of;
 use rayon::prelude::*;
 use specula_raster::post::{srgb_encode, HdrImage, PostStage};
 use specula_raster::{BufferSet, Camera, FrameBuffers};
 use std::sync::Mutex;
-use tiny_skia::{
-    FillRule, Mask, Paint, Path, PathBuilder, PathSegment, Pixmap, Stroke, Transform,
-};
+use tiny_skia::{FillRule, Mask, Paint, Path, PathBuilder, PathSegment, Pixmap, Stroke, Transform};
 pub use tiny_skia::{LineCap, LineJoin};
 
 /// How strokes look.
@@ -542,28 +540,6 @@ impl Canvas {
         }
         self.rows = [self.surface.size().1 as usize, 0];
     }
-}
-
-/// Asks the cache for the lines of `v` (a hint: one prefetch per 64 bytes).
-#[inline(always)]
-fn prefetch<T>(v: &[T]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let (p, bytes) = (v.as_ptr() as *const i8, std::mem::size_of_val(v));
-        if bytes == 0 {
-            return;
-        }
-        // SAFETY: a prefetch never faults; every address is inside `v`.
-        unsafe {
-            use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-            let first = p as usize & !63;
-            for line in (first..p as usize + bytes).step_by(64) {
-                _mm_prefetch::<_MM_HINT_T0>(p.add(line.max(p as usize) - p as usize));
-            }
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = v;
 }
 
 /// c = c·(1 − a) + colour·a over one span of pixels, a from the alpha
