@@ -756,3 +756,109 @@ pub fn svg(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> 
     s.push_str("</svg>\n");
     s
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Distance from `p` to the segment a–b.
+    fn to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
+        let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+        let l2 = dx * dx + dy * dy;
+        let t = if l2 > 0.0 {
+            (((p[0] - a[0]) * dx + (p[1] - a[1]) * dy) / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (p[0] - a[0] - t * dx).hypot(p[1] - a[1] - t * dy)
+    }
+
+    #[test]
+    fn a_draw_changes_only_pixels_within_its_reach_of_the_centre_line() {
+        // Every pixel a draw changes (drawn alone on a fresh pixmap) has
+        // its centre within `reach` of a segment of its centre line, so
+        // the chunks `Canvas::mark` keeps hold it; and the reach is not
+        // much more than needed.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (w, h) = (120u32, 90u32);
+        let mut worst: f64 = f64::NEG_INFINITY;
+        for case in 0..48 {
+            let style = StrokeStyle {
+                width: [0.6, 1.0, 1.5, 2.5, 6.0, 13.0][case % 6],
+                color: [0.0; 3],
+                taper: if case % 5 == 0 { 0.7 } else { 0.0 },
+                join: [LineJoin::Round, LineJoin::Bevel][case / 6 % 2],
+                cap: [LineCap::Butt, LineCap::Round, LineCap::Square][case / 12 % 3],
+            };
+            let mut p = [next() * w as f32, next() * h as f32];
+            let points = (0..2 + (next() * 12.0) as usize)
+                .map(|_| {
+                    // Short and long segments, sharp turns among them.
+                    let step = if next() < 0.5 { 2.0 } else { 40.0 };
+                    p = [p[0] + (next() - 0.5) * step, p[1] + (next() - 0.5) * step];
+                    p
+                })
+                .collect();
+            let line = Polyline {
+                kind: EdgeKind::Silhouette,
+                points,
+                closed: case % 4 == 1,
+            };
+            for d in draws(&[line], &style, w as usize, h as usize) {
+                let reach = reach(&d.stroke).expect("round and bevel joins") as f64;
+                let half = if d.stroke.width <= 1.0 {
+                    0.5
+                } else {
+                    0.5 * d.stroke.width as f64
+                };
+                let mut segs = Vec::new();
+                let (mut first, mut last) = ([0.0; 2], [0.0; 2]);
+                for s in d.centre.segments() {
+                    match s {
+                        PathSegment::MoveTo(p) => (first, last) = ([p.x, p.y], [p.x, p.y]),
+                        PathSegment::LineTo(p) => {
+                            segs.push((last, [p.x, p.y]));
+                            last = [p.x, p.y];
+                        }
+                        PathSegment::Close => segs.push((last, first)),
+                        _ => unreachable!(),
+                    }
+                }
+                let mut pm = Surface::new(w, h, true).unwrap();
+                pm.draw(&d, &white());
+                for (i, px) in pm.data().chunks(4).enumerate() {
+                    if px[3] == 0 {
+                        continue;
+                    }
+                    let c = [(i as u32 % w) as f64 + 0.5, (i as u32 / w) as f64 + 0.5];
+                    let dist = segs
+                        .iter()
+                        .map(|(a, b)| {
+                            let f = |q: [f32; 2]| [q[0] as f64, q[1] as f64];
+                            to_segment(c, f(*a), f(*b))
+                        })
+                        .fold(f64::INFINITY, f64::min);
+                    assert!(
+                        dist <= reach,
+                        "case {case}: pixel {c:?} at {dist} > reach {reach}"
+                    );
+                    let cap = if d.stroke.line_cap == LineCap::Square {
+                        2f64.sqrt()
+                    } else {
+                        1.0
+                    };
+                    worst = worst.max(dist - half * cap);
+                }
+            }
+        }
+        // A changed pixel's centre lies at most ~1 px beyond the stroke:
+        // the 2 px margin is ample but not wildly so.
+        assert!(worst > 0.5 && worst < 1.25, "worst {worst}");
+    }
+}
