@@ -280,7 +280,7 @@ fn reach(stroke: &Stroke) -> Option<f32> {
 const PREFETCH_ROWS: usize = 2;
 
 /// Bands of image rows at most [`draw_bands`] draws in parallel: a canvas
-/// each, so at most this many image-sized pixmaps are kept.
+/// each, so at most this many image-sized canvases are kept.
 const MAX_BANDS: usize = 4;
 
 /// Splits rows `0..h` into at most `k` bands (returns the boundaries,
@@ -603,8 +603,9 @@ impl Canvases {
 /// where that costs least ([`band_rows`]).
 ///
 /// The canvases are kept transparent between frames: a band blends and
-/// clears only the 8-pixel row chunks of its draws' rectangles, and no
-/// image-sized buffer is allocated once the canvases exist.
+/// clears only the 8-pixel row chunks its draws marked ([`Canvas::mark`]),
+/// and no image-sized buffer is allocated once the canvases exist (a frame
+/// that switches between hairlines and none makes new ones: [`Surface`]).
 fn draw_bands(canvases: &mut Vec<Canvas>, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
     let (w, h) = (img.width as usize, img.height as usize);
     if draws.is_empty() || w == 0 || h == 0 {
