@@ -5,9 +5,14 @@
 //! `N` calls per thread count; the minimum is the figure least moved by
 //! other work on a shared machine.
 //!
+//! With `--cold` (anywhere in the arguments) a 64 MB buffer is written
+//! before each call, as the frame's other passes do between two runs of
+//! the stage: its buffers (canvases, image, depth) then come from memory,
+//! as in a frame, instead of staying in the cache of a tight loop.
+//!
 //! ```text
 //! cargo run --release -p specula-bench --example strokes_stage -- \
-//!     fixtures/scenes/sphere-grid-strokes.toml 50 1 2
+//!     fixtures/scenes/sphere-grid-strokes.toml 50 1 2 [--cold]
 //! ```
 
 use specula::render::{median, render_scene, RenderSettings};
@@ -16,7 +21,10 @@ use specula_raster::post::{HdrImage, PostStage};
 use std::time::Instant;
 
 fn main() {
-    let args: Vec<String> = std::env::args().skip(1).collect();
+    let mut args: Vec<String> = std::env::args().skip(1).collect();
+    let cold = args.iter().any(|a| a == "--cold");
+    args.retain(|a| a != "--cold");
+    let mut evict = vec![0u8; if cold { 64 << 20 } else { 0 }];
     let (Some(path), Some(n)) = (args.first(), args.get(1).and_then(|n| n.parse().ok())) else {
         eprintln!("usage: strokes_stage SCENE.toml N THREADS...");
         std::process::exit(2);
@@ -54,15 +62,22 @@ fn main() {
         let mut canvases = Canvases::default();
         let (mut stage_ms, mut lines_ms, mut draw_ms) = (Vec::new(), Vec::new(), Vec::new());
         pool.install(|| {
-            for _ in 0..n + 1 {
+            for k in 0..n + 1 {
+                let mut flush = || {
+                    evict.fill(k as u8);
+                    std::hint::black_box(&evict);
+                };
+                flush();
                 let t0 = Instant::now();
                 stage.apply(&mut im, &r.frame.buffers);
+                stage_ms.push(t0.elapsed().as_secs_f64() * 1e3);
+                // The same two halves, timed apart.
+                flush();
                 let t1 = Instant::now();
                 let lines = stage.polylines(&r.frame.buffers, ssaa);
                 let t2 = Instant::now();
                 canvases.blend(&lines, &stage.style, &mut im);
                 let t3 = Instant::now();
-                stage_ms.push((t1 - t0).as_secs_f64() * 1e3);
                 lines_ms.push((t2 - t1).as_secs_f64() * 1e3);
                 draw_ms.push((t3 - t2).as_secs_f64() * 1e3);
             }

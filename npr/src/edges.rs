@@ -252,7 +252,7 @@ pub struct Polyline {
 /// A visible stretch of one edge: its points in output pixels and, for
 /// each end that is the edge's own end (visible up to its vertex), the
 /// welded vertex there (for chaining).
-#[derive(Clone, Debug)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Piece {
     pub kind: EdgeKind,
     pub a: [f32; 2],
@@ -298,30 +298,91 @@ pub fn visible_pieces(
     // One output vector per parallel chunk of edges, not one per edge;
     // joined in edge order.
     let chunks: Vec<Vec<Piece>> = edges
-        .par_iter()
-        .with_min_len(256)
-        .fold(Vec::new, |mut out, &edge| {
-            edge_pieces(mesh, edge, view, near, depth, &mut out);
+        .par_chunks(256)
+        .map(|chunk| {
+            // The ends in clip space first, so that the depth around the
+            // ends of an edge a few ahead can be asked for.
+            let clip: Vec<[Vec4; 2]> = chunk
+                .iter()
+                .map(|&(a, b, _)| {
+                    [a, b].map(|v| view.view_proj * Vec4::from((mesh.points[v as usize], 1.0)))
+                })
+                .collect();
+            let mut out = Vec::new();
+            for (i, &edge) in chunk.iter().enumerate() {
+                if let Some(ahead) = clip.get(i + PREFETCH_EDGES) {
+                    prefetch_ends(ahead, near, depth);
+                }
+                edge_pieces(edge, clip[i], near, depth, &mut out, true);
+            }
             out
         })
         .collect();
     chunks.concat()
 }
 
-/// Appends the visible pieces of one edge to `out`.
+/// How many edges ahead [`visible_pieces`] asks for depth.
+const PREFETCH_EDGES: usize = 4;
+
+/// Asks the cache for the depth samples around the ends of an edge: the
+/// depth buffer is cold when the stage runs, a neighbourhood spans rows a
+/// page apart, and the tests of one edge wait on them one after another.
+/// (Most drawn edges are silhouettes of a few pixels, whose tests all
+/// fall near their ends.)
+fn prefetch_ends(ends: &[Vec4; 2], near: f32, depth: &DepthView) {
+    let (sw, sh) = (depth.width as f32, depth.height as f32);
+    let r = depth.ssaa.max(1);
+    for c in ends {
+        let (sx, sy) = ((c.x / c.w * 0.5 + 0.5) * sw, (0.5 - c.y / c.w * 0.5) * sh);
+        if !(c.w >= near && sx >= 0.0 && sy >= 0.0 && sx < sw && sy < sh) {
+            continue;
+        }
+        let (x, y) = (sx as usize, sy as usize);
+        let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(depth.width));
+        for yy in y.saturating_sub(r)..(y + r + 1).min(depth.height) {
+            prefetch(&depth.depth[yy * depth.width..][x0..x1]);
+        }
+    }
+}
+
+/// Asks the cache for the lines of `v` (a hint: one prefetch per 64
+/// bytes).
+#[inline(always)]
+pub(crate) fn prefetch<T>(v: &[T]) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        let (start, end) = (
+            v.as_ptr() as usize,
+            v.as_ptr() as usize + std::mem::size_of_val(v),
+        );
+        let mut line = start & !63;
+        while line < end {
+            // SAFETY: a prefetch never faults (the address is inside `v`
+            // or on the line of its first byte).
+            unsafe {
+                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+                _mm_prefetch::<_MM_HINT_T0>(line.max(start) as *const i8);
+            }
+            line += 64;
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = v;
+}
+
+/// Appends the visible pieces of one edge, whose ends are at `ca` and `cb`
+/// in clip space, to `out`; with `clip`, testing only the samples that can
+/// fall on the image.
 fn edge_pieces(
-    mesh: &MeshEdges,
     (a, b, kind): (u32, u32, EdgeKind),
-    view: &View,
+    [ca, cb]: [Vec4; 2],
     near: f32,
     depth: &DepthView,
     out: &mut Vec<Piece>,
+    clip: bool,
 ) {
-    let m = view.view_proj;
     let (sw, sh) = (depth.width as f32, depth.height as f32);
     let inv_ss = 1.0 / depth.ssaa as f32;
-    let ca = m * Vec4::from((mesh.points[a as usize], 1.0));
-    let cb = m * Vec4::from((mesh.points[b as usize], 1.0));
     // Keep the part in front of the near plane (clip space is linear along
     // the edge).
     let (mut t0, mut t1) = (0.0f32, 1.0f32);
@@ -359,7 +420,19 @@ fn edge_pieces(
         });
     };
     let mut last = (0usize, (0.0f32, 0.0f32));
-    for i in 0..n {
+    // Samples off the image are not seen: test only those that can be on
+    // it (the run bookkeeping is the same, as every sample skipped is
+    // unseen).
+    let inside = |p: (f32, f32, f32)| p.0 >= 0.0 && p.1 >= 0.0 && p.0 < sw && p.1 < sh;
+    let on = if clip && !(inside(p0) && inside(p1)) {
+        let Some(on) = on_image(ca, cb, [t0, t1], n, [sw, sh]) else {
+            return;
+        };
+        on
+    } else {
+        0..=n - 1
+    };
+    for i in on {
         // Perspective-correct: the clip-space point at parameter t.
         let t = t0 + (t1 - t0) * i as f32 / (n - 1) as f32;
         let (sx, sy, w) = at(t);
@@ -381,6 +454,60 @@ fn edge_pieces(
             close(start, last);
         }
     }
+}
+
+/// The sample indices `i` in 0..n (at t = t0 + (t1 − t0)·i/(n − 1)
+/// between the clip-space points `ca` and `cb`, in front of the near
+/// plane over [t0, t1]) whose point can fall on a `size` image; None when
+/// none can. Solved in f64 on the exact line: |x| ≤ (1 + 2m/w)·w_clip and
+/// |y| ≤ (1 + 2m/h)·w_clip are linear in t. The margin m (samples) covers
+/// the rounding of the f32 points the samples are tested at, with room
+/// (2 px plus 10⁻⁵ of the clip coordinates' size over the nearest w, in
+/// pixels: f32 rounds each operation to 6·10⁻⁸), and the range is
+/// widened by two samples more.
+fn on_image(
+    ca: Vec4,
+    cb: Vec4,
+    [t0, t1]: [f32; 2],
+    n: usize,
+    size: [f32; 2],
+) -> Option<std::ops::RangeInclusive<usize>> {
+    let all = Some(0..=n - 1);
+    if t1 <= t0 {
+        return all;
+    }
+    let (a, b) = (ca.as_dvec4(), cb.as_dvec4());
+    let at = |t: f64| a + (b - a) * t;
+    let (tf0, tf1) = (t0 as f64, t1 as f64);
+    let w_min = at(tf0).w.min(at(tf1).w);
+    let big = a.abs().max(b.abs()).max_element();
+    if !(w_min > 0.0 && big.is_finite()) {
+        return all;
+    }
+    let (mut lo, mut hi) = (tf0, tf1);
+    for (k, extent) in [(0, size[0] as f64), (1, size[1] as f64)] {
+        let m = 2.0 + 1e-5 * big / w_min * extent;
+        let s = 1.0 + 2.0 * m / extent;
+        // s·w − c ≥ 0 and s·w + c ≥ 0, each f(t) = f(0) + (f(1) − f(0))·t.
+        for sign in [1.0, -1.0] {
+            let f = |c: glam::DVec4| s * c.w - sign * c[k];
+            let (f0, f1) = (f(a), f(b));
+            if f1 > f0 {
+                lo = lo.max(f0 / (f0 - f1));
+            } else if f1 < f0 {
+                hi = hi.min(f0 / (f0 - f1));
+            } else if f0 < 0.0 {
+                return None;
+            }
+        }
+    }
+    if lo > hi {
+        return None;
+    }
+    let index = |t: f64| (t - tf0) / (tf1 - tf0) * (n - 1) as f64;
+    let first = (index(lo).floor() - 2.0).max(0.0) as usize;
+    let last = ((index(hi).ceil() + 2.0).max(0.0) as usize).min(n - 1);
+    (first <= last).then_some(first..=last)
 }
 
 /// Chains pieces into polylines (module docs), kinds in [`EdgeKind`]
@@ -484,5 +611,103 @@ fn norm2(v: [f32; 2]) -> [f32; 2] {
         [v[0] / l, v[1] / l]
     } else {
         [0.0; 2]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use specula_raster::Camera;
+
+    /// xorshift64* in [0, 1).
+    fn rng(seed: u64) -> impl FnMut() -> f32 {
+        let mut state = seed.max(1);
+        move || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
+    #[test]
+    fn testing_only_the_samples_that_can_be_on_the_image_finds_the_same_pieces() {
+        let mut next = rng(7);
+        // Lone triangles (every edge a boundary) from behind the eye to far
+        // off to the sides, a few huge ones, over a blocky depth buffer.
+        let (mut positions, mut triangles) = (Vec::new(), Vec::new());
+        for t in 0..3000u32 {
+            let scale = if t % 100 == 0 { 1e5 } else { 1.0 };
+            let c = Vec3::new(
+                next() * 60.0 - 30.0,
+                next() * 40.0 - 20.0,
+                next() * 40.0 - 32.0,
+            );
+            for _ in 0..3 {
+                let d = Vec3::new(next() - 0.5, next() - 0.5, next() - 0.5) * 8.0 * scale;
+                positions.push(c + d);
+            }
+            triangles.push([3 * t, 3 * t + 1, 3 * t + 2]);
+        }
+        let mesh = MeshEdges::new(
+            &positions,
+            &triangles,
+            &vec![0; triangles.len()],
+            &[EdgeKind::Boundary],
+            60.0,
+        );
+        let camera = Camera {
+            eye: Vec3::new(0.0, 0.0, 5.0),
+            target: Vec3::ZERO,
+            up: Vec3::Y,
+            fov_y_deg: 50.0,
+            near: 0.5,
+            far: 100.0,
+        };
+        let (w, h) = (160usize, 90usize);
+        let depth: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w / 13, i / w / 11);
+                let v = ((x * 7 + y * 13) % 10) as f32;
+                if v < 2.0 {
+                    f32::INFINITY
+                } else {
+                    3.0 * v
+                }
+            })
+            .collect();
+        let view = camera.view(w as u32, h as u32);
+        let drawn = mesh.classify(camera.eye);
+        assert!(drawn.len() > 8900, "{}", drawn.len());
+        let (mut clipped, mut pieces) = (0, 0);
+        for ssaa in [1, 2] {
+            let dv = DepthView {
+                depth: &depth,
+                width: w,
+                height: h,
+                ssaa,
+            };
+            for &edge in &drawn {
+                let c = |v: u32| view.view_proj * Vec4::from((mesh.points[v as usize], 1.0));
+                let (ca, cb) = (c(edge.0), c(edge.1));
+                let (mut got, mut want) = (Vec::new(), Vec::new());
+                edge_pieces(edge, [ca, cb], camera.near, &dv, &mut got, true);
+                edge_pieces(edge, [ca, cb], camera.near, &dv, &mut want, false);
+                assert_eq!(got, want, "edge {edge:?}");
+                pieces += got.len();
+                if ca.w >= camera.near && cb.w >= camera.near {
+                    let len = 4 * (w + h);
+                    match on_image(ca, cb, [0.0, 1.0], len + 1, [w as f32, h as f32]) {
+                        Some(r) if *r.start() == 0 && *r.end() == len => {}
+                        _ => clipped += 1,
+                    }
+                }
+            }
+        }
+        // Many edges were cut short or skipped, and many pieces were found.
+        assert!(
+            clipped > 3000 && pieces > 1000,
+            "{clipped} clipped, {pieces} pieces"
+        );
     }
 }
