@@ -29,6 +29,7 @@
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
+use specula_raster::buffers::prefetch;
 use specula_raster::camera::View;
 use specula_raster::SceneData;
 use std::collections::HashMap;
@@ -343,31 +344,6 @@ fn prefetch_ends(ends: &[Vec4; 2], near: f32, depth: &DepthView) {
             prefetch(&depth.depth[yy * depth.width..][x0..x1]);
         }
     }
-}
-
-/// Asks the cache for the lines of `v` (a hint: one prefetch per 64
-/// bytes).
-#[inline(always)]
-pub(crate) fn prefetch<T>(v: &[T]) {
-    #[cfg(target_arch = "x86_64")]
-    {
-        let (start, end) = (
-            v.as_ptr() as usize,
-            v.as_ptr() as usize + std::mem::size_of_val(v),
-        );
-        let mut line = start & !63;
-        while line < end {
-            // SAFETY: a prefetch never faults (the address is inside `v`
-            // or on the line of its first byte).
-            unsafe {
-                use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-                _mm_prefetch::<_MM_HINT_T0>(line.max(start) as *const i8);
-            }
-            line += 64;
-        }
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = v;
 }
 
 /// Appends the visible pieces of one edge, whose ends are at `ca` and `cb`

@@ -11,9 +11,10 @@
 //! edge kind) with the colour sRGB-encoded, as SVG colours are; a taper,
 //! which one SVG stroke cannot vary, is left out of the SVG.
 
-use crate::edges::{chain, prefetch, visible_pieces, DepthView, EdgeKind, MeshEdges, Polyline};
+use crate::edges::{chain, visible_pieces, DepthView, EdgeKind, MeshEdges, Polyline};
 use crate::outline::ssaa_of;
 use rayon::prelude::*;
+use specula_raster::buffers::prefetch;
 use specula_raster::post::{srgb_encode, HdrImage, PostStage};
 use specula_raster::{BufferSet, Camera, FrameBuffers};
 use std::sync::Mutex;

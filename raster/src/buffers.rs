@@ -195,22 +195,26 @@ impl<'a, T> TileWriter<'a, T> {
     }
 }
 
-/// A hint to bring every cache line of `v` in: one prefetch per 64 bytes
-/// from its start, and one at its last byte (a value straddling a line
-/// boundary). No effect on results.
+/// A hint to bring every cache line of `v` in (a value or a slice): one
+/// prefetch per 64 bytes from its start, and one at its last byte (a value
+/// straddling a line boundary). No effect on results; nothing for an
+/// empty slice. The one prefetch helper of the raster and the NPR stages.
 #[inline(always)]
-pub(crate) fn prefetch<T>(v: &T) {
+pub fn prefetch<T: ?Sized>(v: &T) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
         let p = v as *const T as *const i8;
-        let size = std::mem::size_of::<T>();
+        let size = std::mem::size_of_val(v);
+        if size == 0 {
+            return;
+        }
         // SAFETY: a prefetch never faults; every address is inside `v`.
         unsafe {
             for off in (0..size).step_by(64) {
                 _mm_prefetch::<_MM_HINT_T0>(p.add(off));
             }
-            _mm_prefetch::<_MM_HINT_T0>(p.add(size.saturating_sub(1)));
+            _mm_prefetch::<_MM_HINT_T0>(p.add(size - 1));
         }
     }
     #[cfg(not(target_arch = "x86_64"))]
