@@ -63,9 +63,15 @@ fn read_row(path: &str) -> Result<Row, String> {
     }
     let threads = json["threads"].as_u64().unwrap_or(0);
     let shading = json["shading"].as_str().unwrap_or("");
+    // The 8-bit encode ran inside the shading pass: no post bar.
+    let fused = if json["post_in_shading"].as_bool() == Some(true) {
+        "*"
+    } else {
+        ""
+    };
     Ok(Row {
         label: format!(
-            "{threads} thread{} {shading}",
+            "{threads} thread{} {shading}{fused}",
             if threads == 1 { "" } else { "s" }
         ),
         ms,
@@ -114,7 +120,7 @@ fn main() -> Result<(), String> {
     let plot_w = WIDTH as f32 - LEFT - RIGHT;
     let x_of = |ms: f64| LEFT + (ms / axis_max) as f32 * plot_w;
     let legend_y = TOP + rows.len() as f32 * (BAR + GAP) + 40.0;
-    let height = (legend_y + 40.0) as u32;
+    let height = (legend_y + 62.0) as u32;
 
     let mut pixmap = Pixmap::new(WIDTH, height).ok_or("image too large")?;
     pixmap.fill(Color::WHITE);
@@ -194,6 +200,10 @@ fn main() -> Result<(), String> {
         fill(&mut pixmap, Rect::from_xywh(x, legend_y, 14.0, 14.0), rgb);
         texts.push(label(name.into(), [x + 20.0, legend_y - 1.0], [0.0; 3]));
         x += 20.0 + text_width(name, TEXT) + 24.0;
+    }
+    if rows.iter().any(|r| r.label.ends_with('*')) {
+        let note = "* post (exposure, tone map, sRGB encode) ran inside shade";
+        texts.push(label(note.into(), [LEFT, legend_y + 22.0], [0.0; 3]));
     }
 
     let mut rgb8: Vec<u8> = pixmap
