@@ -240,6 +240,27 @@ fn encoding_in_the_shading_pass_gives_the_post_pass_bytes() {
     s.keep_hdr = false;
     let got = render_scene(&scene, &s, 0.0).expect("in shading");
     assert!(got.stats.post_in_shading && got.ldr == want.ldr);
+    // A frame drawn to 8 bits, then again the usual way into its buffers:
+    // the colour planes come back and hold the frame.
+    use specula_raster::frame::{render, render_into, render_ldr};
+    let target = specula_raster::Target::new(160, 90).expect("target");
+    let enc = s.post().ldr_in_shading().expect("the default list");
+    let mut bytes = Vec::new();
+    let mut f = render_ldr(
+        &scene.data,
+        target,
+        ShadePath::Simd,
+        Default::default(),
+        enc,
+        &mut bytes,
+    );
+    assert!(f.buffers.color.is_empty());
+    render_into(&scene.data, &mut f, ShadePath::Simd);
+    let fresh = render(&scene.data, target, ShadePath::Simd);
+    assert!(
+        f.buffers.color == fresh.buffers.color,
+        "colour after an 8-bit frame"
+    );
     s.ssaa = 2;
     s.width = 320;
     s.height = 180;

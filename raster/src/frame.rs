@@ -271,6 +271,11 @@ pub fn shade_into(
     buffers: &mut FrameBuffers,
     stats: &mut FrameStats,
 ) {
+    // Buffers of a frame drawn by `render_ldr` have no colour planes:
+    // this pass's output is the colour, so they come back.
+    if buffers.color.is_empty() {
+        buffers.color = Planes3::new(target.pixel_count());
+    }
     shade_impl(scene, target, v, path, buffers, None, stats);
 }
 
