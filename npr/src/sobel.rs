@@ -226,8 +226,16 @@ fn labels_into(ids: &[u32], of_id: &[f32], labels: &mut [f32]) {
         let last8 = u32x8::splat(last as u32);
         for (l, i) in labels.chunks_exact_mut(8).zip(ids.chunks_exact(8)) {
             let i = u32x8::new(<[u32; 8]>::try_from(i).unwrap_or_default()).min(last8);
-            let index = i32x8::new(i.to_array().map(|v| v as i32)).round_float();
-            <f32x8 as Real>::gather(table, index).store(l);
+            // Eight samples of one triangle (most chunks: the ground,
+            // sphere interiors) read the table once; a gather costs
+            // ~3.6 ns on the benchmark machine.
+            let first = i.to_array()[0];
+            if i.simd_eq(u32x8::splat(first)).all() {
+                f32x8::splat(table[first as usize]).store(l);
+            } else {
+                let index = i32x8::new(i.to_array().map(|v| v as i32)).round_float();
+                <f32x8 as Real>::gather(table, index).store(l);
+            }
             done += 8;
         }
     }
