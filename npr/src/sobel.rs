@@ -1366,6 +1366,39 @@ mod tests {
         }
     }
 
+    /// Labels by chunks (one table read for a chunk of one id, a gather
+    /// otherwise) against a per-sample look-up: runs of one id across and
+    /// inside chunks, mixed chunks, misses and ids past the table.
+    #[test]
+    fn labels_by_chunks_equal_a_look_up_per_sample() {
+        let id_material = [0u32, 3, u32::MAX, 1, 2];
+        let mut of_id = Vec::new();
+        label_of_id(&id_material, &mut of_id);
+        let ids: Vec<u32> = (0..203)
+            .map(|i| match i / 8 % 4 {
+                0 => 1,                   // a chunk of one id
+                1 => (i % 3) as u32,      // mixed
+                2 => [MISS, 7, 4][i % 3], // a miss, past the table, the last
+                _ => {
+                    if i % 16 < 12 {
+                        3
+                    } else {
+                        2
+                    }
+                } // a run ending inside a chunk
+            })
+            .collect();
+        let mut labels = vec![f32::NAN; ids.len()];
+        labels_into(&ids, &of_id, &mut labels);
+        for (i, (&id, &l)) in ids.iter().zip(&labels).enumerate() {
+            let want = match id_material.get(id as usize) {
+                Some(&m) if m != u32::MAX => m as f32,
+                _ => -1.0,
+            };
+            assert_eq!(l.to_bits(), want.to_bits(), "sample {i}, id {id}");
+        }
+    }
+
     #[test]
     fn packets_give_the_scalar_measure_bit_for_bit() {
         // Noisy buffers with flat patches, steps, misses (q = 0) and
