@@ -124,8 +124,6 @@ struct BandScratch {
     inv_depth: Vec<f32>,
     material: Vec<f32>,
     luma: Vec<f32>,
-    /// One row of one source's measure.
-    measure: Vec<f32>,
 }
 
 /// A blend task's scratch: the dilation's, and at ssaa > 1 the coverage
@@ -272,9 +270,9 @@ pub fn detect_edges(
     mask.bits_mut()
         .par_chunks_mut(words.max(1))
         .enumerate()
-        .for_each_init(Vec::new, |m, (y, out)| {
+        .for_each(|(y, out)| {
             let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)].map(|r| r * w);
-            detect_row(input, sources, rows, &|x| keep(y * w + x), out, m);
+            detect_row(input, sources, rows, &|x| keep(y * w + x), out);
         });
     mask.to_bools()
 }
@@ -283,23 +281,22 @@ pub fn detect_edges(
 /// word written). `rows` are the offsets in `input`'s slices of the row
 /// above, the row and the row below (clamped by the caller at the image's
 /// top and bottom); `keep(x)` says whether sample x of the row may carry
-/// a line; `m` is scratch (a row of measures, for rows under
-/// [`FUSED_MIN_WIDTH`] samples).
+/// a line.
 ///
 /// A sample is marked when any source's measure exceeds its threshold and
 /// `keep` allows it (asked only where a source does: most samples have no
 /// edge). The row's interior goes 8 samples at a time through every
-/// source at once ([`detect_lanes`]); its first and last sample through
-/// the clamped scalar [`measure_at`].
+/// source at once ([`detect_lanes`]); its first and last sample (and every
+/// sample of a row under [`FUSED_MIN_WIDTH`]) through the clamped scalar
+/// [`measure_at`] ([`mark_clamped`]).
 pub fn detect_row(
     input: &EdgeInput,
     sources: &[(Source, f32)],
     rows: [usize; 3],
     keep: &dyn Fn(usize) -> bool,
     out: &mut [u64],
-    m: &mut Vec<f32>,
 ) {
-    detect_row_ahead(input, sources, rows, None, keep, out, m);
+    detect_row_ahead(input, sources, rows, None, keep, out);
 }
 
 /// [`detect_row`], prefetching the normals of the row starting at
@@ -311,12 +308,13 @@ fn detect_row_ahead(
     ahead: Option<usize>,
     keep: &dyn Fn(usize) -> bool,
     out: &mut [u64],
-    m: &mut Vec<f32>,
 ) {
     let w = input.width;
     out.fill(0);
     if w < FUSED_MIN_WIDTH {
-        measured_row(input, sources, rows, out, m);
+        for x in 0..w {
+            mark_clamped(input, sources, rows, x, out);
+        }
     } else {
         let t = Thresholds::new(sources);
         let f = fields(input);
@@ -360,15 +358,8 @@ fn detect_row_ahead(
                 out[j + 1] |= bits >> (64 - sh);
             }
         }
-        for x in [0, w - 1] {
-            let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
-            let nb = rows.map(|r| xs.map(|x| r + x));
-            for &(s, t) in sources {
-                if measure_at(input, s, &nb) > t {
-                    out[x / 64] |= 1 << (x % 64);
-                }
-            }
-        }
+        mark_clamped(input, sources, rows, 0, out);
+        mark_clamped(input, sources, rows, w - 1, out);
     }
     for (j, word) in out.iter_mut().enumerate() {
         let mut set = *word;
@@ -383,23 +374,24 @@ fn detect_row_ahead(
 }
 
 /// Rows narrower than this (no interior chunk of 8 samples with its
-/// neighbours) are measured source by source ([`measured_row`]).
+/// neighbours) are measured sample by sample ([`mark_clamped`]).
 const FUSED_MIN_WIDTH: usize = 10;
 
-/// [`detect_row`]'s marks, source by source along the whole row
-/// ([`measure_row`]), for any width: `out` zeroed by the caller.
-fn measured_row(
+/// Marks sample x of a row (`rows` as in [`detect_row`]) if any source's
+/// clamped scalar [`measure_at`] exceeds its threshold.
+fn mark_clamped(
     input: &EdgeInput,
     sources: &[(Source, f32)],
     rows: [usize; 3],
+    x: usize,
     out: &mut [u64],
-    m: &mut Vec<f32>,
 ) {
-    m.resize(input.width, 0.0);
+    let w = input.width;
+    let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
+    let nb = rows.map(|r| xs.map(|x| r + x));
     for &(s, t) in sources {
-        measure_row(input, s, rows, m);
-        for (x, &v) in m.iter().enumerate() {
-            out[x / 64] |= u64::from(v > t) << (x % 64);
+        if measure_at(input, s, &nb) > t {
+            out[x / 64] |= 1 << (x % 64);
         }
     }
 }
@@ -614,126 +606,6 @@ fn detect_lanes(t: &Thresholds, around: impl Fn(Field) -> [[f32x8; 3]; 3]) -> u3
     hit.bits()
 }
 
-/// The measure of source `s` at every sample of a row (`rows` as in
-/// [`detect_row`]) into `out` (the row's width): the clamped scalar
-/// [`measure_at`] at the first and last column, and between them the
-/// interior kernels, which run [`measure_at`]'s operations in its order
-/// on whole rows (no FMA; the compiler vectorizes the plain loops over
-/// slices of one length, with no bounds checks inside), so every value is
-/// [`measure`]'s bit for bit (tested against it).
-pub fn measure_row(input: &EdgeInput, s: Source, rows: [usize; 3], out: &mut [f32]) {
-    let w = input.width;
-    let at = |x: usize| {
-        let xs = [x.saturating_sub(1), x, (x + 1).min(w - 1)];
-        measure_at(input, s, &rows.map(|r| xs.map(|x| r + x)))
-    };
-    if w < 3 {
-        for (x, o) in out.iter_mut().enumerate() {
-            *o = at(x);
-        }
-        return;
-    }
-    let inner = &mut out[1..w - 1];
-    match s {
-        Source::Depth => depth_row(&Window::new(input.inv_depth, rows, w), inner),
-        Source::Normal => {
-            // measure_at sums 0 + g²(r) + g²(g) + g²(b); g² is +0, positive
-            // or NaN, for which 0 + g² is g² itself (a quiet NaN keeps its
-            // bits), so the first field writes instead of adding to zeros.
-            let [r, g, b] = input.normal;
-            gradient2_row::<false>(&Window::new(r, rows, w), inner);
-            gradient2_row::<true>(&Window::new(g, rows, w), inner);
-            gradient2_row::<true>(&Window::new(b, rows, w), inner);
-            inner.iter_mut().for_each(|v| *v = v.sqrt());
-        }
-        Source::Id => id_row(&Window::new(input.material, rows, w), inner),
-        Source::Color => {
-            gradient2_row::<false>(&Window::new(input.luma, rows, w), inner);
-            inner.iter_mut().for_each(|v| *v = v.sqrt());
-        }
-    }
-    // The ends last: the interior loops stream the rows in, the ends'
-    // scalar reads then hit the cache.
-    out[0] = at(0);
-    out[w - 1] = at(w - 1);
-}
-
-/// The 3×3 neighbourhoods of a row's interior samples x = 1..w−1 as nine
-/// slices of one length w − 2: `n[r][c][i]` is the field at row r (0
-/// above, 2 below) and column x + c − 1 for x = i + 1.
-struct Window<'a> {
-    n: [[&'a [f32]; 3]; 3],
-}
-
-impl<'a> Window<'a> {
-    /// The window of the row whose rows above, at and below start at
-    /// `rows` in `f`; `w` ≥ 3.
-    fn new(f: &'a [f32], rows: [usize; 3], w: usize) -> Window<'a> {
-        let m = w - 2;
-        Window {
-            n: rows.map(|r| [&f[r..r + m], &f[r + 1..r + 1 + m], &f[r + 2..r + 2 + m]]),
-        }
-    }
-}
-
-/// [`measure_at`]'s depth measure along a row's interior.
-fn depth_row(f: &Window, out: &mut [f32]) {
-    let m = out.len();
-    let n = f.n.map(|r| r.map(|c| &c[..m]));
-    for (i, o) in out.iter_mut().enumerate() {
-        let at = |r: usize, c: usize| n[r][c][i];
-        let (mut dxx, mut dyy, mut qmax) = (0.0f32, 0.0f32, 0.0f32);
-        for (k, wk) in W.iter().enumerate() {
-            dxx += wk * (at(k, 2) + at(k, 0) - 2.0 * at(k, 1));
-            dyy += wk * (at(2, k) + at(0, k) - 2.0 * at(1, k));
-            qmax = Real::max(Real::max(Real::max(qmax, at(k, 0)), at(k, 1)), at(k, 2));
-        }
-        *o = if qmax > 0.0 {
-            Real::max(dxx.abs(), dyy.abs()) / qmax
-        } else {
-            0.0
-        };
-    }
-}
-
-/// Gx² + Gy² of one field along a row's interior ([`gradient`]'s sums),
-/// added to `out` (ADD) or written to it.
-fn gradient2_row<const ADD: bool>(f: &Window, out: &mut [f32]) {
-    let m = out.len();
-    let n = f.n.map(|r| r.map(|c| &c[..m]));
-    for (i, o) in out.iter_mut().enumerate() {
-        let at = |r: usize, c: usize| n[r][c][i];
-        let (mut gx, mut gy) = (0.0f32, 0.0f32);
-        for (k, wk) in W.iter().enumerate() {
-            gx += wk * (at(k, 2) - at(k, 0));
-            gy += wk * (at(2, k) - at(0, k));
-        }
-        let g2 = gx * gx + gy * gy;
-        *o = if ADD { *o + g2 } else { g2 };
-    }
-}
-
-/// [`measure_at`]'s id measure along a row's interior (its `!=`; labels
-/// are never NaN, so the lanes' ordered lt | gt is the same). The sums
-/// are of small integers, exact in any order.
-fn id_row(f: &Window, out: &mut [f32]) {
-    let m = out.len();
-    let n = f.n.map(|r| r.map(|c| &c[..m]));
-    for (i, o) in out.iter_mut().enumerate() {
-        let at = |r: usize, c: usize| n[r][c][i];
-        let centre = at(1, 1);
-        let mut sum = 0.0f32;
-        for r in 0..3 {
-            for c in 0..3 {
-                let weight = if r == 1 || c == 1 { 2.0 } else { 1.0 };
-                let o = at(r, c);
-                sum += if o != centre { weight } else { 0.0 };
-            }
-        }
-        *o = sum / 12.0;
-    }
-}
-
 /// The lane form of [`measure`] (the tests check the two agree): the
 /// measure of source `s` at the `R::LANES` samples (x.., y) whose
 /// neighbourhood rows start at `rows` (above, at, below; clamped by the
@@ -830,9 +702,8 @@ fn gradient(f: &[f32], nb: &[[usize; 3]; 3]) -> (f32, f32) {
 }
 
 /// The measure of one source at (x, y); see the module docs. The scalar
-/// reference of [`measure_row`]'s row loops (and of the lane form the
-/// tests keep), and what [`measure_row`] uses at the image's left and
-/// right columns.
+/// reference of the detection's row kernels (and of the lane form the
+/// tests keep).
 pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
     measure_at(input, s, &neighbours(input, x, y))
 }
@@ -955,15 +826,7 @@ impl Sobel {
                         // ahead of their first use (the band's other
                         // inputs were just computed and are in cache).
                         let ahead = (normal && y + 2 < yn).then(|| (y + 2 - ya) * w);
-                        detect_row_ahead(
-                            &input,
-                            &self.sources,
-                            rows,
-                            ahead,
-                            &keep,
-                            out,
-                            &mut s.measure,
-                        );
+                        detect_row_ahead(&input, &self.sources, rows, ahead, &keep, out);
                     }
                 });
             });
@@ -1442,9 +1305,10 @@ mod tests {
         // below: a sample whose measure is the threshold is unmarked, one
         // float less marks it, so every bit of the row kernels' values is
         // checked there. Widths put 8-sample chunks across 64-sample words
-        // and an overlapping last chunk; a source listed twice marks above
+        // and an overlapping last chunk (and rows too narrow for a chunk);
+        // a source listed twice marks above
         // the lesser threshold.
-        for (w, h) in [(10, 3), (37, 5), (130, 6), (203, 4)] {
+        for (w, h) in [(2, 3), (9, 4), (10, 3), (37, 5), (130, 6), (203, 4)] {
             let fields = Fields::noisy(w, h, false);
             let input = fields.input();
             let all = [Source::Depth, Source::Normal, Source::Id, Source::Color];
