@@ -1306,8 +1306,7 @@ mod tests {
         // float less marks it, so every bit of the row kernels' values is
         // checked there. Widths put 8-sample chunks across 64-sample words
         // and an overlapping last chunk (and rows too narrow for a chunk);
-        // a source listed twice marks above
-        // the lesser threshold.
+        // a source listed twice marks above the lesser threshold.
         for (w, h) in [(2, 3), (9, 4), (10, 3), (37, 5), (130, 6), (203, 4)] {
             let fields = Fields::noisy(w, h, false);
             let input = fields.input();
