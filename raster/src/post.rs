@@ -689,60 +689,66 @@ fn resolve_ldr_with<const CURVE: u8>(
     exposure: f32,
     out: &mut Vec<u8>,
 ) {
-    let curve = curve_of::<CURVE>();
     let (sw, ssaa) = (frame.width as usize, ssaa as usize);
     let (w, h) = (sw / ssaa, frame.height as usize / ssaa);
     let color = &frame.color;
     // The same products, in the same order, as the unfused stages.
     let (inv_n, k) = (1.0 / (ssaa * ssaa) as f32, exposure.exp2());
-    let enc = SrgbEncoder::new();
-    let enc8 = SrgbEncoderX8::new();
     size_output(out, w * h * 3);
     out.par_chunks_mut(3 * w).enumerate().for_each(|(y, row)| {
         if ssaa == 1 {
-            // The pass the shading pass runs per tile row when it encodes
-            // in place (LdrEncoding): one function, so the same bytes.
+            // The shading pass's encode (LdrEncoding), on the row's slices.
             let i = y * sw;
             let [r, g, b] = [&color.r, &color.g, &color.b].map(|p| &p[i..i + w]);
-            encode_row_with::<CURVE>(r, g, b, k, row);
-            return;
-        }
-        // Eight pixels at a time: the per-channel scalar chain (scale, curve,
-        // two table reads) was ~50 cycles a pixel.
-        let full = w / 8 * 8;
-        for (x0, px8) in (0..full).step_by(8).zip(row.chunks_exact_mut(24)) {
-            let s = sums8(color, sw, ssaa, x0, y);
-            let code = |ch| ldr_code(&enc8, curve, ch, inv_n, k);
-            let (r, g, b) = (code(s[0]), code(s[1]), code(s[2]));
-            store_rgb8(px8, [r, g, b]);
-        }
-        for (x, px) in row.chunks_exact_mut(3).enumerate().skip(full) {
-            let s = sum1(color, sw, ssaa, x, y);
-            for c in 0..3 {
-                px[c] = enc.encode(curve.apply(s[c] * inv_n * k));
-            }
+            encode_planes::<CURVE>(r, g, b, k, row);
+        } else {
+            encode_pixels::<CURVE>(
+                row,
+                inv_n,
+                k,
+                |x0| sums8(color, sw, ssaa, x0, y),
+                |x| sum1(color, sw, ssaa, x, y),
+            );
         }
     });
 }
 
-/// Exposure, tone curve and sRGB code of one run of pixels at ssaa 1:
-/// `out[3i..3i + 3]` from `r[i]`, `g[i]`, `b[i]`, 2^stops = `k`. The
-/// products are the resolve's (sample sum × 1/n × k, with n = 1, so
-/// bit for bit v × k).
+/// [`encode_pixels`] of one sample a pixel from the slices `r`, `g`, `b`
+/// (n = 1: the resolve's × (1/n) is × 1).
 #[inline(always)]
-fn encode_row_with<const CURVE: u8>(r: &[f32], g: &[f32], b: &[f32], k: f32, out: &mut [u8]) {
-    let curve = curve_of::<CURVE>();
+fn encode_planes<const CURVE: u8>(r: &[f32], g: &[f32], b: &[f32], k: f32, out: &mut [u8]) {
     let n = r.len();
     assert!(g.len() == n && b.len() == n && out.len() == 3 * n);
+    let eight = |x0| [load8(r, x0), load8(g, x0), load8(b, x0)];
+    encode_pixels::<CURVE>(out, 1.0, k, eight, |x| [r[x], g[x], b[x]]);
+}
+
+/// Sample sum × (1/n) × k, tone curve and sRGB code of a run of pixels
+/// into `out` (3 bytes a pixel): `sums8(x0)` gives pixels x0..x0 + 8 per
+/// channel, `sum1(x)` pixel x. The resolve's loop and the shading pass's
+/// ([`LdrEncoding::encode_row`]), so both give the same bytes.
+#[inline(always)]
+fn encode_pixels<const CURVE: u8>(
+    out: &mut [u8],
+    inv_n: f32,
+    k: f32,
+    sums8: impl Fn(usize) -> [f32x8; 3],
+    sum1: impl Fn(usize) -> [f32; 3],
+) {
+    let curve = curve_of::<CURVE>();
     let (enc, enc8) = (SrgbEncoder::new(), SrgbEncoderX8::new());
-    let full = n / 8 * 8;
+    let full = out.len() / 3 / 8 * 8;
+    // Eight pixels at a time: the per-channel scalar chain (scale, curve,
+    // two table reads) was ~50 cycles a pixel.
     for (x0, px8) in (0..full).step_by(8).zip(out.chunks_exact_mut(24)) {
-        let code = |p: &[f32]| ldr_code(&enc8, curve, load8(p, x0), 1.0, k);
-        store_rgb8(px8, [code(r), code(g), code(b)]);
+        let s = sums8(x0);
+        let code = |ch| ldr_code(&enc8, curve, ch, inv_n, k);
+        store_rgb8(px8, [code(s[0]), code(s[1]), code(s[2])]);
     }
     for (x, px) in out.chunks_exact_mut(3).enumerate().skip(full) {
-        for (c, p) in [r, g, b].into_iter().enumerate() {
-            px[c] = enc.encode(curve.apply(p[x] * 1.0 * k));
+        let s = sum1(x);
+        for c in 0..3 {
+            px[c] = enc.encode(curve.apply(s[c] * inv_n * k));
         }
     }
 }
@@ -770,11 +776,10 @@ impl LdrEncoding {
     /// Codes of the pixels with linear colours `r[i]`, `g[i]`, `b[i]` into
     /// `out[3i..3i + 3]`: the bytes [`resolve_ldr`] gives for them.
     pub fn encode_row(&self, r: &[f32], g: &[f32], b: &[f32], out: &mut [u8]) {
-        let k = self.k;
         match self.tonemap {
-            Tonemap::Clamp => encode_row_with::<0>(r, g, b, k, out),
-            Tonemap::Reinhard => encode_row_with::<1>(r, g, b, k, out),
-            Tonemap::Aces => encode_row_with::<2>(r, g, b, k, out),
+            Tonemap::Clamp => encode_planes::<0>(r, g, b, self.k, out),
+            Tonemap::Reinhard => encode_planes::<1>(r, g, b, self.k, out),
+            Tonemap::Aces => encode_planes::<2>(r, g, b, self.k, out),
         }
     }
 }
