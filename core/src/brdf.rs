@@ -115,11 +115,19 @@ pub struct HalfAngles<R: Real> {
     /// cos θd = wi·h, the Fresnel angle.
     pub cos_d: R,
     /// The unnormalized half vector s ∝ wi + wo (local; rescaled when tiny,
-    /// see `new`) and 1/|s|², for models that need h's direction
-    /// (anisotropic NDFs: h = s/|s|).
+    /// see `new`), |s|² and 1/|s|², for models that need h's direction
+    /// (anisotropic NDFs: h = s/|s|). |s|² ≥ [`HALF_LEN2_MIN`] wherever
+    /// s ≠ 0 (s = 0 only for opposite directions, which are not `above`).
     pub s: V3<R>,
+    pub len2: R,
     pub inv_len2: R,
 }
+
+/// [`HalfAngles::new`] rescales a half vector s with |s|² below this to
+/// |s|² ∈ [1, 3], so formulas may take |s|⁴ times the angle terms without
+/// leaving f32's normal range. Unscaled lanes have |s| ≥ 1e-3: wi and wo
+/// more than 0.06° from opposite, rare as both must be above the horizon.
+pub const HALF_LEN2_MIN: f64 = 1e-6;
 
 impl<R: Real> HalfAngles<R> {
     /// From a unit local `wi` and the prepared view direction.
@@ -139,7 +147,7 @@ impl<R: Real> HalfAngles<R> {
         // Behind a branch taken almost never: on every light of every
         // packet the rescale cost ~5 % of the shading pass. (cos θd by the
         // hardware root, not x·rsqrt(x): see `smith_ggx_root`.)
-        let tiny = len2.lt(R::splat(1e-20));
+        let tiny = len2.lt(R::splat(HALF_LEN2_MIN));
         // cos θd = |s| / 2 in each branch: the common one then has no
         // multiply by an `unscale` of 1.
         let (s, len2, cos_d) = if tiny.any() {
@@ -161,6 +169,7 @@ impl<R: Real> HalfAngles<R> {
             sin2_h: s.x.mul_add(s.x, s.y * s.y) * inv_len2,
             cos_d,
             s,
+            len2,
             inv_len2,
         }
     }

@@ -2,6 +2,7 @@
 //! V = G2 / (4 |n·i| |n·o|) when that folds in the BRDF denominator).
 
 use crate::real::Real;
+use crate::vec3::V3;
 
 /// Smith Λ for GGX: Λ(θ) = (−1 + √(1 + α² tan²θ)) / 2   [Walter07, Heitz14]
 ///
@@ -47,34 +48,42 @@ pub fn v_smith_ggx_correlated_roots<R: Real>(cos_i: R, cos_o: R, s_i: R, s_o: R)
 }
 
 /// D_GGX · V for the height-correlated Smith GGX of
-/// [`v_smith_ggx_correlated_roots`], with one division instead of two:
+/// [`v_smith_ggx_correlated_roots`], from the unnormalized half vector s
+/// (h = s/|s|, `len2` = |s|²) and with one division where D and V and the
+/// angles of h take three:
 ///
-/// α² / (π t²) · 0.5 / (μo s_i + μi s_o) = (α² / 2π) / (t² (μo s_i + μi s_o)),
-/// t = α² cos²θh + sin²θh
+/// D·V = α² / (π t²) · 0.5 / (μo s_i + μi s_o),  t = α² cos²θh + sin²θh,
 ///
-/// (D as [`crate::ndf::d_ggx`] writes it). The product in the denominator
-/// stays in f32's normal range: t ∈ [α², 1] and the Smith sum ∈ [~μ α, 2],
-/// so it is ≥ ~1e-22 at α = ALPHA_MIN and the cosine floor 1e-7.
+/// (D as [`crate::ndf::d_ggx`] writes it) and t = u / |s|² with
+/// u = α² s_z² + s_x² + s_y², so
+///
+/// D·V = (α² / 2π) |s|⁴ / (u² (μo s_i + μi s_o)).
+///
+/// u sums squares (no cancellation at the GGX peak, where s_x, s_y → 0
+/// and α is small). Everything stays in f32's normal range for |s|² ≥
+/// [`crate::brdf::HALF_LEN2_MIN`] (which `HalfAngles` guarantees): u ≥ α²
+/// |s|² and the Smith sum ≥ ~2e-7 α (cosine floor 1e-7), so the
+/// denominator is ≥ ~2e-7 α⁵ |s|⁴ ≥ 2e-34 at α = ALPHA_MIN.
 ///
 /// A true division, not `rcp` (estimate + Newton step): on the Zen 5
 /// benchmark machine the divider runs beside the multipliers the light
-/// loop is bound by, and a frame measured ~2.5 % less CPU for it
-/// (PERFORMANCE.md). The light's 1/d stays an `rsqrt`: √ then ÷ there
-/// measured 4 % slower (two long-latency ops in a row on the critical path).
+/// loop is bound by (PERFORMANCE.md). The light's 1/d stays an `rsqrt`: √
+/// then ÷ there measured 4 % slower (two long-latency ops in a row).
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 pub fn dv_ggx_correlated<R: Real>(
     alpha: R,
-    cos2_h: R,
-    sin2_h: R,
+    s: V3<R>,
+    len2: R,
     cos_i: R,
     cos_o: R,
     s_i: R,
     s_o: R,
 ) -> R {
     let a2 = alpha * alpha;
-    let t = cos2_h.mul_add(a2, sin2_h);
+    let u = (s.z * a2).mul_add(s.z, s.x.mul_add(s.x, s.y * s.y));
     let smith = cos_o.mul_add(s_i, cos_i * s_o);
-    a2 * R::splat(0.5 * std::f64::consts::FRAC_1_PI) / (t * t * smith)
+    (a2 * R::splat(0.5 * std::f64::consts::FRAC_1_PI)) * (len2 * len2) / (u * u * smith)
 }
 
 /// Smith Λ for Beckmann [Walter07, eq. 25; Heitz14, eq. 83]: with
@@ -145,41 +154,54 @@ pub fn lambda_ggx_aniso<R: Real>(alpha_x: R, alpha_y: R, vx: R, vy: R, cos_theta
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::brdf::ALPHA_MIN;
+    use crate::brdf::{ALPHA_MIN, HALF_LEN2_MIN};
     use crate::ndf::d_ggx;
 
-    /// The one-reciprocal D·V equals D times V, at the extremes too: the
-    /// smallest α, cosines at their 1e-7 floor, the GGX peak and grazing.
+    /// The fused D·V from the unnormalized half vector equals D times V
+    /// computed from h's angles, at the extremes too: the smallest α,
+    /// cosines at their 1e-7 floor, the GGX peak and grazing, and |s|²
+    /// from HALF_LEN2_MIN to 4.
     #[test]
     fn fused_dv_is_d_times_v() {
         let alphas = [ALPHA_MIN as f64, 0.01, 0.2, 0.6, 1.0];
         let cosines = [1e-7, 1e-3, 0.1, 0.5, 0.9, 1.0];
+        let lengths = [HALF_LEN2_MIN.sqrt(), 0.3, 1.0, 2.0];
         let mut worst32 = 0.0f64;
         for &a in &alphas {
             for &cos_h in &cosines {
                 let (c2, s2) = (cos_h * cos_h, 1.0 - cos_h * cos_h);
-                for &ci in &cosines {
-                    for &co in &cosines {
-                        let (si, so) = (smith_ggx_root(a, ci), smith_ggx_root(a, co));
-                        let want = d_ggx(a, c2, s2) * v_smith_ggx_correlated_roots(ci, co, si, so);
-                        let got = dv_ggx_correlated(a, c2, s2, ci, co, si, so);
-                        assert!(
-                            (got - want).abs() <= 1e-13 * want,
-                            "f64 α={a} cosθh={cos_h} μi={ci} μo={co}: {got} vs {want}"
-                        );
-                        let f = |x: f64| x as f32;
-                        let (si32, so32) =
-                            (smith_ggx_root(f(a), f(ci)), smith_ggx_root(f(a), f(co)));
-                        let got32 =
-                            dv_ggx_correlated(f(a), f(c2), f(s2), f(ci), f(co), si32, so32) as f64;
-                        assert!(got32.is_finite() && got32 > 0.0, "f32 {got32}");
-                        worst32 = worst32.max((got32 - want).abs() / want);
+                let sin_h = s2.sqrt();
+                for (k, &len) in lengths.iter().enumerate() {
+                    // h at azimuth 0.7 k radians, scaled to |s| = len.
+                    let phi = 0.7 * k as f64;
+                    let s = V3::new(sin_h * phi.cos(), sin_h * phi.sin(), cos_h) * len;
+                    let s32 = V3::new(s.x as f32, s.y as f32, s.z as f32);
+                    let len2_32 = s32.length_squared();
+                    for &ci in &cosines {
+                        for &co in &cosines {
+                            let (si, so) = (smith_ggx_root(a, ci), smith_ggx_root(a, co));
+                            let want =
+                                d_ggx(a, c2, s2) * v_smith_ggx_correlated_roots(ci, co, si, so);
+                            let got = dv_ggx_correlated(a, s, len * len, ci, co, si, so);
+                            assert!(
+                                (got - want).abs() <= 1e-12 * want,
+                                "f64 α={a} cosθh={cos_h} |s|={len} μi={ci} μo={co}: {got} vs {want}"
+                            );
+                            let f = |x: f64| x as f32;
+                            let (si32, so32) =
+                                (smith_ggx_root(f(a), f(ci)), smith_ggx_root(f(a), f(co)));
+                            let got32 =
+                                dv_ggx_correlated(f(a), s32, len2_32, f(ci), f(co), si32, so32)
+                                    as f64;
+                            assert!(got32.is_finite() && got32 > 0.0, "f32 {got32}");
+                            worst32 = worst32.max((got32 - want).abs() / want);
+                        }
                     }
                 }
             }
         }
-        // f32 inputs rounded (≤ 6e-8 each), two estimates refined once
-        // (≤ 4e-7 each) and a dozen roundings.
+        // f32 inputs rounded (≤ 6e-8 each; s's components relative to
+        // |s|, so u's terms carry it), the Smith roots and a dozen roundings.
         assert!(worst32 < 3e-6, "worst f32 relative error {worst32:e}");
     }
 }

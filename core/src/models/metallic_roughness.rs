@@ -84,8 +84,8 @@ impl Brdf for MetallicRoughness {
             cos_i,
             cos_o,
             above,
-            cos2_h,
-            sin2_h,
+            s,
+            len2,
             cos_d,
             ..
         } = HalfAngles::new(wi, o);
@@ -93,8 +93,8 @@ impl Brdf for MetallicRoughness {
         let w = schlick_weight(cos_d);
         let dv = dv_ggx_correlated(
             alpha,
-            cos2_h,
-            sin2_h,
+            s,
+            len2,
             cos_i,
             cos_o,
             smith_ggx_root(alpha, cos_i),
