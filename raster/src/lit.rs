@@ -75,7 +75,7 @@ fn add_delta_light<B: Brdf, R: Real>(
             let to_light = V3::from_f32(*position) - frag.p;
             let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
             let inv_d = d2.rsqrt();
-            let wi = frame.to_local(to_light * inv_d);
+            let wi = frame.to_local(to_light) * inv_d;
             // f · cos θi · I / d², the two scalar factors multiplied first.
             let k = wi.z.max(R::ZERO) * (inv_d * inv_d);
             (brdf.f_local(prepared, wi) * k).mul_elem_add(V3::from_f32(*intensity), acc)
