@@ -75,10 +75,15 @@ fn add_delta_light<B: Brdf, R: Real>(
             let to_light = V3::from_f32(*position) - frag.p;
             let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
             let inv_d = d2.rsqrt();
+            // The light loop is bound by its dependency chains (it is not
+            // short of multipliers): the unnormalized vector goes to the
+            // local frame while its rsqrt is computed, and the factors of
+            // f are multiplied into I / d² · cos θi before f is ready, so f
+            // reaches the sum in one step (PERFORMANCE.md).
             let wi = frame.to_local(to_light) * inv_d;
-            // f · cos θi · I / d², the two scalar factors multiplied first.
             let k = wi.z.max(R::ZERO) * (inv_d * inv_d);
-            (brdf.f_local(prepared, wi) * k).mul_elem_add(V3::from_f32(*intensity), acc)
+            let radiance = V3::from_f32(*intensity) * k;
+            brdf.f_local(prepared, wi).mul_elem_add(radiance, acc)
         }
         Light::Directional {
             to_light,
