@@ -114,6 +114,8 @@ pub struct HalfAngles<R: Real> {
     pub sin2_h: R,
     /// cos θd = wi·h, the Fresnel angle.
     pub cos_d: R,
+    /// |wi + wo| = 2 cos θd (see [`crate::fresnel::schlick_weight_half`]).
+    pub len: R,
     /// The unnormalized half vector s ∝ wi + wo (local; rescaled when tiny,
     /// see `new`), |s|² and 1/|s|², for models that need h's direction
     /// (anisotropic NDFs: h = s/|s|). |s|² ≥ [`HALF_LEN2_MIN`] wherever
@@ -148,17 +150,17 @@ impl<R: Real> HalfAngles<R> {
         // packet the rescale cost ~5 % of the shading pass. (cos θd by the
         // hardware root, not x·rsqrt(x): see `smith_ggx_root`.)
         let tiny = len2.lt(R::splat(HALF_LEN2_MIN));
-        // cos θd = |s| / 2 in each branch: the common one then has no
-        // multiply by an `unscale` of 1.
-        let (s, len2, cos_d) = if tiny.any() {
+        // |s| (the unscaled length) in each branch: the common one then has
+        // no multiply by an `unscale` of 1.
+        let (s, len2, len) = if tiny.any() {
             let m = s.x.abs().max(s.y.abs()).max(s.z.abs());
             let tiny = tiny & m.gt(R::ZERO);
             let (scale, unscale) = (R::select(tiny, m.rcp(), R::ONE), R::select(tiny, m, R::ONE));
             let s = s * scale;
             let len2 = s.length_squared();
-            (s, len2, len2.sqrt() * R::HALF * unscale)
+            (s, len2, len2.sqrt() * unscale)
         } else {
-            (s, len2, len2.sqrt() * R::HALF)
+            (s, len2, len2.sqrt())
         };
         let inv_len2 = len2.rcp();
         HalfAngles {
@@ -167,7 +169,8 @@ impl<R: Real> HalfAngles<R> {
             above,
             cos2_h: s.z * s.z * inv_len2,
             sin2_h: s.x.mul_add(s.x, s.y * s.y) * inv_len2,
-            cos_d,
+            cos_d: len * R::HALF,
+            len,
             s,
             len2,
             inv_len2,

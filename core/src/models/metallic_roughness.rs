@@ -9,7 +9,7 @@
 use crate::albedo_tables::AlbedoTables;
 use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
 use crate::diffuse::f_lambert;
-use crate::fresnel::schlick_weight;
+use crate::fresnel::schlick_weight_half;
 use crate::light::PolygonLocal;
 use crate::ltc::ggx::LtcGgx;
 use crate::masking::{dv_ggx_correlated, smith_ggx_root};
@@ -86,11 +86,11 @@ impl Brdf for MetallicRoughness {
             above,
             s,
             len2,
-            cos_d,
+            len,
             ..
         } = HalfAngles::new(wi, o);
 
-        let w = schlick_weight(cos_d);
+        let w = schlick_weight_half(len);
         let dv = dv_ggx_correlated(
             alpha,
             s,
