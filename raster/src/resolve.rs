@@ -275,9 +275,13 @@ impl ResolveContext<'_> {
         let w = ks.rcp();
         let b1 = k1 * w;
         let b2 = k2 * w;
-        let b0 = R::ONE - b1 - b2;
+        // The normal is interpolated with the unnormalized weights
+        // k = b·ks (its direction is the same: ks > 0), so its chain of
+        // dependent steps, which every light of the packet waits on, does
+        // not wait for the reciprocal.
+        let k0 = ks - k1 - k2;
         let vn = |k: usize| V3::new(g(k), g(k + 1), g(k + 2));
-        let n_interp = vn(12) * b0 + vn(15) * b1 + vn(18) * b2;
+        let n_interp = vn(12) * k0 + vn(15) * k1 + vn(18) * k2;
         // Interpolated normals can cancel (opposite vertex normals); fall back
         // to vertex 0's normal rather than produce NaN.
         let n = n_interp.normalize_or(vn(12)) * g(11);
