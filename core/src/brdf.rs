@@ -135,12 +135,24 @@ impl<R: Real> HalfAngles<R> {
     /// From a unit local `wi` and the prepared view direction.
     #[inline(always)]
     pub fn new(wi: V3<R>, o: &Outgoing<R>) -> HalfAngles<R> {
-        let cos_i = wi.z;
+        Self::from_sum(wi.z, wi + o.wo, o)
+    }
+
+    /// [`HalfAngles::new`] at wi = v · inv_len, for an unnormalized `v` and
+    /// inv_len = 1/|v|: s = v · inv_len + wo in one fused step (one step
+    /// shorter on the light loop's dependency chains, which bound it).
+    #[inline(always)]
+    pub fn scaled(v: V3<R>, inv_len: R, o: &Outgoing<R>) -> HalfAngles<R> {
+        Self::from_sum(v.z * inv_len, v.mul_add(inv_len, o.wo), o)
+    }
+
+    /// From cos θi = wi.z and s = wi + wo.
+    #[inline(always)]
+    fn from_sum(cos_i: R, s: V3<R>, o: &Outgoing<R>) -> HalfAngles<R> {
         let above = cos_i.gt(R::ZERO) & o.above;
         // s = wi + wo is zero only for opposite directions, which `above`
         // excludes. For unit wi, wo: |s|² = 2 (1 + wi·wo), so
         // cos θd = wi·s / |s| = |s| / 2 — no normalized h needed.
-        let s = wi + o.wo;
         let len2 = s.length_squared();
         // A nearly opposite grazing pair (wi = [1, 0, 1e-155], wo = [−1, 0,
         // 1e-155] in f64) makes |s|² underflow and 1/|s|² infinite. The
@@ -199,6 +211,14 @@ pub trait Brdf: Send + Sync {
     /// f(wi, wo) for a unit local `wi`, no cosine folded in; zero when
     /// either direction is at or below the horizon.
     fn f_local<R: Real>(&self, p: &Self::Prepared<R>, wi: V3<R>) -> Rgb<R>;
+
+    /// [`Brdf::f_local`] at wi = v · inv_len, for an unnormalized local `v`
+    /// and inv_len = 1/|v| (a point light's direction): a model may fold
+    /// the scale into its first step ([`HalfAngles::scaled`]).
+    #[inline(always)]
+    fn f_local_scaled<R: Real>(&self, p: &Self::Prepared<R>, v: V3<R>, inv_len: R) -> Rgb<R> {
+        self.f_local(p, v * inv_len)
+    }
 
     /// f(wi, wo) · max(0, cos θi): the reflected radiance per unit radiance
     /// arriving from `wi`.

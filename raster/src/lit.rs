@@ -77,13 +77,15 @@ fn add_delta_light<B: Brdf, R: Real>(
             let inv_d = d2.rsqrt();
             // The light loop is bound by its dependency chains (it is not
             // short of multipliers): the unnormalized vector goes to the
-            // local frame while its rsqrt is computed, and the factors of
-            // f are multiplied into I / d² · cos θi before f is ready, so f
-            // reaches the sum in one step (PERFORMANCE.md).
-            let wi = frame.to_local(to_light) * inv_d;
-            let k = wi.z.max(R::ZERO) * (inv_d * inv_d);
+            // local frame while its rsqrt is computed, the model folds the
+            // 1/d into its first step, and the factors of f are multiplied
+            // into I / d² · cos θi before f is ready, so f reaches the sum
+            // in one step (PERFORMANCE.md).
+            let v = frame.to_local(to_light);
+            let k = (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d);
             let radiance = V3::from_f32(*intensity) * k;
-            brdf.f_local(prepared, wi).mul_elem_add(radiance, acc)
+            brdf.f_local_scaled(prepared, v, inv_d)
+                .mul_elem_add(radiance, acc)
         }
         Light::Directional {
             to_light,

@@ -49,6 +49,47 @@ impl MetallicRoughness {
     pub fn diffuse_color(&self) -> [f32; 3] {
         self.base_color.map(|c| c * (1.0 - self.metallic))
     }
+
+    /// f from the half-vector quantities of the pixel's view and a light.
+    #[inline(always)]
+    fn f_half<R: Real>(&self, p: &MetallicRoughnessPrepared<R>, h: HalfAngles<R>) -> Rgb<R> {
+        let alpha = R::splat(self.alpha() as f64);
+        let f0 = self.f0();
+        let kd = f_lambert(Rgb::from_f32(self.diffuse_color()));
+
+        let HalfAngles {
+            cos_i,
+            cos_o,
+            above,
+            s,
+            len2,
+            len,
+            ..
+        } = h;
+
+        let w = schlick_weight_half(len);
+        let dv = dv_ggx_correlated(
+            alpha,
+            s,
+            len2,
+            cos_i,
+            cos_o,
+            smith_ggx_root(alpha, cos_i),
+            p.smith_root_o,
+        );
+        // F·DV + (1 − F)·kd = kd + F·(DV − kd), with Schlick's
+        // F = F0 + (1 − F0) w per channel: two fused steps a channel.
+        let channel = |f0: f32, kd: R| {
+            let f = R::splat(1.0 - f0 as f64).mul_add(w, R::splat(f0 as f64));
+            f.mul_add(dv - kd, kd)
+        };
+        let f = Rgb::new(
+            channel(f0[0], kd.x),
+            channel(f0[1], kd.y),
+            channel(f0[2], kd.z),
+        );
+        Rgb::select(above, f, Rgb::zero())
+    }
 }
 
 /// Per-pixel state: the view direction and its Smith root.
@@ -75,43 +116,17 @@ impl Brdf for MetallicRoughness {
 
     #[inline(always)]
     fn f_local<R: Real>(&self, p: &MetallicRoughnessPrepared<R>, wi: V3<R>) -> Rgb<R> {
-        let o = &p.o;
-        let alpha = R::splat(self.alpha() as f64);
-        let f0 = self.f0();
-        let kd = f_lambert(Rgb::from_f32(self.diffuse_color()));
+        self.f_half(p, HalfAngles::new(wi, &p.o))
+    }
 
-        let HalfAngles {
-            cos_i,
-            cos_o,
-            above,
-            s,
-            len2,
-            len,
-            ..
-        } = HalfAngles::new(wi, o);
-
-        let w = schlick_weight_half(len);
-        let dv = dv_ggx_correlated(
-            alpha,
-            s,
-            len2,
-            cos_i,
-            cos_o,
-            smith_ggx_root(alpha, cos_i),
-            p.smith_root_o,
-        );
-        // F·DV + (1 − F)·kd = kd + F·(DV − kd), with Schlick's
-        // F = F0 + (1 − F0) w per channel: two fused steps a channel.
-        let channel = |f0: f32, kd: R| {
-            let f = R::splat(1.0 - f0 as f64).mul_add(w, R::splat(f0 as f64));
-            f.mul_add(dv - kd, kd)
-        };
-        let f = Rgb::new(
-            channel(f0[0], kd.x),
-            channel(f0[1], kd.y),
-            channel(f0[2], kd.z),
-        );
-        Rgb::select(above, f, Rgb::zero())
+    #[inline(always)]
+    fn f_local_scaled<R: Real>(
+        &self,
+        p: &MetallicRoughnessPrepared<R>,
+        v: V3<R>,
+        inv_len: R,
+    ) -> Rgb<R> {
+        self.f_half(p, HalfAngles::scaled(v, inv_len, &p.o))
     }
 
     #[inline(always)]
