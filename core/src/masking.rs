@@ -65,12 +65,11 @@ pub fn v_smith_ggx_correlated_roots<R: Real>(cos_i: R, cos_o: R, s_i: R, s_o: R)
 /// |s|² and the Smith sum ≥ ~2e-7 α (cosine floor 1e-7), so the
 /// denominator is ≥ ~2e-7 α⁵ |s|⁴ ≥ 2e-34 at α = ALPHA_MIN.
 ///
-/// A true division, not `rcp` (estimate + Newton step): on the Zen 5
-/// benchmark machine the divider runs beside the multipliers the light
-/// loop is bound by (PERFORMANCE.md). The light's 1/d stays an `rsqrt`: √
-/// then ÷ there measured 4 % slower (two long-latency ops in a row).
+/// A true division, not `rcp` (estimate + Newton step): one operation on
+/// the light loop's dependency chain instead of four, and the divider
+/// runs beside the multipliers (measured ~2.5 % of a frame on the Zen 5
+/// benchmark machine, PERFORMANCE.md).
 #[inline(always)]
-#[allow(clippy::too_many_arguments)]
 pub fn dv_ggx_correlated<R: Real>(
     alpha: R,
     s: V3<R>,
