@@ -817,8 +817,44 @@ fn load8(p: &[f32], i: usize) -> f32x8 {
 
 /// Writes eight pixels' sRGB codes (0..=255 per lane) as 24 bytes of RGB:
 /// r | g << 8 | b << 16 is each pixel's three bytes in one little-endian
-/// word, stored at 3 × lane (the next lane overwrites its fourth byte; the
-/// last writes three). A cast to u8 per channel was ~40 % of the fused pass.
+/// word; one byte shuffle packs each 128-bit half's four words into 12
+/// bytes, stored as 8 + 4 (4 stores for 8 pixels instead of 8 word
+/// extracts and 8 stores: ~18 instructions fewer per 8 pixels).
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn store_rgb8(px8: &mut [u8], [r, g, b]: [i32x8; 3]) {
+    use core::arch::x86_64::{
+        __m256i, _mm256_castsi256_si128, _mm256_extracti128_si256, _mm256_setr_epi8,
+        _mm256_shuffle_epi8, _mm_cvtsi128_si64, _mm_extract_epi32,
+    };
+    let word: __m256i = bytemuck::cast(r | (g << 8) | (b << 16));
+    // SAFETY: AVX2 is enabled (cfg); these are register operations only.
+    let (lo, hi) = unsafe {
+        let pack = _mm256_setr_epi8(
+            0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1, //
+            0, 1, 2, 4, 5, 6, 8, 9, 10, 12, 13, 14, -1, -1, -1, -1,
+        );
+        let packed = _mm256_shuffle_epi8(word, pack);
+        let (lo, hi) = (
+            _mm256_castsi256_si128(packed),
+            _mm256_extracti128_si256::<1>(packed),
+        );
+        (
+            (_mm_cvtsi128_si64(lo), _mm_extract_epi32::<2>(lo)),
+            (_mm_cvtsi128_si64(hi), _mm_extract_epi32::<2>(hi)),
+        )
+    };
+    let out: &mut [u8; 24] = px8.try_into().expect("24 bytes for 8 pixels");
+    for ((first8, next4), at) in [(lo, 0), (hi, 12)] {
+        out[at..at + 8].copy_from_slice(&first8.to_le_bytes());
+        out[at + 8..at + 12].copy_from_slice(&next4.to_le_bytes());
+    }
+}
+
+/// The portable form of the store above: each pixel's word stored at
+/// 3 × lane (the next lane overwrites its fourth byte; the last writes
+/// three). A cast to u8 per channel was ~40 % of the fused pass.
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
 #[inline(always)]
 fn store_rgb8(px8: &mut [u8], [r, g, b]: [i32x8; 3]) {
     let word: i32x8 = r | (g << 8) | (b << 16);
