@@ -143,7 +143,7 @@ pub fn scan_triangle(
         // Groups are aligned to 8 inside the tile, so `at` is a multiple of
         // 8 below TILE_PIXELS and the mask changes nothing; it lets the
         // compiler drop the bounds checks of the two 8-wide accesses.
-        debug_assert!(at % 8 == 0 && at < TILE_PIXELS);
+        debug_assert!(at.is_multiple_of(8) && at < TILE_PIXELS);
         let at = at & (TILE_PIXELS - 8);
         let d_old = f32x8::load(&depth[at..at + 8]);
         let pass = f32x8::mask_from_bits(mask) & z.gt(d_old);
