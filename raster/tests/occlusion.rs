@@ -132,8 +132,8 @@ fn triangles_called_hidden_write_no_pixel() {
                     &planes,
                     tx as i32,
                     ty as i32,
-                    &mut d[range.clone()],
-                    &mut ids[range],
+                    (&mut d[range.clone()]).try_into().expect("a tile"),
+                    (&mut ids[range]).try_into().expect("a tile"),
                 );
             }
         }
