@@ -99,8 +99,9 @@ pub fn visibility_into(
         .max()
         .unwrap_or(0);
     out.planes.resize(ids as usize, TriPlanes::default());
+    let mut bounds_built = false;
     for (i, pass) in scene.geometry.iter().enumerate() {
-        geometry_pass(scene, target, pass, i, out, stats);
+        geometry_pass(scene, target, pass, i, &mut bounds_built, out, stats);
     }
     if scene.geometry.is_empty() {
         out.vis.depth.fill(0.0);
@@ -112,16 +113,20 @@ pub fn visibility_into(
 /// pass of a frame clears the visibility buffer; later ones depth-test
 /// against what the earlier ones drew, and skip in setup the triangles
 /// that test shows cannot pass anywhere (`occlusion`; bounds built once,
-/// before the second pass, and counted in the setup time).
+/// before the first later pass that is set up, and counted in the setup
+/// time). A later pass whose vertex stage shows its triangles hidden
+/// ([`crate::geometry::VertexStage::hidden`]) stops after the vertex
+/// stage; its triangles count as hidden by earlier passes.
 fn geometry_pass(
     scene: &SceneData,
     target: &Target,
     pass: &GeometryPass,
     index: usize,
+    bounds_built: &mut bool,
     out: &mut Visibility,
     stats: &mut FrameStats,
 ) {
-    let (first, second) = (index == 0, index == 1);
+    let first = index == 0;
     let t = Instant::now();
     out.clip.clear();
     pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
@@ -132,7 +137,14 @@ fn geometry_pass(
         pass.name
     );
     let clip = &out.clip;
+    let hidden = !first && pass.vertex.hidden(pass.triangles.clone());
     stats.times.vertex += ms_since(t);
+    if hidden {
+        let n = pass.triangles.len() as u64;
+        stats.counts.triangles += n;
+        stats.counts.culled_occluded += n;
+        return;
+    }
 
     let t = Instant::now();
     let ctx = SetupContext {
@@ -140,8 +152,9 @@ fn geometry_pass(
         height: target.height,
         guard: GuardBand::for_image(target.width, target.height),
     };
-    if second {
+    if !first && !*bounds_built {
         out.occluder.build(target, &out.vis.depth);
+        *bounds_built = true;
     }
     let occluder = (!first).then_some(&out.occluder);
     let range = pass.triangles.start as usize..pass.triangles.end as usize;

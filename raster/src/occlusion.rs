@@ -18,7 +18,7 @@
 //! 97k on the benchmark scene (62k with 8×8 blocks; the rest lie within
 //! a few pixels of a silhouette, where the ring is, and must be drawn).
 
-use crate::setup_x4::{Vertices4, LANES};
+use crate::setup_x4::Vertices4;
 use crate::target::{Target, TILE, TILE_PIXELS};
 use rayon::prelude::*;
 use wide::f64x4;
@@ -307,6 +307,7 @@ fn widen(m: &[f32]) -> f64x4 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::setup_x4::LANES;
 
     /// A 130×70 target whose depth is 0.5 everywhere but one pixel.
     fn bounds_with_hole(hole: (u32, u32), hole_depth: f32) -> DepthBounds {
@@ -456,7 +457,7 @@ mod tests {
                     r
                 }
             };
-            let want = (by0..=by1).all(|by| (bx0..=bx1).all(|bx| !(b.min[by * b.row + bx] < z32)));
+            let want = !(by0..=by1).any(|by| (bx0..=bx1).any(|bx| b.min[by * b.row + bx] < z32));
             assert_eq!(
                 b.behind_block_range([bx0, bx1, by0, by1], z),
                 want,
