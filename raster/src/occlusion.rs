@@ -473,6 +473,58 @@ mod tests {
         assert!(!b.behind_block_range([3, 2, 0, 0], 0.0), "empty range");
     }
 
+    /// Whatever `hides` drops writes no pixel: no pixel centre within
+    /// 1/128 px of the triangle (each edge moved out that far) has a depth
+    /// below the triangle's largest vertex depth, checked pixel by pixel
+    /// on random small triangles around holes of random depth.
+    #[test]
+    fn a_hidden_triangle_has_no_pixel_in_front_of_the_depth() {
+        use rand::{Rng, SeedableRng};
+        let mut rng = rand::rngs::StdRng::seed_from_u64(9);
+        let t = Target::new(130, 70).unwrap();
+        let mut depth = vec![0.5f32; t.buffer_len()];
+        for _ in 0..40 {
+            let (x, y) = (rng.random_range(0..130), rng.random_range(0..70));
+            depth[t.index(x, y)] = rng.random_range(0.0..0.5);
+        }
+        let mut b = DepthBounds::default();
+        b.build(&t, &depth);
+        let mut hidden = 0;
+        for _ in 0..20_000 {
+            let (cx, cy) = (rng.random_range(0.0..130.0), rng.random_range(0.0..70.0));
+            let size = [1.5f64, 4.0, 12.0][rng.random_range(0..3)];
+            let px: [[f64; 2]; 3] = std::array::from_fn(|_| {
+                [
+                    cx + rng.random_range(-size..size),
+                    cy + rng.random_range(-size..size),
+                ]
+            });
+            let z = rng.random_range(0.3..0.5);
+            if !b.hides(&tri(px, z)) {
+                continue;
+            }
+            hidden += 1;
+            let [a, bb, c] = px;
+            let d = (bb[0] - a[0]) * (c[1] - a[1]) - (bb[1] - a[1]) * (c[0] - a[0]);
+            let inside = |x: f64, y: f64| {
+                [(a, bb), (bb, c), (c, a)].iter().all(|&(p, q)| {
+                    let cross = (q[0] - p[0]) * (y - p[1]) - (q[1] - p[1]) * (x - p[0]);
+                    let len = ((q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2)).sqrt();
+                    cross * d.signum() >= -len / 128.0
+                })
+            };
+            for y in 0..70u32 {
+                for x in 0..130u32 {
+                    let below = (depth[t.index(x, y)] as f64) < z;
+                    if below && inside(x as f64 + 0.5, y as f64 + 0.5) {
+                        panic!("{px:?} at {z} hides pixel {x},{y}");
+                    }
+                }
+            }
+        }
+        assert!(hidden > 2_000, "{hidden} hidden");
+    }
+
     #[test]
     fn hides_only_triangles_behind_every_pixel_they_touch() {
         let b = bounds_with_hole((100, 60), 0.1);
