@@ -21,6 +21,7 @@ use crate::shade::{shade_tile, ShadeTargets};
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use rayon::prelude::*;
 use specula_core::f32x8;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Wall time of each pass in milliseconds.
@@ -101,7 +102,19 @@ pub fn visibility_into(
     out.planes.resize(ids as usize, TriPlanes::default());
     let mut bounds_built = false;
     for (i, pass) in scene.geometry.iter().enumerate() {
-        geometry_pass(scene, target, pass, i, &mut bounds_built, out, stats);
+        // A pass whose vertex stage is the previous pass's (one outline's
+        // passes share one) finds its positions in `out.clip` already.
+        let same_stage = i > 0 && Arc::ptr_eq(&scene.geometry[i - 1].vertex, &pass.vertex);
+        geometry_pass(
+            scene,
+            target,
+            pass,
+            i,
+            same_stage,
+            &mut bounds_built,
+            out,
+            stats,
+        );
     }
     if scene.geometry.is_empty() {
         out.vis.depth.fill(0.0);
@@ -116,20 +129,26 @@ pub fn visibility_into(
 /// before the first later pass that is set up, and counted in the setup
 /// time). A later pass whose vertex stage shows its triangles hidden
 /// ([`crate::geometry::VertexStage::hidden`]) stops after the vertex
-/// stage; its triangles count as hidden by earlier passes.
+/// stage; its triangles count as hidden by earlier passes. With
+/// `same_stage` the previous pass ran this pass's vertex stage for this
+/// view: its positions in `out.clip` are reused.
+#[allow(clippy::too_many_arguments)]
 fn geometry_pass(
     scene: &SceneData,
     target: &Target,
     pass: &GeometryPass,
     index: usize,
+    same_stage: bool,
     bounds_built: &mut bool,
     out: &mut Visibility,
     stats: &mut FrameStats,
 ) {
     let first = index == 0;
     let t = Instant::now();
-    out.clip.clear();
-    pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
+    if !same_stage {
+        out.clip.clear();
+        pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
+    }
     assert_eq!(
         out.clip.len(),
         scene.positions.len(),
