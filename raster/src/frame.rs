@@ -10,7 +10,7 @@ use crate::buffers::{BufferSet, FrameBuffers, Planes3, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
 use crate::geometry::{Cull, GeometryPass};
-use crate::occlusion::DepthBounds;
+use crate::occlusion::{tile_minima, DepthBounds, TileMinima};
 use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
@@ -57,8 +57,10 @@ pub struct Visibility {
     /// Setup's and binning's output per chunk, kept for the next frame's
     /// geometry passes to refill (see [`BinnedChunk::bin`]).
     chunks: Vec<BinnedChunk>,
-    /// Block depth bounds after the first pass, for the later ones.
+    /// Block depth bounds after the first pass, for the later ones, and
+    /// each tile's part of them, taken in the first pass's raster sweep.
     occluder: DepthBounds,
+    tile_bounds: Vec<TileMinima>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -75,6 +77,7 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         clip: Vec::new(),
         chunks: Vec::new(),
         occluder: DepthBounds::default(),
+        tile_bounds: Vec::new(),
     };
     visibility_into(scene, target, &mut v, stats);
     v
@@ -172,7 +175,7 @@ fn geometry_pass(
         guard: GuardBand::for_image(target.width, target.height),
     };
     if !first && !*bounds_built {
-        out.occluder.build(target, &out.vis.depth);
+        out.occluder.build_from_tiles(target, &out.tile_bounds);
         *bounds_built = true;
     }
     let occluder = (!first).then_some(&out.occluder);
@@ -252,18 +255,35 @@ fn geometry_pass(
 
     let t = Instant::now();
     let planes = &out.planes;
+    // The first pass of several takes the occlusion bounds of each tile
+    // while it is in cache (the later passes' test needs them).
+    let bounds = first && scene.geometry.len() > 1;
+    let tiles = out.vis.depth.len() / TILE_PIXELS;
+    if bounds {
+        // One entry a tile (1 KB), kept from frame to frame.
+        out.tile_bounds.resize(tiles, [0.0; _]);
+    }
     out.vis
         .depth
         .par_chunks_mut(TILE_PIXELS)
         .zip(out.vis.id.par_chunks_mut(TILE_PIXELS))
+        // Entries past the kept ones (none, or all when not taking
+        // bounds): `None`; the zip stops at the last tile.
+        .zip(
+            (out.tile_bounds.par_iter_mut().map(Some))
+                .chain((0..tiles).into_par_iter().map(|_| None)),
+        )
         .enumerate()
-        .for_each(|(tile, (depth, ids))| {
+        .for_each(|(tile, ((depth, ids), minima))| {
             if first {
                 // Cleared here, while the tile is about to be in cache anyway.
                 depth.fill(0.0);
                 ids.fill(MISS);
             }
-            rasterize_tile(target, tile, chunks, planes, depth, ids)
+            rasterize_tile(target, tile, chunks, planes, depth, ids);
+            if let Some(m) = minima.filter(|_| bounds) {
+                *m = tile_minima(depth);
+            }
         });
     stats.times.raster += ms_since(t);
 }

@@ -45,6 +45,44 @@ impl DepthBounds {
     /// past the image's edges hold the cleared depth 0, which only makes
     /// the bounds of edge blocks lower (more conservative).
     pub fn build(&mut self, target: &Target, depth: &[f32]) {
+        let row = self.shape(target);
+        let tiles_x = target.tiles_x as usize;
+        let blocks = row * target.tiles_y as usize * PER_TILE;
+        self.min[..blocks]
+            .par_chunks_mut(row * PER_TILE)
+            .zip(depth.par_chunks(tiles_x * TILE_PIXELS))
+            .for_each(|(out, tiles)| {
+                for (tx, tile) in tiles.chunks_exact(TILE_PIXELS).enumerate() {
+                    let m = tile_minima(tile);
+                    for by in 0..PER_TILE {
+                        out[by * row + tx * PER_TILE..][..PER_TILE]
+                            .copy_from_slice(&m[by * PER_TILE..][..PER_TILE]);
+                    }
+                }
+            });
+    }
+
+    /// [`DepthBounds::build`] from each tile's [`tile_minima`] (tile
+    /// order), which a pass can take while the tile is in cache.
+    pub fn build_from_tiles(&mut self, target: &Target, tiles: &[TileMinima]) {
+        let row = self.shape(target);
+        let tiles_x = target.tiles_x as usize;
+        let blocks = row * target.tiles_y as usize * PER_TILE;
+        self.min[..blocks]
+            .par_chunks_mut(row * PER_TILE)
+            .zip(tiles.par_chunks(tiles_x))
+            .for_each(|(out, tiles)| {
+                for (tx, m) in tiles.iter().enumerate() {
+                    for by in 0..PER_TILE {
+                        out[by * row + tx * PER_TILE..][..PER_TILE]
+                            .copy_from_slice(&m[by * PER_TILE..][..PER_TILE]);
+                    }
+                }
+            });
+    }
+
+    /// Sizes `self` for `target`; returns the blocks a row.
+    fn shape(&mut self, target: &Target) -> usize {
         let row = target.tiles_x as usize * PER_TILE;
         self.row = row;
         self.width = target.width;
@@ -52,30 +90,7 @@ impl DepthBounds {
         let blocks = row * target.tiles_y as usize * PER_TILE;
         // 3 more: `behind_block_range` reads 4 bounds from any block.
         self.min.resize(blocks + 3, 0.0);
-        let tiles_x = target.tiles_x as usize;
-        self.min[..blocks]
-            .par_chunks_mut(row * PER_TILE)
-            .zip(depth.par_chunks(tiles_x * TILE_PIXELS))
-            .for_each(|(out, tiles)| {
-                for (tx, tile) in tiles.chunks_exact(TILE_PIXELS).enumerate() {
-                    for by in 0..PER_TILE {
-                        let mut acc = [f32::INFINITY; TILE];
-                        for r in 0..BLOCK {
-                            let at = (by * BLOCK + r) * TILE;
-                            for (a, &d) in acc.iter_mut().zip(&tile[at..at + TILE]) {
-                                // Not f32::min: this form vectorizes.
-                                *a = if d < *a { d } else { *a };
-                            }
-                        }
-                        for bx in 0..PER_TILE {
-                            let m = acc[bx * BLOCK..(bx + 1) * BLOCK]
-                                .iter()
-                                .fold(f32::INFINITY, |m, &d| if d < m { d } else { m });
-                            out[by * row + tx * PER_TILE + bx] = m;
-                        }
-                    }
-                }
-            });
+        row
     }
 
     /// Whether the triangle with clip-space vertices `v` writes no pixel against depth these bounds
@@ -276,6 +291,30 @@ impl DepthBounds {
     }
 }
 
+/// The least depth of each `BLOCK`² block of one tile, row-major.
+pub type TileMinima = [f32; PER_TILE * PER_TILE];
+
+/// [`TileMinima`] of a tile's depth (`TILE_PIXELS` entries, row-major).
+pub fn tile_minima(tile: &[f32]) -> TileMinima {
+    let mut out = [0.0; PER_TILE * PER_TILE];
+    for by in 0..PER_TILE {
+        let mut acc = [f32::INFINITY; TILE];
+        for r in 0..BLOCK {
+            let at = (by * BLOCK + r) * TILE;
+            for (a, &d) in acc.iter_mut().zip(&tile[at..at + TILE]) {
+                // Not f32::min: this form vectorizes.
+                *a = if d < *a { d } else { *a };
+            }
+        }
+        for bx in 0..PER_TILE {
+            out[by * PER_TILE + bx] = acc[bx * BLOCK..(bx + 1) * BLOCK]
+                .iter()
+                .fold(f32::INFINITY, |m, &d| if d < m { d } else { m });
+        }
+    }
+    out
+}
+
 /// Block index of a pixel coordinate in [0, 2³¹): truncated, over `BLOCK`.
 #[inline(always)]
 fn block_index(x: f64x4) -> [usize; 4] {
@@ -357,6 +396,22 @@ mod tests {
         }
         // The partial blocks past the right edge see the padding's 0.
         assert_eq!(b.min[130 / BLOCK], 0.0);
+    }
+
+    /// Bounds taken tile by tile (as the first pass does) are the bounds
+    /// built from the whole buffer.
+    #[test]
+    fn bounds_from_tiles_are_the_bounds_of_the_buffer() {
+        let t = Target::new(130, 70).unwrap();
+        let depth: Vec<f32> = (0..t.buffer_len())
+            .map(|i| ((i * 7919) % 1000) as f32 / 1000.0)
+            .collect();
+        let mut a = DepthBounds::default();
+        a.build(&t, &depth);
+        let tiles: Vec<TileMinima> = depth.chunks_exact(TILE_PIXELS).map(tile_minima).collect();
+        let mut b = DepthBounds::default();
+        b.build_from_tiles(&t, &tiles);
+        assert!(a.min == b.min && a.row == b.row && (a.width, a.height) == (b.width, b.height));
     }
 
     /// `hides_x4` answers `hides` lane by lane, for lanes asked about, on
