@@ -51,6 +51,13 @@
 //! and every vertex of the copy is pushed back by [`OPEN_DEPTH_PUSH`] so
 //! the sheet itself wins the depth test.
 //!
+//! A copy that cannot show is not drawn: a flat open piece (a ground
+//! plane) whose boundary lies off screen is covered on screen by its own
+//! faces, in front of its copy everywhere (conditions and margins at
+//! `copy_hidden`); its pass is reported hidden ([`VertexStage::hidden`])
+//! and the frame skips it. On the benchmark scene that is the ground's
+//! copy, two screen-filling triangles that wrote no pixel.
+//!
 //! The width is in output pixels; the renderer tells the stage its
 //! supersampling ([`Extrude::set_ssaa`]) so the ring is `width × ssaa`
 //! samples wide and `width` pixels after the resolve.

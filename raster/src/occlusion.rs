@@ -5,7 +5,8 @@
 //! triangles that cannot write a pixel are skipped.
 //!
 //! What the earlier passes drew is summed up as the least depth of each
-//! 4×4 block of pixels ([`DepthBounds`], built once after the first pass).
+//! 4×4 block of pixels ([`DepthBounds`], taken tile by tile in the first
+//! pass's raster sweep and assembled before the second pass).
 //! Depth only grows within a frame (the test is z > depth, reversed depth,
 //! and a pass writes z only where it passes), so the bounds stay lower
 //! bounds for every later pass and need no rebuilding. A triangle is
