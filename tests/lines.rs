@@ -1280,3 +1280,102 @@ materials = ["a"]
         );
     }
 }
+
+/// A flat open piece's copy (the ground under a sphere) whose boundary is
+/// off screen cannot show: the stage reports its pass hidden and the frame
+/// skips it, with the same visibility buffer bit for bit as drawing it
+/// (a stage that never reports hidden). With the boundary on screen the
+/// copy is drawn and its ring shows.
+#[test]
+fn an_open_plane_copy_is_skipped_only_when_its_boundary_is_off_screen() {
+    use specula_raster::frame::{visibility, FrameStats};
+    use specula_raster::geometry::{Cull, GeometryPass, VertexStage};
+    use specula_raster::{SceneData, Target, View};
+    use std::sync::Arc;
+
+    /// The extrusion stage, never skipping: every pass drawn.
+    #[derive(Debug)]
+    struct NeverHidden(Arc<dyn VertexStage>);
+    impl VertexStage for NeverHidden {
+        fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>) {
+            self.0.clip_positions(scene, view, out)
+        }
+    }
+    let scene = |size: f32| {
+        format!(
+            r#"
+[camera]
+eye = [0.3, 8.0, 1.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 100.0
+
+[output]
+width = 96
+height = 72
+
+[[mesh]]
+plane = {{ size = [{size}, {size}] }}
+rotate = [0.0, 25.0, 0.0]
+material = "ground"
+
+[[mesh]]
+sphere = {{ radius = 0.5, segments = 24, rings = 12 }}
+translate = [0.0, 0.5, 0.0]
+material = "ground"
+
+[materials.ground]
+model = "lambert"
+base_color = [0.8, 0.5, 0.2]
+
+[[light]]
+type = "directional"
+direction = [-0.5, -1.0, -0.4]
+irradiance = [3.0, 3.0, 3.0]
+
+[[outline]]
+method = "extrusion"
+width = 1.5
+"#
+        )
+    };
+    for (size, off_screen) in [(20.0, true), (3.0, false)] {
+        let s = common::scene(&scene(size), &[]);
+        let data = &s.data;
+        let target = Target::new(96, 72).unwrap();
+        let main_ids = data.triangles.len() as u32;
+        // The open pieces' pass: the outline's front-face one.
+        let open: Vec<&GeometryPass> = (data.geometry.iter())
+            .filter(|p| p.name == "outline-extrusion" && p.cull == Cull::Back)
+            .collect();
+        assert_eq!(open.len(), 1, "size {size}");
+        let view = data.camera.view(96, 72);
+        open[0].vertex.clip_positions(data, &view, &mut Vec::new());
+        assert_eq!(
+            open[0].vertex.hidden(open[0].triangles.clone()),
+            off_screen,
+            "size {size}"
+        );
+        let mut drawn = data.clone();
+        for p in drawn.geometry.iter_mut().skip(1) {
+            p.vertex = Arc::new(NeverHidden(p.vertex.clone()));
+        }
+        let (mut st_a, mut st_b) = (FrameStats::default(), FrameStats::default());
+        let a = visibility(data, &target, &mut st_a);
+        let b = visibility(&drawn, &target, &mut st_b);
+        let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert!(a.vis.id == b.vis.id, "size {size}: ids differ");
+        assert!(bits(&a.vis.depth) == bits(&b.vis.depth), "size {size}");
+        let skipped = st_a.counts.culled_occluded - st_b.counts.culled_occluded;
+        let copy = open[0].triangles.len() as u64;
+        assert_eq!(skipped, if off_screen { copy } else { 0 });
+        // The sphere's ring shows either way; the plane's only when its
+        // boundary is on screen.
+        let ring = |lo: u32, hi: u32| (a.vis.id.iter()).filter(|&&id| id >= lo && id < hi).count();
+        let plane_ids = open[0].ids();
+        assert!(ring(main_ids, u32::MAX - 1) > 50, "size {size}");
+        let plane_ring = ring(plane_ids.start as u32, plane_ids.end as u32);
+        assert_eq!(plane_ring > 0, !off_screen, "size {size}: {plane_ring}");
+    }
+}

@@ -10,7 +10,7 @@ use crate::buffers::{BufferSet, FrameBuffers, Planes3, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
 use crate::geometry::{Cull, GeometryPass};
-use crate::occlusion::DepthBounds;
+use crate::occlusion::{tile_minima, DepthBounds, TileMinima};
 use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
 use crate::scan::rasterize_tile;
@@ -21,6 +21,7 @@ use crate::shade::{shade_tile, ShadeTargets};
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use rayon::prelude::*;
 use specula_core::f32x8;
+use std::sync::Arc;
 use std::time::Instant;
 
 /// Wall time of each pass in milliseconds.
@@ -56,8 +57,10 @@ pub struct Visibility {
     /// Setup's and binning's output per chunk, kept for the next frame's
     /// geometry passes to refill (see [`BinnedChunk::bin`]).
     chunks: Vec<BinnedChunk>,
-    /// Block depth bounds after the first pass, for the later ones.
+    /// Block depth bounds after the first pass, for the later ones, and
+    /// each tile's part of them, taken in the first pass's raster sweep.
     occluder: DepthBounds,
+    tile_bounds: Vec<TileMinima>,
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -74,6 +77,7 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         clip: Vec::new(),
         chunks: Vec::new(),
         occluder: DepthBounds::default(),
+        tile_bounds: Vec::new(),
     };
     visibility_into(scene, target, &mut v, stats);
     v
@@ -99,8 +103,21 @@ pub fn visibility_into(
         .max()
         .unwrap_or(0);
     out.planes.resize(ids as usize, TriPlanes::default());
+    let mut bounds_built = false;
     for (i, pass) in scene.geometry.iter().enumerate() {
-        geometry_pass(scene, target, pass, i, out, stats);
+        // A pass whose vertex stage is the previous pass's (one outline's
+        // passes share one) finds its positions in `out.clip` already.
+        let same_stage = i > 0 && Arc::ptr_eq(&scene.geometry[i - 1].vertex, &pass.vertex);
+        geometry_pass(
+            scene,
+            target,
+            pass,
+            i,
+            same_stage,
+            &mut bounds_built,
+            out,
+            stats,
+        );
     }
     if scene.geometry.is_empty() {
         out.vis.depth.fill(0.0);
@@ -112,19 +129,29 @@ pub fn visibility_into(
 /// pass of a frame clears the visibility buffer; later ones depth-test
 /// against what the earlier ones drew, and skip in setup the triangles
 /// that test shows cannot pass anywhere (`occlusion`; bounds built once,
-/// before the second pass, and counted in the setup time).
+/// before the first later pass that is set up, and counted in the setup
+/// time). A later pass whose vertex stage shows its triangles hidden
+/// ([`crate::geometry::VertexStage::hidden`]) stops after the vertex
+/// stage; its triangles count as hidden by earlier passes. With
+/// `same_stage` the previous pass ran this pass's vertex stage for this
+/// view: its positions in `out.clip` are reused.
+#[allow(clippy::too_many_arguments)]
 fn geometry_pass(
     scene: &SceneData,
     target: &Target,
     pass: &GeometryPass,
     index: usize,
+    same_stage: bool,
+    bounds_built: &mut bool,
     out: &mut Visibility,
     stats: &mut FrameStats,
 ) {
-    let (first, second) = (index == 0, index == 1);
+    let first = index == 0;
     let t = Instant::now();
-    out.clip.clear();
-    pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
+    if !same_stage {
+        out.clip.clear();
+        pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
+    }
     assert_eq!(
         out.clip.len(),
         scene.positions.len(),
@@ -132,7 +159,14 @@ fn geometry_pass(
         pass.name
     );
     let clip = &out.clip;
+    let hidden = !first && pass.vertex.hidden(pass.triangles.clone());
     stats.times.vertex += ms_since(t);
+    if hidden {
+        let n = pass.triangles.len() as u64;
+        stats.counts.triangles += n;
+        stats.counts.culled_occluded += n;
+        return;
+    }
 
     let t = Instant::now();
     let ctx = SetupContext {
@@ -140,8 +174,9 @@ fn geometry_pass(
         height: target.height,
         guard: GuardBand::for_image(target.width, target.height),
     };
-    if second {
-        out.occluder.build(target, &out.vis.depth);
+    if !first && !*bounds_built {
+        out.occluder.build_from_tiles(target, &out.tile_bounds);
+        *bounds_built = true;
     }
     let occluder = (!first).then_some(&out.occluder);
     let range = pass.triangles.start as usize..pass.triangles.end as usize;
@@ -220,18 +255,35 @@ fn geometry_pass(
 
     let t = Instant::now();
     let planes = &out.planes;
+    // The first pass of several takes the occlusion bounds of each tile
+    // while it is in cache (the later passes' test needs them).
+    let bounds = first && scene.geometry.len() > 1;
+    let tiles = out.vis.depth.len() / TILE_PIXELS;
+    if bounds {
+        // One entry a tile (1 KB), kept from frame to frame.
+        out.tile_bounds.resize(tiles, [0.0; _]);
+    }
     out.vis
         .depth
         .par_chunks_mut(TILE_PIXELS)
         .zip(out.vis.id.par_chunks_mut(TILE_PIXELS))
+        // Entries past the kept ones (none, or all when not taking
+        // bounds): `None`; the zip stops at the last tile.
+        .zip(
+            (out.tile_bounds.par_iter_mut().map(Some))
+                .chain((0..tiles).into_par_iter().map(|_| None)),
+        )
         .enumerate()
-        .for_each(|(tile, (depth, ids))| {
+        .for_each(|(tile, ((depth, ids), minima))| {
             if first {
                 // Cleared here, while the tile is about to be in cache anyway.
                 depth.fill(0.0);
                 ids.fill(MISS);
             }
-            rasterize_tile(target, tile, chunks, planes, depth, ids)
+            rasterize_tile(target, tile, chunks, planes, depth, ids);
+            if let Some(m) = minima.filter(|_| bounds) {
+                *m = tile_minima(depth);
+            }
         });
     stats.times.raster += ms_since(t);
 }

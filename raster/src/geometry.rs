@@ -36,6 +36,15 @@ pub trait VertexStage: Debug + Send + Sync {
     /// Clip-space position of every scene vertex (`scene.positions` order)
     /// into `out`, which arrives cleared.
     fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>);
+
+    /// Right after `clip_positions` for a frame's view: whether source
+    /// triangles `triangles`, drawn from those positions by a pass that
+    /// follows the scene's main pass ([`GeometryPass::main`]), can write
+    /// no pixel, so the frame may skip the pass. A stage answers `true`
+    /// only where it has shown that; the default never does.
+    fn hidden(&self, _triangles: Range<u32>) -> bool {
+        false
+    }
 }
 
 /// The camera's view-projection of the world-space positions.

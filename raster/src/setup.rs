@@ -178,6 +178,15 @@ fn dot3(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// The 2D-homogeneous determinant `setup` decides a triangle's facing by
+/// (clip-space vertices `v`): > 0 counter-clockwise on screen (front),
+/// < 0 clockwise, 0 or not finite degenerate. The same operations as in
+/// `setup`, so the same value.
+pub fn orientation(v: &[[f32; 4]; 3]) -> f64 {
+    let cols = v.map(|p| [p[0] as f64, p[1] as f64, p[3] as f64]);
+    dot3(cols[0], cross3(cols[1], cols[2]))
+}
+
 impl SetupContext {
     /// Sets up the triangle of id `tri` (clip-space vertices `v`), skipping
     /// it if `cull` says its facing is not drawn. Pushes its

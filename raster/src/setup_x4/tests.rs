@@ -376,3 +376,40 @@ fn gathered_vertices_match_the_arrays() {
         }
     }
 }
+
+/// `orientation`, which the extrusion outline uses to tell which faces the
+/// main pass draws, has the sign `setup` culls by: a valid triangle inside
+/// the frustum is culled as a back face exactly when it is negative, and
+/// skipped as degenerate when it is 0.
+#[test]
+fn orientation_is_the_sign_setup_culls_by() {
+    use crate::setup::orientation;
+    let ctx = ctx(64, 48);
+    let mut rng = StdRng::seed_from_u64(11);
+    let (mut front, mut back) = (0, 0);
+    for n in 0..20_000 {
+        let mut v: Tri = std::array::from_fn(|_| {
+            let w = rng.random_range(0.5f32..4.0);
+            [
+                rng.random_range(-0.9..0.9) * w,
+                rng.random_range(-0.9..0.9) * w,
+                rng.random_range(0.1..0.9) * w,
+                w,
+            ]
+        });
+        if n % 17 == 0 {
+            v[2] = v[1]; // degenerate
+        }
+        let mut counts = SetupCounts::default();
+        ctx.setup(0, v, Cull::Back, &mut Vec::new(), &mut counts);
+        let o = orientation(&v);
+        assert_eq!(counts.culled_backface == 1, o < 0.0, "{v:?}: {o}");
+        assert_eq!(counts.skipped_degenerate == 1, o == 0.0, "{v:?}: {o}");
+        if o > 0.0 {
+            front += 1;
+        } else if o < 0.0 {
+            back += 1;
+        }
+    }
+    assert!(front > 5_000 && back > 5_000, "{front} front, {back} back");
+}
