@@ -197,6 +197,11 @@ struct Draw {
     /// ([`Canvas::mark`]): a far tighter set than `rect` for a ring around
     /// an object. None with miter joins (whole `rect`).
     reach: Option<f32>,
+    /// The outline lies within the image with a pixel to spare all round
+    /// (so tiny-skia neither clips it nor tiles the image): it can be
+    /// filled on a mask of `rect`'s size, moved by `rect`'s corner, for the
+    /// same bytes ([`fill_local`]).
+    local: bool,
     /// A drawing cost estimate: the points tiny-skia scans and the rows.
     cost: f64,
 }
@@ -228,12 +233,26 @@ fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Dra
                         (Some(outline), b, 1.0)
                     };
                     let clamp = |v: f32, hi: usize| (v.max(0.0) as usize).min(hi);
-                    let rect = [
-                        clamp((bounds.left() - margin).floor(), w),
-                        clamp((bounds.right() + margin).ceil(), w),
-                        clamp((bounds.top() - margin).floor(), h),
-                        clamp((bounds.bottom() + margin).ceil(), h),
+                    let edges = [
+                        (bounds.left() - margin).floor(),
+                        (bounds.right() + margin).ceil(),
+                        (bounds.top() - margin).floor(),
+                        (bounds.bottom() + margin).ceil(),
                     ];
+                    let rect = [
+                        clamp(edges[0], w),
+                        clamp(edges[1], w),
+                        clamp(edges[2], h),
+                        clamp(edges[3], h),
+                    ];
+                    // (Each edge an integer in f32, so the comparisons are
+                    // exact; a NaN bound fails them.)
+                    let local = outline.is_some()
+                        && w.max(h) < TILED
+                        && edges[0] >= 0.0
+                        && edges[2] >= 0.0
+                        && edges[1] <= w as f32
+                        && edges[3] <= h as f32;
                     let points = outline.as_ref().unwrap_or(&centre).len();
                     let reach = reach(&stroke);
                     (rect[0] < rect[1] && rect[2] < rect[3]).then_some(Draw {
@@ -242,6 +261,7 @@ fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Dra
                         outline,
                         rect,
                         reach,
+                        local,
                         cost: (points + rect[3] - rect[2]) as f64,
                     })
                 })
@@ -276,6 +296,74 @@ fn reach(stroke: &Stroke) -> Option<f32> {
         1.0
     };
     Some(half * cap + 2.0)
+}
+
+/// tiny-skia fills a mask this wide or tall in tiles, each clipping the
+/// path (its `DrawTiler`: 8192 supersampled by 4 overflows its fixed
+/// point): such images keep the image-sized fills.
+const TILED: usize = 8192;
+
+/// Fills `d` (an outline within the image, [`Draw::local`]) on a
+/// transparent mask of its rectangle's size held in `buf`, the outline
+/// moved by the rectangle's corner (−x0, −y0), and returns its coverage in
+/// image coordinates.
+///
+/// The same bytes as the fill on an image-sized mask: the move is exact
+/// (an integer subtracted from a float at least as large, below 2²⁴),
+/// tiny-skia turns points into fixed point by scaling by a power of two
+/// and truncating (a floor, the points being positive both ways) and then
+/// works in integers relative to the edges' ends, and the outline lies
+/// within both masks, so neither clips it. Checked by
+/// `a_local_fill_gives_the_bytes_of_the_image_sized_fill`.
+fn fill_local(d: &Draw, buf: &mut Vec<u8>) -> Coverage {
+    let [x0, x1, y0, y1] = d.rect;
+    let (w, h) = (x1 - x0, y1 - y0);
+    let mut c = Coverage::default();
+    let (Some(outline), Some(size)) = (&d.outline, tiny_skia::IntSize::from_wh(w as u32, h as u32))
+    else {
+        return c;
+    };
+    buf.clear();
+    buf.resize(w * h, 0);
+    let Some(mut mask) = Mask::from_vec(std::mem::take(buf), size) else {
+        return c;
+    };
+    let to_local = Transform::from_translate(-(x0 as f32), -(y0 as f32));
+    mask.fill_path(outline, FillRule::Winding, true, to_local);
+    for (y, row) in mask.data().chunks_exact(w).enumerate() {
+        push_runs(&mut c, row, (y0 + y) as u32, x0 as u32);
+    }
+    *buf = mask.take();
+    c
+}
+
+/// Appends the nonzero stretches of `row` (image row `y`, starting at
+/// pixel `x0`) to `c`: runs of 8-byte chunks holding a nonzero byte,
+/// trimmed to their first and last nonzero bytes.
+fn push_runs(c: &mut Coverage, row: &[u8], y: u32, x0: u32) {
+    let nonzero = |k: usize| {
+        row[k * 8..(k * 8 + 8).min(row.len())]
+            .iter()
+            .any(|&a| a != 0)
+    };
+    let chunks = row.len().div_ceil(8);
+    let mut k = 0;
+    while k < chunks {
+        if !nonzero(k) {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < chunks && nonzero(k) {
+            k += 1;
+        }
+        let run = &row[start * 8..(k * 8).min(row.len())];
+        let first = run.iter().position(|&a| a != 0).unwrap_or(0);
+        let last = run.iter().rposition(|&a| a != 0).unwrap_or(first);
+        c.spans
+            .push([y, x0 + (start * 8 + first) as u32, c.alpha.len() as u32]);
+        c.alpha.extend_from_slice(&run[first..=last]);
+    }
 }
 
 /// How many rows ahead the blend asks for the colour planes' lines.
@@ -620,6 +708,9 @@ fn blend_span<const BPP: usize>(
 #[derive(Debug, Default)]
 pub struct Canvases {
     canvases: Vec<Canvas>,
+    /// A worker's mask for the draws filled at their own size
+    /// ([`fill_local`]).
+    locals: Vec<Vec<u8>>,
 }
 
 impl Canvases {
@@ -628,7 +719,7 @@ impl Canvases {
     /// coverage (see [`draw_bands`]).
     pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
         let draws = draws(lines, style, img.width as usize, img.height as usize);
-        draw_all(&mut self.canvases, &draws, img, style.color);
+        draw_all(self, &draws, img, style.color);
     }
 }
 
@@ -640,7 +731,8 @@ impl Canvases {
 /// clears only the 8-pixel row chunks its draws marked ([`Canvas::mark`]),
 /// and no image-sized buffer is allocated once the canvases exist (a frame
 /// that switches between hairlines and none makes new ones: [`Surface`]).
-fn draw_all(canvases: &mut Vec<Canvas>, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
+fn draw_all(cv: &mut Canvases, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
+    let canvases = &mut cv.canvases;
     let (w, h) = (img.width as usize, img.height as usize);
     if draws.is_empty() || w == 0 || h == 0 {
         return;
@@ -667,7 +759,7 @@ fn draw_all(canvases: &mut Vec<Canvas>, draws: &[Draw], img: &mut HdrImage, colo
     if hairlines {
         draw_bands(canvases, draws, &rows, img, color);
     } else {
-        let coverage = raster(canvases, draws);
+        let coverage = raster(canvases, &mut cv.locals, draws);
         compose_bands(canvases, draws, &coverage, img, color);
     }
 }
@@ -708,18 +800,25 @@ impl Coverage {
 /// tiled paths write disjoint spans), so on a transparent mask it leaves
 /// the pixel's coverage c itself: lerp(0, 255, c) = ⌊255·(c + 1)/256⌋ = c
 /// for c < 255, and 255 for c = 255 ([`lerp_alpha`]).
-fn raster(canvases: &mut [Canvas], draws: &[Draw]) -> Vec<Coverage> {
+fn raster(canvases: &mut [Canvas], locals: &mut Vec<Vec<u8>>, draws: &[Draw]) -> Vec<Coverage> {
     let mut order: Vec<usize> = (0..draws.len()).collect();
     order.sort_by(|&a, &b| draws[b].cost.total_cmp(&draws[a].cost).then(a.cmp(&b)));
     let next = AtomicUsize::new(0);
     let paint = white();
+    locals.resize_with(canvases.len(), Vec::new);
     let filled: Vec<Vec<(usize, Coverage)>> = canvases
         .par_iter_mut()
-        .map(|canvas| {
+        .zip(locals.par_iter_mut())
+        .map(|(canvas, local)| {
             let mut out = Vec::new();
             while let Some(&j) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
-                canvas.draw(&draws[j], &paint);
-                out.push((j, canvas.take()));
+                let d = &draws[j];
+                if d.local {
+                    out.push((j, fill_local(d, local)));
+                } else {
+                    canvas.draw(d, &paint);
+                    out.push((j, canvas.take()));
+                }
             }
             out
         })
@@ -1138,6 +1237,66 @@ mod tests {
         assert!(
             overlapped > 5_000 && seen > 20,
             "{overlapped} overlapped, {seen} levels"
+        );
+    }
+
+    #[test]
+    fn a_local_fill_gives_the_bytes_of_the_image_sized_fill() {
+        // Random strokes (round, bevel and miter joins, every cap, widths
+        // from 1.5 to 13 px, tapers), each filled on an image-sized mask
+        // and at its own size (`fill_local`): the same alpha at every
+        // pixel, and draws near the edges are left to the image-sized way.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (w, h) = (173usize, 131usize);
+        let (mut local, mut edge) = (0, 0);
+        let mut buf = Vec::new();
+        for case in 0..240 {
+            let style = StrokeStyle {
+                width: [1.5, 2.5, 6.0, 13.0, 3.7][case % 5],
+                color: [0.0; 3],
+                taper: if case % 7 == 0 { 0.6 } else { 0.0 },
+                join: [LineJoin::Round, LineJoin::Bevel, LineJoin::Miter][case / 5 % 3],
+                cap: [LineCap::Butt, LineCap::Round, LineCap::Square][case / 15 % 3],
+            };
+            let mut p = [next() * w as f32, next() * h as f32];
+            let points = (0..2 + (next() * 20.0) as usize)
+                .map(|_| {
+                    let step = if next() < 0.5 { 3.0 } else { 50.0 };
+                    p = [p[0] + (next() - 0.5) * step, p[1] + (next() - 0.5) * step];
+                    p
+                })
+                .collect();
+            let line = Polyline {
+                kind: EdgeKind::Silhouette,
+                points,
+                closed: case % 3 == 1,
+            };
+            for d in draws(&[line], &style, w, h) {
+                if !d.local {
+                    edge += 1;
+                    continue;
+                }
+                local += 1;
+                let mut whole = Mask::new(w as u32, h as u32).unwrap();
+                let outline = d.outline.as_ref().unwrap();
+                whole.fill_path(outline, FillRule::Winding, true, Transform::identity());
+                let mut got = vec![0u8; w * h];
+                let c = fill_local(&d, &mut buf);
+                for (y, x, a) in c.rows(0, h) {
+                    got[y * w + x..y * w + x + a.len()].copy_from_slice(a);
+                }
+                assert_eq!(whole.data(), &got[..], "case {case}");
+            }
+        }
+        assert!(
+            local > 200 && edge > 20,
+            "{local} local, {edge} near the edges"
         );
     }
 }
