@@ -760,7 +760,7 @@ fn draw_all(cv: &mut Canvases, draws: &[Draw], img: &mut HdrImage, color: [f32; 
         draw_bands(canvases, draws, &rows, img, color);
     } else {
         let coverage = raster(canvases, &mut cv.locals, draws);
-        compose_bands(canvases, draws, &coverage, img, color);
+        compose_bands(canvases.len(), &coverage, img, color);
     }
 }
 
@@ -842,34 +842,43 @@ fn lerp_alpha(dst: &mut [u8], cov: &[u8]) {
     }
 }
 
-/// Blends `coverage` (the draws' own, [`raster`]) over `img` in `color`.
+/// Blends `coverage` (the draws' own, [`raster`], in drawing order) over
+/// `img` in `color`.
 ///
-/// Rows are split into bands composed in parallel, each on its own
-/// canvas: a band lerps, draw after draw in drawing order, every
-/// coverage span in its rows into its canvas ([`lerp_alpha`], the very
-/// step the fill would have done on one mask), then blends its rows. A
-/// pixel's alpha is then the sequence of draws over it on one mask,
-/// whatever the bands.
-fn compose_bands(
-    canvases: &mut [Canvas],
-    draws: &[Draw],
-    coverage: &[Coverage],
-    img: &mut HdrImage,
-    color: [f32; 3],
-) {
+/// Row by row, in bands of rows run in parallel: a row's coverage spans
+/// are lerped, draw after draw in drawing order, into a row of alpha
+/// ([`lerp_alpha`], the very step the fill would have done on one mask),
+/// whose touched 8-pixel chunks are then blended and cleared. A pixel's
+/// alpha is then the sequence of draws over it on one mask, whatever the
+/// bands; and a row of alpha stays in cache, where an image-sized one
+/// would bring in a line per row.
+fn compose_bands(k: usize, coverage: &[Coverage], img: &mut HdrImage, color: [f32; 3]) {
     let (w, h) = (img.width as usize, img.height as usize);
-    // Bands of about equal coverage bytes (what composing and blending
-    // cost).
+    // The spans as (draw, span) by row, each row's in drawing order: a
+    // counting sort on the row; and the rows' bytes, to cut the bands.
+    let mut start = vec![0usize; h + 2];
     let mut bytes = vec![0usize; h + 1];
     for c in coverage {
         for (y, _, a) in c.rows(0, h) {
+            start[y + 2] += 1;
             bytes[y + 1] += a.len();
         }
     }
     for y in 1..=h {
+        start[y + 1] += start[y];
         bytes[y] += bytes[y - 1];
     }
-    let k = canvases.len();
+    let mut by_row = vec![(0u32, 0u32); start[h + 1]];
+    for (j, c) in coverage.iter().enumerate() {
+        for (i, s) in c.spans.iter().enumerate() {
+            let y = s[0] as usize;
+            if y < h {
+                by_row[start[y + 1]] = (j as u32, i as u32);
+                start[y + 1] += 1;
+            }
+        }
+    }
+    // Now row y's spans are by_row[start[y]..start[y + 1]].
     let rows: Vec<usize> = (0..=k)
         .map(|i| match i {
             0 => 0,
@@ -877,44 +886,73 @@ fn compose_bands(
             _ => bytes.partition_point(|&b| b * k < bytes[h] * i).min(h),
         })
         .collect();
-    let bands = split_bands(canvases, &rows, img);
-    bands.into_par_iter().for_each(|(canvas, lo, hi, planes)| {
-        for (d, c) in draws.iter().zip(coverage) {
-            if d.rect[2] >= hi || d.rect[3] <= lo {
-                continue;
+    let words = w.div_ceil(8).div_ceil(64);
+    split_bands(0..k, &rows, img)
+        .into_par_iter()
+        .for_each(|(_, lo, hi, [r, g, b])| {
+            let (mut alpha, mut marks) = (vec![0u8; w], vec![0u64; words]);
+            let spans = |y: usize| {
+                by_row[start[y]..start[y + 1]].iter().map(|&(j, i)| {
+                    let c = &coverage[j as usize];
+                    let [_, x, at] = c.spans[i as usize];
+                    let end = c
+                        .spans
+                        .get(i as usize + 1)
+                        .map_or(c.alpha.len(), |s| s[2] as usize);
+                    (x as usize, &c.alpha[at as usize..end])
+                })
+            };
+            for y in lo..hi {
+                // The colour planes' lines of a later row, ahead: they
+                // come from memory, one row crossing of a line at a time.
+                let ahead = y + PREFETCH_ROWS;
+                if ahead < hi {
+                    let at = (ahead - lo) * w;
+                    for (x, a) in spans(ahead) {
+                        prefetch(&r[at + x..at + x + a.len()]);
+                        prefetch(&g[at + x..at + x + a.len()]);
+                        prefetch(&b[at + x..at + x + a.len()]);
+                    }
+                }
+                for (x, a) in spans(y) {
+                    lerp_alpha(&mut alpha[x..x + a.len()], a);
+                    for c in x / 8..(x + a.len()).div_ceil(8) {
+                        marks[c / 64] |= 1 << (c % 64);
+                    }
+                }
+                let row = (y - lo) * w;
+                for x in runs(&marks, w) {
+                    let (r, g, b) = (
+                        &mut r[row + x.start..row + x.end],
+                        &mut g[row + x.start..row + x.end],
+                        &mut b[row + x.start..row + x.end],
+                    );
+                    blend_span::<1>(&alpha[x.clone()], r, g, b, color);
+                    alpha[x].fill(0);
+                }
+                marks.fill(0);
             }
-            for (y, x, a) in c.rows(lo, hi) {
-                canvas.mark_row(y, x, x + a.len());
-                let at = y * w + x;
-                lerp_alpha(&mut canvas.surface.data_mut()[at..at + a.len()], a);
-            }
-            canvas.rows = [
-                canvas.rows[0].min(d.rect[2].max(lo)),
-                canvas.rows[1].max(d.rect[3].min(hi)),
-            ];
-        }
-        blend_band(canvas, lo, hi, planes, color);
-    });
+        });
 }
 
-/// The canvases paired with consecutive bands of rows (`rows`, from 0 to
-/// the height) and those rows of `img`'s colour planes.
+/// The items paired with consecutive bands of rows (`rows`, from 0 to the
+/// height) and those rows of `img`'s colour planes.
 #[allow(clippy::type_complexity)]
-fn split_bands<'a, 'b>(
-    canvases: &'a mut [Canvas],
+fn split_bands<'b, T>(
+    items: impl IntoIterator<Item = T>,
     rows: &[usize],
     img: &'b mut HdrImage,
-) -> Vec<(&'a mut Canvas, usize, usize, [&'b mut [f32]; 3])> {
+) -> Vec<(T, usize, usize, [&'b mut [f32]; 3])> {
     let w = img.width as usize;
-    let mut bands = Vec::with_capacity(canvases.len());
+    let mut bands = Vec::with_capacity(rows.len() - 1);
     let (mut r, mut g, mut b) = (&mut img.rgb.r[..], &mut img.rgb.g[..], &mut img.rgb.b[..]);
-    for (i, canvas) in canvases.iter_mut().enumerate() {
+    for (i, item) in items.into_iter().enumerate().take(rows.len() - 1) {
         let n = (rows[i + 1] - rows[i]) * w;
         let (r0, r1) = std::mem::take(&mut r).split_at_mut(n);
         let (g0, g1) = std::mem::take(&mut g).split_at_mut(n);
         let (b0, b1) = std::mem::take(&mut b).split_at_mut(n);
         (r, g, b) = (r1, g1, b1);
-        bands.push((canvas, rows[i], rows[i + 1], [r0, g0, b0]));
+        bands.push((item, rows[i], rows[i + 1], [r0, g0, b0]));
     }
     bands
 }
@@ -936,7 +974,7 @@ fn draw_bands(
     color: [f32; 3],
 ) {
     let paint = white();
-    split_bands(canvases, rows, img)
+    split_bands(canvases.iter_mut(), rows, img)
         .into_par_iter()
         .for_each(|(canvas, lo, hi, planes)| {
             for d in draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo) {
