@@ -703,6 +703,24 @@ fn blend_span<const BPP: usize>(
     }
 }
 
+/// [`blend_span`] over a row of alpha bytes, without branches (so it runs
+/// 8 pixels at a time): where the alpha is 0 the pixel is kept as it is
+/// (a select, not c·1 + colour·0, which would turn −0 into +0).
+fn blend_alpha(px: &[u8], r: &mut [f32], g: &mut [f32], b: &mut [f32], color: [f32; 3]) {
+    for (((&alpha, r), g), b) in px.iter().zip(r).zip(g).zip(b) {
+        let a = alpha as f32 / 255.0;
+        let keep = alpha == 0;
+        let (nr, ng, nb) = (
+            *r * (1.0 - a) + color[0] * a,
+            *g * (1.0 - a) + color[1] * a,
+            *b * (1.0 - a) + color[2] * a,
+        );
+        *r = if keep { *r } else { nr };
+        *g = if keep { *g } else { ng };
+        *b = if keep { *b } else { nb };
+    }
+}
+
 /// The image-sized canvases the overlay draws on, kept from frame to
 /// frame and transparent between frames.
 #[derive(Debug, Default)]
@@ -927,7 +945,7 @@ fn compose_bands(k: usize, coverage: &[Coverage], img: &mut HdrImage, color: [f3
                         &mut g[row + x.start..row + x.end],
                         &mut b[row + x.start..row + x.end],
                     );
-                    blend_span::<1>(&alpha[x.clone()], r, g, b, color);
+                    blend_alpha(&alpha[x.clone()], r, g, b, color);
                     alpha[x].fill(0);
                 }
                 marks.fill(0);
