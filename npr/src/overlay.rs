@@ -215,60 +215,74 @@ fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Dra
         .map(|l| {
             strokes_of(l, style)
                 .into_iter()
-                .filter_map(|(centre, stroke)| {
-                    // tiny-skia's own test (treat_as_hairline with the
-                    // identity transform and anti-aliasing).
-                    let (outline, bounds, margin) = if stroke.width <= 1.0 {
-                        // A hairline's coverage stays within 1 px of the
-                        // line, caps (½ px) included.
-                        (None, centre.bounds(), 3.0)
-                    } else {
-                        // The scan converter writes only within the filled
-                        // path's bounds, rounded out. (Not the stroke's
-                        // theoretical reach from the centre line: with
-                        // miter-clip joins tiny-skia can draw spikes far
-                        // beyond it.)
-                        let outline = centre.stroke(&stroke, 1.0)?;
-                        let b = outline.bounds();
-                        (Some(outline), b, 1.0)
-                    };
-                    let clamp = |v: f32, hi: usize| (v.max(0.0) as usize).min(hi);
-                    let edges = [
-                        (bounds.left() - margin).floor(),
-                        (bounds.right() + margin).ceil(),
-                        (bounds.top() - margin).floor(),
-                        (bounds.bottom() + margin).ceil(),
-                    ];
-                    let rect = [
-                        clamp(edges[0], w),
-                        clamp(edges[1], w),
-                        clamp(edges[2], h),
-                        clamp(edges[3], h),
-                    ];
-                    // (Each edge an integer in f32, so the comparisons are
-                    // exact; a NaN bound fails them.)
-                    let local = outline.is_some()
-                        && w.max(h) < TILED
-                        && edges[0] >= 0.0
-                        && edges[2] >= 0.0
-                        && edges[1] <= w as f32
-                        && edges[3] <= h as f32;
-                    let points = outline.as_ref().unwrap_or(&centre).len();
-                    let reach = reach(&stroke);
-                    (rect[0] < rect[1] && rect[2] < rect[3]).then_some(Draw {
-                        centre,
-                        stroke,
-                        outline,
-                        rect,
-                        reach,
-                        local,
-                        cost: (points + rect[3] - rect[2]) as f64,
-                    })
-                })
+                .filter_map(|(centre, stroke)| draw_of(centre, stroke, w, h))
                 .collect()
         })
         .collect();
     per_line.into_iter().flatten().collect()
+}
+
+/// The draw of one stroke on a `w × h` image (the outline stroked), None
+/// if it cannot touch the image.
+fn draw_of(centre: Path, stroke: Stroke, w: usize, h: usize) -> Option<Draw> {
+    // tiny-skia's own test (treat_as_hairline with the identity transform
+    // and anti-aliasing).
+    let (outline, bounds, margin) = if stroke.width <= 1.0 {
+        // A hairline's coverage stays within 1 px of the line, caps (½ px)
+        // included.
+        (None, centre.bounds(), 3.0)
+    } else {
+        // The scan converter writes only within the filled path's bounds,
+        // rounded out. (Not the stroke's theoretical reach from the centre
+        // line: with miter-clip joins tiny-skia can draw spikes far beyond
+        // it.)
+        let outline = centre.stroke(&stroke, 1.0)?;
+        let b = outline.bounds();
+        (Some(outline), b, 1.0)
+    };
+    let clamp = |v: f32, hi: usize| (v.max(0.0) as usize).min(hi);
+    let edges = [
+        (bounds.left() - margin).floor(),
+        (bounds.right() + margin).ceil(),
+        (bounds.top() - margin).floor(),
+        (bounds.bottom() + margin).ceil(),
+    ];
+    let rect = [
+        clamp(edges[0], w),
+        clamp(edges[1], w),
+        clamp(edges[2], h),
+        clamp(edges[3], h),
+    ];
+    // (Each edge an integer in f32, so the comparisons are exact; a NaN
+    // bound fails them.)
+    let local = outline.is_some()
+        && w.max(h) < TILED
+        && edges[0] >= 0.0
+        && edges[2] >= 0.0
+        && edges[1] <= w as f32
+        && edges[3] <= h as f32;
+    let points = outline.as_ref().unwrap_or(&centre).len();
+    let reach = reach(&stroke);
+    (rect[0] < rect[1] && rect[2] < rect[3]).then_some(Draw {
+        centre,
+        stroke,
+        outline,
+        rect,
+        reach,
+        local,
+        cost: (points + rect[3] - rect[2]) as f64,
+    })
+}
+
+/// Whether every stroke of `style` is wider than 1 px, so that none is a
+/// hairline ([`strokes_of`]: a taper's widths are at least
+/// width·(1 − taper)).
+fn no_hairlines(style: &StrokeStyle) -> bool {
+    if style.taper > 0.0 {
+        style.width * (1.0 - style.taper) > 1.0
+    } else {
+        style.width > 1.0
+    }
 }
 
 /// How far from its centre line's segments a stroke can change pixels,
@@ -736,49 +750,44 @@ impl Canvases {
     /// a the strokes' alpha, the same bytes as blending [`draw`]'s
     /// coverage (see [`draw_bands`]).
     pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
-        let draws = draws(lines, style, img.width as usize, img.height as usize);
-        draw_all(self, &draws, img, style.color);
-    }
-}
-
-/// Draws `draws` and blends them over `img` in `color`: the masks' way
-/// ([`raster`] then [`compose_bands`]) unless a draw is a hairline, which
-/// tiny-skia may blend into one pixel more than once ([`draw_bands`]).
-///
-/// The canvases are kept transparent between frames: a band blends and
-/// clears only the 8-pixel row chunks its draws marked ([`Canvas::mark`]),
-/// and no image-sized buffer is allocated once the canvases exist (a frame
-/// that switches between hairlines and none makes new ones: [`Surface`]).
-fn draw_all(cv: &mut Canvases, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
-    let canvases = &mut cv.canvases;
-    let (w, h) = (img.width as usize, img.height as usize);
-    if draws.is_empty() || w == 0 || h == 0 {
-        return;
-    }
-    let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
-    // Masks unless a draw is a hairline ([`Surface`]).
-    let hairlines = draws.iter().any(|d| d.outline.is_none());
-    let rows = if hairlines {
-        band_rows(draws, h, k)
-    } else {
-        vec![0, h]
-    };
-    let k = if hairlines { rows.len() - 1 } else { k };
-    canvases.retain(|c| {
-        c.surface.size() == (img.width, img.height) && c.surface.hairlines() == hairlines
-    });
-    while canvases.len() < k {
-        let Some(c) = Canvas::new(img.width, img.height, hairlines) else {
+        let (w, h) = (img.width as usize, img.height as usize);
+        if lines.is_empty() || w == 0 || h == 0 {
             return;
-        };
-        canvases.push(c);
+        }
+        let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
+        if no_hairlines(style) {
+            if !self.keep_canvases(k, img.width, img.height, false) {
+                return;
+            }
+            let coverage = raster(&mut self.canvases, &mut self.locals, lines, style, w, h);
+            compose_bands(k, &coverage, img, style.color);
+        } else {
+            let draws = draws(lines, style, w, h);
+            if draws.is_empty() {
+                return;
+            }
+            let rows = band_rows(&draws, h, k);
+            let hairlines = draws.iter().any(|d| d.outline.is_none());
+            if !self.keep_canvases(rows.len() - 1, img.width, img.height, hairlines) {
+                return;
+            }
+            draw_bands(&mut self.canvases, &draws, &rows, img, style.color);
+        }
     }
-    canvases.truncate(k);
-    if hairlines {
-        draw_bands(canvases, draws, &rows, img, color);
-    } else {
-        let coverage = raster(canvases, &mut cv.locals, draws);
-        compose_bands(canvases.len(), &coverage, img, color);
+
+    /// Keeps `k` canvases of `w × h` pixels, pixmaps if `hairlines` else
+    /// masks ([`Surface`]); false if they cannot be made.
+    fn keep_canvases(&mut self, k: usize, w: u32, h: u32, hairlines: bool) -> bool {
+        let canvases = &mut self.canvases;
+        canvases.retain(|c| c.surface.size() == (w, h) && c.surface.hairlines() == hairlines);
+        while canvases.len() < k {
+            let Some(c) = Canvas::new(w, h, hairlines) else {
+                return false;
+            };
+            canvases.push(c);
+        }
+        canvases.truncate(k);
+        true
     }
 }
 
@@ -808,44 +817,70 @@ impl Coverage {
     }
 }
 
-/// Fills every draw on its own, in parallel, each on a transparent mask,
-/// and returns their coverage in draw order. A worker per canvas takes the
-/// next draw, costliest first, until none is left: no draw is filled
-/// twice, and which worker fills a draw does not change its bytes.
+/// Strokes and fills every draw of `lines` in `style` (no hairline:
+/// [`no_hairlines`]) on a `w × h` image on its own, in parallel, each on
+/// a transparent mask, and returns their coverage in drawing order. A
+/// worker per canvas takes the next polyline, costliest first (its points
+/// and rows), until none is left: no draw is filled twice, and which
+/// worker fills a draw does not change its bytes.
 ///
 /// A fill blends each pixel at most once (tiny-skia's supersampling
 /// blitter flushes a pixel row once, one run per pixel; its non-AA and
 /// tiled paths write disjoint spans), so on a transparent mask it leaves
 /// the pixel's coverage c itself: lerp(0, 255, c) = ⌊255·(c + 1)/256⌋ = c
 /// for c < 255, and 255 for c = 255 ([`lerp_alpha`]).
-fn raster(canvases: &mut [Canvas], locals: &mut Vec<Vec<u8>>, draws: &[Draw]) -> Vec<Coverage> {
-    let mut order: Vec<usize> = (0..draws.len()).collect();
-    order.sort_by(|&a, &b| draws[b].cost.total_cmp(&draws[a].cost).then(a.cmp(&b)));
+fn raster(
+    canvases: &mut [Canvas],
+    locals: &mut Vec<Vec<u8>>,
+    lines: &[Polyline],
+    style: &StrokeStyle,
+    w: usize,
+    h: usize,
+) -> Vec<Coverage> {
+    let cost = |l: &Polyline| {
+        let (lo, hi) = l
+            .points
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[1]), hi.max(p[1]))
+            });
+        l.points.len() as f32 + (hi - lo).clamp(0.0, h as f32)
+    };
+    let costs: Vec<f32> = lines.iter().map(cost).collect();
+    let mut order: Vec<usize> = (0..lines.len()).collect();
+    order.sort_by(|&a, &b| costs[b].total_cmp(&costs[a]).then(a.cmp(&b)));
     let next = AtomicUsize::new(0);
     let paint = white();
     locals.resize_with(canvases.len(), Vec::new);
-    let filled: Vec<Vec<(usize, Coverage)>> = canvases
+    let filled: Vec<Vec<(usize, Vec<Coverage>)>> = canvases
         .par_iter_mut()
         .zip(locals.par_iter_mut())
         .map(|(canvas, local)| {
             let mut out = Vec::new();
             while let Some(&j) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
-                let d = &draws[j];
-                if d.local {
-                    out.push((j, fill_local(d, local)));
-                } else {
-                    canvas.draw(d, &paint);
-                    out.push((j, canvas.take()));
+                let mut of_line = Vec::new();
+                for (centre, stroke) in strokes_of(&lines[j], style) {
+                    debug_assert!(stroke.width > 1.0, "a hairline on masks");
+                    let Some(d) = draw_of(centre, stroke, w, h) else {
+                        continue;
+                    };
+                    of_line.push(if d.local {
+                        fill_local(&d, local)
+                    } else {
+                        canvas.draw(&d, &paint);
+                        canvas.take()
+                    });
                 }
+                out.push((j, of_line));
             }
             out
         })
         .collect();
-    let mut coverage: Vec<Coverage> = (0..draws.len()).map(|_| Coverage::default()).collect();
+    let mut by_line: Vec<Vec<Coverage>> = (0..lines.len()).map(|_| Vec::new()).collect();
     for (j, c) in filled.into_iter().flatten() {
-        coverage[j] = c;
+        by_line[j] = c;
     }
-    coverage
+    by_line.into_iter().flatten().collect()
 }
 
 /// tiny-skia's blend of an opaque white source into a mask's alpha `dst`
