@@ -490,13 +490,6 @@ fn on_image(
 /// order; deterministic for a given piece order.
 pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
     let mut out = Vec::new();
-    chain_each(pieces, |l| out.push(l));
-    out
-}
-
-/// [`chain`], handing each polyline to `emit` as soon as it is made (in
-/// the same order).
-pub fn chain_each(pieces: &[Piece], mut emit: impl FnMut(Polyline)) {
     for kind in EdgeKind::ALL {
         let ps: Vec<&Piece> = pieces.iter().filter(|p| p.kind == kind).collect();
         let point = |i: usize, end: usize| if end == 0 { ps[i].a } else { ps[i].b };
@@ -580,7 +573,7 @@ pub fn chain_each(pieces: &[Piece], mut emit: impl FnMut(Polyline)) {
                 continue;
             }
             if let Some(end) = ps[i].ends.iter().position(|v| v.is_none()) {
-                emit(walk(i, end, &mut used));
+                out.push(walk(i, end, &mut used));
             }
         }
         let odd = runs.iter().filter(|(_, r)| r.len() % 2 == 1);
@@ -589,10 +582,11 @@ pub fn chain_each(pieces: &[Piece], mut emit: impl FnMut(Polyline)) {
         for r in starts {
             while let Some(&k) = ends[r.clone()].iter().find(|&&k| !used[unpack(k).1]) {
                 let (_, i, e) = unpack(k);
-                emit(walk(i, e, &mut used));
+                out.push(walk(i, e, &mut used));
             }
         }
     }
+    out
 }
 
 fn norm2(v: [f32; 2]) -> [f32; 2] {

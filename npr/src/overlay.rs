@@ -11,16 +11,13 @@
 //! edge kind) with the colour sRGB-encoded, as SVG colours are; a taper,
 //! which one SVG stroke cannot vary, is left out of the SVG.
 
-use crate::edges::{
-    chain, chain_each, visible_pieces, DepthView, EdgeKind, MeshEdges, Piece, Polyline,
-};
+use crate::edges::{chain, visible_pieces, DepthView, EdgeKind, MeshEdges, Polyline};
 use crate::outline::ssaa_of;
 use rayon::prelude::*;
 use specula_raster::buffers::prefetch;
 use specula_raster::post::{srgb_encode, HdrImage, PostStage};
 use specula_raster::{BufferSet, Camera, FrameBuffers};
-use std::borrow::Cow;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use tiny_skia::{FillRule, Mask, Paint, Path, PathBuilder, PathSegment, Pixmap, Stroke, Transform};
 pub use tiny_skia::{LineCap, LineJoin};
@@ -87,12 +84,6 @@ impl Strokes {
     /// The visible polylines of a frame (whose buffers hold depth), in
     /// output pixels of a `ssaa`-times smaller image.
     pub fn polylines(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<Polyline> {
-        chain(&self.pieces(frame, ssaa))
-    }
-
-    /// The visible pieces of the drawn edges ([`visible_pieces`]) that
-    /// [`Strokes::polylines`] chains.
-    fn pieces(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<Piece> {
         let view = self.camera.view(frame.width, frame.height);
         let depth = DepthView {
             depth: &frame.depth,
@@ -100,7 +91,8 @@ impl Strokes {
             height: frame.height as usize,
             ssaa,
         };
-        visible_pieces(&self.edges, &self.drawn, &view, self.camera.near, &depth)
+        let pieces = visible_pieces(&self.edges, &self.drawn, &view, self.camera.near, &depth);
+        chain(&pieces)
     }
 }
 
@@ -758,58 +750,18 @@ impl Canvases {
     /// a the strokes' alpha, the same bytes as blending [`draw`]'s
     /// coverage (see [`draw_bands`]).
     pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
-        if no_hairlines(style) {
-            self.fill_and_compose(
-                |emit| lines.iter().for_each(|l| emit(Cow::Borrowed(l))),
-                style,
-                img,
-            );
-        } else {
-            self.draw_in_bands(lines, style, img);
-        }
-    }
-
-    /// [`Canvases::blend`] of the polylines that [`chain`] makes of
-    /// `pieces`: without a hairline, the chaining runs on one worker while
-    /// the others fill the polylines it has made.
-    pub fn blend_pieces(&mut self, pieces: &[Piece], style: &StrokeStyle, img: &mut HdrImage) {
-        if no_hairlines(style) {
-            self.fill_and_compose(
-                |emit| chain_each(pieces, |l| emit(Cow::Owned(l))),
-                style,
-                img,
-            );
-        } else {
-            self.draw_in_bands(&chain(pieces), style, img);
-        }
-    }
-
-    /// The masks' way ([`raster`], then [`compose_bands`]) for the
-    /// polylines `produce` hands over.
-    fn fill_and_compose<'a>(
-        &mut self,
-        produce: impl FnOnce(&mut dyn FnMut(Cow<'a, Polyline>)) + Send,
-        style: &StrokeStyle,
-        img: &mut HdrImage,
-    ) {
-        let (w, h) = (img.width as usize, img.height as usize);
-        let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
-        if w == 0 || h == 0 || !self.keep_canvases(k, img.width, img.height, false) {
-            return;
-        }
-        let coverage = raster(&mut self.canvases, &mut self.locals, produce, style, w, h);
-        compose_bands(k, &coverage, img, style.color);
-    }
-
-    /// The row bands' way ([`draw_bands`]), for styles that can give
-    /// hairlines.
-    fn draw_in_bands(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
         let (w, h) = (img.width as usize, img.height as usize);
         if lines.is_empty() || w == 0 || h == 0 {
             return;
         }
         let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
-        {
+        if no_hairlines(style) {
+            if !self.keep_canvases(k, img.width, img.height, false) {
+                return;
+            }
+            let coverage = raster(&mut self.canvases, &mut self.locals, lines, style, w, h);
+            compose_bands(k, &coverage, img, style.color);
+        } else {
             let draws = draws(lines, style, w, h);
             if draws.is_empty() {
                 return;
@@ -865,78 +817,49 @@ impl Coverage {
     }
 }
 
-/// Strokes and fills every draw of the polylines `produce` hands over,
-/// in `style` (no hairline: [`no_hairlines`]), on a `w × h` image, each on
-/// its own on a transparent mask, in parallel; returns their coverage in
-/// drawing order. A worker per canvas: the first runs `produce` (the
-/// chaining, [`Canvases::blend_pieces`]), then all take the next polyline
-/// made, waiting for it if need be, until none is left: no draw is filled
-/// twice, and which worker fills a draw does not change its bytes.
+/// Strokes and fills every draw of `lines` in `style` (no hairline:
+/// [`no_hairlines`]) on a `w × h` image on its own, in parallel, each on
+/// a transparent mask, and returns their coverage in drawing order. A
+/// worker per canvas takes the next polyline, costliest first (its points
+/// and rows), until none is left: no draw is filled twice, and which
+/// worker fills a draw does not change its bytes.
 ///
 /// A fill blends each pixel at most once (tiny-skia's supersampling
 /// blitter flushes a pixel row once, one run per pixel; its non-AA and
 /// tiled paths write disjoint spans), so on a transparent mask it leaves
 /// the pixel's coverage c itself: lerp(0, 255, c) = ⌊255·(c + 1)/256⌋ = c
 /// for c < 255, and 255 for c = 255 ([`lerp_alpha`]).
-fn raster<'a>(
+fn raster(
     canvases: &mut [Canvas],
     locals: &mut Vec<Vec<u8>>,
-    produce: impl FnOnce(&mut dyn FnMut(Cow<'a, Polyline>)) + Send,
+    lines: &[Polyline],
     style: &StrokeStyle,
     w: usize,
     h: usize,
 ) -> Vec<Coverage> {
-    // The polylines made so far (taken by the worker filling them), how
-    // many, whether that is all, and the next one to take.
-    let made: Mutex<Vec<Option<Cow<'a, Polyline>>>> = Mutex::new(Vec::new());
-    let (count, done, next) = (
-        AtomicUsize::new(0),
-        AtomicBool::new(false),
-        AtomicUsize::new(0),
-    );
-    let produce = Mutex::new(Some(produce));
+    let cost = |l: &Polyline| {
+        let (lo, hi) = l
+            .points
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[1]), hi.max(p[1]))
+            });
+        l.points.len() as f32 + (hi - lo).clamp(0.0, h as f32)
+    };
+    let costs: Vec<f32> = lines.iter().map(cost).collect();
+    let mut order: Vec<usize> = (0..lines.len()).collect();
+    order.sort_by(|&a, &b| costs[b].total_cmp(&costs[a]).then(a.cmp(&b)));
+    let next = AtomicUsize::new(0);
     let paint = white();
     locals.resize_with(canvases.len(), Vec::new);
     let filled: Vec<Vec<(usize, Vec<Coverage>)>> = canvases
         .par_iter_mut()
         .zip(locals.par_iter_mut())
         .map(|(canvas, local)| {
-            // Whichever worker starts first makes the polylines.
-            let first = produce.lock().ok().and_then(|mut p| p.take());
-            if let Some(produce) = first {
-                produce(&mut |l| {
-                    if let Ok(mut made) = made.lock() {
-                        made.push(Some(l));
-                        count.store(made.len(), Ordering::Release);
-                    }
-                });
-                done.store(true, Ordering::Release);
-            }
             let mut out = Vec::new();
-            'take: loop {
-                let j = next.fetch_add(1, Ordering::Relaxed);
-                // Wait for polyline j, or for the end of them (the maker
-                // is running on another thread: it took `produce` before
-                // this worker found it gone). Spinning, then yielding:
-                // a polyline comes every few microseconds, but on a busy
-                // machine the maker may be waiting for a core.
-                let mut spins = 0u32;
-                while count.load(Ordering::Acquire) <= j {
-                    if done.load(Ordering::Acquire) && count.load(Ordering::Acquire) <= j {
-                        break 'take;
-                    }
-                    spins += 1;
-                    if spins < 1 << 12 {
-                        std::hint::spin_loop();
-                    } else {
-                        std::thread::yield_now();
-                    }
-                }
-                let Some(line) = made.lock().ok().and_then(|mut m| m[j].take()) else {
-                    continue;
-                };
+            while let Some(&j) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
                 let mut of_line = Vec::new();
-                for (centre, stroke) in strokes_of(&line, style) {
+                for (centre, stroke) in strokes_of(&lines[j], style) {
                     debug_assert!(stroke.width > 1.0, "a hairline on masks");
                     let Some(d) = draw_of(centre, stroke, w, h) else {
                         continue;
@@ -953,7 +876,7 @@ fn raster<'a>(
             out
         })
         .collect();
-    let mut by_line: Vec<Vec<Coverage>> = (0..count.into_inner()).map(|_| Vec::new()).collect();
+    let mut by_line: Vec<Vec<Coverage>> = (0..lines.len()).map(|_| Vec::new()).collect();
     for (j, c) in filled.into_iter().flatten() {
         by_line[j] = c;
     }
@@ -1176,7 +1099,7 @@ impl PostStage for Strokes {
     }
 
     fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
-        let pieces = self.pieces(frame, ssaa_of(img, frame));
+        let lines = self.polylines(frame, ssaa_of(img, frame));
         // A panic mid-draw (none is known) could leave paint on a canvas:
         // start again from fresh ones.
         let mut canvases = self.canvases.lock().unwrap_or_else(|e| {
@@ -1184,7 +1107,7 @@ impl PostStage for Strokes {
             *c = Canvases::default();
             c
         });
-        canvases.blend_pieces(&pieces, &self.style, img);
+        canvases.blend(&lines, &self.style, img);
     }
 }
 
