@@ -8,7 +8,8 @@
 //! - `lines/strokes`: the stroke overlay stage of a steady frame
 //!   (silhouette + crease + boundary edges of the view, found once per
 //!   scene; per frame their visibility against the depth buffer, chaining,
-//!   tiny-skia drawing in row bands and the blend);
+//!   tiny-skia stroking and filling, each draw once on its own mask by
+//!   parallel workers, and the coverage composed and blended row by row);
 //!   `lines/strokes_one_pixmap` the same lines drawn the plain way (one
 //!   fresh pixmap, a coverage image); `lines/strokes_topology` the
 //!   once-per-scene edge table.

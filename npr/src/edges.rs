@@ -493,22 +493,37 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
     for kind in EdgeKind::ALL {
         let ps: Vec<&Piece> = pieces.iter().filter(|p| p.kind == kind).collect();
         let point = |i: usize, end: usize| if end == 0 { ps[i].a } else { ps[i].b };
-        // The piece ends at vertices, (vertex, piece, end) sorted: the ends
-        // at a vertex are a run, in piece order.
-        let mut ends: Vec<(u32, u32, u32)> = ps
+        // The piece ends at vertices, (vertex, piece, end) sorted (packed
+        // in a u64, vertex high: a piece index is below 2³¹): the ends at a
+        // vertex are a run, in piece order.
+        let mut ends: Vec<u64> = ps
             .iter()
             .enumerate()
             .flat_map(|(i, p)| {
-                (0..2).filter_map(move |end| p.ends[end].map(|v| (v, i as u32, end as u32)))
+                (0..2).filter_map(move |end| {
+                    p.ends[end].map(|v| (v as u64) << 32 | (i as u64) << 1 | end as u64)
+                })
             })
             .collect();
         ends.sort_unstable();
-        let at = |v: u32| {
-            let lo = ends.partition_point(|e| e.0 < v);
-            let hi = lo + ends[lo..].partition_point(|e| e.0 == v);
-            ends[lo..hi]
+        let unpack = |k: u64| ((k >> 32) as u32, (k as u32 >> 1) as usize, (k & 1) as usize);
+        // Each vertex once, ascending, with its run of ends; and the run of
+        // each piece end at a vertex (piece i's end e at 2i + e).
+        let mut runs: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
+        let mut run_of = vec![u32::MAX; 2 * ps.len()];
+        for (k, &key) in ends.iter().enumerate() {
+            let (v, i, e) = unpack(key);
+            match runs.last_mut() {
+                Some((u, r)) if *u == v => r.end = k + 1,
+                _ => runs.push((v, k..k + 1)),
+            }
+            run_of[2 * i + e] = runs.len() as u32 - 1;
+        }
+        // The ends at the vertex of piece i's end e (which has one).
+        let at = |i: usize, e: usize| {
+            ends[runs[run_of[2 * i + e] as usize].1.clone()]
                 .iter()
-                .map(|&(_, i, e)| (i as usize, e as usize))
+                .map(move |&k| (unpack(k).1, unpack(k).2))
         };
         let mut used = vec![false; ps.len()];
         // Walks from end `end` of piece `first` through the pieces after it.
@@ -529,7 +544,7 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
                 // Go on along the unused piece that turns least on screen.
                 let (p, q) = (point(piece, from), point(piece, to));
                 let dir = norm2([q[0] - p[0], q[1] - p[1]]);
-                let next = at(v)
+                let next = at(piece, to)
                     .filter(|(i, _)| !used[*i])
                     .map(|(i, e)| {
                         let r = point(i, 1 - e);
@@ -561,20 +576,13 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
                 out.push(walk(i, end, &mut used));
             }
         }
-        // Each vertex once, ascending, with its run of ends.
-        let mut runs: Vec<(u32, std::ops::Range<usize>)> = Vec::new();
-        for (k, e) in ends.iter().enumerate() {
-            match runs.last_mut() {
-                Some((v, r)) if *v == e.0 => r.end = k + 1,
-                _ => runs.push((e.0, k..k + 1)),
-            }
-        }
         let odd = runs.iter().filter(|(_, r)| r.len() % 2 == 1);
         let starts: Vec<std::ops::Range<usize>> =
             odd.chain(runs.iter()).map(|(_, r)| r.clone()).collect();
         for r in starts {
-            while let Some(&(_, i, e)) = ends[r.clone()].iter().find(|e| !used[e.1 as usize]) {
-                out.push(walk(i as usize, e as usize, &mut used));
+            while let Some(&k) = ends[r.clone()].iter().find(|&&k| !used[unpack(k).1]) {
+                let (_, i, e) = unpack(k);
+                out.push(walk(i, e, &mut used));
             }
         }
     }

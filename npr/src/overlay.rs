@@ -17,6 +17,7 @@ use rayon::prelude::*;
 use specula_raster::buffers::prefetch;
 use specula_raster::post::{srgb_encode, HdrImage, PostStage};
 use specula_raster::{BufferSet, Camera, FrameBuffers};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::sync::Mutex;
 use tiny_skia::{FillRule, Mask, Paint, Path, PathBuilder, PathSegment, Pixmap, Stroke, Transform};
 pub use tiny_skia::{LineCap, LineJoin};
@@ -196,6 +197,11 @@ struct Draw {
     /// ([`Canvas::mark`]): a far tighter set than `rect` for a ring around
     /// an object. None with miter joins (whole `rect`).
     reach: Option<f32>,
+    /// The outline lies within the image with a pixel to spare all round
+    /// (so tiny-skia neither clips it nor tiles the image): it can be
+    /// filled on a mask of `rect`'s size, moved by `rect`'s corner, for the
+    /// same bytes ([`fill_local`]).
+    local: bool,
     /// A drawing cost estimate: the points tiny-skia scans and the rows.
     cost: f64,
 }
@@ -209,45 +215,74 @@ fn draws(lines: &[Polyline], style: &StrokeStyle, w: usize, h: usize) -> Vec<Dra
         .map(|l| {
             strokes_of(l, style)
                 .into_iter()
-                .filter_map(|(centre, stroke)| {
-                    // tiny-skia's own test (treat_as_hairline with the
-                    // identity transform and anti-aliasing).
-                    let (outline, bounds, margin) = if stroke.width <= 1.0 {
-                        // A hairline's coverage stays within 1 px of the
-                        // line, caps (½ px) included.
-                        (None, centre.bounds(), 3.0)
-                    } else {
-                        // The scan converter writes only within the filled
-                        // path's bounds, rounded out. (Not the stroke's
-                        // theoretical reach from the centre line: with
-                        // miter-clip joins tiny-skia can draw spikes far
-                        // beyond it.)
-                        let outline = centre.stroke(&stroke, 1.0)?;
-                        let b = outline.bounds();
-                        (Some(outline), b, 1.0)
-                    };
-                    let clamp = |v: f32, hi: usize| (v.max(0.0) as usize).min(hi);
-                    let rect = [
-                        clamp((bounds.left() - margin).floor(), w),
-                        clamp((bounds.right() + margin).ceil(), w),
-                        clamp((bounds.top() - margin).floor(), h),
-                        clamp((bounds.bottom() + margin).ceil(), h),
-                    ];
-                    let points = outline.as_ref().unwrap_or(&centre).len();
-                    let reach = reach(&stroke);
-                    (rect[0] < rect[1] && rect[2] < rect[3]).then_some(Draw {
-                        centre,
-                        stroke,
-                        outline,
-                        rect,
-                        reach,
-                        cost: (points + rect[3] - rect[2]) as f64,
-                    })
-                })
+                .filter_map(|(centre, stroke)| draw_of(centre, stroke, w, h))
                 .collect()
         })
         .collect();
     per_line.into_iter().flatten().collect()
+}
+
+/// The draw of one stroke on a `w × h` image (the outline stroked), None
+/// if it cannot touch the image.
+fn draw_of(centre: Path, stroke: Stroke, w: usize, h: usize) -> Option<Draw> {
+    // tiny-skia's own test (treat_as_hairline with the identity transform
+    // and anti-aliasing).
+    let (outline, bounds, margin) = if stroke.width <= 1.0 {
+        // A hairline's coverage stays within 1 px of the line, caps (½ px)
+        // included.
+        (None, centre.bounds(), 3.0)
+    } else {
+        // The scan converter writes only within the filled path's bounds,
+        // rounded out. (Not the stroke's theoretical reach from the centre
+        // line: with miter-clip joins tiny-skia can draw spikes far beyond
+        // it.)
+        let outline = centre.stroke(&stroke, 1.0)?;
+        let b = outline.bounds();
+        (Some(outline), b, 1.0)
+    };
+    let clamp = |v: f32, hi: usize| (v.max(0.0) as usize).min(hi);
+    let edges = [
+        (bounds.left() - margin).floor(),
+        (bounds.right() + margin).ceil(),
+        (bounds.top() - margin).floor(),
+        (bounds.bottom() + margin).ceil(),
+    ];
+    let rect = [
+        clamp(edges[0], w),
+        clamp(edges[1], w),
+        clamp(edges[2], h),
+        clamp(edges[3], h),
+    ];
+    // (Each edge an integer in f32, so the comparisons are exact; a NaN
+    // bound fails them.)
+    let local = outline.is_some()
+        && w.max(h) < TILED
+        && edges[0] >= 0.0
+        && edges[2] >= 0.0
+        && edges[1] <= w as f32
+        && edges[3] <= h as f32;
+    let points = outline.as_ref().unwrap_or(&centre).len();
+    let reach = reach(&stroke);
+    (rect[0] < rect[1] && rect[2] < rect[3]).then_some(Draw {
+        centre,
+        stroke,
+        outline,
+        rect,
+        reach,
+        local,
+        cost: (points + rect[3] - rect[2]) as f64,
+    })
+}
+
+/// Whether every stroke of `style` is wider than 1 px, so that none is a
+/// hairline ([`strokes_of`]: a taper's widths are at least
+/// width·(1 − taper)).
+fn no_hairlines(style: &StrokeStyle) -> bool {
+    if style.taper > 0.0 {
+        style.width * (1.0 - style.taper) > 1.0
+    } else {
+        style.width > 1.0
+    }
 }
 
 /// How far from its centre line's segments a stroke can change pixels,
@@ -277,11 +312,80 @@ fn reach(stroke: &Stroke) -> Option<f32> {
     Some(half * cap + 2.0)
 }
 
+/// tiny-skia fills a mask this wide or tall in tiles, each clipping the
+/// path (its `DrawTiler`: 8192 supersampled by 4 overflows its fixed
+/// point): such images keep the image-sized fills.
+const TILED: usize = 8192;
+
+/// Fills `d` (an outline within the image, [`Draw::local`]) on a
+/// transparent mask of its rectangle's size held in `buf`, the outline
+/// moved by the rectangle's corner (−x0, −y0), and returns its coverage in
+/// image coordinates.
+///
+/// The same bytes as the fill on an image-sized mask: the move is exact
+/// (an integer subtracted from a float at least as large, below 2²⁴),
+/// tiny-skia turns points into fixed point by scaling by a power of two
+/// and truncating (a floor, the points being positive both ways) and then
+/// works in integers relative to the edges' ends, and the outline lies
+/// within both masks, so neither clips it. Checked by
+/// `a_local_fill_gives_the_bytes_of_the_image_sized_fill`.
+fn fill_local(d: &Draw, buf: &mut Vec<u8>) -> Coverage {
+    let [x0, x1, y0, y1] = d.rect;
+    let (w, h) = (x1 - x0, y1 - y0);
+    let mut c = Coverage::default();
+    let (Some(outline), Some(size)) = (&d.outline, tiny_skia::IntSize::from_wh(w as u32, h as u32))
+    else {
+        return c;
+    };
+    buf.clear();
+    buf.resize(w * h, 0);
+    let Some(mut mask) = Mask::from_vec(std::mem::take(buf), size) else {
+        return c;
+    };
+    let to_local = Transform::from_translate(-(x0 as f32), -(y0 as f32));
+    mask.fill_path(outline, FillRule::Winding, true, to_local);
+    for (y, row) in mask.data().chunks_exact(w).enumerate() {
+        push_runs(&mut c, row, (y0 + y) as u32, x0 as u32);
+    }
+    *buf = mask.take();
+    c
+}
+
+/// Appends the nonzero stretches of `row` (image row `y`, starting at
+/// pixel `x0`) to `c`: runs of 8-byte chunks holding a nonzero byte,
+/// trimmed to their first and last nonzero bytes.
+fn push_runs(c: &mut Coverage, row: &[u8], y: u32, x0: u32) {
+    let nonzero = |k: usize| {
+        row[k * 8..(k * 8 + 8).min(row.len())]
+            .iter()
+            .any(|&a| a != 0)
+    };
+    let chunks = row.len().div_ceil(8);
+    let mut k = 0;
+    while k < chunks {
+        if !nonzero(k) {
+            k += 1;
+            continue;
+        }
+        let start = k;
+        while k < chunks && nonzero(k) {
+            k += 1;
+        }
+        let run = &row[start * 8..(k * 8).min(row.len())];
+        let first = run.iter().position(|&a| a != 0).unwrap_or(0);
+        let last = run.iter().rposition(|&a| a != 0).unwrap_or(first);
+        c.spans
+            .push([y, x0 + (start * 8 + first) as u32, c.alpha.len() as u32]);
+        c.alpha.extend_from_slice(&run[first..=last]);
+    }
+}
+
 /// How many rows ahead the blend asks for the colour planes' lines.
 const PREFETCH_ROWS: usize = 2;
 
-/// Bands of image rows at most [`draw_bands`] draws in parallel: a canvas
-/// each, so at most this many image-sized canvases are kept.
+/// At most this many workers fill draws ([`raster`]) or bands of rows are
+/// composed or drawn ([`compose_bands`], [`draw_bands`]) in parallel: a
+/// canvas each, so at most this many image-sized canvases are kept.
 const MAX_BANDS: usize = 4;
 
 /// Splits rows `0..h` into at most `k` bands (returns the boundaries,
@@ -404,6 +508,8 @@ struct Canvas {
     words: usize,
     /// Rows that may hold touched chunks.
     rows: [usize; 2],
+    /// One row's marks, taken off `touched` while the row is cleared.
+    row: Vec<u64>,
 }
 
 impl Canvas {
@@ -414,6 +520,7 @@ impl Canvas {
             touched: vec![0; words * h as usize],
             words,
             rows: [h as usize, 0],
+            row: Vec::with_capacity(words),
         })
     }
 
@@ -504,43 +611,78 @@ impl Canvas {
     /// touched chunks.
     fn spans(&self, y: usize) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
         let w = self.surface.size().0 as usize;
-        let row = &self.touched[y * self.words..][..self.words];
-        // Runs of set bits within each word, as chunk ranges.
-        let (mut k, mut bits) = (0, row[0]);
-        let mut runs = std::iter::from_fn(move || loop {
-            if bits != 0 {
-                let c0 = bits.trailing_zeros() as usize;
-                let len = (bits >> c0).trailing_ones() as usize;
-                bits &= !(u64::MAX >> (64 - len) << c0);
-                return Some((k * 64 + c0, k * 64 + c0 + len));
-            }
-            k += 1;
-            bits = *row.get(k)?;
-        })
-        .peekable();
-        // Joined where a run goes on into the next word.
-        std::iter::from_fn(move || {
-            let (c0, mut c1) = runs.next()?;
-            while let Some((_, end)) = runs.next_if(|r| r.0 == c1) {
-                c1 = end;
-            }
-            Some(c0 * 8..(c1 * 8).min(w))
-        })
+        runs(&self.touched[y * self.words..][..self.words], w)
     }
 
-    /// Back to transparent, marks cleared.
-    fn clear(&mut self) {
+    /// Row `y`'s marks, moved into `self.row` (cleared on the canvas).
+    fn take_marks(&mut self, y: usize) {
+        let marks = &mut self.touched[y * self.words..][..self.words];
+        self.row.clear();
+        self.row.extend_from_slice(marks);
+        marks.fill(0);
+    }
+
+    /// Clears the marked chunks of `rows` and their marks.
+    fn clear_rows(&mut self, rows: std::ops::Range<usize>) {
         let (w, bpp) = (self.surface.size().0 as usize, self.surface.bpp());
-        for y in self.rows[0]..self.rows[1] {
-            let spans: Vec<_> = self.spans(y).collect();
+        for y in rows {
+            self.take_marks(y);
             let data = self.surface.data_mut();
-            for r in spans {
+            for r in runs(&self.row, w) {
                 data[(y * w + r.start) * bpp..(y * w + r.end) * bpp].fill(0);
             }
-            self.touched[y * self.words..][..self.words].fill(0);
+        }
+    }
+
+    /// The alpha of the marked chunks as a [`Coverage`] (each span trimmed
+    /// to its nonzero bytes), leaving the canvas transparent and unmarked.
+    /// (A mask's: one byte a pixel.)
+    fn take(&mut self) -> Coverage {
+        let w = self.surface.size().0 as usize;
+        let mut c = Coverage::default();
+        for y in self.rows[0]..self.rows[1] {
+            self.take_marks(y);
+            let data = self.surface.data_mut();
+            for r in runs(&self.row, w) {
+                let px = &mut data[y * w + r.start..y * w + r.end];
+                if let Some(first) = px.iter().position(|&a| a != 0) {
+                    let last = px.iter().rposition(|&a| a != 0).unwrap_or(first);
+                    c.spans
+                        .push([y as u32, (r.start + first) as u32, c.alpha.len() as u32]);
+                    c.alpha.extend_from_slice(&px[first..=last]);
+                    px[first..=last].fill(0);
+                }
+            }
         }
         self.rows = [self.surface.size().1 as usize, 0];
+        c
     }
+}
+
+/// The runs of set bits of a row's chunk marks (`row`, 64 chunks a word)
+/// as pixel ranges of a `w`-pixel row, left to right.
+fn runs(row: &[u64], w: usize) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+    // Runs of set bits within each word, as chunk ranges.
+    let (mut k, mut bits) = (0, row.first().copied().unwrap_or(0));
+    let mut runs = std::iter::from_fn(move || loop {
+        if bits != 0 {
+            let c0 = bits.trailing_zeros() as usize;
+            let len = (bits >> c0).trailing_ones() as usize;
+            bits &= !(u64::MAX >> (64 - len) << c0);
+            return Some((k * 64 + c0, k * 64 + c0 + len));
+        }
+        k += 1;
+        bits = *row.get(k)?;
+    })
+    .peekable();
+    // Joined where a run goes on into the next word.
+    std::iter::from_fn(move || {
+        let (c0, mut c1) = runs.next()?;
+        while let Some((_, end)) = runs.next_if(|r| r.0 == c1) {
+            c1 = end;
+        }
+        Some(c0 * 8..(c1 * 8).min(w))
+    })
 }
 
 /// c = c·(1 − a) + colour·a over one span of pixels, a from the alpha
@@ -575,11 +717,32 @@ fn blend_span<const BPP: usize>(
     }
 }
 
+/// [`blend_span`] over a row of alpha bytes, without branches (so it runs
+/// 8 pixels at a time): where the alpha is 0 the pixel is kept as it is
+/// (a select, not c·1 + colour·0, which would turn −0 into +0).
+fn blend_alpha(px: &[u8], r: &mut [f32], g: &mut [f32], b: &mut [f32], color: [f32; 3]) {
+    for (((&alpha, r), g), b) in px.iter().zip(r).zip(g).zip(b) {
+        let a = alpha as f32 / 255.0;
+        let keep = alpha == 0;
+        let (nr, ng, nb) = (
+            *r * (1.0 - a) + color[0] * a,
+            *g * (1.0 - a) + color[1] * a,
+            *b * (1.0 - a) + color[2] * a,
+        );
+        *r = if keep { *r } else { nr };
+        *g = if keep { *g } else { ng };
+        *b = if keep { *b } else { nb };
+    }
+}
+
 /// The image-sized canvases the overlay draws on, kept from frame to
 /// frame and transparent between frames.
 #[derive(Debug, Default)]
 pub struct Canvases {
     canvases: Vec<Canvas>,
+    /// A worker's mask for the draws filled at their own size
+    /// ([`fill_local`]).
+    locals: Vec<Vec<u8>>,
 }
 
 impl Canvases {
@@ -587,94 +750,340 @@ impl Canvases {
     /// a the strokes' alpha, the same bytes as blending [`draw`]'s
     /// coverage (see [`draw_bands`]).
     pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
-        let draws = draws(lines, style, img.width as usize, img.height as usize);
-        draw_bands(&mut self.canvases, &draws, img, style.color);
+        let (w, h) = (img.width as usize, img.height as usize);
+        if lines.is_empty() || w == 0 || h == 0 {
+            return;
+        }
+        let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
+        if no_hairlines(style) {
+            if !self.keep_canvases(k, img.width, img.height, false) {
+                return;
+            }
+            let coverage = raster(&mut self.canvases, &mut self.locals, lines, style, w, h);
+            compose_bands(k, &coverage, img, style.color);
+        } else {
+            let draws = draws(lines, style, w, h);
+            if draws.is_empty() {
+                return;
+            }
+            let rows = band_rows(&draws, h, k);
+            let hairlines = draws.iter().any(|d| d.outline.is_none());
+            if !self.keep_canvases(rows.len() - 1, img.width, img.height, hairlines) {
+                return;
+            }
+            draw_bands(&mut self.canvases, &draws, &rows, img, style.color);
+        }
+    }
+
+    /// Keeps `k` canvases of `w × h` pixels, pixmaps if `hairlines` else
+    /// masks ([`Surface`]); false if they cannot be made.
+    fn keep_canvases(&mut self, k: usize, w: u32, h: u32, hairlines: bool) -> bool {
+        let canvases = &mut self.canvases;
+        canvases.retain(|c| c.surface.size() == (w, h) && c.surface.hairlines() == hairlines);
+        while canvases.len() < k {
+            let Some(c) = Canvas::new(w, h, hairlines) else {
+                return false;
+            };
+            canvases.push(c);
+        }
+        canvases.truncate(k);
+        true
     }
 }
 
-/// Draws `draws` and blends them over `img` in `color`.
+/// One draw's coverage: the alpha bytes its fill leaves on a transparent
+/// mask, over the pixels it changed, as row spans (rows ascending).
+#[derive(Debug, Default)]
+struct Coverage {
+    /// Per span: its row, its first pixel, and where its bytes start in
+    /// `alpha` (they end where the next span's start).
+    spans: Vec<[u32; 3]>,
+    alpha: Vec<u8>,
+}
+
+impl Coverage {
+    /// The spans of rows [lo, hi): (row, first pixel, alpha bytes).
+    fn rows(&self, lo: usize, hi: usize) -> impl Iterator<Item = (usize, usize, &[u8])> + '_ {
+        let first = self.spans.partition_point(|s| (s[0] as usize) < lo);
+        let last = self.spans.partition_point(|s| (s[0] as usize) < hi);
+        (first..last).map(move |i| {
+            let [y, x, at] = self.spans[i];
+            let end = self
+                .spans
+                .get(i + 1)
+                .map_or(self.alpha.len(), |s| s[2] as usize);
+            (y as usize, x as usize, &self.alpha[at as usize..end])
+        })
+    }
+}
+
+/// Strokes and fills every draw of `lines` in `style` (no hairline:
+/// [`no_hairlines`]) on a `w × h` image on its own, in parallel, each on
+/// a transparent mask, and returns their coverage in drawing order. A
+/// worker per canvas takes the next polyline, costliest first (its points
+/// and rows), until none is left: no draw is filled twice, and which
+/// worker fills a draw does not change its bytes.
 ///
-/// Rows are split into bands drawn in parallel, each on its own
-/// image-sized canvas: a band draws, in order, every draw that reaches its
-/// rows, at the draw's own image coordinates (so tiny-skia sees the very
-/// same paths and clip as on one pixmap), then blends its own rows. A
-/// pixel's alpha is then the same sequence of draws over it as on one
-/// pixmap, whatever the bands: the bytes do not depend on the thread
-/// count. A draw that spans two bands is drawn by both; the bands are cut
-/// where that costs least ([`band_rows`]).
-///
-/// The canvases are kept transparent between frames: a band blends and
-/// clears only the 8-pixel row chunks its draws marked ([`Canvas::mark`]),
-/// and no image-sized buffer is allocated once the canvases exist (a frame
-/// that switches between hairlines and none makes new ones: [`Surface`]).
-fn draw_bands(canvases: &mut Vec<Canvas>, draws: &[Draw], img: &mut HdrImage, color: [f32; 3]) {
-    let (w, h) = (img.width as usize, img.height as usize);
-    if draws.is_empty() || w == 0 || h == 0 {
-        return;
-    }
-    let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
-    let rows = band_rows(draws, h, k);
-    let k = rows.len() - 1;
-    // Masks unless a draw is a hairline ([`Surface`]).
-    let hairlines = draws.iter().any(|d| d.outline.is_none());
-    canvases.retain(|c| {
-        c.surface.size() == (img.width, img.height) && c.surface.hairlines() == hairlines
-    });
-    while canvases.len() < k {
-        let Some(c) = Canvas::new(img.width, img.height, hairlines) else {
-            return;
-        };
-        canvases.push(c);
-    }
-    canvases.truncate(k);
-    // Each band's rows of the three colour planes.
-    let mut bands = Vec::with_capacity(k);
-    let (mut r, mut g, mut b) = (&mut img.rgb.r[..], &mut img.rgb.g[..], &mut img.rgb.b[..]);
-    for (i, canvas) in canvases.iter_mut().enumerate() {
-        let n = (rows[i + 1] - rows[i]) * w;
-        let (r0, r1) = std::mem::take(&mut r).split_at_mut(n);
-        let (g0, g1) = std::mem::take(&mut g).split_at_mut(n);
-        let (b0, b1) = std::mem::take(&mut b).split_at_mut(n);
-        (r, g, b) = (r1, g1, b1);
-        bands.push((canvas, rows[i], rows[i + 1], [r0, g0, b0]));
-    }
+/// A fill blends each pixel at most once (tiny-skia's supersampling
+/// blitter flushes a pixel row once, one run per pixel; its non-AA and
+/// tiled paths write disjoint spans), so on a transparent mask it leaves
+/// the pixel's coverage c itself: lerp(0, 255, c) = ⌊255·(c + 1)/256⌋ = c
+/// for c < 255, and 255 for c = 255 ([`lerp_alpha`]).
+fn raster(
+    canvases: &mut [Canvas],
+    locals: &mut Vec<Vec<u8>>,
+    lines: &[Polyline],
+    style: &StrokeStyle,
+    w: usize,
+    h: usize,
+) -> Vec<Coverage> {
+    let cost = |l: &Polyline| {
+        let (lo, hi) = l
+            .points
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p[1]), hi.max(p[1]))
+            });
+        l.points.len() as f32 + (hi - lo).clamp(0.0, h as f32)
+    };
+    let costs: Vec<f32> = lines.iter().map(cost).collect();
+    let mut order: Vec<usize> = (0..lines.len()).collect();
+    order.sort_by(|&a, &b| costs[b].total_cmp(&costs[a]).then(a.cmp(&b)));
+    let next = AtomicUsize::new(0);
     let paint = white();
-    bands
-        .into_par_iter()
-        .for_each(|(canvas, lo, hi, [r, g, b])| {
-            for d in draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo) {
-                canvas.draw(d, &paint);
+    locals.resize_with(canvases.len(), Vec::new);
+    let filled: Vec<Vec<(usize, Vec<Coverage>)>> = canvases
+        .par_iter_mut()
+        .zip(locals.par_iter_mut())
+        .map(|(canvas, local)| {
+            let mut out = Vec::new();
+            while let Some(&j) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
+                let mut of_line = Vec::new();
+                for (centre, stroke) in strokes_of(&lines[j], style) {
+                    debug_assert!(stroke.width > 1.0, "a hairline on masks");
+                    let Some(d) = draw_of(centre, stroke, w, h) else {
+                        continue;
+                    };
+                    of_line.push(if d.local {
+                        fill_local(&d, local)
+                    } else {
+                        canvas.draw(&d, &paint);
+                        canvas.take()
+                    });
+                }
+                out.push((j, of_line));
             }
-            let (data, bpp) = (canvas.surface.data(), canvas.surface.bpp());
-            let [y0, y1] = [canvas.rows[0].max(lo), canvas.rows[1].min(hi)];
-            for y in y0..y1 {
-                // The colour planes' lines of a later row, ahead: they come
-                // from memory, one row crossing of a line at a time.
+            out
+        })
+        .collect();
+    let mut by_line: Vec<Vec<Coverage>> = (0..lines.len()).map(|_| Vec::new()).collect();
+    for (j, c) in filled.into_iter().flatten() {
+        by_line[j] = c;
+    }
+    by_line.into_iter().flatten().collect()
+}
+
+/// tiny-skia's blend of an opaque white source into a mask's alpha `dst`
+/// at coverage `c` (its `lowp` pipeline: load the destination, lerp by the
+/// coverage, store): dst = div255(dst·(255 − c) + 255·c), with div255(v) =
+/// (v + 255) >> 8 as in `lowp`. (A fully covered run, which tiny-skia
+/// stores as 255 without the lerp, gives 255 here too.)
+fn lerp_alpha(dst: &mut [u8], cov: &[u8]) {
+    for (d, &c) in dst.iter_mut().zip(cov) {
+        let (d16, c16) = (*d as u16, c as u16);
+        *d = ((d16 * (255 - c16) + 255 * c16 + 255) >> 8) as u8;
+    }
+}
+
+/// Blends `coverage` (the draws' own, [`raster`], in drawing order) over
+/// `img` in `color`.
+///
+/// Row by row, in bands of rows run in parallel: a row's coverage spans
+/// are lerped, draw after draw in drawing order, into a row of alpha
+/// ([`lerp_alpha`], the very step the fill would have done on one mask),
+/// whose touched 8-pixel chunks are then blended and cleared. A pixel's
+/// alpha is then the sequence of draws over it on one mask, whatever the
+/// bands; and a row of alpha stays in cache, where an image-sized one
+/// would bring in a line per row.
+fn compose_bands(k: usize, coverage: &[Coverage], img: &mut HdrImage, color: [f32; 3]) {
+    let (w, h) = (img.width as usize, img.height as usize);
+    // The spans as (draw, span) by row, each row's in drawing order: a
+    // counting sort on the row; and the rows' bytes, to cut the bands.
+    let mut start = vec![0usize; h + 2];
+    let mut bytes = vec![0usize; h + 1];
+    for c in coverage {
+        for (y, _, a) in c.rows(0, h) {
+            start[y + 2] += 1;
+            bytes[y + 1] += a.len();
+        }
+    }
+    for y in 1..=h {
+        start[y + 1] += start[y];
+        bytes[y] += bytes[y - 1];
+    }
+    let mut by_row = vec![(0u32, 0u32); start[h + 1]];
+    for (j, c) in coverage.iter().enumerate() {
+        for (i, s) in c.spans.iter().enumerate() {
+            let y = s[0] as usize;
+            if y < h {
+                by_row[start[y + 1]] = (j as u32, i as u32);
+                start[y + 1] += 1;
+            }
+        }
+    }
+    // Now row y's spans are by_row[start[y]..start[y + 1]].
+    let rows: Vec<usize> = (0..=k)
+        .map(|i| match i {
+            0 => 0,
+            _ if i == k => h,
+            _ => bytes.partition_point(|&b| b * k < bytes[h] * i).min(h),
+        })
+        .collect();
+    let words = w.div_ceil(8).div_ceil(64);
+    split_bands(0..k, &rows, img)
+        .into_par_iter()
+        .for_each(|(_, lo, hi, [r, g, b])| {
+            let (mut alpha, mut marks) = (vec![0u8; w], vec![0u64; words]);
+            let spans = |y: usize| {
+                by_row[start[y]..start[y + 1]].iter().map(|&(j, i)| {
+                    let c = &coverage[j as usize];
+                    let [_, x, at] = c.spans[i as usize];
+                    let end = c
+                        .spans
+                        .get(i as usize + 1)
+                        .map_or(c.alpha.len(), |s| s[2] as usize);
+                    (x as usize, &c.alpha[at as usize..end])
+                })
+            };
+            for y in lo..hi {
+                // The colour planes' lines of a later row, ahead: they
+                // come from memory, one row crossing of a line at a time.
                 let ahead = y + PREFETCH_ROWS;
-                if ahead < y1 {
-                    for x in canvas.spans(ahead) {
-                        let at = (ahead - lo) * w;
-                        prefetch(&r[at + x.start..at + x.end]);
-                        prefetch(&g[at + x.start..at + x.end]);
-                        prefetch(&b[at + x.start..at + x.end]);
+                if ahead < hi {
+                    let at = (ahead - lo) * w;
+                    for (x, a) in spans(ahead) {
+                        prefetch(&r[at + x..at + x + a.len()]);
+                        prefetch(&g[at + x..at + x + a.len()]);
+                        prefetch(&b[at + x..at + x + a.len()]);
+                    }
+                }
+                for (x, a) in spans(y) {
+                    lerp_alpha(&mut alpha[x..x + a.len()], a);
+                    for c in x / 8..(x + a.len()).div_ceil(8) {
+                        marks[c / 64] |= 1 << (c % 64);
                     }
                 }
                 let row = (y - lo) * w;
-                for x in canvas.spans(y) {
+                for x in runs(&marks, w) {
                     let (r, g, b) = (
                         &mut r[row + x.start..row + x.end],
                         &mut g[row + x.start..row + x.end],
                         &mut b[row + x.start..row + x.end],
                     );
-                    let px = &data[(y * w + x.start) * bpp..(y * w + x.end) * bpp];
-                    match bpp {
-                        4 => blend_span::<4>(px, r, g, b, color),
-                        _ => blend_span::<1>(px, r, g, b, color),
-                    }
+                    blend_alpha(&alpha[x.clone()], r, g, b, color);
+                    alpha[x].fill(0);
                 }
+                marks.fill(0);
             }
-            canvas.clear();
         });
+}
+
+/// The items paired with consecutive bands of rows (`rows`, from 0 to the
+/// height) and those rows of `img`'s colour planes.
+#[allow(clippy::type_complexity)]
+fn split_bands<'b, T>(
+    items: impl IntoIterator<Item = T>,
+    rows: &[usize],
+    img: &'b mut HdrImage,
+) -> Vec<(T, usize, usize, [&'b mut [f32]; 3])> {
+    let w = img.width as usize;
+    let mut bands = Vec::with_capacity(rows.len() - 1);
+    let (mut r, mut g, mut b) = (&mut img.rgb.r[..], &mut img.rgb.g[..], &mut img.rgb.b[..]);
+    for (i, item) in items.into_iter().enumerate().take(rows.len() - 1) {
+        let n = (rows[i + 1] - rows[i]) * w;
+        let (r0, r1) = std::mem::take(&mut r).split_at_mut(n);
+        let (g0, g1) = std::mem::take(&mut g).split_at_mut(n);
+        let (b0, b1) = std::mem::take(&mut b).split_at_mut(n);
+        (r, g, b) = (r1, g1, b1);
+        bands.push((item, rows[i], rows[i + 1], [r0, g0, b0]));
+    }
+    bands
+}
+
+/// Draws `draws` (hairlines among them) in bands of rows (`rows`)
+/// drawn in parallel, each on its own image-sized canvas: a band draws,
+/// in order, every draw that reaches its rows, at the draw's own image
+/// coordinates (so tiny-skia sees the very same paths and clip as on one
+/// pixmap), then blends its own rows. A pixel's alpha is then the same
+/// sequence of draws over it as on one pixmap, whatever the bands: the
+/// bytes do not depend on the thread count. A draw that spans two bands is
+/// drawn by both; the bands are cut where that costs least
+/// ([`band_rows`]).
+fn draw_bands(
+    canvases: &mut [Canvas],
+    draws: &[Draw],
+    rows: &[usize],
+    img: &mut HdrImage,
+    color: [f32; 3],
+) {
+    let paint = white();
+    split_bands(canvases.iter_mut(), rows, img)
+        .into_par_iter()
+        .for_each(|(canvas, lo, hi, planes)| {
+            for d in draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo) {
+                canvas.draw(d, &paint);
+            }
+            blend_band(canvas, lo, hi, planes, color);
+        });
+}
+
+/// Blends the alpha of `canvas`'s marked chunks in rows [lo, hi) over
+/// those rows of the colour planes (`[r, g, b]`, the band's rows only),
+/// clearing the canvas as it goes (and, after, any marks outside the rows:
+/// a draw over two bands is drawn whole by each).
+fn blend_band(
+    canvas: &mut Canvas,
+    lo: usize,
+    hi: usize,
+    [r, g, b]: [&mut [f32]; 3],
+    color: [f32; 3],
+) {
+    let w = canvas.surface.size().0 as usize;
+    let bpp = canvas.surface.bpp();
+    let [y0, y1] = [canvas.rows[0].max(lo), canvas.rows[1].min(hi)];
+    for y in y0..y1 {
+        // The colour planes' lines of a later row, ahead: they come
+        // from memory, one row crossing of a line at a time.
+        let ahead = y + PREFETCH_ROWS;
+        if ahead < y1 {
+            for x in canvas.spans(ahead) {
+                let at = (ahead - lo) * w;
+                prefetch(&r[at + x.start..at + x.end]);
+                prefetch(&g[at + x.start..at + x.end]);
+                prefetch(&b[at + x.start..at + x.end]);
+            }
+        }
+        canvas.take_marks(y);
+        let data = canvas.surface.data_mut();
+        let row = (y - lo) * w;
+        for x in runs(&canvas.row, w) {
+            let (r, g, b) = (
+                &mut r[row + x.start..row + x.end],
+                &mut g[row + x.start..row + x.end],
+                &mut b[row + x.start..row + x.end],
+            );
+            let px = &mut data[(y * w + x.start) * bpp..(y * w + x.end) * bpp];
+            match bpp {
+                4 => blend_span::<4>(px, r, g, b, color),
+                _ => blend_span::<1>(px, r, g, b, color),
+            }
+            px.fill(0);
+        }
+    }
+    let [r0, r1] = canvas.rows;
+    canvas.clear_rows(r0..y0.max(r0));
+    canvas.clear_rows(y1.max(r0)..r1);
+    canvas.rows = [canvas.surface.size().1 as usize, 0];
 }
 
 impl PostStage for Strokes {
@@ -862,5 +1271,123 @@ mod tests {
         // A changed pixel's centre lies at most ~1 px beyond the stroke:
         // the 2 px margin is ample but not wildly so.
         assert!(worst > 0.5 && worst < 1.25, "worst {worst}");
+    }
+
+    #[test]
+    fn fills_composed_from_their_own_coverage_give_the_bytes_of_one_mask() {
+        // Random overlapping polygons (sharp and thin ones, curves, both
+        // fill rules): filled in order on one mask, against each filled
+        // on a transparent mask and lerped in order (`lerp_alpha`) from
+        // those bytes alone. Holds if a fill leaves its coverage itself on
+        // a transparent mask (each pixel blended once) and `lerp_alpha`
+        // is tiny-skia's blend.
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (w, h) = (64u32, 48u32);
+        let (mut overlapped, mut levels) = (0usize, [false; 256]);
+        for case in 0..300 {
+            let mut one = Mask::new(w, h).unwrap();
+            let mut composed = vec![0u8; (w * h) as usize];
+            for _ in 0..2 + case % 4 {
+                let mut pb = PathBuilder::new();
+                let c = [next() * w as f32, next() * h as f32];
+                let r = 1.0 + next() * 20.0;
+                pb.move_to(c[0] + r, c[1]);
+                for k in 1..3 + (next() * 9.0) as usize {
+                    let (a, rr) = (k as f32 * 2.4, r * (0.2 + next()));
+                    let p = [c[0] + rr * a.cos(), c[1] + rr * a.sin()];
+                    if k % 3 == 0 {
+                        pb.quad_to(c[0] + next() * 30.0 - 15.0, c[1], p[0], p[1]);
+                    } else {
+                        pb.line_to(p[0], p[1]);
+                    }
+                }
+                pb.close();
+                let Some(path) = pb.finish() else { continue };
+                let rule = [FillRule::Winding, FillRule::EvenOdd][case % 2];
+                let id = Transform::identity();
+                one.fill_path(&path, rule, true, id);
+                let mut alone = Mask::new(w, h).unwrap();
+                alone.fill_path(&path, rule, true, id);
+                for (&d, &a) in composed.iter().zip(alone.data()) {
+                    overlapped += usize::from(d != 0 && a != 0);
+                    levels[a as usize] = true;
+                }
+                lerp_alpha(&mut composed, alone.data());
+            }
+            assert_eq!(one.data(), &composed[..], "case {case}");
+        }
+        // Many pixels blended over others, at every coverage level the 4×4
+        // supersampling gives (29 here: runs of partial rows add up).
+        let seen = levels.iter().filter(|&&l| l).count();
+        assert!(
+            overlapped > 5_000 && seen > 20,
+            "{overlapped} overlapped, {seen} levels"
+        );
+    }
+
+    #[test]
+    fn a_local_fill_gives_the_bytes_of_the_image_sized_fill() {
+        // Random strokes (round, bevel and miter joins, every cap, widths
+        // from 1.5 to 13 px, tapers), each filled on an image-sized mask
+        // and at its own size (`fill_local`): the same alpha at every
+        // pixel, and draws near the edges are left to the image-sized way.
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (w, h) = (173usize, 131usize);
+        let (mut local, mut edge) = (0, 0);
+        let mut buf = Vec::new();
+        for case in 0..240 {
+            let style = StrokeStyle {
+                width: [1.5, 2.5, 6.0, 13.0, 3.7][case % 5],
+                color: [0.0; 3],
+                taper: if case % 7 == 0 { 0.6 } else { 0.0 },
+                join: [LineJoin::Round, LineJoin::Bevel, LineJoin::Miter][case / 5 % 3],
+                cap: [LineCap::Butt, LineCap::Round, LineCap::Square][case / 15 % 3],
+            };
+            let mut p = [next() * w as f32, next() * h as f32];
+            let points = (0..2 + (next() * 20.0) as usize)
+                .map(|_| {
+                    let step = if next() < 0.5 { 3.0 } else { 50.0 };
+                    p = [p[0] + (next() - 0.5) * step, p[1] + (next() - 0.5) * step];
+                    p
+                })
+                .collect();
+            let line = Polyline {
+                kind: EdgeKind::Silhouette,
+                points,
+                closed: case % 3 == 1,
+            };
+            for d in draws(&[line], &style, w, h) {
+                if !d.local {
+                    edge += 1;
+                    continue;
+                }
+                local += 1;
+                let mut whole = Mask::new(w as u32, h as u32).unwrap();
+                let outline = d.outline.as_ref().unwrap();
+                whole.fill_path(outline, FillRule::Winding, true, Transform::identity());
+                let mut got = vec![0u8; w * h];
+                let c = fill_local(&d, &mut buf);
+                for (y, x, a) in c.rows(0, h) {
+                    got[y * w + x..y * w + x + a.len()].copy_from_slice(a);
+                }
+                assert_eq!(whole.data(), &got[..], "case {case}");
+            }
+        }
+        assert!(
+            local > 200 && edge > 20,
+            "{local} local, {edge} near the edges"
+        );
     }
 }
