@@ -60,7 +60,8 @@ use std::sync::Mutex;
 use wide::{f32x8, i32x8, u32x8};
 
 pub use crate::dilate::{
-    dilate, dilate_row, distance, Cover, EdgeMask, Pool, RowScratch, BOUNDED_RADIUS,
+    dilate, dilate_row, dilate_row_lanes, distance, Cover, EdgeMask, Ink, Pool, RowScratch,
+    BOUNDED_RADIUS,
 };
 
 /// What a Sobel outline looks at.
@@ -993,8 +994,28 @@ impl PostStage for Sobel {
                             let y = k * BLEND_ROWS + i;
                             let row = i * w..(i + 1) * w;
                             let (r, g, b) = (&mut r[row.clone()], &mut g[row.clone()], &mut b[row]);
-                            dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| {
-                                blend([&mut r[x], &mut g[x], &mut b[x]], c * inv, color)
+                            // blend's products 8 samples at a time, the
+                            // samples without ink selected back unchanged.
+                            let (inv8, col8) = (f32x8::splat(inv), color.map(f32x8::splat));
+                            dilate_row_lanes(mask, marked, y, cover, &mut s.dilate, |x, ink| {
+                                match ink {
+                                    Ink::Eight(inked, c) => {
+                                        let a = c * inv8;
+                                        let keep = f32x8::ONE - a;
+                                        for (p, col) in
+                                            [&mut *r, &mut *g, &mut *b].into_iter().zip(col8)
+                                        {
+                                            let p = &mut p[x..x + 8];
+                                            let v = <[f32; 8]>::try_from(&*p).unwrap_or_default();
+                                            let v = f32x8::from(v);
+                                            let v = inked.select(v * keep + col * a, v);
+                                            p.copy_from_slice(v.as_array());
+                                        }
+                                    }
+                                    Ink::One(c) => {
+                                        blend([&mut r[x], &mut g[x], &mut b[x]], c * inv, color)
+                                    }
+                                }
                             });
                         }
                         return;
