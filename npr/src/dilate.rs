@@ -6,6 +6,7 @@
 
 use rayon::prelude::*;
 use std::sync::Mutex;
+use wide::{f32x8, i32x8};
 
 /// Marked samples of a `width × height` image, one bit a sample: sample
 /// (x, y) is bit x % 64 of word `y·words + x/64`, with `words` =
@@ -237,6 +238,21 @@ impl Cover {
         }
     }
 
+    /// [`Cover::at`] on 8 lanes, bit for bit (the same comparisons and
+    /// the one subtraction; clamp as its two selects).
+    #[inline(always)]
+    pub fn at8(self, d: f32x8) -> f32x8 {
+        let (zero, one) = (f32x8::ZERO, f32x8::ONE);
+        if self.antialias {
+            let v = f32x8::splat(self.half) - d;
+            let v = v.simd_lt(zero).select(zero, v);
+            v.simd_gt(one).select(one, v)
+        } else {
+            let limit = f32x8::splat((self.half - 0.5).max(0.0));
+            d.simd_le(limit).select(one, zero)
+        }
+    }
+
     /// The search radius r = ⌈W/2⌉: a mark farther than r gives no ink.
     pub fn radius(self) -> usize {
         self.half.ceil().max(0.0) as usize
@@ -305,6 +321,43 @@ pub fn dilate_row(
     cover: Cover,
     s: &mut RowScratch,
     mut ink: impl FnMut(usize, f32),
+) {
+    dilate_row_lanes(mask, marked, y, cover, s, |x, lanes| match lanes {
+        Ink::Eight(inked, c) => {
+            let (inked, c) = (inked.to_bitmask(), c.to_array());
+            for (i, &c) in c.iter().enumerate() {
+                if inked >> i & 1 != 0 {
+                    ink(x + i, c);
+                }
+            }
+        }
+        Ink::One(c) => ink(x, c),
+    });
+}
+
+/// What [`dilate_row_lanes`] inks at x.
+#[derive(Clone, Copy, Debug)]
+pub enum Ink {
+    /// Samples x..x+8 (x + 8 ≤ width), at least one with ink: the lane
+    /// mask of those with ink, and the coverage of each lane.
+    Eight(f32x8, f32x8),
+    /// Sample x, with this coverage.
+    One(f32),
+}
+
+/// [`dilate_row`] 8 samples at a time: `ink(x, Ink::Eight(inked,
+/// coverage))` for the samples x..x+8 (x + 8 ≤ width) that hold a sample
+/// with ink, whose lanes `inked` are those [`dilate_row`] calls its `ink`
+/// for, with the same coverage bit for bit; a word's last n % 8 samples
+/// (the row's last word, when width % 8 ≠ 0) one by one, `Ink::One`.
+/// Calls in increasing x.
+pub fn dilate_row_lanes(
+    mask: &EdgeMask,
+    marked: &[bool],
+    y: usize,
+    cover: Cover,
+    s: &mut RowScratch,
+    mut ink: impl FnMut(usize, Ink),
 ) {
     let (w, h, words) = (mask.width(), mask.height(), mask.words());
     let r = cover.radius();
@@ -387,10 +440,21 @@ pub fn dilate_row(
                 }
             }
         }
-        // d² ≥ (r + 1)² is past half the width: no ink.
-        for (i, &d) in d2.iter().enumerate() {
+        // d² ≥ (r + 1)² is past half the width: no ink. The squares are
+        // integers below 2²⁴, exact in f32.
+        let full = n / 8 * 8;
+        let far2_8 = f32x8::splat(far2 as f32);
+        for (c, d) in d2[..full].chunks_exact(8).enumerate() {
+            let d = <[u32; 8]>::try_from(d).unwrap_or_default();
+            let d = i32x8::new(d.map(|v| v as i32)).round_float();
+            let inked = d.simd_lt(far2_8);
+            if inked.any() {
+                ink(x0 + 8 * c, Ink::Eight(inked, cover.at8(d.sqrt())));
+            }
+        }
+        for (i, &d) in d2.iter().enumerate().skip(full) {
             if d < far2 {
-                ink(x0 + i, cover.at((d as f32).sqrt()));
+                ink(x0 + i, Ink::One(cover.at((d as f32).sqrt())));
             }
         }
     }

@@ -60,7 +60,8 @@ use std::sync::Mutex;
 use wide::{f32x8, i32x8, u32x8};
 
 pub use crate::dilate::{
-    dilate, dilate_row, distance, Cover, EdgeMask, Pool, RowScratch, BOUNDED_RADIUS,
+    dilate, dilate_row, dilate_row_lanes, distance, Cover, EdgeMask, Ink, Pool, RowScratch,
+    BOUNDED_RADIUS,
 };
 
 /// What a Sobel outline looks at.
@@ -905,8 +906,12 @@ fn prefetch_inked(mask: &EdgeMask, marked: &[bool], y: usize, reach: usize, rgb:
             let hi = (16 * k + 15 + reach).min(63);
             let span = (u64::MAX >> (63 - hi)) & (u64::MAX << lo);
             if v & span != 0 {
+                // Both ends of the 16 samples: the planes need not start
+                // on a cache line (a large Vec's does not: it is 16 bytes
+                // past a page), and then the 16 straddle two lines.
                 for p in rgb {
                     prefetch(p, 64 * j + 16 * k);
+                    prefetch(p, 64 * j + 16 * k + 15);
                 }
             }
         }
@@ -993,8 +998,28 @@ impl PostStage for Sobel {
                             let y = k * BLEND_ROWS + i;
                             let row = i * w..(i + 1) * w;
                             let (r, g, b) = (&mut r[row.clone()], &mut g[row.clone()], &mut b[row]);
-                            dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| {
-                                blend([&mut r[x], &mut g[x], &mut b[x]], c * inv, color)
+                            // blend's products 8 samples at a time, the
+                            // samples without ink selected back unchanged.
+                            let (inv8, col8) = (f32x8::splat(inv), color.map(f32x8::splat));
+                            dilate_row_lanes(mask, marked, y, cover, &mut s.dilate, |x, ink| {
+                                match ink {
+                                    Ink::Eight(inked, c) => {
+                                        let a = c * inv8;
+                                        let keep = f32x8::ONE - a;
+                                        for (p, col) in
+                                            [&mut *r, &mut *g, &mut *b].into_iter().zip(col8)
+                                        {
+                                            let p = &mut p[x..x + 8];
+                                            let v = <[f32; 8]>::try_from(&*p).unwrap_or_default();
+                                            let v = f32x8::from(v);
+                                            let v = inked.select(v * keep + col * a, v);
+                                            p.copy_from_slice(v.as_array());
+                                        }
+                                    }
+                                    Ink::One(c) => {
+                                        blend([&mut r[x], &mut g[x], &mut b[x]], c * inv, color)
+                                    }
+                                }
                             });
                         }
                         return;
@@ -1328,6 +1353,45 @@ mod tests {
                     }
                 }
             }
+        }
+    }
+
+    #[test]
+    fn blocks_of_one_label_mark_as_the_scalar_id_measure() {
+        // Wide runs of one label (whole 64-sample blocks of one label and
+        // their neighbour rows, where every measure is 0), a few single
+        // samples of another, a run boundary in mid-block, and a row band
+        // of another label; thresholds below 0 mark every sample.
+        let (w, h) = (203, 9);
+        let mat: Vec<f32> = (0..w * h)
+            .map(|i| {
+                let (x, y) = (i % w, i / w);
+                if (x, y) == (100, 4) || (x, y) == (170, 1) {
+                    7.0
+                } else if y >= 7 {
+                    -1.0
+                } else {
+                    (x / 90) as f32
+                }
+            })
+            .collect();
+        let input = EdgeInput {
+            width: w,
+            height: h,
+            inv_depth: &[],
+            normal: [&[], &[], &[]],
+            material: &mat,
+            luma: &[],
+        };
+        for t in [-0.5f32, -0.0, 0.0, 0.1, 1.0 / 3.0, 0.9] {
+            let e = detect_edges(&input, &[(Source::Id, t)], &|_| true);
+            for y in 0..h {
+                for x in 0..w {
+                    let want = measure(&input, Source::Id, x, y) > t;
+                    assert_eq!(e[y * w + x], want, "t {t} ({x}, {y})");
+                }
+            }
+            assert_eq!(e.iter().all(|&m| m), t < 0.0, "t {t}");
         }
     }
 
