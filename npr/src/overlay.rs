@@ -1172,6 +1172,17 @@ pub fn svg(lines: &[Polyline], style: &StrokeStyle, width: u32, height: u32) -> 
 mod tests {
     use super::*;
 
+    /// Floats in [0, 1) from a xorshift* generator seeded with `state`:
+    /// the tests' random strokes and polygons, the same on every machine.
+    fn unit_floats(mut state: u64) -> impl FnMut() -> f32 {
+        move || {
+            state ^= state >> 12;
+            state ^= state << 25;
+            state ^= state >> 27;
+            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
+        }
+    }
+
     /// Distance from `p` to the segment a–b.
     fn to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -1190,13 +1201,7 @@ mod tests {
         // its centre within `reach` of a segment of its centre line, so
         // the chunks `Canvas::mark` keeps hold it; and the reach is not
         // much more than needed.
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = unit_floats(0x9e37_79b9_7f4a_7c15u64);
         let (w, h) = (120u32, 90u32);
         let mut worst: f64 = f64::NEG_INFINITY;
         for case in 0..48 {
@@ -1281,13 +1286,7 @@ mod tests {
         // those bytes alone. Holds if a fill leaves its coverage itself on
         // a transparent mask (each pixel blended once) and `lerp_alpha`
         // is tiny-skia's blend.
-        let mut state = 0x2545_f491_4f6c_dd1du64;
-        let mut next = move || {
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = unit_floats(0x2545_f491_4f6c_dd1du64);
         let (w, h) = (64u32, 48u32);
         let (mut overlapped, mut levels) = (0usize, [false; 256]);
         for case in 0..300 {
@@ -1337,13 +1336,7 @@ mod tests {
         // from 1.5 to 13 px, tapers), each filled on an image-sized mask
         // and at its own size (`fill_local`): the same alpha at every
         // pixel, and draws near the edges are left to the image-sized way.
-        let mut state = 0x9e37_79b9_7f4a_7c15u64;
-        let mut next = move || {
-            state ^= state >> 12;
-            state ^= state << 25;
-            state ^= state >> 27;
-            (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut next = unit_floats(0x9e37_79b9_7f4a_7c15u64);
         let (w, h) = (173usize, 131usize);
         let (mut local, mut edge) = (0, 0);
         let mut buf = Vec::new();
