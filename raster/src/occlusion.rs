@@ -46,21 +46,8 @@ impl DepthBounds {
     /// past the image's edges hold the cleared depth 0, which only makes
     /// the bounds of edge blocks lower (more conservative).
     pub fn build(&mut self, target: &Target, depth: &[f32]) {
-        let row = self.shape(target);
-        let tiles_x = target.tiles_x as usize;
-        let blocks = row * target.tiles_y as usize * PER_TILE;
-        self.min[..blocks]
-            .par_chunks_mut(row * PER_TILE)
-            .zip(depth.par_chunks(tiles_x * TILE_PIXELS))
-            .for_each(|(out, tiles)| {
-                for (tx, tile) in tiles.chunks_exact(TILE_PIXELS).enumerate() {
-                    let m = tile_minima(tile);
-                    for by in 0..PER_TILE {
-                        out[by * row + tx * PER_TILE..][..PER_TILE]
-                            .copy_from_slice(&m[by * PER_TILE..][..PER_TILE]);
-                    }
-                }
-            });
+        let tiles: Vec<TileMinima> = depth.par_chunks(TILE_PIXELS).map(tile_minima).collect();
+        self.build_from_tiles(target, &tiles);
     }
 
     /// [`DepthBounds::build`] from each tile's [`tile_minima`] (tile
@@ -397,22 +384,6 @@ mod tests {
         }
         // The partial blocks past the right edge see the padding's 0.
         assert_eq!(b.min[130 / BLOCK], 0.0);
-    }
-
-    /// Bounds taken tile by tile (as the first pass does) are the bounds
-    /// built from the whole buffer.
-    #[test]
-    fn bounds_from_tiles_are_the_bounds_of_the_buffer() {
-        let t = Target::new(130, 70).unwrap();
-        let depth: Vec<f32> = (0..t.buffer_len())
-            .map(|i| ((i * 7919) % 1000) as f32 / 1000.0)
-            .collect();
-        let mut a = DepthBounds::default();
-        a.build(&t, &depth);
-        let tiles: Vec<TileMinima> = depth.chunks_exact(TILE_PIXELS).map(tile_minima).collect();
-        let mut b = DepthBounds::default();
-        b.build_from_tiles(&t, &tiles);
-        assert!(a.min == b.min && a.row == b.row && (a.width, a.height) == (b.width, b.height));
     }
 
     /// `hides_x4` answers `hides` lane by lane, for lanes asked about, on
