@@ -1183,6 +1183,25 @@ mod tests {
         }
     }
 
+    /// A polyline of 2 to 1 + `count` points from a point in the `size`
+    /// box, each step short or long (`steps`) at random, so sharp turns
+    /// and long runs mix.
+    fn random_walk(
+        next: &mut impl FnMut() -> f32,
+        size: [f32; 2],
+        count: f32,
+        steps: [f32; 2],
+    ) -> Vec<[f32; 2]> {
+        let mut p = [next() * size[0], next() * size[1]];
+        (0..2 + (next() * count) as usize)
+            .map(|_| {
+                let step = if next() < 0.5 { steps[0] } else { steps[1] };
+                p = [p[0] + (next() - 0.5) * step, p[1] + (next() - 0.5) * step];
+                p
+            })
+            .collect()
+    }
+
     /// Distance from `p` to the segment a–b.
     fn to_segment(p: [f64; 2], a: [f64; 2], b: [f64; 2]) -> f64 {
         let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
@@ -1212,15 +1231,7 @@ mod tests {
                 join: [LineJoin::Round, LineJoin::Bevel][case / 6 % 2],
                 cap: [LineCap::Butt, LineCap::Round, LineCap::Square][case / 12 % 3],
             };
-            let mut p = [next() * w as f32, next() * h as f32];
-            let points = (0..2 + (next() * 12.0) as usize)
-                .map(|_| {
-                    // Short and long segments, sharp turns among them.
-                    let step = if next() < 0.5 { 2.0 } else { 40.0 };
-                    p = [p[0] + (next() - 0.5) * step, p[1] + (next() - 0.5) * step];
-                    p
-                })
-                .collect();
+            let points = random_walk(&mut next, [w as f32, h as f32], 12.0, [2.0, 40.0]);
             let line = Polyline {
                 kind: EdgeKind::Silhouette,
                 points,
@@ -1348,14 +1359,7 @@ mod tests {
                 join: [LineJoin::Round, LineJoin::Bevel, LineJoin::Miter][case / 5 % 3],
                 cap: [LineCap::Butt, LineCap::Round, LineCap::Square][case / 15 % 3],
             };
-            let mut p = [next() * w as f32, next() * h as f32];
-            let points = (0..2 + (next() * 20.0) as usize)
-                .map(|_| {
-                    let step = if next() < 0.5 { 3.0 } else { 50.0 };
-                    p = [p[0] + (next() - 0.5) * step, p[1] + (next() - 0.5) * step];
-                    p
-                })
-                .collect();
+            let points = random_walk(&mut next, [w as f32, h as f32], 20.0, [3.0, 50.0]);
             let line = Polyline {
                 kind: EdgeKind::Silhouette,
                 points,
