@@ -126,21 +126,27 @@ impl PacketTris {
     /// back with vector loads, which stall on store forwarding.)
     #[inline(always)]
     pub fn fill(&mut self, ids: &[u32], lanes: usize, ctx: Option<&ResolveContext>) {
-        self.n = 0;
         if lanes == 8 {
-            // One vector compare per distinct triangle.
-            let v = u32x8::new(ids[..8].try_into().expect("8 ids"));
+            // One vector compare per distinct triangle. The counts live in
+            // registers until the end, and indices are masked to 0..8 (a
+            // no-op: each round clears at least one of the 8 bits of
+            // `todo`), so the loop has no bounds checks or reloads.
+            let ids: [u32; 8] = ids[..8].try_into().expect("8 ids");
+            let v = u32x8::new(ids);
             let mut todo = !v.simd_eq(u32x8::splat(MISS)).to_bitmask() & 0xFF;
             self.covered = todo;
+            let mut n = 0;
             while todo != 0 {
-                let id = ids[todo.trailing_zeros() as usize];
+                let id = ids[todo.trailing_zeros() as usize & 7];
                 let lanes = v.simd_eq(u32x8::splat(id)).to_bitmask();
-                self.id[self.n] = id;
-                self.lanes[self.n] = lanes;
-                self.n += 1;
+                self.id[n & 7] = id;
+                self.lanes[n & 7] = lanes;
+                n += 1;
                 todo &= !lanes;
             }
+            self.n = n;
         } else {
+            self.n = 0;
             self.covered = 0;
             for (i, &id) in ids[..lanes].iter().enumerate() {
                 if id == MISS {
@@ -160,37 +166,36 @@ impl PacketTris {
             }
         }
         self.groups = 0;
-        if let Some(ctx) = ctx {
-            for t in 0..self.n {
-                let (tri, m) = ctx.ids.look_up(self.id[t], &ctx.scene.tri_material);
-                (self.tri[t], self.material[t]) = (tri, m);
-                // Packets hold one material almost always: the last group
-                // is tested first, without the search (which cost ~20
-                // instructions a packet).
-                let last = self.groups.wrapping_sub(1);
-                if self.groups > 0 && self.group_material[last] == m {
-                    self.group_lanes[last] |= self.lanes[t];
-                    continue;
-                }
-                match (0..self.groups).find(|&g| self.group_material[g] == m) {
-                    Some(g) => self.group_lanes[g] |= self.lanes[t],
-                    None => {
-                        self.group_material[self.groups] = m;
-                        self.group_lanes[self.groups] = self.lanes[t];
-                        self.groups += 1;
-                    }
+        let Some(ctx) = ctx else {
+            return;
+        };
+        let mut groups = 0usize;
+        for t in 0..self.n.min(8) {
+            let (tri, m) = ctx.ids.look_up(self.id[t], &ctx.scene.tri_material);
+            (self.tri[t], self.material[t]) = (tri, m);
+            // Packets hold one material almost always: the last group is
+            // tested first, without the search (which cost ~20
+            // instructions a packet).
+            let last = groups.wrapping_sub(1) & 7;
+            if groups > 0 && self.group_material[last] == m {
+                self.group_lanes[last] |= self.lanes[t];
+                continue;
+            }
+            match (0..groups).find(|&g| self.group_material[g] == m) {
+                Some(g) => self.group_lanes[g] |= self.lanes[t],
+                None => {
+                    self.group_material[groups & 7] = m;
+                    self.group_lanes[groups & 7] = self.lanes[t];
+                    groups += 1;
                 }
             }
         }
+        self.groups = groups;
     }
 }
 
 /// Smallest n·wo the shading normal is allowed (see `resolve`).
 const MIN_COS_VIEW: f64 = 0.02;
-
-/// Gathered per-triangle values: origin (2), k1, k2, ks (9), facing (1),
-/// vertex normals (9).
-const GATHER: usize = 21;
 
 impl ResolveContext<'_> {
     /// Hints the cache to bring in what resolving visibility-buffer id `id`
@@ -213,79 +218,68 @@ impl ResolveContext<'_> {
         }
     }
 
-    /// Triangle `t`'s resolve inputs, in the order of [`GATHER`], each
-    /// read straight from the scene's arrays (no staging copy: every value
-    /// becomes one broadcast from memory).
-    #[inline(always)]
-    fn gathered(&self, tris: &PacketTris, t: usize) -> [f32; GATHER] {
-        let p = &self.planes[tris.id[t] as usize];
-        let tri = self.scene.triangles[tris.tri[t] as usize];
-        let [n0, n1, n2] = tri.map(|i| self.scene.normals[i as usize]);
-        [
-            p.origin[0],
-            p.origin[1],
-            p.k1[0],
-            p.k1[1],
-            p.k1[2],
-            p.k2[0],
-            p.k2[1],
-            p.k2[2],
-            p.ks[0],
-            p.ks[1],
-            p.ks[2],
-            p.facing,
-            n0.x,
-            n0.y,
-            n0.z,
-            n1.x,
-            n1.y,
-            n1.z,
-            n2.x,
-            n2.y,
-            n2.z,
-        ]
-    }
-
     /// Rebuilds the fragments of pixels (x + lane, y) covered by the
-    /// triangles of `tris` (at least one; from [`PacketTris::new`]). Each
-    /// triangle's data is read once and broadcast into the lanes it covers:
-    /// packets hold 1–3 triangles typically, and a per-lane gather through
-    /// memory (8 scalar stores, then a vector load) stalls on store
-    /// forwarding. Lanes no triangle covers carry the first triangle's data,
-    /// so they stay finite; callers mask them.
+    /// triangles of `tris` (at least one; from [`PacketTris::new`]).
+    ///
+    /// Packets hold one triangle mostly (the ground) or 3–5 (the spheres'
+    /// small ones). Each triangle's data is read once, broadcast, evaluated
+    /// at every lane and the result kept in the lanes it covers, in two
+    /// rounds: first the barycentric planes, then the normals, which the
+    /// planes' values of each lane weight. Evaluating everything of a
+    /// triangle at once, or selecting its 21 inputs before evaluating them,
+    /// kept more values live than the 16 registers hold: each further
+    /// triangle cost ~100 instructions with the spills, against ~55 now. (A
+    /// per-lane gather through memory, 8 scalar stores then a vector load,
+    /// stalls on store forwarding.) Lanes no triangle covers carry the first
+    /// triangle's values, so they stay finite; callers mask them.
     #[inline(always)]
     pub fn resolve<R: Real>(&self, x: u32, y: u32, tris: &PacketTris) -> Fragment<R> {
         debug_assert!(tris.n > 0);
-        let mut lanes = self.gathered(tris, 0).map(|c| R::splat(c as f64));
-        for t in 1..tris.n {
-            let m = R::mask_from_bits(tris.lanes[t]);
-            for (l, c) in lanes.iter_mut().zip(self.gathered(tris, t)) {
-                *l = R::select(m, R::splat(c as f64), *l);
-            }
-        }
-        let g = |k: usize| lanes[k];
-
+        let splat = |c: f32| R::splat(c as f64);
         let px = R::splat(x as f64 + 0.5) + R::lane_index();
         let py = R::splat(y as f64 + 0.5);
-        let dx = px - g(0);
-        let dy = py - g(1);
-        let plane = |k: usize| g(k).mul_add(dx, g(k + 1).mul_add(dy, g(k + 2)));
-        let (k1, k2, ks) = (plane(2), plane(5), plane(8));
-        // ks = 1/w > 0 at every covered pixel centre.
+        // k1, k2, Σk (= 1/w) and the facing sign of each lane's triangle.
+        let planes = |t: usize| {
+            let p = &self.planes[tris.id[t] as usize];
+            let dx = px - splat(p.origin[0]);
+            let dy = py - splat(p.origin[1]);
+            let plane = |k: [f32; 3]| splat(k[0]).mul_add(dx, splat(k[1]).mul_add(dy, splat(k[2])));
+            [plane(p.k1), plane(p.k2), plane(p.ks), splat(p.facing)]
+        };
+        let mut k = planes(0);
+        for t in 1..tris.n {
+            let m = R::mask_from_bits(tris.lanes[t]);
+            let kt = planes(t);
+            for (k, kt) in k.iter_mut().zip(kt) {
+                *k = R::select(m, kt, *k);
+            }
+        }
+        let [k1, k2, ks, facing] = k;
+        // Σk = 1/w > 0 at every covered pixel centre.
         let w = ks.rcp();
         let b1 = k1 * w;
         let b2 = k2 * w;
-        // The normal is interpolated with the unnormalized weights
-        // k = b·ks (its direction is the same: ks > 0), so its chain of
-        // dependent steps does not wait for the reciprocal (1.6 % of a
-        // frame's CPU time, PERFORMANCE.md). |k| ≥ |b|/w_far keeps the
-        // cancellation test of `normalize_or` meaningful.
-        let k0 = ks - k1 - k2;
-        let vn = |k: usize| V3::new(g(k), g(k + 1), g(k + 2));
-        let n_interp = vn(12) * k0 + vn(15) * k1 + vn(18) * k2;
-        // Interpolated normals can cancel (opposite vertex normals); fall back
-        // to vertex 0's normal rather than produce NaN.
-        let n = n_interp.normalize_or(vn(12)) * g(11);
+        // The normal is interpolated with the unnormalized weights k = b·Σk
+        // (its direction is the same: Σk > 0), so its chain of dependent
+        // steps does not wait for the reciprocal (1.6 % of a frame's CPU
+        // time, PERFORMANCE.md); |k| ≥ |b|/w_far keeps the cancellation
+        // test of `normalize_or` meaningful. The facing sign goes into the
+        // weights: ±1, so the normal is the same bits as flipping it after.
+        // (No array `map` here: its closure was not inlined.)
+        let (f0, f1, f2) = ((ks - k1 - k2) * facing, k1 * facing, k2 * facing);
+        let normal = |t: usize| {
+            let [i0, i1, i2] = self.scene.triangles[tris.tri[t] as usize];
+            let vertex = |i: u32| {
+                let n = self.scene.normals[i as usize];
+                V3::new(splat(n.x), splat(n.y), splat(n.z))
+            };
+            vertex(i0) * f0 + vertex(i1) * f1 + vertex(i2) * f2
+        };
+        let mut n_interp = normal(0);
+        for t in 1..tris.n {
+            let m = R::mask_from_bits(tris.lanes[t]);
+            n_interp = V3::select(m, normal(t), n_interp);
+        }
 
         // The primary ray through the pixel centre (camera.rs); its point at
         // view depth w is the surface point.
@@ -301,6 +295,9 @@ impl ResolveContext<'_> {
             + V3::from_f32(v.up.to_array()) * (ny * R::splat(v.tan_y as f64));
         let p = ray.mul_add(w, V3::from_f32(v.eye.to_array()));
         let wo = -ray.normalize();
+        // Interpolated normals can cancel (opposite vertex normals): such a
+        // lane takes the direction toward the eye rather than NaN.
+        let n = n_interp.normalize_or(wo);
         // Interpolated normals near a silhouette can face away from the eye,
         // where every BRDF is zero: black speckles along smooth outlines.
         // Bend such normals until n·wo = MIN_COS_VIEW (the usual
