@@ -66,22 +66,39 @@ pub fn covered_groups(
     if let Some(se) = &rt.small {
         let [bx0, by0, ..] = rt.bbox;
         let lanes = i32x8::new([0, 1, 2, 3, 4, 5, 6, 7]);
-        let lane_a = se.a.map(|a| lanes * i32x8::splat(a));
+        let lane_a = [0, 1, 2].map(|k| lanes * i32x8::splat(se.a[k]));
+        let step = [0, 1, 2].map(|k| i32x8::splat(8 * se.a[k]));
+        let gx0 = first_group(x_lo);
+        // Lanes of the first group left of x_lo (only it can have any).
+        let first = 0xFFu32 << (x_lo - gx0);
+        let row_step = [0, 1, 2].map(|k| i32x8::splat(se.b[k]));
+        // The three edge functions at the first row's first group, then
+        // stepped by b per row and 8·a per group: the same integers as
+        // evaluating each group afresh (SmallEdges' range keeps them
+        // exact), with no broadcasts or multiplies inside the loops.
+        let mut row_e = [0, 1, 2].map(|k| {
+            i32x8::splat(se.e0[k] + se.b[k] * (y_lo - by0) + se.a[k] * (gx0 - bx0)) + lane_a[k]
+        });
         for y in y_lo..y_hi {
-            let row = [0, 1, 2].map(|k| se.e0[k] + se.b[k] * (y - by0));
-            let mut gx = first_group(x_lo);
+            let mut e = row_e;
+            for k in 0..3 {
+                row_e[k] += row_step[k];
+            }
+            let mut gx = gx0;
+            let mut range = first;
             while gx < x_hi {
-                let mut inside = i32x8::splat(-1);
-                for k in 0..3 {
-                    let e = i32x8::splat(row[k] + se.a[k] * (gx - bx0)) + lane_a[k];
-                    inside &= e.simd_gt(i32x8::splat(-1));
-                }
-                let x = i32x8::splat(gx) + lanes;
-                inside &= x.simd_gt(i32x8::splat(x_lo - 1)) & i32x8::splat(x_hi).simd_gt(x);
-                let mask = inside.to_bitmask();
+                // A pixel is inside when no edge function is negative: the
+                // sign bit of their OR. Lanes at or right of x_hi are cut
+                // off by `range` (only the last group has any).
+                let outside = (e[0] | e[1] | e[2]).simd_lt(i32x8::splat(0)).to_bitmask();
+                let mask = !outside & range & (0xFF >> (8 - (x_hi - gx).min(8)));
                 if mask != 0 {
                     emit(y, gx, mask);
                 }
+                for k in 0..3 {
+                    e[k] += step[k];
+                }
+                range = 0xFF;
                 gx += 8;
             }
         }
