@@ -11,13 +11,15 @@
 //! and a pass writes z only where it passes), so the bounds stay lower
 //! bounds for every later pass and need no rebuilding. A triangle is
 //! hidden if an upper bound of its depth over its pixels is ≤ the least
-//! depth of every block its pixel rectangle touches ([`hides`]).
+//! depth of every block holding a pixel it can cover ([`hides`]: the
+//! pixel range of its projected vertices' box, exact up to the snapping).
 //!
 //! The extrusion outline is what this is for: its back faces lie behind
 //! the front faces of their own mesh except within a few pixels of the
-//! silhouette, so most of them are hidden and go no further: 67k of the
-//! 97k on the benchmark scene (62k with 8×8 blocks; the rest lie within
-//! a few pixels of a silhouette, where the ring is, and must be drawn).
+//! silhouette, so most of them are hidden and go no further: 73k of the
+//! 97k on the benchmark scene (67k when the range was the box grown a
+//! pixel each way, 62k that way with 8×8 blocks; the rest lie within a
+//! few pixels of a silhouette, where the ring is, and must be drawn).
 
 use crate::setup_x4::Vertices4;
 use crate::target::{Target, TILE, TILE_PIXELS};
