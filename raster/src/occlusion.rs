@@ -11,13 +11,15 @@
 //! and a pass writes z only where it passes), so the bounds stay lower
 //! bounds for every later pass and need no rebuilding. A triangle is
 //! hidden if an upper bound of its depth over its pixels is ≤ the least
-//! depth of every block its pixel rectangle touches ([`hides`]).
+//! depth of every block holding a pixel it can cover ([`hides`]: the
+//! pixel range of its projected vertices' box, exact up to the snapping).
 //!
 //! The extrusion outline is what this is for: its back faces lie behind
 //! the front faces of their own mesh except within a few pixels of the
-//! silhouette, so most of them are hidden and go no further: 67k of the
-//! 97k on the benchmark scene (62k with 8×8 blocks; the rest lie within
-//! a few pixels of a silhouette, where the ring is, and must be drawn).
+//! silhouette, so most of them are hidden and go no further: 73k of the
+//! 97k on the benchmark scene (67k when the range was the box grown a
+//! pixel each way, 62k that way with 8×8 blocks; the rest lie within a
+//! few pixels of a silhouette, where the ring is, and must be drawn).
 
 use crate::setup_x4::Vertices4;
 use crate::target::{Target, TILE, TILE_PIXELS};
@@ -28,6 +30,15 @@ use wide::f64x4;
 /// benchmark's back faces than 8 (2.4 M instructions a frame less).
 pub const BLOCK: usize = 4;
 const PER_TILE: usize = TILE / BLOCK;
+
+/// How far (pixels) a covered pixel's centre may lie outside the box of
+/// the projected vertices: the snapping's 1/512, and room for the
+/// rounding of a clipped piece's vertices (far below it).
+pub const PIXEL_MARGIN: f64 = 1.0 / 64.0;
+/// Covered pixel x satisfies min − `LO_OFFSET` ≤ x ≤ max − `HI_OFFSET`
+/// (x + ½ within the box grown by `PIXEL_MARGIN`).
+const LO_OFFSET: f64 = 0.5 + PIXEL_MARGIN;
+const HI_OFFSET: f64 = 0.5 - PIXEL_MARGIN;
 
 /// Least depth per `BLOCK`² block of a visibility buffer's depth, row-major
 /// over the tile grid's padded extent (`tiles_x · 8` blocks a row), and 3
@@ -87,14 +98,20 @@ impl DepthBounds {
     /// With every w > 0 the triangle's screen projection is the triangle
     /// of its projected vertices (any clipped piece lies inside it) and
     /// its depth z/w is the affine function through the vertices' z/w
-    /// (setup's plane, `TriPlanes::z`). The pixels the rasterizer covers
-    /// are centres inside the snapped triangle, whose vertices are within
-    /// 1/512 px of the exact ones each way, so inside the rectangle
-    /// [min − 1, max + 1] of the exact ones, and the plane there is at
-    /// most max z_i + (|∂z/∂x| + |∂z/∂y|)/512 (taken as /256). Setup keeps
-    /// the plane in f32 and evaluates it with two fused multiply-adds
+    /// (setup's plane, `TriPlanes::z`). The projection here is setup's
+    /// (the same operations: x·(1/w), + 1, then × w/2, where setup's × 0.5
+    /// then × w rounds the same), and the pixels the rasterizer covers are
+    /// centres inside the snapped triangle, whose vertices are within
+    /// 1/512 px of those each way (a clipped piece's, up to rounding far
+    /// below that). So a covered pixel x has its centre x + ½ within
+    /// [min − `PIXEL_MARGIN`, max + `PIXEL_MARGIN`] of the projected
+    /// vertices, i.e. x in [⌈min − ½ − m⌉, ⌊max − ½ + m⌋], and likewise y:
+    /// the blocks of that pixel range are the ones tested. The plane there
+    /// is at most max z_i + (|∂z/∂x| + |∂z/∂y|)/512 (taken as /256). Setup
+    /// keeps the plane in f32 and evaluates it with two fused multiply-adds
     /// relative to a corner of the triangle's box: a few ulps of |z| +
-    /// |∂z/∂x|·Δx + |∂z/∂y|·Δy, far below the 1e-6 relative margin added.
+    /// |∂z/∂x|·Δx + |∂z/∂y|·Δy, far below the 1e-6 relative margin added
+    /// (over the vertices' box grown a pixel each way).
     pub fn hides(&self, v: &[[f64; 4]; 3]) -> bool {
         let [a, b, c] = v;
         if !(a[3] > 0.0 && b[3] > 0.0 && c[3] > 0.0) {
@@ -132,17 +149,20 @@ impl DepthBounds {
             }
         };
         let max3 = |a: f64, b: f64, c: f64| -min3(-a, -b, -c);
-        let (x_lo, x_hi) = (min3(x0, x1, x2) - 1.0, max3(x0, x1, x2) + 1.0);
-        let (y_lo, y_hi) = (min3(y0, y1, y2) - 1.0, max3(y0, y1, y2) + 1.0);
+        let (x_min, x_max) = (min3(x0, x1, x2), max3(x0, x1, x2));
+        let (y_min, y_max) = (min3(y0, y1, y2), max3(y0, y1, y2));
+        // The covered pixels' range, before ⌈ ⌉ and ⌊ ⌋ (see above).
+        let (x_lo, x_hi) = (x_min - LO_OFFSET, x_max - HI_OFFSET);
+        let (y_lo, y_hi) = (y_min - LO_OFFSET, y_max - HI_OFFSET);
         // Off the image (setup's business), or NaN: not judged.
-        if !(x_hi >= 0.0 && y_hi >= 0.0 && x_lo <= w && y_lo <= h) {
+        if !(x_hi >= 0.0 && y_hi >= 0.0 && x_lo <= w - 1.0 && y_lo <= h - 1.0) {
             return false;
         }
         let z_hi = max3(z0, z1, z2);
         let (ax, ay) = (gx.abs(), gy.abs());
         let z = z_hi
             + (ax + ay) * (1.0 / 256.0)
-            + 1e-6 * (z_hi.abs() + ax * (x_hi - x_lo) + ay * (y_hi - y_lo));
+            + 1e-6 * (z_hi.abs() + ax * (x_max - x_min + 2.0) + ay * (y_max - y_min + 2.0));
         if !z.is_finite() {
             return false;
         }
@@ -183,29 +203,32 @@ impl DepthBounds {
             c.simd_lt(m).select(c, m)
         };
         let max3 = |a: f64x4, b: f64x4, c: f64x4| -min3(-a, -b, -c);
-        let (x_lo, x_hi) = (min3(x0, x1, x2) - one, max3(x0, x1, x2) + one);
-        let (y_lo, y_hi) = (min3(y0, y1, y2) - one, max3(y0, y1, y2) + one);
-        let on_image = x_hi.simd_ge(zero)
-            & y_hi.simd_ge(zero)
-            & x_lo.simd_le(f64x4::splat(w))
-            & y_lo.simd_le(f64x4::splat(h));
+        let (x_min, x_max) = (min3(x0, x1, x2), max3(x0, x1, x2));
+        let (y_min, y_max) = (min3(y0, y1, y2), max3(y0, y1, y2));
+        let (lo, hi) = (f64x4::splat(LO_OFFSET), f64x4::splat(HI_OFFSET));
+        let (x_lo, x_hi) = (x_min - lo, x_max - hi);
+        let (y_lo, y_hi) = (y_min - lo, y_max - hi);
+        let (wm, hm) = (f64x4::splat(w - 1.0), f64x4::splat(h - 1.0));
+        let on_image =
+            x_hi.simd_ge(zero) & y_hi.simd_ge(zero) & x_lo.simd_le(wm) & y_lo.simd_le(hm);
         let z_hi = max3(z0, z1, z2);
         let (ax, ay) = (gx.abs(), gy.abs());
+        let two = f64x4::splat(2.0);
         let z = z_hi
             + (ax + ay) * f64x4::splat(1.0 / 256.0)
-            + f64x4::splat(1e-6) * (z_hi.abs() + ax * (x_hi - x_lo) + ay * (y_hi - y_lo));
+            + f64x4::splat(1e-6)
+                * (z_hi.abs() + ax * (x_max - x_min + two) + ay * (y_max - y_min + two));
         let judged = (ahead & on_image & z.is_finite()).to_bitmask() & lanes;
         if judged == 0 {
             return 0;
         }
         // `behind_blocks`' block range, 4 lanes at once (the same
-        // operations: on judged lanes the rectangle is not NaN and meets
-        // the image, so every value converted lies in [0, w] or [0, h]).
-        let (wm, hm) = (f64x4::splat(w - 1.0), f64x4::splat(h - 1.0));
-        let bx0 = block_index(x_lo.fast_max(zero));
-        let bx1 = block_index(x_hi.ceil().fast_min(wm));
-        let by0 = block_index(y_lo.fast_max(zero));
-        let by1 = block_index(y_hi.ceil().fast_min(hm));
+        // operations: on judged lanes the range is not NaN and meets the
+        // image, so every value converted lies in [0, w − 1] or [0, h − 1]).
+        let bx0 = block_index(x_lo.ceil().fast_max(zero));
+        let bx1 = block_index(x_hi.floor().fast_min(wm));
+        let by0 = block_index(y_lo.ceil().fast_max(zero));
+        let by1 = block_index(y_hi.floor().fast_min(hm));
         let z = z.to_array();
         let mut hidden = 0;
         let mut left = judged;
@@ -220,16 +243,17 @@ impl DepthBounds {
     }
 
     /// The end of [`DepthBounds::hides`]: whether depth bound `z` (finite)
-    /// is at most the least depth of every block the pixel rectangle
-    /// `[x_lo, x_hi] × [y_lo, y_hi]` (which meets the image) touches.
+    /// is at most the least depth of every block holding a pixel of
+    /// columns ⌈x_lo⌉..=⌊x_hi⌋ and rows ⌈y_lo⌉..=⌊y_hi⌋ (a range that
+    /// meets the image: x_hi, y_hi ≥ 0, x_lo ≤ w − 1, y_lo ≤ h − 1).
     #[inline(always)]
     fn behind_blocks(&self, [x_lo, x_hi, y_lo, y_hi]: [f64; 4], z: f64) -> bool {
         let (w, h) = (self.width as f64, self.height as f64);
-        // Inside the image: the casts truncate non-negative values.
-        let bx0 = x_lo.max(0.0) as usize / BLOCK;
-        let bx1 = x_hi.ceil().min(w - 1.0) as usize / BLOCK;
-        let by0 = y_lo.max(0.0) as usize / BLOCK;
-        let by1 = y_hi.ceil().min(h - 1.0) as usize / BLOCK;
+        // Inside the image: the casts truncate non-negative integers.
+        let bx0 = x_lo.ceil().max(0.0) as usize / BLOCK;
+        let bx1 = x_hi.floor().min(w - 1.0) as usize / BLOCK;
+        let by0 = y_lo.ceil().max(0.0) as usize / BLOCK;
+        let by1 = y_hi.floor().min(h - 1.0) as usize / BLOCK;
         self.behind_block_range([bx0, bx1, by0, by1], z)
     }
 
@@ -563,10 +587,19 @@ mod tests {
         // Over the hole (a lower depth there): may write.
         let over = [[95.0, 55.0], [105.0, 55.0], [95.0, 65.0]];
         assert!(!b.hides(&tri(over, 0.4)));
-        // Within a pixel of the hole's block, but not touching it: the
-        // rectangle grows a pixel each way, so it still counts.
-        let near = [[89.0, 50.0], [98.5, 50.0], [89.0, 58.5]];
+        // The hole's block holds pixels 100..=103 × 60..=63. A box
+        // reaching past the centre of pixel (100, 60) by less than
+        // `PIXEL_MARGIN` may cover it (snapping): it counts. One ending
+        // 0.05 px before that centre covers no pixel of the block: hidden.
+        let reach = 100.5 - PIXEL_MARGIN / 2.0;
+        let near = [
+            [89.0, 50.0],
+            [reach, 50.0],
+            [89.0, 60.5 - PIXEL_MARGIN / 2.0],
+        ];
         assert!(!b.hides(&tri(near, 0.4)));
+        let short = [[89.0, 50.0], [100.45, 50.0], [89.0, 60.45]];
+        assert!(b.hides(&tri(short, 0.4)));
         // A vertex behind the eye: not judged.
         let mut v = tri(small, 0.4);
         v[0][3] = -1.0;
