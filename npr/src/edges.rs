@@ -277,6 +277,9 @@ impl DepthView<'_> {
             return false;
         }
         let (x, y, r) = (sx as usize, sy as usize, self.ssaa.max(1));
+        if r == 1 && x >= 1 && y >= 1 && x + 1 < self.width && y + 1 < self.height {
+            return w <= self.max3x3(x, y) * (1.0 + DEPTH_BIAS);
+        }
         let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(self.width));
         // Row by row as slices (the order of a max does not change it).
         let mut dmax = 0.0f32;
@@ -285,6 +288,24 @@ impl DepthView<'_> {
             dmax = row.iter().fold(dmax, |m, &d| m.max(d));
         }
         w <= dmax * (1.0 + DEPTH_BIAS)
+    }
+
+    /// The largest depth of the 3×3 samples around (x, y), which lie
+    /// within the buffer, folded from 0 in the order of [`Self::seen`]'s
+    /// general loop (rows top to bottom, each left to right): the same
+    /// value, with three fixed-size rows instead of slices of any length.
+    #[inline(always)]
+    fn max3x3(&self, x: usize, y: usize) -> f32 {
+        let row = |yy: usize| -> [f32; 3] {
+            let at = yy * self.width + x - 1;
+            self.depth[at..at + 3]
+                .try_into()
+                .unwrap_or([f32::INFINITY; 3])
+        };
+        [row(y - 1), row(y), row(y + 1)]
+            .iter()
+            .flatten()
+            .fold(0.0f32, |m, &d| m.max(d))
     }
 }
 
@@ -612,6 +633,74 @@ mod tests {
             state ^= state >> 27;
             (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
         }
+    }
+
+    #[test]
+    fn a_sample_is_seen_against_the_largest_depth_of_its_neighbourhood() {
+        // `DepthView::seen` (its fixed 3×3 path inside the buffer and its
+        // general path at the borders and with supersampling) against the
+        // rule written plainly here: the largest depth of the samples within
+        // `ssaa` of the sample's, clipped to the buffer, times 1 + bias.
+        let mut next = rng(11);
+        let (w, h) = (37usize, 23usize);
+        let depth: Vec<f32> = (0..w * h)
+            .map(|_| {
+                if next() < 0.15 {
+                    f32::INFINITY
+                } else {
+                    1.0 + 9.0 * next()
+                }
+            })
+            .collect();
+        let (mut seen, mut hidden) = (0, 0);
+        for ssaa in [1usize, 2] {
+            let view = DepthView {
+                depth: &depth,
+                width: w,
+                height: h,
+                ssaa,
+            };
+            for _ in 0..20_000 {
+                // Points a little outside the buffer too.
+                let (sx, sy) = (next() * (w + 2) as f32 - 1.0, next() * (h + 2) as f32 - 1.0);
+                // A depth near one of the buffer's, to meet the threshold.
+                let near = depth[(next() * (w * h) as f32) as usize % (w * h)];
+                let wz = if near.is_finite() {
+                    near * (0.97 + 0.06 * next())
+                } else {
+                    1.0 + 12.0 * next()
+                };
+                let want = if sx >= 0.0 && sy >= 0.0 && sx < w as f32 && sy < h as f32 {
+                    let (x, y, r) = (sx.floor() as i64, sy.floor() as i64, ssaa as i64);
+                    let mut m = 0.0f32;
+                    for yy in (y - r).max(0)..=(y + r).min(h as i64 - 1) {
+                        for xx in (x - r).max(0)..=(x + r).min(w as i64 - 1) {
+                            let d = depth[yy as usize * w + xx as usize];
+                            if d > m {
+                                m = d;
+                            }
+                        }
+                    }
+                    wz <= m * (1.0 + DEPTH_BIAS)
+                } else {
+                    false
+                };
+                assert_eq!(
+                    view.seen(sx, sy, wz),
+                    want,
+                    "({sx}, {sy}) at {wz}, ssaa {ssaa}"
+                );
+                if want {
+                    seen += 1;
+                } else {
+                    hidden += 1;
+                }
+            }
+        }
+        assert!(
+            seen > 8_000 && hidden > 4_000,
+            "{seen} seen, {hidden} hidden"
+        );
     }
 
     #[test]

@@ -355,10 +355,10 @@ fn fill_local(d: &Draw, buf: &mut Vec<u8>) -> Coverage {
 /// pixel `x0`) to `c`: runs of 8-byte chunks holding a nonzero byte,
 /// trimmed to their first and last nonzero bytes.
 fn push_runs(c: &mut Coverage, row: &[u8], y: u32, x0: u32) {
-    let nonzero = |k: usize| {
-        row[k * 8..(k * 8 + 8).min(row.len())]
-            .iter()
-            .any(|&a| a != 0)
+    // A whole chunk read as one u64 (the last, short one byte by byte).
+    let nonzero = |k: usize| match row.get(k * 8..k * 8 + 8) {
+        Some(chunk) => u64::from_ne_bytes(chunk.try_into().unwrap_or([0; 8])) != 0,
+        None => row[k * 8..].iter().any(|&a| a != 0),
     };
     let chunks = row.len().div_ceil(8);
     let mut k = 0;
