@@ -360,6 +360,18 @@ fn prefetch_ends(ends: &[Vec4; 2], near: f32, depth: &DepthView) {
             continue;
         }
         let (x, y) = (sx as usize, sy as usize);
+        if r == 1 && x >= 1 && y >= 1 && x + 1 < depth.width && y + 1 < depth.height {
+            // The 3×3 of `DepthView::max3x3`: rows of a fixed size, one or
+            // two lines each, asked for without a loop.
+            for yy in y - 1..=y + 1 {
+                let at = yy * depth.width + x - 1;
+                if let Some(row) = depth.depth.get(at..at + 3) {
+                    let row: Result<&[f32; 3], _> = row.try_into();
+                    row.map(prefetch).unwrap_or_default();
+                }
+            }
+            continue;
+        }
         let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(depth.width));
         for yy in y.saturating_sub(r)..(y + r + 1).min(depth.height) {
             prefetch(&depth.depth[yy * depth.width..][x0..x1]);
@@ -526,7 +538,7 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
                 })
             })
             .collect();
-        ends.sort_unstable();
+        sort_by_vertex(&mut ends);
         let unpack = |k: u64| ((k >> 32) as u32, (k as u32 >> 1) as usize, (k & 1) as usize);
         // Each vertex once, ascending, with its run of ends; and the run of
         // each piece end at a vertex (piece i's end e at 2i + e).
@@ -610,6 +622,36 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
     out
 }
 
+/// Sorts piece-end keys (vertex in the high 32 bits, ascending in their
+/// low bits as [`chain`] makes them) ascending: a stable least-significant
+/// digit radix sort on the vertex, 11 bits a pass and only as many passes
+/// as the largest vertex needs (two for 4 million vertices). The low bits
+/// being ascending already, stable passes on the vertex alone give the
+/// order of a sort on the whole key, in a few counting passes instead of
+/// a comparison sort's n·log n.
+fn sort_by_vertex(keys: &mut Vec<u64>) {
+    const BITS: u32 = 11;
+    let top = keys.iter().map(|k| k >> 32).max().unwrap_or(0);
+    let passes = (u64::BITS - top.leading_zeros()).div_ceil(BITS);
+    let mut out = vec![0u64; keys.len()];
+    for pass in 0..passes {
+        let digit = |k: u64| ((k >> (32 + pass * BITS)) & ((1 << BITS) - 1)) as usize;
+        let mut at = [0usize; 1 << BITS];
+        for &k in keys.iter() {
+            at[digit(k)] += 1;
+        }
+        let mut sum = 0;
+        for a in at.iter_mut() {
+            (*a, sum) = (sum, sum + *a);
+        }
+        for &k in keys.iter() {
+            out[at[digit(k)]] = k;
+            at[digit(k)] += 1;
+        }
+        std::mem::swap(keys, &mut out);
+    }
+}
+
 fn norm2(v: [f32; 2]) -> [f32; 2] {
     let l = (v[0] * v[0] + v[1] * v[1]).sqrt();
     if l > 0.0 {
@@ -633,6 +675,34 @@ mod tests {
             state ^= state >> 27;
             (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
         }
+    }
+
+    #[test]
+    fn piece_ends_sorted_by_vertex_are_sorted_whole() {
+        // Keys as `chain` makes them (low bits ascending), vertices from a
+        // few to millions apart (one to three radix passes), against the
+        // comparison sort of the whole key.
+        let mut next = rng(5);
+        for (case, top) in [1u64, 7, 2047, 2048, 100_000, 5_000_000, u32::MAX as u64]
+            .into_iter()
+            .enumerate()
+        {
+            let mut keys = Vec::new();
+            for i in 0..3000u64 {
+                if next() < 0.8 {
+                    let v = ((next() as f64 * top as f64) as u64).min(top);
+                    keys.push(v << 32 | i);
+                }
+            }
+            let mut want = keys.clone();
+            want.sort_unstable();
+            let mut got = keys;
+            sort_by_vertex(&mut got);
+            assert_eq!(got, want, "case {case}");
+        }
+        let mut empty = Vec::new();
+        sort_by_vertex(&mut empty);
+        assert!(empty.is_empty());
     }
 
     #[test]
