@@ -276,7 +276,9 @@ impl DepthView<'_> {
         if !(sx >= 0.0 && sy >= 0.0 && sx < self.width as f32 && sy < self.height as f32) {
             return false;
         }
-        let (x, y, r) = (sx as usize, sy as usize, self.ssaa.max(1));
+        // (In [0, width), far below 2³¹: through i32, the same value as a
+        // saturating cast to usize, in fewer instructions.)
+        let (x, y, r) = (sx as i32 as usize, sy as i32 as usize, self.ssaa.max(1));
         if r == 1 && x >= 1 && y >= 1 && x + 1 < self.width && y + 1 < self.height {
             return w <= self.max3x3(x, y) * (1.0 + DEPTH_BIAS);
         }
@@ -359,7 +361,7 @@ fn prefetch_ends(ends: &[Vec4; 2], near: f32, depth: &DepthView) {
         if !(c.w >= near && sx >= 0.0 && sy >= 0.0 && sx < sw && sy < sh) {
             continue;
         }
-        let (x, y) = (sx as usize, sy as usize);
+        let (x, y) = (sx as i32 as usize, sy as i32 as usize);
         if r == 1 && x >= 1 && y >= 1 && x + 1 < depth.width && y + 1 < depth.height {
             // The 3×3 of `DepthView::max3x3`: rows of a fixed size, one or
             // two lines each, asked for without a loop.

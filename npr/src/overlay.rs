@@ -950,6 +950,8 @@ fn compose_bands(k: usize, coverage: &[Coverage], img: &mut HdrImage, color: [f3
         .into_par_iter()
         .for_each(|(_, lo, hi, [r, g, b])| {
             let (mut alpha, mut marks) = (vec![0u8; w], vec![0u64; words]);
+            // The spans of the row at hand, looked up once.
+            let mut here: Vec<(usize, &[u8])> = Vec::new();
             let spans = |y: usize| {
                 by_row[start[y]..start[y + 1]].iter().map(|&(j, i)| {
                     let c = &coverage[j as usize];
@@ -978,13 +980,35 @@ fn compose_bands(k: usize, coverage: &[Coverage], img: &mut HdrImage, color: [f3
                         }
                     }
                 }
-                for (x, a) in spans(y) {
-                    lerp_alpha(&mut alpha[x..x + a.len()], a);
+                let row = (y - lo) * w;
+                here.clear();
+                here.extend(spans(y));
+                // The spans' 8-pixel chunks marked; whether two spans share
+                // a chunk.
+                let mut shared = false;
+                for &(x, a) in &here {
                     for c in x / 8..(x + a.len()).div_ceil(8) {
+                        shared |= marks[c / 64] & 1 << (c % 64) != 0;
                         marks[c / 64] |= 1 << (c % 64);
                     }
                 }
-                let row = (y - lo) * w;
+                // Spans that share no chunk (most rows: the sides of the
+                // rings a row crosses) share no pixel, and a pixel under one
+                // span only has that span's coverage as its alpha
+                // (lerp_alpha(0, c) = c): they blend straight from their
+                // own bytes, without the row of alpha and its clearing.
+                if !shared {
+                    for &(x, a) in &here {
+                        let px = row + x..row + x + a.len();
+                        let (r, g, b) = (&mut r[px.clone()], &mut g[px.clone()], &mut b[px]);
+                        blend_alpha(a, r, g, b, color);
+                    }
+                    marks.fill(0);
+                    continue;
+                }
+                for &(x, a) in &here {
+                    lerp_alpha(&mut alpha[x..x + a.len()], a);
+                }
                 for x in runs(&marks, w) {
                     let (r, g, b) = (
                         &mut r[row + x.start..row + x.end],
