@@ -50,6 +50,14 @@ fn main() {
         )
         .rgb,
     };
+    // What a frame draws: the stage's edges, the visible polylines and
+    // their segments (one per visible piece of an edge).
+    let lines = stage.polylines(&r.frame.buffers, ssaa);
+    let segments: usize = lines
+        .iter()
+        .map(|l| l.points.len() - 1 + usize::from(l.closed))
+        .sum();
+    println!("{stage:?}: {} polylines, {segments} segments", lines.len());
     for t in args[2..]
         .iter()
         .map(|t| t.parse::<usize>().expect("threads"))

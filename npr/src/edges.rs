@@ -276,7 +276,12 @@ impl DepthView<'_> {
         if !(sx >= 0.0 && sy >= 0.0 && sx < self.width as f32 && sy < self.height as f32) {
             return false;
         }
-        let (x, y, r) = (sx as usize, sy as usize, self.ssaa.max(1));
+        // (In [0, width), far below 2³¹: through i32, the same value as a
+        // saturating cast to usize, in fewer instructions.)
+        let (x, y, r) = (sx as i32 as usize, sy as i32 as usize, self.ssaa.max(1));
+        if r == 1 && x >= 1 && y >= 1 && x + 1 < self.width && y + 1 < self.height {
+            return w <= self.max3x3(x, y) * (1.0 + DEPTH_BIAS);
+        }
         let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(self.width));
         // Row by row as slices (the order of a max does not change it).
         let mut dmax = 0.0f32;
@@ -285,6 +290,24 @@ impl DepthView<'_> {
             dmax = row.iter().fold(dmax, |m, &d| m.max(d));
         }
         w <= dmax * (1.0 + DEPTH_BIAS)
+    }
+
+    /// The largest depth of the 3×3 samples around (x, y), which lie
+    /// within the buffer, folded from 0 in the order of [`Self::seen`]'s
+    /// general loop (rows top to bottom, each left to right): the same
+    /// value, with three fixed-size rows instead of slices of any length.
+    #[inline(always)]
+    fn max3x3(&self, x: usize, y: usize) -> f32 {
+        let row = |yy: usize| -> [f32; 3] {
+            let at = yy * self.width + x - 1;
+            self.depth[at..at + 3]
+                .try_into()
+                .unwrap_or([f32::INFINITY; 3])
+        };
+        [row(y - 1), row(y), row(y + 1)]
+            .iter()
+            .flatten()
+            .fold(0.0f32, |m, &d| m.max(d))
     }
 }
 
@@ -338,7 +361,19 @@ fn prefetch_ends(ends: &[Vec4; 2], near: f32, depth: &DepthView) {
         if !(c.w >= near && sx >= 0.0 && sy >= 0.0 && sx < sw && sy < sh) {
             continue;
         }
-        let (x, y) = (sx as usize, sy as usize);
+        let (x, y) = (sx as i32 as usize, sy as i32 as usize);
+        if r == 1 && x >= 1 && y >= 1 && x + 1 < depth.width && y + 1 < depth.height {
+            // The 3×3 of `DepthView::max3x3`: rows of a fixed size, one or
+            // two lines each, asked for without a loop.
+            for yy in y - 1..=y + 1 {
+                let at = yy * depth.width + x - 1;
+                if let Some(row) = depth.depth.get(at..at + 3) {
+                    let row: Result<&[f32; 3], _> = row.try_into();
+                    row.map(prefetch).unwrap_or_default();
+                }
+            }
+            continue;
+        }
         let (x0, x1) = (x.saturating_sub(r), (x + r + 1).min(depth.width));
         for yy in y.saturating_sub(r)..(y + r + 1).min(depth.height) {
             prefetch(&depth.depth[yy * depth.width..][x0..x1]);
@@ -505,7 +540,7 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
                 })
             })
             .collect();
-        ends.sort_unstable();
+        sort_by_vertex(&mut ends);
         let unpack = |k: u64| ((k >> 32) as u32, (k as u32 >> 1) as usize, (k & 1) as usize);
         // Each vertex once, ascending, with its run of ends; and the run of
         // each piece end at a vertex (piece i's end e at 2i + e).
@@ -589,6 +624,36 @@ pub fn chain(pieces: &[Piece]) -> Vec<Polyline> {
     out
 }
 
+/// Sorts piece-end keys (vertex in the high 32 bits, ascending in their
+/// low bits as [`chain`] makes them) ascending: a stable least-significant
+/// digit radix sort on the vertex, 11 bits a pass and only as many passes
+/// as the largest vertex needs (two for 4 million vertices). The low bits
+/// being ascending already, stable passes on the vertex alone give the
+/// order of a sort on the whole key, in a few counting passes instead of
+/// a comparison sort's n·log n.
+fn sort_by_vertex(keys: &mut Vec<u64>) {
+    const BITS: u32 = 11;
+    let top = keys.iter().map(|k| k >> 32).max().unwrap_or(0);
+    let passes = (u64::BITS - top.leading_zeros()).div_ceil(BITS);
+    let mut out = vec![0u64; keys.len()];
+    for pass in 0..passes {
+        let digit = |k: u64| ((k >> (32 + pass * BITS)) & ((1 << BITS) - 1)) as usize;
+        let mut at = [0usize; 1 << BITS];
+        for &k in keys.iter() {
+            at[digit(k)] += 1;
+        }
+        let mut sum = 0;
+        for a in at.iter_mut() {
+            (*a, sum) = (sum, sum + *a);
+        }
+        for &k in keys.iter() {
+            out[at[digit(k)]] = k;
+            at[digit(k)] += 1;
+        }
+        std::mem::swap(keys, &mut out);
+    }
+}
+
 fn norm2(v: [f32; 2]) -> [f32; 2] {
     let l = (v[0] * v[0] + v[1] * v[1]).sqrt();
     if l > 0.0 {
@@ -612,6 +677,102 @@ mod tests {
             state ^= state >> 27;
             (state.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 40) as f32 / (1u64 << 24) as f32
         }
+    }
+
+    #[test]
+    fn piece_ends_sorted_by_vertex_are_sorted_whole() {
+        // Keys as `chain` makes them (low bits ascending), vertices from a
+        // few to millions apart (one to three radix passes), against the
+        // comparison sort of the whole key.
+        let mut next = rng(5);
+        for (case, top) in [1u64, 7, 2047, 2048, 100_000, 5_000_000, u32::MAX as u64]
+            .into_iter()
+            .enumerate()
+        {
+            let mut keys = Vec::new();
+            for i in 0..3000u64 {
+                if next() < 0.8 {
+                    let v = ((next() as f64 * top as f64) as u64).min(top);
+                    keys.push(v << 32 | i);
+                }
+            }
+            let mut want = keys.clone();
+            want.sort_unstable();
+            let mut got = keys;
+            sort_by_vertex(&mut got);
+            assert_eq!(got, want, "case {case}");
+        }
+        let mut empty = Vec::new();
+        sort_by_vertex(&mut empty);
+        assert!(empty.is_empty());
+    }
+
+    #[test]
+    fn a_sample_is_seen_against_the_largest_depth_of_its_neighbourhood() {
+        // `DepthView::seen` (its fixed 3×3 path inside the buffer and its
+        // general path at the borders and with supersampling) against the
+        // rule written plainly here: the largest depth of the samples within
+        // `ssaa` of the sample's, clipped to the buffer, times 1 + bias.
+        let mut next = rng(11);
+        let (w, h) = (37usize, 23usize);
+        let depth: Vec<f32> = (0..w * h)
+            .map(|_| {
+                if next() < 0.15 {
+                    f32::INFINITY
+                } else {
+                    1.0 + 9.0 * next()
+                }
+            })
+            .collect();
+        let (mut seen, mut hidden) = (0, 0);
+        for ssaa in [1usize, 2] {
+            let view = DepthView {
+                depth: &depth,
+                width: w,
+                height: h,
+                ssaa,
+            };
+            for _ in 0..20_000 {
+                // Points a little outside the buffer too.
+                let (sx, sy) = (next() * (w + 2) as f32 - 1.0, next() * (h + 2) as f32 - 1.0);
+                // A depth near one of the buffer's, to meet the threshold.
+                let near = depth[(next() * (w * h) as f32) as usize % (w * h)];
+                let wz = if near.is_finite() {
+                    near * (0.97 + 0.06 * next())
+                } else {
+                    1.0 + 12.0 * next()
+                };
+                let want = if sx >= 0.0 && sy >= 0.0 && sx < w as f32 && sy < h as f32 {
+                    let (x, y, r) = (sx.floor() as i64, sy.floor() as i64, ssaa as i64);
+                    let mut m = 0.0f32;
+                    for yy in (y - r).max(0)..=(y + r).min(h as i64 - 1) {
+                        for xx in (x - r).max(0)..=(x + r).min(w as i64 - 1) {
+                            let d = depth[yy as usize * w + xx as usize];
+                            if d > m {
+                                m = d;
+                            }
+                        }
+                    }
+                    wz <= m * (1.0 + DEPTH_BIAS)
+                } else {
+                    false
+                };
+                assert_eq!(
+                    view.seen(sx, sy, wz),
+                    want,
+                    "({sx}, {sy}) at {wz}, ssaa {ssaa}"
+                );
+                if want {
+                    seen += 1;
+                } else {
+                    hidden += 1;
+                }
+            }
+        }
+        assert!(
+            seen > 8_000 && hidden > 4_000,
+            "{seen} seen, {hidden} hidden"
+        );
     }
 
     #[test]

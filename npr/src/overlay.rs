@@ -136,7 +136,8 @@ fn strokes_of(line: &Polyline, style: &StrokeStyle) -> Vec<(Path, Stroke)> {
         }
         return out;
     }
-    let mut pb = PathBuilder::new();
+    // (Sized up front: the verbs are a move, the lines and a close.)
+    let mut pb = PathBuilder::with_capacity(line.points.len() + 1, line.points.len());
     pb.move_to(line.points[0][0], line.points[0][1]);
     for p in &line.points[1..] {
         pb.line_to(p[0], p[1]);
@@ -337,14 +338,16 @@ fn fill_local(d: &Draw, buf: &mut Vec<u8>) -> Coverage {
     else {
         return c;
     };
-    buf.clear();
+    // `buf` is all zero between fills (each fill's runs are cleared
+    // below), so it needs no clearing whatever its last shape: only the
+    // bytes it gains are written (zeros).
     buf.resize(w * h, 0);
     let Some(mut mask) = Mask::from_vec(std::mem::take(buf), size) else {
         return c;
     };
     let to_local = Transform::from_translate(-(x0 as f32), -(y0 as f32));
     mask.fill_path(outline, FillRule::Winding, true, to_local);
-    for (y, row) in mask.data().chunks_exact(w).enumerate() {
+    for (y, row) in mask.data_mut().chunks_exact_mut(w).enumerate() {
         push_runs(&mut c, row, (y0 + y) as u32, x0 as u32);
     }
     *buf = mask.take();
@@ -353,30 +356,33 @@ fn fill_local(d: &Draw, buf: &mut Vec<u8>) -> Coverage {
 
 /// Appends the nonzero stretches of `row` (image row `y`, starting at
 /// pixel `x0`) to `c`: runs of 8-byte chunks holding a nonzero byte,
-/// trimmed to their first and last nonzero bytes.
-fn push_runs(c: &mut Coverage, row: &[u8], y: u32, x0: u32) {
-    let nonzero = |k: usize| {
-        row[k * 8..(k * 8 + 8).min(row.len())]
-            .iter()
-            .any(|&a| a != 0)
+/// trimmed to their first and last nonzero bytes; and clears them, leaving
+/// `row` all zero.
+fn push_runs(c: &mut Coverage, row: &mut [u8], y: u32, x0: u32) {
+    // A whole chunk read as one u64 (the last, short one byte by byte).
+    let nonzero = |row: &[u8], k: usize| match row.get(k * 8..k * 8 + 8) {
+        Some(chunk) => u64::from_ne_bytes(chunk.try_into().unwrap_or([0; 8])) != 0,
+        None => row[k * 8..].iter().any(|&a| a != 0),
     };
     let chunks = row.len().div_ceil(8);
     let mut k = 0;
     while k < chunks {
-        if !nonzero(k) {
+        if !nonzero(row, k) {
             k += 1;
             continue;
         }
         let start = k;
-        while k < chunks && nonzero(k) {
+        while k < chunks && nonzero(row, k) {
             k += 1;
         }
-        let run = &row[start * 8..(k * 8).min(row.len())];
+        let end = (k * 8).min(row.len());
+        let run = &mut row[start * 8..end];
         let first = run.iter().position(|&a| a != 0).unwrap_or(0);
         let last = run.iter().rposition(|&a| a != 0).unwrap_or(first);
         c.spans
             .push([y, x0 + (start * 8 + first) as u32, c.alpha.len() as u32]);
         c.alpha.extend_from_slice(&run[first..=last]);
+        run.fill(0);
     }
 }
 
@@ -944,6 +950,8 @@ fn compose_bands(k: usize, coverage: &[Coverage], img: &mut HdrImage, color: [f3
         .into_par_iter()
         .for_each(|(_, lo, hi, [r, g, b])| {
             let (mut alpha, mut marks) = (vec![0u8; w], vec![0u64; words]);
+            // The spans of the row at hand, looked up once.
+            let mut here: Vec<(usize, &[u8])> = Vec::new();
             let spans = |y: usize| {
                 by_row[start[y]..start[y + 1]].iter().map(|&(j, i)| {
                     let c = &coverage[j as usize];
@@ -959,21 +967,48 @@ fn compose_bands(k: usize, coverage: &[Coverage], img: &mut HdrImage, color: [f3
                 // The colour planes' lines of a later row, ahead: they
                 // come from memory, one row crossing of a line at a time.
                 let ahead = y + PREFETCH_ROWS;
+                // A span's first and last pixels' lines (most spans are a
+                // few pixels of a ring's side; the hardware prefetcher
+                // follows the long ones).
                 if ahead < hi {
                     let at = (ahead - lo) * w;
                     for (x, a) in spans(ahead) {
-                        prefetch(&r[at + x..at + x + a.len()]);
-                        prefetch(&g[at + x..at + x + a.len()]);
-                        prefetch(&b[at + x..at + x + a.len()]);
-                    }
-                }
-                for (x, a) in spans(y) {
-                    lerp_alpha(&mut alpha[x..x + a.len()], a);
-                    for c in x / 8..(x + a.len()).div_ceil(8) {
-                        marks[c / 64] |= 1 << (c % 64);
+                        let (first, last) = (at + x, at + x + a.len().max(1) - 1);
+                        for p in [&r[..], &g[..], &b[..]] {
+                            prefetch(&p[first]);
+                            prefetch(&p[last]);
+                        }
                     }
                 }
                 let row = (y - lo) * w;
+                here.clear();
+                here.extend(spans(y));
+                // The spans' 8-pixel chunks marked; whether two spans share
+                // a chunk.
+                let mut shared = false;
+                for &(x, a) in &here {
+                    for c in x / 8..(x + a.len()).div_ceil(8) {
+                        shared |= marks[c / 64] & 1 << (c % 64) != 0;
+                        marks[c / 64] |= 1 << (c % 64);
+                    }
+                }
+                // Spans that share no chunk (most rows: the sides of the
+                // rings a row crosses) share no pixel, and a pixel under one
+                // span only has that span's coverage as its alpha
+                // (lerp_alpha(0, c) = c): they blend straight from their
+                // own bytes, without the row of alpha and its clearing.
+                if !shared {
+                    for &(x, a) in &here {
+                        let px = row + x..row + x + a.len();
+                        let (r, g, b) = (&mut r[px.clone()], &mut g[px.clone()], &mut b[px]);
+                        blend_alpha(a, r, g, b, color);
+                    }
+                    marks.fill(0);
+                    continue;
+                }
+                for &(x, a) in &here {
+                    lerp_alpha(&mut alpha[x..x + a.len()], a);
+                }
                 for x in runs(&marks, w) {
                     let (r, g, b) = (
                         &mut r[row + x.start..row + x.end],
