@@ -464,6 +464,45 @@ fn planes_evaluate_finite_over_the_whole_image() {
     }
 }
 
+/// `q` on half-pixel positions for every third `i` (edges through pixel
+/// centres), unchanged for the others.
+fn snapped_every_third(i: usize, q: [f64; 2]) -> [f64; 2] {
+    if i.is_multiple_of(3) {
+        q.map(|v| (v * 2.0).round() / 2.0)
+    } else {
+        q
+    }
+}
+
+/// Walks `t` over the pixel rectangle `r` ([x0, x1, y0, y1]) with groups
+/// aligned to `align`, as the scan does for one tile, and checks that the
+/// walk covers exactly the pixels the direct edge test does, each once, and
+/// nothing outside `r`. Returns the number of pixels walked.
+fn walk_rectangle(t: &RasterTri, r: [i32; 4], align: i32) -> usize {
+    let mut walked = std::collections::HashSet::new();
+    covered_groups(t, r, align, |y, gx, mask| {
+        assert_eq!((gx - align).rem_euclid(8), 0, "group not aligned");
+        for lane in 0..8 {
+            if mask & (1 << lane) != 0 {
+                assert!(walked.insert((gx + lane, y)), "pixel walked twice");
+            }
+        }
+    });
+    for y in r[2]..r[3] {
+        for x in r[0]..r[1] {
+            assert_eq!(
+                walked.contains(&(x, y)),
+                t.covers(x, y),
+                "pixel ({x}, {y}), rectangle {r:?}, groups from {align}"
+            );
+        }
+    }
+    assert!(walked
+        .iter()
+        .all(|&(x, y)| x >= r[0] && x < r[1] && y >= r[2] && y < r[3]));
+    walked.len()
+}
+
 /// The scan walks large triangles tile by tile, and decides a tile the
 /// triangle covers entirely (or misses) from its four corners alone
 /// (`RasterTri::rect_coverage`). Over random large triangles, some with
@@ -484,11 +523,7 @@ fn large_triangles_walked_by_rectangles_cover_exactly_their_pixels() {
                 rng.random_range(-150.0..250.0),
                 rng.random_range(-150.0..230.0),
             ];
-            if i % 3 == 0 {
-                q.map(|v: f64| (v * 2.0).round() / 2.0)
-            } else {
-                q
-            }
+            snapped_every_third(i, q)
         };
         let Some(t) = tri(&ctx, [p(), p(), p()]) else {
             continue;
@@ -511,26 +546,7 @@ fn large_triangles_walked_by_rectangles_cover_exactly_their_pixels() {
                     RectCoverage::Inside => seen[1] += 1,
                     RectCoverage::Partial => seen[2] += 1,
                 }
-                let mut walked = std::collections::HashSet::new();
-                covered_groups(&t, r, rx, |y, gx, mask| {
-                    for lane in 0..8 {
-                        if mask & (1 << lane) != 0 {
-                            assert!(walked.insert((gx + lane, y)), "pixel walked twice");
-                        }
-                    }
-                });
-                for y in r[2]..r[3] {
-                    for x in r[0]..r[1] {
-                        assert_eq!(
-                            walked.contains(&(x, y)),
-                            t.covers(x, y),
-                            "pixel ({x}, {y}), rectangle {r:?}"
-                        );
-                    }
-                }
-                assert!(walked
-                    .iter()
-                    .all(|&(x, y)| x >= r[0] && x < r[1] && y >= r[2] && y < r[3]));
+                walk_rectangle(&t, r, rx);
             }
         }
     }
@@ -543,9 +559,7 @@ fn large_triangles_walked_by_rectangles_cover_exactly_their_pixels() {
 /// Small triangles (i32 edge functions, stepped row by row and group by
 /// group) walked tile by tile as the scan does: groups aligned to the
 /// tile's origin, the rectangle the bounding box clipped to the tile and to
-/// a random window. The
-/// walk covers exactly the pixels the direct edge test does, once each,
-/// and nothing outside the rectangle.
+/// a random window (`walk_rectangle`).
 #[test]
 fn small_triangles_walked_by_tiles_cover_exactly_their_pixels() {
     let ctx = ctx();
@@ -562,11 +576,7 @@ fn small_triangles_walked_by_tiles_cover_exactly_their_pixels() {
                 c[0] + rng.random_range(-s..s),
                 c[1] + rng.random_range(-s..s),
             ];
-            if i % 3 == 0 {
-                q.map(|v: f64| (v * 2.0).round() / 2.0)
-            } else {
-                q
-            }
+            snapped_every_third(i, q)
         };
         let Some(t) = tri(&ctx, [p(), p(), p()]) else {
             continue;
@@ -596,28 +606,7 @@ fn small_triangles_walked_by_tiles_cover_exactly_their_pixels() {
                     continue;
                 }
                 clipped += (r[0] > bx0 || r[1] < bx1) as usize;
-                let mut walked = std::collections::HashSet::new();
-                covered_groups(&t, r, tx, |y, gx, mask| {
-                    assert_eq!((gx - tx).rem_euclid(8), 0, "group not aligned to the tile");
-                    for lane in 0..8 {
-                        if mask & (1 << lane) != 0 {
-                            assert!(walked.insert((gx + lane, y)), "pixel walked twice");
-                        }
-                    }
-                });
-                for y in r[2]..r[3] {
-                    for x in r[0]..r[1] {
-                        assert_eq!(
-                            walked.contains(&(x, y)),
-                            t.covers(x, y),
-                            "pixel ({x}, {y}), rectangle {r:?}, tile origin {tx}"
-                        );
-                    }
-                }
-                assert!(walked
-                    .iter()
-                    .all(|&(x, y)| x >= r[0] && x < r[1] && y >= r[2] && y < r[3]));
-                walked_pixels += walked.len();
+                walked_pixels += walk_rectangle(&t, r, tx);
             }
         }
     }
