@@ -228,7 +228,7 @@ impl ResolveContext<'_> {
     /// planes' values of each lane weight. Evaluating everything of a
     /// triangle at once, or selecting its 21 inputs before evaluating them,
     /// kept more values live than the 16 registers hold: each further
-    /// triangle cost ~100 instructions with the spills, against ~55 now. (A
+    /// triangle cost ~100 instructions with the spills, against ~70 now. (A
     /// per-lane gather through memory, 8 scalar stores then a vector load,
     /// stalls on store forwarding.) Lanes no triangle covers carry the first
     /// triangle's values, so they stay finite; callers mask them.
