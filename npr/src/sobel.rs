@@ -400,6 +400,7 @@ fn mark_clamped(
 /// Each source's threshold for [`detect_lanes`], `None` when it is not a
 /// source. A source listed twice marks where its measure exceeds either
 /// threshold, i.e. the lesser (a NaN threshold marks nothing: dropped).
+#[derive(Clone, Copy)]
 struct Thresholds {
     depth: Option<f32x8>,
     normal: Option<f32x8>,
@@ -496,6 +497,10 @@ fn detect_block(
     // instructions a frame).
     let rows3 = |k: usize| [row(k, 0), row(k, 1), row(k, 2)];
     let a = [rows3(0), rows3(1), rows3(2), rows3(3), rows3(4), rows3(5)];
+    let Some(t) = block_sources(t, &a) else {
+        return 0;
+    };
+    let t = &t;
     let mut bits = 0u64;
     for i in 0..BLOCK / 8 {
         let o = 8 * i;
@@ -513,6 +518,146 @@ fn detect_block(
         bits |= u64::from(detect_lanes(t, at)) << o;
     }
     bits
+}
+
+/// A block's three rows of one field ([`detect_block`]).
+type BlockRows<'a> = [&'a [f32; BLOCK + 2]; 3];
+
+/// The sources of `t` that may mark a sample of a block whose field rows
+/// are `a` (`None`: none may, the block has no mark). A source is dropped
+/// where a bound over the whole block shows that its measure, as
+/// [`detect_lanes`] rounds it, cannot exceed its threshold at any sample:
+/// a flat floor, the inside of a large face. The sources are tested in the
+/// order id, normal, depth, colour (cheapest and most often failing
+/// first), up to the first that may mark: the rest are kept untested.
+#[inline(always)]
+fn block_sources(t: &Thresholds, a: &[BlockRows; 6]) -> Option<Thresholds> {
+    let lane0 = |v: f32x8| v.as_array()[0];
+    let mut out = *t;
+    'tests: {
+        if let Some(ti) = t.id {
+            if !(one_label(&a[Field::Label as usize]) && lane0(ti) >= 0.0) {
+                break 'tests;
+            }
+            out.id = None; // every measure is 0, not above ti ≥ 0
+        }
+        if let Some(tn) = t.normal {
+            let mut g2 = 0.0f32;
+            for f in [Field::NormalX, Field::NormalY, Field::NormalZ] {
+                let b = gradient_bound(&a[f as usize]);
+                g2 += b * b + b * b; // detect_lanes' sum: increasing in each term
+                let under = g2 <= lane0(tn); // false for a NaN bound
+                if !under {
+                    break 'tests;
+                }
+            }
+            out.normal = None;
+        }
+        if let Some(td) = t.depth {
+            let under = depth_bound(&a[Field::InvDepth as usize]) <= lane0(td);
+            if !under {
+                break 'tests;
+            }
+            out.depth = None;
+        }
+        if let Some(tc) = t.color {
+            let b = gradient_bound(&a[Field::Luma as usize]);
+            let under = b * b + b * b <= lane0(tc);
+            if !under {
+                break 'tests;
+            }
+            out.color = None;
+        }
+    }
+    let any = out.depth.is_some() || out.normal.is_some() || out.id.is_some();
+    (any || out.color.is_some()).then_some(out)
+}
+
+/// Offsets of the 8-value loads that cover a block row's BLOCK + 2 values.
+const COVER8: [usize; BLOCK / 8 + 1] = {
+    let mut o = [BLOCK + 2 - 8; BLOCK / 8 + 1];
+    let mut k = 0;
+    while k < BLOCK / 8 {
+        o[k] = 8 * k;
+        k += 1;
+    }
+    o
+};
+
+/// The least and greatest value of a block's rows, NaNs left out (+∞, −∞
+/// if every value is NaN). [`Real::min`] and `max` give their second
+/// operand when the first is NaN, and the running extremes never are.
+#[inline(always)]
+fn block_range(rows: &BlockRows) -> (f32, f32) {
+    let mut lo = f32x8::splat(f32::INFINITY);
+    let mut hi = f32x8::splat(f32::NEG_INFINITY);
+    for row in rows {
+        for o in COVER8 {
+            let v = f32x8::from(<[f32; 8]>::try_from(&row[o..o + 8]).unwrap_or_default());
+            lo = Real::min(v, lo);
+            hi = Real::max(v, hi);
+        }
+    }
+    let lo = lo
+        .as_array()
+        .iter()
+        .fold(f32::INFINITY, |m, &v| Real::min(v, m));
+    let hi = hi
+        .as_array()
+        .iter()
+        .fold(f32::NEG_INFINITY, |m, &v| Real::max(v, m));
+    (lo, hi)
+}
+
+/// Whether every label of a block's rows is the first (a NaN label is
+/// unequal to all, as in [`detect_lanes`]' unordered ≠).
+#[inline(always)]
+fn one_label(rows: &BlockRows) -> bool {
+    let first = f32x8::splat(rows[0][0]);
+    let mut differ = f32x8::ZERO;
+    for row in rows {
+        for o in COVER8 {
+            let v = f32x8::from(<[f32; 8]>::try_from(&row[o..o + 8]).unwrap_or_default());
+            differ |= v.simd_ne(first);
+        }
+    }
+    !differ.any()
+}
+
+/// An upper bound of |Gx| and |Gy| ([`gradient8`]) at every sample of a
+/// block, as rounded in f32 (NaN or +∞ when none can be given): with the
+/// values in [lo, hi] each difference is at most D = hi − lo in magnitude
+/// (rounding is monotone), so each Sobel sum is at most its sum with D in
+/// every difference, rounded in the same order. NaN values are left out:
+/// a difference with one is NaN, and a NaN g² is above no threshold.
+#[inline(always)]
+fn gradient_bound(rows: &BlockRows) -> f32 {
+    let (lo, hi) = block_range(rows);
+    let d = hi - lo; // −∞ if every value is NaN: its square +∞ tests false
+    W[0] * d + W[1] * d + W[2] * d
+}
+
+/// An upper bound of the depth measure ([`detect_lanes`]) at every sample
+/// of a block, as rounded in f32 (NaN or +∞ when none can be given).
+/// With q in [lo, hi] each second difference q₊ + q₋ − 2q is at most
+/// E = 2hi − 2lo in magnitude, so |dxx| and |dyy| are at most their sums
+/// with E (rounding is monotone), and a sample's q_max is ≥ lo: the
+/// measure is ≤ that bound / lo when lo > 0, and 0 (q_max ≤ 0) when
+/// hi ≤ 0. NaN values are left out as in [`gradient_bound`]: a q_max is
+/// NaN (no mark) or one of the others, ≥ lo.
+#[inline(always)]
+fn depth_bound(rows: &BlockRows) -> f32 {
+    let (lo, hi) = block_range(rows);
+    if hi <= 0.0 {
+        return 0.0;
+    }
+    let e = (hi + hi) - 2.0 * lo;
+    let b = W[0] * e + W[1] * e + W[2] * e;
+    if lo > 0.0 {
+        b / lo
+    } else {
+        f32::NAN
+    }
 }
 
 /// The 3×3 neighbourhoods of field `f` at the 8 samples x..x+8 of a row
@@ -1354,6 +1499,127 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// The fields of one block (3 rows of BLOCK + 2 samples) for the block
+    /// bound tests: `pattern` over a base value per field, with amplitude
+    /// `eps`: 0 noise, 1 a step across the rows, 2 a diagonal step, 3 a
+    /// ridge every other column (the largest second difference), 4 one
+    /// sample off the base and a NaN after it (in the order block_range
+    /// reads them: a NaN must not drop what came before), 5 noise with a
+    /// +∞, 6 noise with misses (q = 0) in the first columns, 7 all 0.
+    fn block_fields(pattern: u32, eps: f32) -> [Vec<f32>; 6] {
+        const N: usize = BLOCK + 2;
+        [0u32, 1, 2, 3, 4, 5].map(|f| {
+            // q small enough that a block's largest can be under 0.1.
+            let base = if f == 0 { 0.05 } else { 0.3 + 0.1 * f as f32 };
+            (0..3 * N)
+                .map(|i| {
+                    let (x, r) = (i % N, i / N);
+                    let noise = base + eps * unit(i, f);
+                    let v = match pattern {
+                        1 => base + if x >= 33 { eps } else { 0.0 },
+                        2 => base + if x + r >= 34 { eps } else { 0.0 },
+                        3 => base + if x % 2 == 0 { eps } else { 0.0 },
+                        4 if (x, r) == (8, 0) => base + eps,
+                        4 if (x, r) == (40, 1) => f32::NAN,
+                        4 => base,
+                        5 if (x, r) == (20, 0) => f32::INFINITY,
+                        6 if f == Field::InvDepth as u32 && x < 10 => 0.0,
+                        7 => 0.0,
+                        _ => noise,
+                    };
+                    if f == Field::Label as u32 {
+                        // Labels (never NaN, EdgeInput): one, or two where
+                        // the pattern leaves the base.
+                        (v != base) as u32 as f32
+                    } else {
+                        v
+                    }
+                })
+                .collect()
+        })
+    }
+
+    #[test]
+    fn a_source_dropped_from_a_block_marks_none_of_its_samples() {
+        // The bounds of block_sources against the scalar measure of every
+        // sample of the block: a source is dropped only where no measure
+        // exceeds its threshold, thresholds from below 0 to just under and
+        // at the block's largest measure (a bound smaller than it fails
+        // there); the patterns include the ones that reach the bounds
+        // (steps, ridges) and NaN, ∞ and missed samples. The mask of
+        // detect_edges equals the scalar measure's everywhere.
+        const N: usize = BLOCK + 2;
+        let all = [Source::Depth, Source::Normal, Source::Id, Source::Color];
+        let mut dropped = [0usize; 4];
+        for pattern in 0..8 {
+            for eps in [0.0f32, 1e-3, 1e-2, 0.1, 0.5] {
+                let fields = block_fields(pattern, eps);
+                let [q, nx, ny, nz, labels, luma] = &fields;
+                let input = EdgeInput {
+                    width: N,
+                    height: 3,
+                    inv_depth: q,
+                    normal: [nx, ny, nz],
+                    material: labels,
+                    luma,
+                };
+                let a: [BlockRows; 6] = std::array::from_fn(|k| {
+                    [0, 1, 2].map(|r| <&[f32; N]>::try_from(&fields[k][r * N..][..N]).unwrap())
+                });
+                let measures =
+                    |s| -> Vec<f32> { (1..=BLOCK).map(|x| measure(&input, s, x, 1)).collect() };
+                let thresholds = |s| -> Vec<f32> {
+                    let most = measures(s).into_iter().fold(0.0f32, f32::max);
+                    let ts = [-0.5, 0.0, most.next_down(), most, most * 1.01, most * 3.0];
+                    ts.into_iter().chain([0.4, f32::INFINITY]).collect()
+                };
+                for (k, &s) in all.iter().enumerate() {
+                    for t in thresholds(s) {
+                        let out = block_sources(&Thresholds::new(&[(s, t)]), &a);
+                        let kept = out.is_some_and(|o| match s {
+                            Source::Depth => o.depth.is_some(),
+                            Source::Normal => o.normal.is_some(),
+                            Source::Id => o.id.is_some(),
+                            Source::Color => o.color.is_some(),
+                        });
+                        if !kept {
+                            dropped[k] += 1;
+                            let over: Vec<f32> =
+                                measures(s).into_iter().filter(|&m| m > t).collect();
+                            assert!(over.is_empty(), "{s:?} {pattern} {eps} t {t}: {over:?}");
+                        }
+                        let e = detect_edges(&input, &[(s, t)], &|_| true);
+                        for x in 0..N {
+                            let want = measure(&input, s, x, 1) > t;
+                            assert_eq!(e[N + x], want, "{s:?} {pattern} {eps} t {t} x {x}");
+                        }
+                    }
+                }
+                // All sources at once: the tests stop at the first source
+                // that may mark; whatever is dropped marks nothing.
+                let ts: Vec<Vec<f32>> = all.iter().map(|&s| thresholds(s)).collect();
+                for i in 0..ts[0].len() {
+                    let sources: Vec<(Source, f32)> =
+                        all.iter().zip(&ts).map(|(&s, t)| (s, t[i])).collect();
+                    let out = block_sources(&Thresholds::new(&sources), &a);
+                    for (&(s, t), kept) in sources.iter().zip(out.map_or([false; 4], |o| {
+                        [
+                            o.depth.is_some(),
+                            o.normal.is_some(),
+                            o.id.is_some(),
+                            o.color.is_some(),
+                        ]
+                    })) {
+                        let none = !measures(s).iter().any(|&m| m > t);
+                        assert!(kept || none, "{s:?} {pattern} {eps}");
+                    }
+                }
+            }
+        }
+        // Every source was dropped somewhere (the bounds are not vacuous).
+        assert!(dropped.iter().all(|&d| d > 0), "{dropped:?}");
     }
 
     #[test]
