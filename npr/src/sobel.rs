@@ -1116,6 +1116,10 @@ impl PostStage for Sobel {
         let inv = 1.0 / (ssaa * ssaa) as f32;
         let color = self.color;
         let (mask, marked, pool) = (&b.mask, &b.marked, &b.rows);
+        // A line at most 2 samples wide (anti-aliased; 3 aliased) inks
+        // only the marks: every other sample is at least 1 from one.
+        let marks_only = cover.marks_only();
+        let on_mark = cover.at(0.0) * inv;
         let band = (w * BLEND_ROWS).max(1);
         let p = &mut img.rgb;
         p.r.par_chunks_mut(band)
@@ -1129,7 +1133,7 @@ impl PostStage for Sobel {
                         // The image lines the blend will read, two rows
                         // ahead (the band's first two rows at its start):
                         // they are far apart and come from memory.
-                        let reach = cover.radius();
+                        let reach = if marks_only { 0 } else { cover.radius() };
                         let ahead = |r: &[f32], g: &[f32], b: &[f32], i: usize| {
                             if i < n {
                                 let planes = [r, g, b].map(|p| &p[i * w..(i + 1) * w]);
@@ -1143,6 +1147,20 @@ impl PostStage for Sobel {
                             let y = k * BLEND_ROWS + i;
                             let row = i * w..(i + 1) * w;
                             let (r, g, b) = (&mut r[row.clone()], &mut g[row.clone()], &mut b[row]);
+                            if marks_only {
+                                // The ink of the marks alone: blend's
+                                // products on each, as below at d = 0.
+                                let words = if marked[y] { mask.row(y) } else { &[] };
+                                for (j, &word) in words.iter().enumerate() {
+                                    let mut set = word;
+                                    while set != 0 {
+                                        let x = 64 * j + set.trailing_zeros() as usize;
+                                        blend([&mut r[x], &mut g[x], &mut b[x]], on_mark, color);
+                                        set &= set - 1;
+                                    }
+                                }
+                                continue;
+                            }
                             // blend's products 8 samples at a time, the
                             // samples without ink selected back unchanged.
                             let (inv8, col8) = (f32x8::splat(inv), color.map(f32x8::splat));
@@ -1884,6 +1902,23 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_line_of_marks_only_inks_no_other_sample() {
+        // An unmarked sample lies √k from the nearest mark, k ≥ 1 an
+        // integer: marks_only says that every such sample has coverage 0.
+        for i in 0..=24 {
+            let width = i as f32 * 0.25;
+            for aa in [true, false] {
+                let c = Cover::new(width, aa);
+                let off = (1..200).all(|k| c.at((k as f32).sqrt()) == 0.0);
+                assert_eq!(c.marks_only(), off, "width {width} aa {aa}");
+            }
+        }
+        // The limits its docs name.
+        assert!(Cover::new(2.0, true).marks_only() && !Cover::new(2.01, true).marks_only());
+        assert!(Cover::new(2.99, false).marks_only() && !Cover::new(3.0, false).marks_only());
     }
 
     #[test]
