@@ -328,11 +328,11 @@ fn detect_row_ahead(
             t.id.is_some(),
             t.color.is_some(),
         ];
-        // Blocks of 64 samples x..x+64 with x = 1, 65, …, then chunks of 8
-        // up to w − 2, the last one overlapping the one before where
-        // needed (its marks are the same bits again).
-        let mut x = 1;
-        while x + BLOCK < w {
+        // Blocks of 64 samples x..x+64 with x = 1, 65, …, then one more
+        // ending at w − 2, overlapping the one before (its marks are the
+        // same bits again); rows too narrow for a block in chunks of 8 up
+        // to w − 2, the last one overlapping likewise.
+        let block = |x: usize, out: &mut [u64]| {
             if let Some(a) = ahead {
                 for f in input.normal {
                     for k in (0..BLOCK).step_by(16) {
@@ -341,23 +341,35 @@ fn detect_row_ahead(
                 }
             }
             let bits = detect_block(&f, used, &t, rows, x);
-            out[x / 64] |= bits << 1;
-            out[x / 64 + 1] |= bits >> 63;
-            x += BLOCK;
-        }
-        let last = w - 9;
-        let starts = (x..last).step_by(8).chain(std::iter::once(last));
-        for x in starts {
-            if let Some(a) = ahead {
-                for f in input.normal {
-                    prefetch(f, a + x);
-                }
-            }
-            let bits = u64::from(detect_lanes(&t, |k| around8(f[k as usize], rows, x)));
             let (j, sh) = (x / 64, x % 64);
             out[j] |= bits << sh;
-            if sh > 56 {
+            if sh > 0 {
                 out[j + 1] |= bits >> (64 - sh);
+            }
+        };
+        let mut x = 1;
+        while x + BLOCK < w {
+            block(x, out);
+            x += BLOCK;
+        }
+        if x > 1 {
+            if x < w - 1 {
+                block(w - 1 - BLOCK, out);
+            }
+        } else {
+            let last = w - 9;
+            for x in (1..last).step_by(8).chain(std::iter::once(last)) {
+                if let Some(a) = ahead {
+                    for f in input.normal {
+                        prefetch(f, a + x);
+                    }
+                }
+                let bits = u64::from(detect_lanes(&t, |k| around8(f[k as usize], rows, x)));
+                let (j, sh) = (x / 64, x % 64);
+                out[j] |= bits << sh;
+                if sh > 56 {
+                    out[j + 1] |= bits >> (64 - sh);
+                }
             }
         }
         mark_clamped(input, sources, rows, 0, out);
