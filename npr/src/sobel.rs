@@ -40,7 +40,8 @@
 //! - the line is widened row by row ([`dilate_row`]) straight into the
 //!   blend, and only near marks: rows with no mark within the line's
 //!   reach and 64-sample words with none are skipped, so there is no
-//!   frame-size coverage map either.
+//!   frame-size coverage map either; a line at most 2 samples wide inks
+//!   only the marks ([`Cover::marks_only`]) and skips the dilation.
 //!
 //! Memory bounds it as much as arithmetic (a 1080p frame's depth, normals
 //! and ids are ~41 MB; perf annotate put most of the time on the first
@@ -48,7 +49,10 @@
 //! detection reads each field row once: every source's measure 8 samples
 //! at a time in one pass ([`detect_block`]), the frame's normals
 //! prefetched two rows ahead; and the blend prefetches the image lines
-//! near the marks two rows ahead (docs/PERFORMANCE.md).
+//! near the marks two rows ahead (docs/PERFORMANCE.md). A block of 64
+//! samples first drops every source whose measure a bound over the
+//! block's values keeps under its threshold ([`block_sources`]): flat
+//! ground and the insides of large faces are not measured.
 
 use crate::outline::{blend, blend_row, composite, ssaa_of, sum_samples, Selection};
 use rayon::prelude::*;
