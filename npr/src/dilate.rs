@@ -253,6 +253,14 @@ impl Cover {
         }
     }
 
+    /// Whether only the marked samples themselves get ink: every other
+    /// sample is at distance ≥ 1 from a mark, where the coverage (never
+    /// increasing with d) is 0 if it is 0 at d = 1. True for lines up to 2
+    /// samples wide anti-aliased, under 3 aliased.
+    pub fn marks_only(self) -> bool {
+        self.at(1.0) == 0.0
+    }
+
     /// The search radius r = ⌈W/2⌉: a mark farther than r gives no ink.
     pub fn radius(self) -> usize {
         self.half.ceil().max(0.0) as usize

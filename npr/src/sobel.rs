@@ -40,7 +40,8 @@
 //! - the line is widened row by row ([`dilate_row`]) straight into the
 //!   blend, and only near marks: rows with no mark within the line's
 //!   reach and 64-sample words with none are skipped, so there is no
-//!   frame-size coverage map either.
+//!   frame-size coverage map either; a line at most 2 samples wide inks
+//!   only the marks ([`Cover::marks_only`]) and skips the dilation.
 //!
 //! Memory bounds it as much as arithmetic (a 1080p frame's depth, normals
 //! and ids are ~41 MB; perf annotate put most of the time on the first
@@ -48,7 +49,10 @@
 //! detection reads each field row once: every source's measure 8 samples
 //! at a time in one pass ([`detect_block`]), the frame's normals
 //! prefetched two rows ahead; and the blend prefetches the image lines
-//! near the marks two rows ahead (docs/PERFORMANCE.md).
+//! near the marks two rows ahead (docs/PERFORMANCE.md). A block of 64
+//! samples first drops every source whose measure a bound over the
+//! block's values keeps under its threshold ([`block_sources`]): flat
+//! ground and the insides of large faces are not measured.
 
 use crate::outline::{blend, blend_row, composite, ssaa_of, sum_samples, Selection};
 use rayon::prelude::*;
@@ -201,7 +205,8 @@ pub fn material_labels(ids: &[u32], id_material: &[u32]) -> Vec<f32> {
 /// among them).
 fn label_of_id(id_material: &[u32], out: &mut Vec<f32>) {
     out.clear();
-    out.extend(id_material.iter().enumerate().map(|(id, &m)| {
+    // In parallel: ~200k ids a benchmark frame, before any band starts.
+    out.par_extend(id_material.par_iter().enumerate().map(|(id, &m)| {
         if id as u32 != MISS && m != u32::MAX {
             m as f32
         } else {
@@ -327,11 +332,11 @@ fn detect_row_ahead(
             t.id.is_some(),
             t.color.is_some(),
         ];
-        // Blocks of 64 samples x..x+64 with x = 1, 65, …, then chunks of 8
-        // up to w − 2, the last one overlapping the one before where
-        // needed (its marks are the same bits again).
-        let mut x = 1;
-        while x + BLOCK < w {
+        // Blocks of 64 samples x..x+64 with x = 1, 65, …, then one more
+        // ending at w − 2, overlapping the one before (its marks are the
+        // same bits again); rows too narrow for a block in chunks of 8 up
+        // to w − 2, the last one overlapping likewise.
+        let block = |x: usize, out: &mut [u64]| {
             if let Some(a) = ahead {
                 for f in input.normal {
                     for k in (0..BLOCK).step_by(16) {
@@ -340,23 +345,35 @@ fn detect_row_ahead(
                 }
             }
             let bits = detect_block(&f, used, &t, rows, x);
-            out[x / 64] |= bits << 1;
-            out[x / 64 + 1] |= bits >> 63;
-            x += BLOCK;
-        }
-        let last = w - 9;
-        let starts = (x..last).step_by(8).chain(std::iter::once(last));
-        for x in starts {
-            if let Some(a) = ahead {
-                for f in input.normal {
-                    prefetch(f, a + x);
-                }
-            }
-            let bits = u64::from(detect_lanes(&t, |k| around8(f[k as usize], rows, x)));
             let (j, sh) = (x / 64, x % 64);
             out[j] |= bits << sh;
-            if sh > 56 {
+            if sh > 0 {
                 out[j + 1] |= bits >> (64 - sh);
+            }
+        };
+        let mut x = 1;
+        while x + BLOCK < w {
+            block(x, out);
+            x += BLOCK;
+        }
+        if x > 1 {
+            if x < w - 1 {
+                block(w - 1 - BLOCK, out);
+            }
+        } else {
+            let last = w - 9;
+            for x in (1..last).step_by(8).chain(std::iter::once(last)) {
+                if let Some(a) = ahead {
+                    for f in input.normal {
+                        prefetch(f, a + x);
+                    }
+                }
+                let bits = u64::from(detect_lanes(&t, |k| around8(f[k as usize], rows, x)));
+                let (j, sh) = (x / 64, x % 64);
+                out[j] |= bits << sh;
+                if sh > 56 {
+                    out[j + 1] |= bits >> (64 - sh);
+                }
             }
         }
         mark_clamped(input, sources, rows, 0, out);
@@ -400,6 +417,7 @@ fn mark_clamped(
 /// Each source's threshold for [`detect_lanes`], `None` when it is not a
 /// source. A source listed twice marks where its measure exceeds either
 /// threshold, i.e. the lesser (a NaN threshold marks nothing: dropped).
+#[derive(Clone, Copy)]
 struct Thresholds {
     depth: Option<f32x8>,
     normal: Option<f32x8>,
@@ -496,6 +514,10 @@ fn detect_block(
     // instructions a frame).
     let rows3 = |k: usize| [row(k, 0), row(k, 1), row(k, 2)];
     let a = [rows3(0), rows3(1), rows3(2), rows3(3), rows3(4), rows3(5)];
+    let Some(t) = block_sources(t, &a) else {
+        return 0;
+    };
+    let t = &t;
     let mut bits = 0u64;
     for i in 0..BLOCK / 8 {
         let o = 8 * i;
@@ -513,6 +535,146 @@ fn detect_block(
         bits |= u64::from(detect_lanes(t, at)) << o;
     }
     bits
+}
+
+/// A block's three rows of one field ([`detect_block`]).
+type BlockRows<'a> = [&'a [f32; BLOCK + 2]; 3];
+
+/// The sources of `t` that may mark a sample of a block whose field rows
+/// are `a` (`None`: none may, the block has no mark). A source is dropped
+/// where a bound over the whole block shows that its measure, as
+/// [`detect_lanes`] rounds it, cannot exceed its threshold at any sample:
+/// a flat floor, the inside of a large face. The sources are tested in the
+/// order id, normal, depth, colour (cheapest and most often failing
+/// first), up to the first that may mark: the rest are kept untested.
+#[inline(always)]
+fn block_sources(t: &Thresholds, a: &[BlockRows; 6]) -> Option<Thresholds> {
+    let lane0 = |v: f32x8| v.as_array()[0];
+    let mut out = *t;
+    'tests: {
+        if let Some(ti) = t.id {
+            if !(one_label(&a[Field::Label as usize]) && lane0(ti) >= 0.0) {
+                break 'tests;
+            }
+            out.id = None; // every measure is 0, not above ti ≥ 0
+        }
+        if let Some(tn) = t.normal {
+            let mut g2 = 0.0f32;
+            for f in [Field::NormalX, Field::NormalY, Field::NormalZ] {
+                let b = gradient_bound(&a[f as usize]);
+                g2 += b * b + b * b; // detect_lanes' sum: increasing in each term
+                let under = g2 <= lane0(tn); // false for a NaN bound
+                if !under {
+                    break 'tests;
+                }
+            }
+            out.normal = None;
+        }
+        if let Some(td) = t.depth {
+            let under = depth_bound(&a[Field::InvDepth as usize]) <= lane0(td);
+            if !under {
+                break 'tests;
+            }
+            out.depth = None;
+        }
+        if let Some(tc) = t.color {
+            let b = gradient_bound(&a[Field::Luma as usize]);
+            let under = b * b + b * b <= lane0(tc);
+            if !under {
+                break 'tests;
+            }
+            out.color = None;
+        }
+    }
+    let any = out.depth.is_some() || out.normal.is_some() || out.id.is_some();
+    (any || out.color.is_some()).then_some(out)
+}
+
+/// Offsets of the 8-value loads that cover a block row's BLOCK + 2 values.
+const COVER8: [usize; BLOCK / 8 + 1] = {
+    let mut o = [BLOCK + 2 - 8; BLOCK / 8 + 1];
+    let mut k = 0;
+    while k < BLOCK / 8 {
+        o[k] = 8 * k;
+        k += 1;
+    }
+    o
+};
+
+/// The least and greatest value of a block's rows, NaNs left out (+∞, −∞
+/// if every value is NaN). [`Real::min`] and `max` give their second
+/// operand when the first is NaN, and the running extremes never are.
+#[inline(always)]
+fn block_range(rows: &BlockRows) -> (f32, f32) {
+    let mut lo = f32x8::splat(f32::INFINITY);
+    let mut hi = f32x8::splat(f32::NEG_INFINITY);
+    for row in rows {
+        for o in COVER8 {
+            let v = f32x8::from(<[f32; 8]>::try_from(&row[o..o + 8]).unwrap_or_default());
+            lo = Real::min(v, lo);
+            hi = Real::max(v, hi);
+        }
+    }
+    let lo = lo
+        .as_array()
+        .iter()
+        .fold(f32::INFINITY, |m, &v| Real::min(v, m));
+    let hi = hi
+        .as_array()
+        .iter()
+        .fold(f32::NEG_INFINITY, |m, &v| Real::max(v, m));
+    (lo, hi)
+}
+
+/// Whether every label of a block's rows is the first (a NaN label is
+/// unequal to all, as in [`detect_lanes`]' unordered ≠).
+#[inline(always)]
+fn one_label(rows: &BlockRows) -> bool {
+    let first = f32x8::splat(rows[0][0]);
+    let mut differ = f32x8::ZERO;
+    for row in rows {
+        for o in COVER8 {
+            let v = f32x8::from(<[f32; 8]>::try_from(&row[o..o + 8]).unwrap_or_default());
+            differ |= v.simd_ne(first);
+        }
+    }
+    !differ.any()
+}
+
+/// An upper bound of |Gx| and |Gy| ([`gradient8`]) at every sample of a
+/// block, as rounded in f32 (NaN or +∞ when none can be given): with the
+/// values in [lo, hi] each difference is at most D = hi − lo in magnitude
+/// (rounding is monotone), so each Sobel sum is at most its sum with D in
+/// every difference, rounded in the same order. NaN values are left out:
+/// a difference with one is NaN, and a NaN g² is above no threshold.
+#[inline(always)]
+fn gradient_bound(rows: &BlockRows) -> f32 {
+    let (lo, hi) = block_range(rows);
+    let d = hi - lo; // −∞ if every value is NaN: its square +∞ tests false
+    W[0] * d + W[1] * d + W[2] * d
+}
+
+/// An upper bound of the depth measure ([`detect_lanes`]) at every sample
+/// of a block, as rounded in f32 (NaN or +∞ when none can be given).
+/// With q in [lo, hi] each second difference q₊ + q₋ − 2q is at most
+/// E = 2hi − 2lo in magnitude, so |dxx| and |dyy| are at most their sums
+/// with E (rounding is monotone), and a sample's q_max is ≥ lo: the
+/// measure is ≤ that bound / lo when lo > 0, and 0 (q_max ≤ 0) when
+/// hi ≤ 0. NaN values are left out as in [`gradient_bound`]: a q_max is
+/// NaN (no mark) or one of the others, ≥ lo.
+#[inline(always)]
+fn depth_bound(rows: &BlockRows) -> f32 {
+    let (lo, hi) = block_range(rows);
+    if hi <= 0.0 {
+        return 0.0;
+    }
+    let e = (hi + hi) - 2.0 * lo;
+    let b = W[0] * e + W[1] * e + W[2] * e;
+    if lo > 0.0 {
+        b / lo
+    } else {
+        f32::NAN
+    }
 }
 
 /// The 3×3 neighbourhoods of field `f` at the 8 samples x..x+8 of a row
@@ -971,6 +1133,10 @@ impl PostStage for Sobel {
         let inv = 1.0 / (ssaa * ssaa) as f32;
         let color = self.color;
         let (mask, marked, pool) = (&b.mask, &b.marked, &b.rows);
+        // A line at most 2 samples wide (anti-aliased; 3 aliased) inks
+        // only the marks: every other sample is at least 1 from one.
+        let marks_only = cover.marks_only();
+        let on_mark = cover.at(0.0) * inv;
         let band = (w * BLEND_ROWS).max(1);
         let p = &mut img.rgb;
         p.r.par_chunks_mut(band)
@@ -984,7 +1150,7 @@ impl PostStage for Sobel {
                         // The image lines the blend will read, two rows
                         // ahead (the band's first two rows at its start):
                         // they are far apart and come from memory.
-                        let reach = cover.radius();
+                        let reach = if marks_only { 0 } else { cover.radius() };
                         let ahead = |r: &[f32], g: &[f32], b: &[f32], i: usize| {
                             if i < n {
                                 let planes = [r, g, b].map(|p| &p[i * w..(i + 1) * w]);
@@ -998,6 +1164,20 @@ impl PostStage for Sobel {
                             let y = k * BLEND_ROWS + i;
                             let row = i * w..(i + 1) * w;
                             let (r, g, b) = (&mut r[row.clone()], &mut g[row.clone()], &mut b[row]);
+                            if marks_only {
+                                // The ink of the marks alone: blend's
+                                // products on each, as below at d = 0.
+                                let words = if marked[y] { mask.row(y) } else { &[] };
+                                for (j, &word) in words.iter().enumerate() {
+                                    let mut set = word;
+                                    while set != 0 {
+                                        let x = 64 * j + set.trailing_zeros() as usize;
+                                        blend([&mut r[x], &mut g[x], &mut b[x]], on_mark, color);
+                                        set &= set - 1;
+                                    }
+                                }
+                                continue;
+                            }
                             // blend's products 8 samples at a time, the
                             // samples without ink selected back unchanged.
                             let (inv8, col8) = (f32x8::splat(inv), color.map(f32x8::splat));
@@ -1356,6 +1536,127 @@ mod tests {
         }
     }
 
+    /// The fields of one block (3 rows of BLOCK + 2 samples) for the block
+    /// bound tests: `pattern` over a base value per field, with amplitude
+    /// `eps`: 0 noise, 1 a step across the rows, 2 a diagonal step, 3 a
+    /// ridge every other column (the largest second difference), 4 one
+    /// sample off the base and a NaN after it (in the order block_range
+    /// reads them: a NaN must not drop what came before), 5 noise with a
+    /// +∞, 6 noise with misses (q = 0) in the first columns, 7 all 0.
+    fn block_fields(pattern: u32, eps: f32) -> [Vec<f32>; 6] {
+        const N: usize = BLOCK + 2;
+        [0u32, 1, 2, 3, 4, 5].map(|f| {
+            // q small enough that a block's largest can be under 0.1.
+            let base = if f == 0 { 0.05 } else { 0.3 + 0.1 * f as f32 };
+            (0..3 * N)
+                .map(|i| {
+                    let (x, r) = (i % N, i / N);
+                    let noise = base + eps * unit(i, f);
+                    let v = match pattern {
+                        1 => base + if x >= 33 { eps } else { 0.0 },
+                        2 => base + if x + r >= 34 { eps } else { 0.0 },
+                        3 => base + if x % 2 == 0 { eps } else { 0.0 },
+                        4 if (x, r) == (8, 0) => base + eps,
+                        4 if (x, r) == (40, 1) => f32::NAN,
+                        4 => base,
+                        5 if (x, r) == (20, 0) => f32::INFINITY,
+                        6 if f == Field::InvDepth as u32 && x < 10 => 0.0,
+                        7 => 0.0,
+                        _ => noise,
+                    };
+                    if f == Field::Label as u32 {
+                        // Labels (never NaN, EdgeInput): one, or two where
+                        // the pattern leaves the base.
+                        (v != base) as u32 as f32
+                    } else {
+                        v
+                    }
+                })
+                .collect()
+        })
+    }
+
+    #[test]
+    fn a_source_dropped_from_a_block_marks_none_of_its_samples() {
+        // The bounds of block_sources against the scalar measure of every
+        // sample of the block: a source is dropped only where no measure
+        // exceeds its threshold, thresholds from below 0 to just under and
+        // at the block's largest measure (a bound smaller than it fails
+        // there); the patterns include the ones that reach the bounds
+        // (steps, ridges) and NaN, ∞ and missed samples. The mask of
+        // detect_edges equals the scalar measure's everywhere.
+        const N: usize = BLOCK + 2;
+        let all = [Source::Depth, Source::Normal, Source::Id, Source::Color];
+        let mut dropped = [0usize; 4];
+        for pattern in 0..8 {
+            for eps in [0.0f32, 1e-3, 1e-2, 0.1, 0.5] {
+                let fields = block_fields(pattern, eps);
+                let [q, nx, ny, nz, labels, luma] = &fields;
+                let input = EdgeInput {
+                    width: N,
+                    height: 3,
+                    inv_depth: q,
+                    normal: [nx, ny, nz],
+                    material: labels,
+                    luma,
+                };
+                let a: [BlockRows; 6] = std::array::from_fn(|k| {
+                    [0, 1, 2].map(|r| <&[f32; N]>::try_from(&fields[k][r * N..][..N]).unwrap())
+                });
+                let measures =
+                    |s| -> Vec<f32> { (1..=BLOCK).map(|x| measure(&input, s, x, 1)).collect() };
+                let thresholds = |s| -> Vec<f32> {
+                    let most = measures(s).into_iter().fold(0.0f32, f32::max);
+                    let ts = [-0.5, 0.0, most.next_down(), most, most * 1.01, most * 3.0];
+                    ts.into_iter().chain([0.4, f32::INFINITY]).collect()
+                };
+                for (k, &s) in all.iter().enumerate() {
+                    for t in thresholds(s) {
+                        let out = block_sources(&Thresholds::new(&[(s, t)]), &a);
+                        let kept = out.is_some_and(|o| match s {
+                            Source::Depth => o.depth.is_some(),
+                            Source::Normal => o.normal.is_some(),
+                            Source::Id => o.id.is_some(),
+                            Source::Color => o.color.is_some(),
+                        });
+                        if !kept {
+                            dropped[k] += 1;
+                            let over: Vec<f32> =
+                                measures(s).into_iter().filter(|&m| m > t).collect();
+                            assert!(over.is_empty(), "{s:?} {pattern} {eps} t {t}: {over:?}");
+                        }
+                        let e = detect_edges(&input, &[(s, t)], &|_| true);
+                        for x in 0..N {
+                            let want = measure(&input, s, x, 1) > t;
+                            assert_eq!(e[N + x], want, "{s:?} {pattern} {eps} t {t} x {x}");
+                        }
+                    }
+                }
+                // All sources at once: the tests stop at the first source
+                // that may mark; whatever is dropped marks nothing.
+                let ts: Vec<Vec<f32>> = all.iter().map(|&s| thresholds(s)).collect();
+                for i in 0..ts[0].len() {
+                    let sources: Vec<(Source, f32)> =
+                        all.iter().zip(&ts).map(|(&s, t)| (s, t[i])).collect();
+                    let out = block_sources(&Thresholds::new(&sources), &a);
+                    for (&(s, t), kept) in sources.iter().zip(out.map_or([false; 4], |o| {
+                        [
+                            o.depth.is_some(),
+                            o.normal.is_some(),
+                            o.id.is_some(),
+                            o.color.is_some(),
+                        ]
+                    })) {
+                        let none = !measures(s).iter().any(|&m| m > t);
+                        assert!(kept || none, "{s:?} {pattern} {eps}");
+                    }
+                }
+            }
+        }
+        // Every source was dropped somewhere (the bounds are not vacuous).
+        assert!(dropped.iter().all(|&d| d > 0), "{dropped:?}");
+    }
+
     #[test]
     fn blocks_of_one_label_mark_as_the_scalar_id_measure() {
         // Wide runs of one label (whole 64-sample blocks of one label and
@@ -1618,6 +1919,23 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn a_line_of_marks_only_inks_no_other_sample() {
+        // An unmarked sample lies √k from the nearest mark, k ≥ 1 an
+        // integer: marks_only says that every such sample has coverage 0.
+        for i in 0..=24 {
+            let width = i as f32 * 0.25;
+            for aa in [true, false] {
+                let c = Cover::new(width, aa);
+                let off = (1..200).all(|k| c.at((k as f32).sqrt()) == 0.0);
+                assert_eq!(c.marks_only(), off, "width {width} aa {aa}");
+            }
+        }
+        // The limits its docs name.
+        assert!(Cover::new(2.0, true).marks_only() && !Cover::new(2.01, true).marks_only());
+        assert!(Cover::new(2.99, false).marks_only() && !Cover::new(3.0, false).marks_only());
     }
 
     #[test]
