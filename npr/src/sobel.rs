@@ -610,7 +610,7 @@ fn block_range(rows: &BlockRows) -> (f32, f32) {
     let mut hi = f32x8::splat(f32::NEG_INFINITY);
     for row in rows {
         for o in COVER8 {
-            let v = f32x8::from(<[f32; 8]>::try_from(&row[o..o + 8]).unwrap_or_default());
+            let v = load8(&row[o..o + 8]);
             lo = Real::min(v, lo);
             hi = Real::max(v, hi);
         }
@@ -634,7 +634,7 @@ fn one_label(rows: &BlockRows) -> bool {
     let mut differ = f32x8::ZERO;
     for row in rows {
         for o in COVER8 {
-            let v = f32x8::from(<[f32; 8]>::try_from(&row[o..o + 8]).unwrap_or_default());
+            let v = load8(&row[o..o + 8]);
             differ |= v.simd_ne(first);
         }
     }
@@ -677,16 +677,18 @@ fn depth_bound(rows: &BlockRows) -> f32 {
     }
 }
 
+/// `s` (8 values) as one vector load (zeros if `s` is not 8 long).
+#[inline(always)]
+fn load8(s: &[f32]) -> f32x8 {
+    f32x8::from(<[f32; 8]>::try_from(s).unwrap_or_default())
+}
+
 /// The 3×3 neighbourhoods of field `f` at the 8 samples x..x+8 of a row
 /// (`rows` as in [`detect_row`]; 1 ≤ x, x + 9 ≤ width): `[r][c]` holds
 /// the row r (0 above), column offset c − 1. One bounds check a row.
 #[inline(always)]
 fn around8(f: &[f32], rows: [usize; 3], x: usize) -> [[f32x8; 3]; 3] {
     // No array `map` here: it was left as a call copying the arrays.
-    #[inline(always)]
-    fn load8(s: &[f32]) -> f32x8 {
-        f32x8::from(<[f32; 8]>::try_from(s).unwrap_or_default())
-    }
     #[inline(always)]
     fn row(f: &[f32], r: usize, x: usize) -> [f32x8; 3] {
         let s = &f[r + x - 1..r + x + 9];
