@@ -43,7 +43,7 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
             // out-of-line loop that makes the polygons' per-pixel state
             // once for all of them.
             if B::POLYGON_LIGHTS && matches!(light, Light::Polygon { .. }) {
-                acc += lights_from_polygon(brdf, &prepared, frag, frame, rest);
+                acc += lights_from_polygon(brdf, self.input, rest);
                 break;
             }
             acc = add_delta_light(brdf, &prepared, frag, frame, light, acc);
@@ -109,15 +109,19 @@ fn add_delta_light<B: Brdf, R: Real>(
 /// lights). The model's per-pixel state for polygon lights
 /// ([`Brdf::prepare_polygons`]: the LTC lookup) is made here, once for all
 /// of them, so pixels lit only by point lights never pay for it.
+///
+/// The frame and the prepared view are made again here (the same values,
+/// bit for bit) rather than passed by reference: a reference made the
+/// light loop store both to memory in every call, polygon lights or not.
 #[inline(never)]
 #[cold]
 fn lights_from_polygon<B: Brdf, R: Real>(
     brdf: &B,
-    prepared: &B::Prepared<R>,
-    frag: &Fragment<R>,
-    frame: &ShadingFrame<R>,
+    input: &ShadeInput<R>,
     lights: &[Light],
 ) -> Rgb<R> {
+    let (frag, frame) = (input.frag, &input.frame());
+    let prepared = &brdf.prepare(frame.to_local(frag.wo));
     let mut poly = PolygonLocal {
         vertices: [V3::zero(); MAX_POLYGON_VERTICES],
         len: 0,
