@@ -273,7 +273,7 @@ impl ResolveContext<'_> {
                 let n = self.scene.normals[i as usize];
                 V3::new(splat(n.x), splat(n.y), splat(n.z))
             };
-            vertex(i0) * f0 + vertex(i1) * f1 + vertex(i2) * f2
+            vertex(i2).mul_add(f2, vertex(i1).mul_add(f1, vertex(i0) * f0))
         };
         let mut n_interp = normal(0);
         for t in 1..tris.n {
