@@ -163,6 +163,49 @@ impl PacketShader for Lit {
         self.model.visit(LightLoop { input, env })
     }
 
+    /// The model is dispatched once for the batch, so its constants are
+    /// made once too.
+    #[inline(always)]
+    fn shade_batch<R: Real>(
+        &self,
+        frags: &[Fragment<R>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<R>],
+    ) {
+        struct Packets<'a, R: Real> {
+            frags: &'a [Fragment<R>],
+            lanes: &'a [u32],
+            env: &'a ShadeEnv<'a>,
+            out: &'a mut [Rgb<R>],
+        }
+        impl<R: Real> BrdfVisitor for Packets<'_, R> {
+            type Output = ();
+            #[inline(always)]
+            fn visit<B: Brdf>(self, brdf: &B) {
+                let packets = self.frags.iter().zip(self.lanes).zip(self.out);
+                for ((frag, &lanes), out) in packets {
+                    let input = ShadeInput {
+                        frag,
+                        surface: None,
+                        lanes,
+                    };
+                    *out = LightLoop {
+                        input: &input,
+                        env: self.env,
+                    }
+                    .visit(brdf);
+                }
+            }
+        }
+        self.model.visit(Packets {
+            frags,
+            lanes,
+            env,
+            out,
+        })
+    }
+
     fn needs_surface(&self) -> bool {
         struct Aniso;
         impl BrdfVisitor for Aniso {

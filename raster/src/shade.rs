@@ -4,10 +4,12 @@
 
 use crate::buffers::TileWriter;
 use crate::post::LdrEncoding;
-use crate::resolve::{PacketTris, ResolveContext};
+use crate::resolve::{Fragment, PacketTris, ResolveContext};
+use crate::scene::SceneData;
 use crate::shader::{ShadeEnv, ShadeInput, ShadeLanes};
 use crate::target::{Target, TILE};
 use specula_core::{Real, Rgb, V3};
+use std::ops::Range;
 
 /// The frame buffers of one frame, open for tile-parallel writes. Planes
 /// that were not requested are empty writers and get nothing.
@@ -34,6 +36,94 @@ fn store<R: Real>(v: R, out: &mut [f32]) {
     }
 }
 
+/// Packets the shading pass holds back for one call of their material's
+/// shader ([`ShadeLanes::shade_batch_with`]): the runs of packets of one
+/// material in a tile row (a 64-pixel row is 8 packets of 8 lanes).
+const BATCH: usize = 8;
+
+struct Batch<R: Real> {
+    frags: [Fragment<R>; BATCH],
+    lanes: [u32; BATCH],
+    /// Each packet's pixels in the tile row.
+    px: [Range<usize>; BATCH],
+    n: usize,
+    material: u32,
+}
+
+impl<R: Real> Default for Batch<R> {
+    fn default() -> Self {
+        let zero = V3::zero();
+        let frag = Fragment {
+            p: zero,
+            n: zero,
+            wo: zero,
+            w: R::ZERO,
+            b1: R::ZERO,
+            b2: R::ZERO,
+        };
+        Batch {
+            frags: [frag; BATCH],
+            lanes: [0; BATCH],
+            px: std::array::from_fn(|_| 0..0),
+            n: 0,
+            material: 0,
+        }
+    }
+}
+
+impl<R: ShadeLanes> Batch<R> {
+    /// Adds a packet (the batch is not full) whose fragment `resolve`
+    /// writes into its place.
+    #[inline(always)]
+    fn push(
+        &mut self,
+        material: u32,
+        lanes: u32,
+        px: Range<usize>,
+        resolve: impl FnOnce() -> Fragment<R>,
+    ) -> &Fragment<R> {
+        let i = self.n & (BATCH - 1);
+        self.material = material;
+        self.lanes[i] = lanes;
+        self.px[i] = px;
+        self.n = i + 1;
+        self.frags[i] = resolve();
+        &self.frags[i]
+    }
+
+    /// Shades the held packets and writes their colours (the background in
+    /// lanes no triangle covers).
+    #[inline(always)]
+    fn flush(
+        &mut self,
+        scene: &SceneData,
+        env: &ShadeEnv,
+        background: Rgb<R>,
+        color: &mut [&mut [f32]; 3],
+    ) {
+        let n = self.n.min(BATCH);
+        if n == 0 {
+            return;
+        }
+        self.n = 0;
+        let shader = &*scene.materials[self.material as usize].shader;
+        let mut out = [background; BATCH];
+        R::shade_batch_with(
+            shader,
+            &self.frags[..n],
+            &self.lanes[..n],
+            env,
+            &mut out[..n],
+        );
+        for ((c, &lanes), px) in out.iter().zip(&self.lanes).zip(&self.px).take(n) {
+            let rgb = Rgb::select(R::mask_from_bits(lanes), *c, background);
+            store(rgb.x, &mut color[0][px.clone()]);
+            store(rgb.y, &mut color[1][px.clone()]);
+            store(rgb.z, &mut color[2][px.clone()]);
+        }
+    }
+}
+
 /// Shades tile `t` with lane type R: `ids` is the tile's slice of the
 /// visibility buffer. Returns the number of covered pixels.
 ///
@@ -53,12 +143,15 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
     };
     let (tx, ty) = target.tile_origin(t);
     let background = scene.environment.unwrap_or(scene.background);
+    let background_rgb: Rgb<R> = Rgb::from_f32(background);
     let mut covered = 0u64;
     let tile_w = TILE.min((target.width - tx) as usize);
     let mut tris = PacketTris::default();
     // A tile row's colour when the planes are not kept (LDR encoded in
     // place): it stays in L1 from the shading to the encode.
     let mut row_rgb = [[0.0f32; TILE]; 3];
+    // Empty at the start of each row (each row flushes it at its end).
+    let mut batch = Batch::<R>::default();
     for plane in out.color.iter().chain(&out.normal).chain([&out.depth]) {
         plane.prefetch_row(tx as usize, ty as usize);
     }
@@ -76,7 +169,7 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
                 out.id.tile_row(x0, y),
             )
         };
-        let color = if planes[0].is_empty() {
+        let mut color = if planes[0].is_empty() {
             let [r, g, b] = &mut row_rgb;
             [&mut r[..tile_w], &mut g[..tile_w], &mut b[..tile_w]]
         } else {
@@ -112,49 +205,81 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
                 }
             }
             tris.fill(&ids[at..], R::LANES, Some(ctx));
-            let mut rgb: Rgb<R> = Rgb::from_f32(background);
-            let mut w = R::splat(f64::INFINITY);
-            let mut n = V3::zero();
-            if tris.n > 0 {
-                covered += tris.covered.count_ones() as u64;
-                let frag = ctx.resolve::<R>(tx + lx as u32, y as u32, &tris);
-                // The mesh's uv frame only for shaders that read the surface
-                // (anisotropic models, textures); any frame for the rest.
-                let groups = 0..tris.groups;
-                let needs = |g: usize| ctx.needs_surface[tris.group_material[g] as usize];
-                let surface = (ctx.any_needs_surface && groups.clone().any(needs))
-                    .then(|| ctx.surface(&tris, &frag));
-                // Shade once per material present, under its lanes' mask.
-                for g in groups {
-                    let input = ShadeInput {
-                        frag: &frag,
-                        surface: surface.as_ref().filter(|_| needs(g)),
-                        lanes: tris.group_lanes[g],
-                    };
-                    let shader = &*scene.materials[tris.group_material[g] as usize].shader;
-                    let c = R::shade_with(shader, &input, &env);
-                    rgb = Rgb::select(R::mask_from_bits(input.lanes), c, rgb);
+            let px = lx..lx + n_px;
+            lx += R::LANES;
+            if tris.n == 0 {
+                store(background_rgb.x, &mut color[0][px.clone()]);
+                store(background_rgb.y, &mut color[1][px.clone()]);
+                store(background_rgb.z, &mut color[2][px.clone()]);
+                if !depth.is_empty() {
+                    store(R::splat(f64::INFINITY), &mut depth[px.clone()]);
                 }
-                if !depth.is_empty() || !normal[0].is_empty() {
-                    let hit = R::mask_from_bits(tris.covered);
-                    w = R::select(hit, frag.w, w);
-                    n = V3::select(hit, frag.n, n);
+                if !normal[0].is_empty() {
+                    store(R::ZERO, &mut normal[0][px.clone()]);
+                    store(R::ZERO, &mut normal[1][px.clone()]);
+                    store(R::ZERO, &mut normal[2][px.clone()]);
+                }
+                continue;
+            }
+            covered += tris.covered.count_ones() as u64;
+            // The usual packet, one material whose shader needs no
+            // surface, joins the row's run of packets of that material
+            // (resolved into its place there).
+            let material = tris.group_material[0];
+            let batched = tris.groups == 1 && !ctx.needs_surface[material as usize];
+            if batched && (batch.n == BATCH || (batch.n > 0 && batch.material != material)) {
+                batch.flush(scene, &env, background_rgb, &mut color);
+            }
+            let resolved;
+            let frag = if batched {
+                batch.push(material, tris.group_lanes[0], px.clone(), || {
+                    ctx.resolve::<R>(tx + px.start as u32, y as u32, &tris)
+                })
+            } else {
+                resolved = ctx.resolve::<R>(tx + px.start as u32, y as u32, &tris);
+                &resolved
+            };
+            if !depth.is_empty() || !normal[0].is_empty() {
+                let hit = R::mask_from_bits(tris.covered);
+                if !depth.is_empty() {
+                    store(
+                        R::select(hit, frag.w, R::splat(f64::INFINITY)),
+                        &mut depth[px.clone()],
+                    );
+                }
+                if !normal[0].is_empty() {
+                    let n = V3::select(hit, frag.n, V3::zero());
+                    store(n.x, &mut normal[0][px.clone()]);
+                    store(n.y, &mut normal[1][px.clone()]);
+                    store(n.z, &mut normal[2][px.clone()]);
                 }
             }
-            let px = lx..lx + n_px;
+            if batched {
+                continue;
+            }
+            // The mesh's uv frame only for shaders that read the surface
+            // (anisotropic models, textures); any frame for the rest.
+            let groups = 0..tris.groups;
+            let needs = |g: usize| ctx.needs_surface[tris.group_material[g] as usize];
+            let surface = (ctx.any_needs_surface && groups.clone().any(needs))
+                .then(|| ctx.surface(&tris, frag));
+            // Shade once per material present, under its lanes' mask.
+            let mut rgb = background_rgb;
+            for g in groups {
+                let input = ShadeInput {
+                    frag,
+                    surface: surface.as_ref().filter(|_| needs(g)),
+                    lanes: tris.group_lanes[g],
+                };
+                let shader = &*scene.materials[tris.group_material[g] as usize].shader;
+                let c = R::shade_with(shader, &input, &env);
+                rgb = Rgb::select(R::mask_from_bits(input.lanes), c, rgb);
+            }
             store(rgb.x, &mut color[0][px.clone()]);
             store(rgb.y, &mut color[1][px.clone()]);
-            store(rgb.z, &mut color[2][px.clone()]);
-            if !depth.is_empty() {
-                store(w, &mut depth[px.clone()]);
-            }
-            if !normal[0].is_empty() {
-                store(n.x, &mut normal[0][px.clone()]);
-                store(n.y, &mut normal[1][px.clone()]);
-                store(n.z, &mut normal[2][px]);
-            }
-            lx += R::LANES;
+            store(rgb.z, &mut color[2][px]);
         }
+        batch.flush(scene, &env, background_rgb, &mut color);
         if let Some((enc, ldr)) = &out.ldr {
             // SAFETY: as the rows above.
             let bytes = unsafe { ldr.tile_row(x0, y) };

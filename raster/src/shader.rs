@@ -62,6 +62,28 @@ pub trait PacketShader: Debug + Send + Sync + 'static {
     /// Outgoing radiance toward the eye in the lanes of `input.lanes`.
     fn shade<R: Real>(&self, input: &ShadeInput<R>, env: &ShadeEnv) -> Rgb<R>;
 
+    /// [`PacketShader::shade`] of several packets of this material
+    /// (`out[i]` for `frags[i]` under `lanes[i]`), none of them with a
+    /// surface. A shader whose work per call does not depend on the packet
+    /// (a model's dispatch, its constants) may do that once here.
+    #[inline(always)]
+    fn shade_batch<R: Real>(
+        &self,
+        frags: &[Fragment<R>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<R>],
+    ) {
+        for ((frag, &lanes), out) in frags.iter().zip(lanes).zip(out) {
+            let input = ShadeInput {
+                frag,
+                surface: None,
+                lanes,
+            };
+            *out = self.shade(&input, env);
+        }
+    }
+
     /// The shader reads [`ShadeInput::surface`] (uvs, tangents).
     fn needs_surface(&self) -> bool {
         false
@@ -79,6 +101,23 @@ pub trait PacketShader: Debug + Send + Sync + 'static {
 pub trait SurfaceShader: Debug + Send + Sync + 'static {
     fn shade_x8(&self, input: &ShadeInput<f32x8>, env: &ShadeEnv) -> Rgb<f32x8>;
     fn shade_x1(&self, input: &ShadeInput<f32>, env: &ShadeEnv) -> Rgb<f32>;
+    /// [`SurfaceShader::shade_x8`] of several packets in one call (no
+    /// surface; `out[i]` for `frags[i]` under `lanes[i]`): see
+    /// [`ShadeLanes::shade_batch_with`].
+    fn shade_x8_batch(
+        &self,
+        frags: &[Fragment<f32x8>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<f32x8>],
+    );
+    fn shade_x1_batch(
+        &self,
+        frags: &[Fragment<f32>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<f32>],
+    );
     fn needs_surface(&self) -> bool;
     fn check_lights(&self, lights: &[Light]) -> Result<(), String>;
     /// For callers that need the concrete shader back (benchmarks swapping
@@ -92,6 +131,24 @@ impl<T: PacketShader> SurfaceShader for T {
     }
     fn shade_x1(&self, input: &ShadeInput<f32>, env: &ShadeEnv) -> Rgb<f32> {
         self.shade(input, env)
+    }
+    fn shade_x8_batch(
+        &self,
+        frags: &[Fragment<f32x8>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<f32x8>],
+    ) {
+        self.shade_batch(frags, lanes, env, out)
+    }
+    fn shade_x1_batch(
+        &self,
+        frags: &[Fragment<f32>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<f32>],
+    ) {
+        self.shade_batch(frags, lanes, env, out)
     }
     fn needs_surface(&self) -> bool {
         PacketShader::needs_surface(self)
@@ -112,6 +169,19 @@ pub trait ShadeLanes: Real {
         input: &ShadeInput<Self>,
         env: &ShadeEnv,
     ) -> Rgb<Self>;
+
+    /// Several packets of one material, none needing the surface, in one
+    /// dynamic call. Per call, a material's shader pays its prologue, the
+    /// model's dispatch and its constants (F0, the diffuse colour, α:
+    /// ~100 instructions with the call itself), so the shading pass hands
+    /// it the runs of packets of one material a tile row shows.
+    fn shade_batch_with(
+        shader: &dyn SurfaceShader,
+        frags: &[Fragment<Self>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<Self>],
+    );
 }
 
 impl ShadeLanes for f32x8 {
@@ -119,12 +189,32 @@ impl ShadeLanes for f32x8 {
     fn shade_with(s: &dyn SurfaceShader, input: &ShadeInput<Self>, env: &ShadeEnv) -> Rgb<Self> {
         s.shade_x8(input, env)
     }
+    #[inline(always)]
+    fn shade_batch_with(
+        s: &dyn SurfaceShader,
+        frags: &[Fragment<Self>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<Self>],
+    ) {
+        s.shade_x8_batch(frags, lanes, env, out)
+    }
 }
 
 impl ShadeLanes for f32 {
     #[inline(always)]
     fn shade_with(s: &dyn SurfaceShader, input: &ShadeInput<Self>, env: &ShadeEnv) -> Rgb<Self> {
         s.shade_x1(input, env)
+    }
+    #[inline(always)]
+    fn shade_batch_with(
+        s: &dyn SurfaceShader,
+        frags: &[Fragment<Self>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<Self>],
+    ) {
+        s.shade_x1_batch(frags, lanes, env, out)
     }
 }
 
