@@ -1021,7 +1021,8 @@ impl Sobel {
                             // The image lines of this row's marks, for
                             // the blend two rows on: they come from memory.
                             let image_row = i * w..(i + 1) * w;
-                            let planes = [&r[image_row.clone()], &g[image_row.clone()], &b[image_row]];
+                            let planes =
+                                [&r[image_row.clone()], &g[image_row.clone()], &b[image_row]];
                             for_marks(row, |x| planes.iter().for_each(|p| prefetch(p, x)));
                         }
                         if i >= 2 {
@@ -1144,7 +1145,11 @@ type BandInk<'a> = Option<([&'a mut [f32]; 3], f32)>;
 /// `ink`.
 fn ink_marks(ink: &mut BandInk, out: &[u64], words: usize, w: usize, i: usize, color: [f32; 3]) {
     if let Some(([r, g, b], on)) = ink {
-        let (r, g, b) = (&mut r[i * w..(i + 1) * w], &mut g[i * w..(i + 1) * w], &mut b[i * w..(i + 1) * w]);
+        let (r, g, b) = (
+            &mut r[i * w..(i + 1) * w],
+            &mut g[i * w..(i + 1) * w],
+            &mut b[i * w..(i + 1) * w],
+        );
         for_marks(&out[i * words..(i + 1) * words], |x| {
             blend([&mut r[x], &mut g[x], &mut b[x]], *on, color)
         });
