@@ -55,7 +55,6 @@
 //! ground and the insides of large faces are not measured.
 
 use crate::outline::{blend, blend_row, composite, ssaa_of, sum_samples, Selection};
-use rayon::iter::Either;
 use rayon::prelude::*;
 use specula_core::{Mask, Real};
 use specula_raster::post::{HdrImage, PostStage};
@@ -933,13 +932,7 @@ impl Sobel {
     /// Marks the frame's edge samples into `mask`: [`detect_row`] on
     /// bands of [`BAND_ROWS`] rows, each band computing its own 1/w,
     /// labels and luminance (rows of the band and one each side).
-    ///
-    /// `ink`: the image planes (at the frame's size) and the coverage of
-    /// a mark, for a line that inks only its marks ([`Cover::marks_only`]):
-    /// each row's marks are blended in by the task that found them, two
-    /// rows later (their image lines prefetched meanwhile), instead of by
-    /// a second pass over the mask; `marked` is then not computed.
-    fn detect(&self, frame: &FrameBuffers, b: &mut Buffers, ink: Option<(&mut Planes3, f32)>) {
+    fn detect(&self, frame: &FrameBuffers, b: &mut Buffers) {
         let (w, h) = (frame.width as usize, frame.height as usize);
         b.mask.resize(w, h);
         let words = b.mask.words();
@@ -955,26 +948,11 @@ impl Sobel {
         let (of_id, pool) = (&b.label_of_id, &b.bands);
         let ids = &frame.id;
         let needs_ids = self.selection.needs_ids();
-        let fused = ink.is_some();
-        // Each band's image rows (or none), zipped with its mask rows.
-        let band_px = (w * BAND_ROWS).max(1);
-        let images = match ink {
-            Some((rgb, on)) => Either::Left(
-                rgb.r
-                    .par_chunks_mut(band_px)
-                    .zip(rgb.g.par_chunks_mut(band_px))
-                    .zip(rgb.b.par_chunks_mut(band_px))
-                    .map(move |((r, g), b)| Some(([r, g, b], on))),
-            ),
-            None => Either::Right((0..h.div_ceil(BAND_ROWS)).into_par_iter().map(|_| None)),
-        };
-        let line_color = self.color;
         b.mask
             .bits_mut()
             .par_chunks_mut((words * BAND_ROWS).max(1))
-            .zip(images)
             .enumerate()
-            .for_each(|(band, (out, mut ink))| {
+            .for_each(|(band, out)| {
                 let y0 = band * BAND_ROWS;
                 let y1 = (y0 + BAND_ROWS).min(h);
                 let (ya, yb) = (y0.saturating_sub(1), (y1 + 1).min(h));
@@ -1005,8 +983,7 @@ impl Sobel {
                         material: part(id, &s.material, 0..n),
                         luma: part(color, &s.luma, 0..n),
                     };
-                    let words = words.max(1);
-                    for y in y0..y1 {
+                    for (y, out) in (y0..y1).zip(out.chunks_mut(words.max(1))) {
                         let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)];
                         let rows = rows.map(|r| (r - ya) * w);
                         let keep = |x: usize| !needs_ids || self.selection.contains(ids[y * w + x]);
@@ -1014,30 +991,11 @@ impl Sobel {
                         // ahead of their first use (the band's other
                         // inputs were just computed and are in cache).
                         let ahead = (normal && y + 2 < yn).then(|| (y + 2 - ya) * w);
-                        let i = y - y0;
-                        let row = &mut out[i * words..(i + 1) * words];
-                        detect_row_ahead(&input, &self.sources, rows, ahead, &keep, row);
-                        if let Some(([r, g, b], _)) = &ink {
-                            // The image lines of this row's marks, for
-                            // the blend two rows on: they come from memory.
-                            let image_row = i * w..(i + 1) * w;
-                            let planes =
-                                [&r[image_row.clone()], &g[image_row.clone()], &b[image_row]];
-                            for_marks(row, |x| planes.iter().for_each(|p| prefetch(p, x)));
-                        }
-                        if i >= 2 {
-                            ink_marks(&mut ink, out, words, w, i - 2, line_color);
-                        }
-                    }
-                    let n = y1 - y0;
-                    for i in n.saturating_sub(2)..n {
-                        ink_marks(&mut ink, out, words, w, i, line_color);
+                        detect_row_ahead(&input, &self.sources, rows, ahead, &keep, out);
                     }
                 });
             });
-        if !fused {
-            b.mask.rows_marked(&mut b.marked);
-        }
+        b.mask.rows_marked(&mut b.marked);
     }
 
     fn lock(&self) -> std::sync::MutexGuard<'_, Buffers> {
@@ -1049,7 +1007,7 @@ impl Sobel {
     /// Per-sample coverage over `frame` for a stage at supersampling `ssaa`.
     pub fn coverage_map(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<f32> {
         let mut b = self.lock();
-        self.detect(frame, &mut b, None);
+        self.detect(frame, &mut b);
         let cover = Cover::new(self.width * ssaa as f32, self.antialias);
         let (w, h) = (frame.width as usize, frame.height as usize);
         if cover.radius() > BOUNDED_RADIUS {
@@ -1124,38 +1082,6 @@ fn prefetch_inked(mask: &EdgeMask, marked: &[bool], y: usize, reach: usize, rgb:
     }
 }
 
-/// Calls `f(x)` for each marked sample x of a row's mask words, in order.
-#[inline(always)]
-fn for_marks(words: &[u64], mut f: impl FnMut(usize)) {
-    for (j, &word) in words.iter().enumerate() {
-        let mut set = word;
-        while set != 0 {
-            f(64 * j + set.trailing_zeros() as usize);
-            set &= set - 1;
-        }
-    }
-}
-
-/// A band's image rows and the coverage of a mark ([`Sobel::detect`]).
-type BandInk<'a> = Option<([&'a mut [f32]; 3], f32)>;
-
-/// Blends the marks of row `i` of a band (mask words `out`, `words` a
-/// row) into its image rows (`w` wide), as the blend of `apply` does for
-/// a line of marks only: blend's products at each mark. Nothing without
-/// `ink`.
-fn ink_marks(ink: &mut BandInk, out: &[u64], words: usize, w: usize, i: usize, color: [f32; 3]) {
-    if let Some(([r, g, b], on)) = ink {
-        let (r, g, b) = (
-            &mut r[i * w..(i + 1) * w],
-            &mut g[i * w..(i + 1) * w],
-            &mut b[i * w..(i + 1) * w],
-        );
-        for_marks(&out[i * words..(i + 1) * words], |x| {
-            blend([&mut r[x], &mut g[x], &mut b[x]], *on, color)
-        });
-    }
-}
-
 /// `v[range]` for a source in use, else empty (its buffer may be absent).
 fn part(on: bool, v: &[f32], range: std::ops::Range<usize>) -> &[f32] {
     if on {
@@ -1191,15 +1117,8 @@ impl PostStage for Sobel {
     fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
         let ssaa = ssaa_of(img, frame);
         let mut b = self.lock();
+        self.detect(frame, &mut b);
         let cover = Cover::new(self.width * ssaa as f32, self.antialias);
-        if ssaa == 1 && cover.marks_only() && cover.radius() <= BOUNDED_RADIUS {
-            // A line of marks only at the frame's size: each mark blended
-            // by the detection task that found it (blend's products, as
-            // below with inv = 1), no second pass.
-            self.detect(frame, &mut b, Some((&mut img.rgb, cover.at(0.0))));
-            return;
-        }
-        self.detect(frame, &mut b, None);
         if cover.radius() > BOUNDED_RADIUS {
             let (w, h) = (frame.width as usize, frame.height as usize);
             let cov = dilate(
