@@ -105,9 +105,8 @@ pub struct Scratch(Mutex<Buffers>);
 struct Buffers {
     mask: EdgeMask,
     marked: Vec<bool>,
-    /// The id source's label of each id, kept while the stage's
-    /// `id_material` is the same.
-    labels: LabelTable,
+    /// The id source's label of each id ([`material_labels`]).
+    label_of_id: Vec<f32>,
     bands: Pool<BandScratch>,
     rows: Pool<RowsScratch>,
 }
@@ -130,214 +129,6 @@ struct BandScratch {
     inv_depth: Vec<f32>,
     material: Vec<f32>,
     luma: Vec<f32>,
-    /// Each field's range per row and block ([`RowBlock`]).
-    ranges: Vec<RowBlock>,
-    /// Which 8-sample tiles of each row hold their 1/w, their label (a
-    /// bit a tile, [`fill_tiles`]).
-    q_done: Vec<u64>,
-    label_done: Vec<u64>,
-    /// The sources each block of a row keeps ([`Thresholds::kept`]).
-    kept: Vec<u8>,
-    /// The tiles of a row whose 1/w, whose labels its blocks read.
-    need_q: Vec<u64>,
-    need_l: Vec<u64>,
-}
-
-/// The least and greatest value of each field over one row of a block's
-/// columns (x − 1 ..= x + BLOCK): three of them, the block's rows, give
-/// the ranges of [`block_range`] (min and max are exact, so in any order)
-/// without reading the block's values again. q's is found from the depth
-/// ([`q_range`]), the labels' as the range of the ids ([`LabelTable::one_label`]).
-#[derive(Clone, Copy)]
-struct RowBlock {
-    q: (f32, f32),
-    normal: [(f32, f32); 3],
-    id: (u32, u32),
-    luma: (f32, f32),
-}
-
-impl Default for RowBlock {
-    fn default() -> RowBlock {
-        let none = (f32::INFINITY, f32::NEG_INFINITY);
-        RowBlock {
-            q: none,
-            normal: [none; 3],
-            id: (u32::MAX, 0),
-            luma: none,
-        }
-    }
-}
-
-impl RowBlock {
-    /// Field `f`'s range over a block whose rows are `at` (not the
-    /// labels': [`LabelTable::one_label`]).
-    #[inline(always)]
-    fn range(at: [&RowBlock; 3], f: Field) -> (f32, f32) {
-        let of = |r: &RowBlock| match f {
-            Field::InvDepth => r.q,
-            Field::NormalX => r.normal[0],
-            Field::NormalY => r.normal[1],
-            Field::NormalZ => r.normal[2],
-            Field::Luma => r.luma,
-            Field::Label => (f32::NEG_INFINITY, f32::INFINITY), // never asked
-        };
-        let (a, b, c) = (of(at[0]), of(at[1]), of(at[2])); // no array `map`: a call
-                                                           // No range holds a NaN: plain compares.
-        let min = |x: f32, y: f32| if y < x { y } else { x };
-        let max = |x: f32, y: f32| if y > x { y } else { x };
-        (min(min(a.0, b.0), c.0), max(max(a.1, b.1), c.1))
-    }
-}
-
-/// The ranges of row `y` of the frame for each block of the row
-/// ([`block_xs`]) into `out`, for the fields of the sources `used` (depth,
-/// normal, id, colour; `luma`: the row's luminance).
-fn row_ranges(frame: &FrameBuffers, luma: &[f32], y: usize, used: [bool; 4], out: &mut [RowBlock]) {
-    const NONE: [f32; BLOCK + 2] = [0.0; BLOCK + 2];
-    let w = frame.width as usize;
-    let nrm = &frame.normal;
-    for (r, x) in out.iter_mut().zip(block_xs(w)) {
-        let cols = y * w + x - 1..y * w + x + BLOCK + 1;
-        fn block<'a>(p: &'a [f32], cols: &std::ops::Range<usize>) -> &'a [f32; BLOCK + 2] {
-            <&[f32; BLOCK + 2]>::try_from(&p[cols.clone()]).unwrap_or(&NONE)
-        }
-        if used[0] {
-            r.q = q_range(block(&frame.depth, &cols));
-        }
-        if used[1] {
-            r.normal = [
-                row_range(block(&nrm.r, &cols)),
-                row_range(block(&nrm.g, &cols)),
-                row_range(block(&nrm.b, &cols)),
-            ];
-        }
-        if used[2] {
-            r.id = <&[u32; BLOCK + 2]>::try_from(&frame.id[cols.clone()])
-                .map_or((0, u32::MAX), id_range);
-        }
-        if used[3] {
-            let l = &luma[x - 1..x + BLOCK + 1];
-            r.luma = <&[f32; BLOCK + 2]>::try_from(l).map_or((0.0, f32::NAN), row_range);
-        }
-    }
-}
-
-/// A hint that row `y` of the frame's depth, normals and ids (those the
-/// sources `used` read, as [`row_ranges`]) will be read soon: a prefetch
-/// every 16 samples. No effect on results.
-fn prefetch_row(frame: &FrameBuffers, y: usize, used: [bool; 4]) {
-    let w = frame.width as usize;
-    let row = y * w..(y + 1) * w;
-    let nrm = &frame.normal;
-    let ids: &[u32] = &frame.id[row.clone()];
-    for x in (0..w).step_by(16) {
-        if used[0] {
-            prefetch(&frame.depth[row.clone()], x);
-        }
-        if used[1] {
-            prefetch(&nrm.r[row.clone()], x);
-            prefetch(&nrm.g[row.clone()], x);
-            prefetch(&nrm.b[row.clone()], x);
-        }
-        if used[2] {
-            #[cfg(target_arch = "x86_64")]
-            if let Some(p) = ids.get(x) {
-                // SAFETY: as in `prefetch`.
-                unsafe {
-                    use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
-                    _mm_prefetch::<_MM_HINT_T0>(p as *const u32 as *const i8);
-                }
-            }
-        }
-    }
-    let _ = ids;
-}
-
-/// Sets in `need` (a bit an 8-sample tile of a row: 8k..8k + 8) the
-/// tiles holding columns c0..=c1.
-#[inline(always)]
-fn need_tiles(need: &mut [u64], c0: usize, c1: usize) {
-    let (mut t, t1) = (c0 / 8, c1 / 8);
-    while t <= t1 {
-        let j = t / 64;
-        let hi = t1.min(64 * j + 63);
-        need[j] |= (u64::MAX >> (63 - hi % 64)) & (u64::MAX << (t % 64));
-        t = hi + 1;
-    }
-}
-
-/// Calls `fill` on each run of the tiles of `need` not yet in `done` (a
-/// bit a tile, [`need_tiles`]; the last tile cut at `w`), then adds them
-/// to `done`.
-fn fill_tiles(
-    done: &mut [u64],
-    need: &[u64],
-    w: usize,
-    mut fill: impl FnMut(std::ops::Range<usize>),
-) {
-    for (j, (d, &n)) in done.iter_mut().zip(need).enumerate() {
-        let mut todo = n & !*d;
-        *d |= n;
-        while todo != 0 {
-            let s = todo.trailing_zeros() as usize;
-            let run = (!(todo >> s)).trailing_zeros() as usize;
-            let t = 64 * j + s;
-            fill(8 * t..(8 * (t + run)).min(w));
-            // The bits below s are clear: keep those from s + run on.
-            todo = if s + run >= 64 {
-                0
-            } else {
-                todo & (u64::MAX << (s + run))
-            };
-        }
-    }
-}
-
-/// The id source's label of each id ([`label_of_id`]) and, for each id,
-/// the last of the ids after it with the same label (its run), built for
-/// one `id_material` and kept while the stage's is the same.
-#[derive(Default)]
-struct LabelTable {
-    of_id: Vec<f32>,
-    run_end: Vec<u32>,
-    id_material: Vec<u32>,
-}
-
-impl LabelTable {
-    /// Rebuilds the tables unless they are `id_material`'s (a compare of
-    /// ~0.8 MB a benchmark frame, against building ~200k labels).
-    fn update(&mut self, id_material: &[u32]) {
-        if !self.of_id.is_empty() && self.id_material == id_material {
-            return;
-        }
-        label_of_id(id_material, &mut self.of_id);
-        let n = self.of_id.len();
-        self.run_end.clear();
-        self.run_end.resize(n, 0);
-        let mut end = n - 1;
-        for i in (0..n).rev() {
-            if i + 1 < n && self.of_id[i] != self.of_id[i + 1] {
-                end = i;
-            }
-            // Saturated past u32 (not reached: ids are u32): a shorter
-            // run only keeps a source.
-            self.run_end[i] = end.min(u32::MAX as usize) as u32;
-        }
-        self.id_material.clear();
-        self.id_material.extend_from_slice(id_material);
-    }
-
-    /// Whether every id in the union of the ranges `ids` has one label
-    /// (ids past the table read its last entry, as [`labels_into`]): a
-    /// block whose ids these are has one label. Labels are never NaN.
-    #[inline(always)]
-    fn one_label(&self, ids: [(u32, u32); 3]) -> bool {
-        let lo = ids[0].0.min(ids[1].0).min(ids[2].0);
-        let hi = ids[0].1.max(ids[1].1).max(ids[2].1);
-        let last = self.of_id.len() - 1;
-        let (lo, hi) = ((lo as usize).min(last), (hi as usize).min(last));
-        lo == hi || (self.run_end[lo] as usize) >= hi
-    }
 }
 
 /// A blend task's scratch: the dilation's, and at ssaa > 1 the coverage
@@ -385,17 +176,8 @@ pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
 
 /// [`inverse_depth`] into `q` (same length).
 pub fn inverse_depth_into(depth: &[f32], q: &mut [f32]) {
-    // 8 at a time (the plain loop's vector form took 32 at a time and
-    // the short runs of the stage's tiles one by one): the division is
-    // correctly rounded in either, so the same bits.
-    let (zero, inf) = (f32x8::ZERO, f32x8::splat(f32::INFINITY));
-    let n = q.len().min(depth.len()) / 8 * 8;
-    for (q, d) in q[..n].chunks_exact_mut(8).zip(depth[..n].chunks_exact(8)) {
-        let d = load8(d);
-        let has_q = d.simd_gt(zero) & d.simd_lt(inf); // finite and > 0
-        q.copy_from_slice(has_q.select(f32x8::ONE / d, zero).as_array());
-    }
-    for (q, &d) in q[n..].iter_mut().zip(&depth[n..]) {
+    // A plain loop (a select per sample) vectorizes.
+    for (q, &d) in q.iter_mut().zip(depth) {
         *q = if d.is_finite() && d > 0.0 {
             1.0 / d
         } else {
@@ -520,21 +302,16 @@ pub fn detect_row(
     keep: &dyn Fn(usize) -> bool,
     out: &mut [u64],
 ) {
-    detect_row_ahead(input, sources, rows, None, None, keep, out);
+    detect_row_ahead(input, sources, rows, None, keep, out);
 }
 
 /// [`detect_row`], prefetching the normals of the row starting at
-/// `ahead` (an offset in `input`'s slices) as it goes. `decided`: the
-/// sources left to each block of the row ([`block_xs`], [`Thresholds::kept`];
-/// 0: the block has no mark), as found by the caller's bounds, which are then
-/// not taken again here; the fields a block's sources do not need may
-/// hold anything there.
+/// `ahead` (an offset in `input`'s slices) as it goes.
 fn detect_row_ahead(
     input: &EdgeInput,
     sources: &[(Source, f32)],
     rows: [usize; 3],
     ahead: Option<usize>,
-    decided: Option<&[u8]>,
     keep: &dyn Fn(usize) -> bool,
     out: &mut [u64],
 ) {
@@ -559,7 +336,7 @@ fn detect_row_ahead(
         // ending at w − 2, overlapping the one before (its marks are the
         // same bits again); rows too narrow for a block in chunks of 8 up
         // to w − 2, the last one overlapping likewise.
-        let block = |b: usize, x: usize, out: &mut [u64]| {
+        let block = |x: usize, out: &mut [u64]| {
             if let Some(a) = ahead {
                 for f in input.normal {
                     for k in (0..BLOCK).step_by(16) {
@@ -567,22 +344,21 @@ fn detect_row_ahead(
                     }
                 }
             }
-            let bits = match decided {
-                None => detect_block(&f, used, &t, rows, x, true),
-                Some(d) => match d[b] {
-                    0 => 0,
-                    k => detect_block(&f, used, &t.only(k), rows, x, false),
-                },
-            };
+            let bits = detect_block(&f, used, &t, rows, x);
             let (j, sh) = (x / 64, x % 64);
             out[j] |= bits << sh;
             if sh > 0 {
                 out[j + 1] |= bits >> (64 - sh);
             }
         };
-        if w > BLOCK + 1 {
-            for (b, x) in block_xs(w).enumerate() {
-                block(b, x, out);
+        let mut x = 1;
+        while x + BLOCK < w {
+            block(x, out);
+            x += BLOCK;
+        }
+        if x > 1 {
+            if x < w - 1 {
+                block(w - 1 - BLOCK, out);
             }
         } else {
             let last = w - 9;
@@ -613,26 +389,6 @@ fn detect_row_ahead(
             set &= set - 1;
         }
     }
-}
-
-/// The first sample x of each block ([`detect_block`]) of a row `w`
-/// wide: x = 1, 65, … while the block ends before the row's last sample,
-/// then one more ending at w − 2, overlapping the one before (its marks
-/// are the same bits again). None if the row is too narrow for one
-/// (w < BLOCK + 2).
-fn block_xs(w: usize) -> impl ExactSizeIterator<Item = usize> {
-    // x = 1 + BLOCK k with x + BLOCK < w: k < (w − BLOCK − 1) / BLOCK.
-    let full = if w > BLOCK + 1 { (w - 2) / BLOCK } else { 0 };
-    let end = 1 + BLOCK * full;
-    let last = (full > 0 && end < w - 1).then(|| w - 1 - BLOCK);
-    let n = full + last.is_some() as usize;
-    (0..n).map(move |k| {
-        if k < full {
-            1 + BLOCK * k
-        } else {
-            w - 1 - BLOCK
-        }
-    })
 }
 
 /// Rows narrower than this (no interior chunk of 8 samples with its
@@ -670,30 +426,6 @@ struct Thresholds {
 }
 
 impl Thresholds {
-    const DEPTH: u8 = 1;
-    const NORMAL: u8 = 2;
-    const ID: u8 = 4;
-    const COLOR: u8 = 8;
-
-    /// The sources present, a bit each.
-    fn kept(&self) -> u8 {
-        let bit = |on: bool, b: u8| if on { b } else { 0 };
-        bit(self.depth.is_some(), Self::DEPTH)
-            | bit(self.normal.is_some(), Self::NORMAL)
-            | bit(self.id.is_some(), Self::ID)
-            | bit(self.color.is_some(), Self::COLOR)
-    }
-
-    /// These thresholds with only the sources of `kept` ([`Self::kept`]).
-    fn only(&self, kept: u8) -> Thresholds {
-        Thresholds {
-            depth: self.depth.filter(|_| kept & Self::DEPTH != 0),
-            normal: self.normal.filter(|_| kept & Self::NORMAL != 0),
-            id: self.id.filter(|_| kept & Self::ID != 0),
-            color: self.color.filter(|_| kept & Self::COLOR != 0),
-        }
-    }
-
     fn new(sources: &[(Source, f32)]) -> Thresholds {
         let least = |s: Source| {
             sources
@@ -757,8 +489,7 @@ fn fields<'a>(input: &EdgeInput<'a>) -> [&'a [f32]; 6] {
 const BLOCK: usize = 64;
 
 /// [`detect_lanes`] on the 64 samples x..x+64 of a row (bit i: sample
-/// x + i; 1 ≤ x, x + 65 ≤ width), with the sources [`block_sources`]
-/// keeps (`bound`) or all of `t`. Each field row's 66 values are sliced
+/// x + i; 1 ≤ x, x + 65 ≤ width). Each field row's 66 values are sliced
 /// once, and the eight chunks read them at constant offsets: no bounds
 /// checks inside (the chunk-by-chunk slicing was ~40 % of the detection's
 /// instructions).
@@ -769,7 +500,6 @@ fn detect_block(
     t: &Thresholds,
     rows: [usize; 3],
     x: usize,
-    bound: bool,
 ) -> u64 {
     const UNUSED: [f32; BLOCK + 2] = [0.0; BLOCK + 2];
     let row = |k: usize, r: usize| -> &[f32; BLOCK + 2] {
@@ -784,14 +514,7 @@ fn detect_block(
     // instructions a frame).
     let rows3 = |k: usize| [row(k, 0), row(k, 1), row(k, 2)];
     let a = [rows3(0), rows3(1), rows3(2), rows3(3), rows3(4), rows3(5)];
-    // `bound`: drop the sources a bound over the block rules out here
-    // (else the caller did, and `t` is what is left).
-    let t = if bound {
-        block_sources(t, &a)
-    } else {
-        Some(*t)
-    };
-    let Some(t) = t else {
+    let Some(t) = block_sources(t, &a) else {
         return 0;
     };
     let t = &t;
@@ -826,29 +549,11 @@ type BlockRows<'a> = [&'a [f32; BLOCK + 2]; 3];
 /// first), up to the first that may mark: the rest are kept untested.
 #[inline(always)]
 fn block_sources(t: &Thresholds, a: &[BlockRows; 6]) -> Option<Thresholds> {
-    sources_by_bounds(
-        t,
-        || one_label(&a[Field::Label as usize]),
-        |f| block_range(&a[f as usize]),
-    )
-}
-
-/// [`block_sources`] from what a bound needs of a block, however found:
-/// `one_label()`, whether every label of the block is the same (and none
-/// NaN); `range(f)`, the least and greatest value of field `f` over the
-/// block, NaNs left out ([`block_range`]). Each is asked only when its
-/// test is reached.
-#[inline(always)]
-fn sources_by_bounds(
-    t: &Thresholds,
-    one_label: impl FnOnce() -> bool,
-    mut range: impl FnMut(Field) -> (f32, f32),
-) -> Option<Thresholds> {
     let lane0 = |v: f32x8| v.as_array()[0];
     let mut out = *t;
     'tests: {
         if let Some(ti) = t.id {
-            if !(lane0(ti) >= 0.0 && one_label()) {
+            if !(one_label(&a[Field::Label as usize]) && lane0(ti) >= 0.0) {
                 break 'tests;
             }
             out.id = None; // every measure is 0, not above ti ≥ 0
@@ -856,7 +561,7 @@ fn sources_by_bounds(
         if let Some(tn) = t.normal {
             let mut g2 = 0.0f32;
             for f in [Field::NormalX, Field::NormalY, Field::NormalZ] {
-                let b = gradient_bound(range(f));
+                let b = gradient_bound(&a[f as usize]);
                 g2 += b * b + b * b; // detect_lanes' sum: increasing in each term
                 let under = g2 <= lane0(tn); // false for a NaN bound
                 if !under {
@@ -866,14 +571,14 @@ fn sources_by_bounds(
             out.normal = None;
         }
         if let Some(td) = t.depth {
-            let under = depth_bound(range(Field::InvDepth)) <= lane0(td);
+            let under = depth_bound(&a[Field::InvDepth as usize]) <= lane0(td);
             if !under {
                 break 'tests;
             }
             out.depth = None;
         }
         if let Some(tc) = t.color {
-            let b = gradient_bound(range(Field::Luma));
+            let b = gradient_bound(&a[Field::Luma as usize]);
             let under = b * b + b * b <= lane0(tc);
             if !under {
                 break 'tests;
@@ -910,105 +615,15 @@ fn block_range(rows: &BlockRows) -> (f32, f32) {
             hi = Real::max(v, hi);
         }
     }
-    lanes_range(lo, hi)
-}
-
-/// The least lane of `lo` and the greatest of `hi` ([`block_range`]; no
-/// lane NaN), by halves.
-#[inline(always)]
-fn lanes_range(lo: f32x8, hi: f32x8) -> (f32, f32) {
-    let (l, h) = (lo.to_array(), hi.to_array());
-    let min = |a: f32, b: f32| if b < a { b } else { a };
-    let max = |a: f32, b: f32| if b > a { b } else { a };
-    // Written out: an array `map` is left as a call.
-    let l4 = [
-        min(l[0], l[4]),
-        min(l[1], l[5]),
-        min(l[2], l[6]),
-        min(l[3], l[7]),
-    ];
-    let h4 = [
-        max(h[0], h[4]),
-        max(h[1], h[5]),
-        max(h[2], h[6]),
-        max(h[3], h[7]),
-    ];
-    (
-        min(min(l4[0], l4[2]), min(l4[1], l4[3])),
-        max(max(h4[0], h4[2]), max(h4[1], h4[3])),
-    )
-}
-
-/// [`block_range`] of one row of a block.
-#[inline(always)]
-fn row_range(row: &[f32; BLOCK + 2]) -> (f32, f32) {
-    let mut lo = f32x8::splat(f32::INFINITY);
-    let mut hi = f32x8::splat(f32::NEG_INFINITY);
-    for o in COVER8 {
-        let v = load8(&row[o..o + 8]);
-        lo = Real::min(v, lo);
-        hi = Real::max(v, hi);
-    }
-    lanes_range(lo, hi)
-}
-
-/// The range of q = 1/w ([`inverse_depth_into`]) over one row of a block,
-/// from its depths `d`, before any q is computed, or a wider one: 1/d
-/// rounds monotonically (decreasing in d > 0), so where every d has a q
-/// (finite, > 0) the least q is fl(1/d_max) and the greatest fl(1/d_min);
-/// where none has, every q is 0; where some have not (q = 0 there, and q
-/// is never NaN) the least is 0 and the greatest fl(1/d_min) if d_min > 0
-/// (then a q itself), else unbounded.
-#[inline(always)]
-fn q_range(d: &[f32; BLOCK + 2]) -> (f32, f32) {
-    let mut lo = f32x8::splat(f32::INFINITY);
-    let mut hi = f32x8::splat(f32::NEG_INFINITY);
-    let mut nan = f32x8::ZERO;
-    for o in COVER8 {
-        let v = load8(&d[o..o + 8]);
-        lo = Real::min(v, lo); // NaNs left out, as block_range
-        hi = Real::max(v, hi);
-        nan |= v.simd_ne(v);
-    }
-    let (d_min, d_max) = lanes_range(lo, hi);
-    if d_min >= f32::INFINITY {
-        (0.0, 0.0) // every d is +∞ or NaN
-    } else if d_min > 0.0 && d_max < f32::INFINITY && !nan.any() {
-        (1.0 / d_max, 1.0 / d_min)
-    } else if d_min > 0.0 {
-        (0.0, 1.0 / d_min)
-    } else {
-        (0.0, f32::INFINITY)
-    }
-}
-
-/// The least and greatest id over one row of a block.
-#[inline(always)]
-fn id_range(ids: &[u32; BLOCK + 2]) -> (u32, u32) {
-    let load = |o: usize| u32x8::new(<[u32; 8]>::try_from(&ids[o..o + 8]).unwrap_or_default());
-    let (mut lo, mut hi) = (load(0), load(0));
-    for o in COVER8 {
-        let v = load(o);
-        lo = lo.min(v);
-        hi = hi.max(v);
-    }
-    let (l, h) = (lo.to_array(), hi.to_array());
-    let l4 = [
-        l[0].min(l[4]),
-        l[1].min(l[5]),
-        l[2].min(l[6]),
-        l[3].min(l[7]),
-    ];
-    let h4 = [
-        h[0].max(h[4]),
-        h[1].max(h[5]),
-        h[2].max(h[6]),
-        h[3].max(h[7]),
-    ];
-    (
-        l4[0].min(l4[2]).min(l4[1].min(l4[3])),
-        h4[0].max(h4[2]).max(h4[1].max(h4[3])),
-    )
+    let lo = lo
+        .as_array()
+        .iter()
+        .fold(f32::INFINITY, |m, &v| Real::min(v, m));
+    let hi = hi
+        .as_array()
+        .iter()
+        .fold(f32::NEG_INFINITY, |m, &v| Real::max(v, m));
+    (lo, hi)
 }
 
 /// Whether every label of a block's rows is the first (a NaN label is
@@ -1027,19 +642,20 @@ fn one_label(rows: &BlockRows) -> bool {
 }
 
 /// An upper bound of |Gx| and |Gy| ([`gradient8`]) at every sample of a
-/// block whose values are in [lo, hi] ([`block_range`]), as rounded in f32 (NaN or +∞ when none can be given): with the
+/// block, as rounded in f32 (NaN or +∞ when none can be given): with the
 /// values in [lo, hi] each difference is at most D = hi − lo in magnitude
 /// (rounding is monotone), so each Sobel sum is at most its sum with D in
 /// every difference, rounded in the same order. NaN values are left out:
 /// a difference with one is NaN, and a NaN g² is above no threshold.
 #[inline(always)]
-fn gradient_bound((lo, hi): (f32, f32)) -> f32 {
+fn gradient_bound(rows: &BlockRows) -> f32 {
+    let (lo, hi) = block_range(rows);
     let d = hi - lo; // −∞ if every value is NaN: its square +∞ tests false
     W[0] * d + W[1] * d + W[2] * d
 }
 
 /// An upper bound of the depth measure ([`detect_lanes`]) at every sample
-/// of a block whose q are in [lo, hi] ([`block_range`]), as rounded in f32 (NaN or +∞ when none can be given).
+/// of a block, as rounded in f32 (NaN or +∞ when none can be given).
 /// With q in [lo, hi] each second difference q₊ + q₋ − 2q is at most
 /// E = 2hi − 2lo in magnitude, so |dxx| and |dyy| are at most their sums
 /// with E (rounding is monotone), and a sample's q_max is ≥ lo: the
@@ -1047,7 +663,8 @@ fn gradient_bound((lo, hi): (f32, f32)) -> f32 {
 /// hi ≤ 0. NaN values are left out as in [`gradient_bound`]: a q_max is
 /// NaN (no mark) or one of the others, ≥ lo.
 #[inline(always)]
-fn depth_bound((lo, hi): (f32, f32)) -> f32 {
+fn depth_bound(rows: &BlockRows) -> f32 {
+    let (lo, hi) = block_range(rows);
     if hi <= 0.0 {
         return 0.0;
     }
@@ -1313,15 +930,8 @@ impl Sobel {
     }
 
     /// Marks the frame's edge samples into `mask`: [`detect_row`] on
-    /// bands of [`BAND_ROWS`] rows (with one row each side).
-    ///
-    /// Rows wide enough for blocks ([`block_xs`]) take their bounds from
-    /// ranges kept per row and block ([`RowBlock`]: each field's least and
-    /// greatest value over the block's columns, read once from the frame
-    /// for the three blocks that use it), and compute 1/w and the labels
-    /// only in the 8-sample tiles that a block left with those sources,
-    /// or a row's ends, will read ([`fill_tiles`]): the ground's blocks
-    /// need neither. Narrower rows compute them for the whole band.
+    /// bands of [`BAND_ROWS`] rows, each band computing its own 1/w,
+    /// labels and luminance (rows of the band and one each side).
     fn detect(&self, frame: &FrameBuffers, b: &mut Buffers) {
         let (w, h) = (frame.width as usize, frame.height as usize);
         b.mask.resize(w, h);
@@ -1333,15 +943,11 @@ impl Sobel {
             self.has(Source::Color),
         );
         if id {
-            b.labels.update(&self.id_material);
+            label_of_id(&self.id_material, &mut b.label_of_id);
         }
-        let (labels, pool) = (&b.labels, &b.bands);
+        let (of_id, pool) = (&b.label_of_id, &b.bands);
         let ids = &frame.id;
         let needs_ids = self.selection.needs_ids();
-        let t = Thresholds::new(&self.sources);
-        let by_blocks = w > BLOCK + 1;
-        let blocks = if by_blocks { block_xs(w).len() } else { 0 };
-        let tiles = w.div_ceil(8).div_ceil(64); // words of tile flags a row
         b.mask
             .bits_mut()
             .par_chunks_mut((words * BAND_ROWS).max(1))
@@ -1352,157 +958,40 @@ impl Sobel {
                 let (ya, yb) = (y0.saturating_sub(1), (y1 + 1).min(h));
                 let range = ya * w..yb * w;
                 let n = range.len();
+                // The normals' slices reach two rows past the band, for
+                // the prefetch.
+                let yn = (yb + 2).min(h);
                 pool.with(|s| {
-                    let BandScratch {
-                        inv_depth,
-                        material,
-                        luma,
-                        ranges,
-                        q_done,
-                        label_done,
-                        kept,
-                        need_q,
-                        need_l,
-                    } = s;
                     if depth {
-                        inv_depth.resize(n, 0.0);
-                        if !by_blocks {
-                            inverse_depth_into(&frame.depth[range.clone()], &mut inv_depth[..n]);
-                        }
+                        s.inv_depth.resize(n, 0.0);
+                        inverse_depth_into(&frame.depth[range.clone()], &mut s.inv_depth[..n]);
                     }
                     if id {
-                        material.resize(n, 0.0);
-                        if !by_blocks {
-                            labels_into(
-                                &frame.id[range.clone()],
-                                &labels.of_id,
-                                &mut material[..n],
-                            );
-                        }
+                        s.material.resize(n, 0.0);
+                        labels_into(&frame.id[range.clone()], of_id, &mut s.material[..n]);
                     }
                     if color {
-                        luma.resize(n, 0.0);
-                        luma_into(&frame.color, range.clone(), &mut luma[..n]);
-                    }
-                    let rows_in = yb - ya;
-                    // Every row's ranges are written before they are read.
-                    ranges.resize(rows_in * blocks, RowBlock::default());
-                    for done in [&mut *q_done, &mut *label_done] {
-                        done.clear();
-                        done.resize(rows_in * tiles, 0);
+                        s.luma.resize(n, 0.0);
+                        luma_into(&frame.color, range.clone(), &mut s.luma[..n]);
                     }
                     let nrm = &frame.normal;
-                    let used = [depth, normal, id, color];
-                    let mut next = ya; // the next row whose ranges are taken
+                    let input = EdgeInput {
+                        width: w,
+                        height: yb - ya,
+                        inv_depth: part(depth, &s.inv_depth, 0..n),
+                        normal: [&nrm.r, &nrm.g, &nrm.b].map(|c| part(normal, c, ya * w..yn * w)),
+                        material: part(id, &s.material, 0..n),
+                        luma: part(color, &s.luma, 0..n),
+                    };
                     for (y, out) in (y0..y1).zip(out.chunks_mut(words.max(1))) {
                         let rows = [y.saturating_sub(1), y, (y + 1).min(h - 1)];
-                        let offsets = rows.map(|r| (r - ya) * w);
+                        let rows = rows.map(|r| (r - ya) * w);
                         let keep = |x: usize| !needs_ids || self.selection.contains(ids[y * w + x]);
-                        if !by_blocks {
-                            let input = EdgeInput {
-                                width: w,
-                                height: rows_in,
-                                inv_depth: part(depth, inv_depth, 0..n),
-                                normal: [&nrm.r, &nrm.g, &nrm.b]
-                                    .map(|c| part(normal, c, range.clone())),
-                                material: part(id, material, 0..n),
-                                luma: part(color, luma, 0..n),
-                            };
-                            detect_row_ahead(
-                                &input,
-                                &self.sources,
-                                offsets,
-                                None,
-                                None,
-                                &keep,
-                                out,
-                            );
-                            continue;
-                        }
-                        // The ranges of the rows up to two below y: the
-                        // first read of those rows of the frame, which
-                        // streams them in ahead of the blocks.
-                        while next < (y + 3).min(yb) {
-                            // The frame's rows two below the one whose
-                            // ranges are taken, prefetched.
-                            if next + 2 < yb {
-                                prefetch_row(frame, next + 2, used);
-                            }
-                            let i = next - ya;
-                            let luma_row = part(color, luma, i * w..(i + 1) * w);
-                            let out = &mut ranges[i * blocks..(i + 1) * blocks];
-                            row_ranges(frame, luma_row, next, used, out);
-                            next += 1;
-                        }
-                        kept.clear();
-                        let [r0, r1, r2] = rows.map(|r| &ranges[(r - ya) * blocks..][..blocks]);
-                        for ((a, b), c) in r0.iter().zip(r1).zip(r2) {
-                            let left = sources_by_bounds(
-                                &t,
-                                || labels.one_label([a.id, b.id, c.id]),
-                                |f| RowBlock::range([a, b, c], f),
-                            );
-                            kept.push(left.map_or(0, |l| l.kept()));
-                        }
-                        // 1/w and the labels where they will be read:
-                        // the tiles of the blocks that keep those
-                        // sources, and the row's ends (which measure
-                        // every source).
-                        need_q.clear();
-                        need_q.resize(tiles, 0);
-                        need_l.clear();
-                        need_l.resize(tiles, 0);
-                        for (x, &k) in block_xs(w).zip(kept.iter()) {
-                            if k & Thresholds::DEPTH != 0 {
-                                need_tiles(need_q, x - 1, x + BLOCK);
-                            }
-                            if k & Thresholds::ID != 0 {
-                                need_tiles(need_l, x - 1, x + BLOCK);
-                            }
-                        }
-                        for (c0, c1) in [(0, 1), (w - 2, w - 1)] {
-                            if depth {
-                                need_tiles(need_q, c0, c1);
-                            }
-                            if id {
-                                need_tiles(need_l, c0, c1);
-                            }
-                        }
-                        for (&r, &o) in rows.iter().zip(&offsets) {
-                            let i = o / w;
-                            let row = i * tiles..(i + 1) * tiles;
-                            fill_tiles(&mut q_done[row.clone()], need_q, w, |cols| {
-                                inverse_depth_into(
-                                    &frame.depth[r * w..][cols.clone()],
-                                    &mut inv_depth[o..][cols],
-                                )
-                            });
-                            fill_tiles(&mut label_done[row], need_l, w, |cols| {
-                                labels_into(
-                                    &frame.id[r * w..][cols.clone()],
-                                    &labels.of_id,
-                                    &mut material[o..][cols],
-                                )
-                            });
-                        }
-                        let input = EdgeInput {
-                            width: w,
-                            height: rows_in,
-                            inv_depth: part(depth, inv_depth, 0..n),
-                            normal: [&nrm.r, &nrm.g, &nrm.b]
-                                .map(|c| part(normal, c, range.clone())),
-                            material: part(id, material, 0..n),
-                            luma: part(color, luma, 0..n),
-                        };
-                        detect_row_ahead(
-                            &input,
-                            &self.sources,
-                            offsets,
-                            None,
-                            Some(kept),
-                            &keep,
-                            out,
-                        );
+                        // The normals are read from the frame, two rows
+                        // ahead of their first use (the band's other
+                        // inputs were just computed and are in cache).
+                        let ahead = (normal && y + 2 < yn).then(|| (y + 2 - ya) * w);
+                        detect_row_ahead(&input, &self.sources, rows, ahead, &keep, out);
                     }
                 });
             });
