@@ -323,7 +323,7 @@ const GENTLE_EXCESS: f64 = 1.0 / 64.0;
 /// the stroke's pixels); bounded by the same test.
 fn gentle_outline(centre: &Path, stroke: &Stroke) -> Option<Path> {
     // (A stroke of at most 1 px is a hairline to tiny-skia: no outline.)
-    if !(stroke.width > 1.0) {
+    if stroke.width.is_nan() || stroke.width <= 1.0 {
         return None;
     }
     let bevel = match stroke.line_join {
@@ -373,7 +373,7 @@ fn gentle_outline(centre: &Path, stroke: &Stroke) -> Option<Path> {
         // segment) fails the test.
         let cos_half = (0.5 * (1.0 + cos)).max(0.0).sqrt();
         let excess = r * (1.0 / cos_half - if bevel { cos_half } else { 1.0 });
-        if !(excess <= GENTLE_EXCESS) {
+        if excess.is_nan() || excess > GENTLE_EXCESS {
             return None;
         }
         offset.push([
@@ -384,7 +384,8 @@ fn gentle_outline(centre: &Path, stroke: &Stroke) -> Option<Path> {
     }
     for (i, s) in seg.iter().enumerate() {
         let cut = r * (tan_half[i] + tan_half[(i + 1) % n]);
-        if !(s.1 > cut + GENTLE_EXCESS) {
+        let longer = s.1.partial_cmp(&(cut + GENTLE_EXCESS)) == Some(std::cmp::Ordering::Greater);
+        if !longer {
             return None;
         }
     }
@@ -1736,7 +1737,7 @@ mod tests {
                 let d = dist(q);
                 let inside = winding(&outline, q) != 0;
                 assert!(
-                    !(d <= inner && !inside) && !(d >= outer && inside),
+                    if inside { d < outer } else { d > inner },
                     "case {case}: {q:?} at {d} from the line (r {r}), inside: {inside}"
                 );
                 tested += usize::from(d <= inner || d >= outer);
