@@ -1379,3 +1379,116 @@ width = 1.5
         assert_eq!(plane_ring > 0, !off_screen, "size {size}: {plane_ring}");
     }
 }
+
+/// The front faces the extrusion stage shows culled skip setup in the
+/// outline's back-face pass: the visibility buffer (depth and id bits) and
+/// every setup count are those of the same passes set up triangle by
+/// triangle, in views where the meshes are whole, cut by the image's
+/// edges, crossing the near plane and seen with supersampling; and most
+/// of the front faces are skipped (a third at least; those off the image
+/// or too small for the f32 test go to setup).
+#[test]
+fn extrusion_front_faces_skipped_before_setup_change_nothing() {
+    use specula_raster::frame::{visibility, FrameStats};
+    use specula_raster::geometry::{Cull, VertexStage};
+    use specula_raster::{SceneData, Target, View};
+    use std::ops::Range;
+    use std::sync::Arc;
+
+    /// The stage without its front-face mask: setup decides every face.
+    #[derive(Debug)]
+    struct NoMask(Arc<dyn VertexStage>);
+    impl VertexStage for NoMask {
+        fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>) {
+            self.0.clip_positions(scene, view, out)
+        }
+        fn hidden(&self, triangles: Range<u32>) -> bool {
+            self.0.hidden(triangles)
+        }
+    }
+    let scene = |eye: [f32; 3], ssaa: u32| {
+        format!(
+            r#"
+[camera]
+eye = {eye:?}
+target = [0.0, 0.0, 0.0]
+fov_y = 50.0
+near = 0.3
+far = 100.0
+
+[output]
+width = 80
+height = 60
+ssaa = {ssaa}
+
+[[mesh]]
+sphere = {{ radius = 1.0, segments = 48, rings = 24 }}
+material = "toon"
+
+[[mesh]]
+cube = {{ size = 1.2 }}
+translate = [1.8, 0.4, -0.5]
+rotate = [20.0, 35.0, 0.0]
+material = "toon"
+
+[[mesh]]
+sphere = {{ radius = 0.6, segments = 16, rings = 8 }}
+translate = [-2.2, -0.3, 0.8]
+material = "toon"
+
+[materials.toon]
+model = "lambert"
+base_color = [0.8, 0.5, 0.2]
+
+[[light]]
+type = "directional"
+direction = [-0.5, -0.4, -1.0]
+irradiance = [3.0, 3.0, 3.0]
+
+[[outline]]
+method = "extrusion"
+width = 2.0
+"#
+        )
+    };
+    let views = [
+        ([0.0, -1.0, 5.0], 1),  // all on screen
+        ([0.5, 0.3, 2.2], 1),   // cut by the image's edges
+        ([-1.9, -0.2, 1.2], 1), // the small sphere across the near plane
+        ([3.0, -4.0, 2.5], 2),  // supersampled
+    ];
+    for (eye, ssaa) in views {
+        let s = common::scene(&scene(eye, ssaa), &[]);
+        let data = &s.data;
+        let target = Target::new(80 * ssaa, 60 * ssaa).unwrap();
+        let mut plain = data.clone();
+        for p in plain.geometry.iter_mut().skip(1) {
+            p.vertex = Arc::new(NoMask(p.vertex.clone()));
+        }
+        let (mut st_a, mut st_b) = (FrameStats::default(), FrameStats::default());
+        let a = visibility(data, &target, &mut st_a);
+        let b = visibility(&plain, &target, &mut st_b);
+        let bits = |d: &[f32]| d.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert!(a.vis.id == b.vis.id, "eye {eye:?}: ids differ");
+        assert!(bits(&a.vis.depth) == bits(&b.vis.depth), "eye {eye:?}");
+        assert_eq!(st_a.counts, st_b.counts, "eye {eye:?}");
+        assert_eq!(st_a.raster_triangles, st_b.raster_triangles);
+        // The mask of the back-face pass (right after the frame's view).
+        let pass = (data.geometry.iter())
+            .find(|p| p.name == "outline-extrusion" && p.cull == Cull::Front)
+            .expect("a back-face pass");
+        let mask = pass
+            .vertex
+            .front_faces()
+            .expect("a mask for the frame's view");
+        let skipped: u32 = (pass.triangles.clone())
+            .map(|t| (mask[t as usize / 64] >> (t % 64) & 1) as u32)
+            .sum();
+        // Half the faces culled are the main pass's back faces, about.
+        let culled = st_a.counts.culled_backface as f64 / 2.0;
+        assert!(
+            skipped as f64 > 0.3 * culled,
+            "eye {eye:?}: {skipped} of ~{culled} front faces shown"
+        );
+    }
+}

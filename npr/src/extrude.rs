@@ -67,7 +67,7 @@ use rayon::prelude::*;
 use specula_raster::camera::View;
 use specula_raster::clip::GuardBand;
 use specula_raster::geometry::{Cull, GeometryPass, VertexStage};
-use specula_raster::setup::{orientation, MAX_CLIP_COORD};
+use specula_raster::setup::{front_face_shown, front_faces_shown_x8, orientation, MAX_CLIP_COORD};
 use specula_raster::SceneData;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -120,6 +120,9 @@ struct ViewState {
     moves: Vec<Option<Move>>,
     /// Per flat piece (`Topology::flat`): its copy is hidden this view.
     hidden: Vec<bool>,
+    /// Per triangle, a bit where `front_face_shown` holds for `out`
+    /// ([`VertexStage::front_faces`]).
+    front_mask: Arc<Vec<u64>>,
 }
 
 /// An outline edge's outward unit screen normal and the screen gradient
@@ -656,12 +659,43 @@ impl VertexStage for Extrude {
         st.hidden = (self.topo.flat.iter())
             .map(|p| copy_hidden(scene, p, &st.clip, &st.out, w, h))
             .collect();
+        // The closed pieces' pass culls front faces: those shown front
+        // facing here (most of them) skip setup (`front_faces`).
+        // Groups of 8 with no face toward the eye in world space (`moves`'
+        // `front`) are not tried: they are back faces after the push too,
+        // nearly always, and a bit left clear only means setup decides.
+        let (copy, facing) = (&st.out, &st.front);
+        scene
+            .triangles
+            .par_chunks(64)
+            .zip(facing.par_chunks(64))
+            .with_min_len(64)
+            .map(|(tris, facing)| {
+                let (eights, rest) = tris.as_chunks::<8>();
+                let mut word = 0u64;
+                for (k, (t8, f8)) in eights.iter().zip(facing.chunks(8)).enumerate() {
+                    if f8.iter().any(|&f| f) {
+                        word |= (front_faces_shown_x8(copy, t8) as u64) << (8 * k);
+                    }
+                }
+                for (k, t) in rest.iter().enumerate() {
+                    let v = t.map(|v| copy[v as usize]);
+                    word |= (front_face_shown(&v) as u64) << (8 * eights.len() + k);
+                }
+                word
+            })
+            .collect_into_vec(Arc::make_mut(&mut st.front_mask));
         st.key = Some(key);
         st.out
             .par_iter()
             .with_min_len(4096)
             .copied()
             .collect_into_vec(out);
+    }
+
+    fn front_faces(&self) -> Option<Arc<Vec<u64>>> {
+        let st = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        st.key.is_some().then(|| st.front_mask.clone())
     }
 
     /// True when every triangle of `triangles` is on a flat open piece

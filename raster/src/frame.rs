@@ -9,7 +9,7 @@ use crate::bin::{BinnedChunk, CHUNK};
 use crate::buffers::{BufferSet, FrameBuffers, Planes3, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
-use crate::geometry::{Cull, GeometryPass};
+use crate::geometry::{mask_bits4, Cull, GeometryPass};
 use crate::occlusion::{tile_minima, DepthBounds, TileMinima};
 use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
@@ -186,6 +186,14 @@ fn geometry_pass(
         out.chunks.resize_with(n_chunks, BinnedChunk::default);
     }
     let chunks = &mut out.chunks[..n_chunks];
+    // Triangles the vertex stage showed front-facing: a `Cull::Front`
+    // pass skips their groups of 4 whole (setup would cull each).
+    let front = match pass.cull {
+        Cull::Front => pass.vertex.front_faces(),
+        _ => None,
+    };
+    let mask: &[u64] = front.as_deref().map_or(&[], Vec::as_slice);
+    let masked = !mask.is_empty();
     let set_up: Vec<(SetupCounts, f64)> = scene.triangles[range.clone()]
         .par_chunks(CHUNK)
         .zip(out.planes[ids.start as usize..ids.end as usize].par_chunks_mut(CHUNK))
@@ -218,6 +226,11 @@ fn geometry_pass(
                 .enumerate()
             {
                 let i = q * LANES;
+                if masked && mask_bits4(mask, range.start + base + i) == 0xF {
+                    counts.triangles += LANES as u64;
+                    counts.culled_backface += LANES as u64;
+                    continue;
+                }
                 let v = Vertices4::gather(clip, tris4.try_into().expect("chunks of LANES"));
                 // Spelled out: `array::from_fn` compiled to copies through
                 // the stack here, which stalled on store forwarding.

@@ -45,6 +45,30 @@ pub trait VertexStage: Debug + Send + Sync {
     fn hidden(&self, _triangles: Range<u32>) -> bool {
         false
     }
+
+    /// Right after `clip_positions` for a frame's view: per source
+    /// triangle t (bit t % 64 of word t / 64), set where the stage has
+    /// shown that setup, given those positions and `Cull::Front`, skips
+    /// the triangle as culled by its facing
+    /// ([`crate::setup::front_face_shown`]). A `Cull::Front` pass skips
+    /// such triangles without setting them up (same pixels, same counts).
+    /// The default shows none.
+    fn front_faces(&self) -> Option<Arc<Vec<u64>>> {
+        None
+    }
+}
+
+/// Bits of triangles `t..t + 4` in a [`VertexStage::front_faces`] mask
+/// (bit k for triangle t + k; 0 past its end).
+#[inline(always)]
+pub fn mask_bits4(mask: &[u64], t: usize) -> u32 {
+    let (word, off) = (t / 64, t % 64);
+    let lo = mask.get(word).map_or(0, |w| w >> off);
+    let hi = match off {
+        61..=63 => mask.get(word + 1).map_or(0, |w| w << (64 - off)),
+        _ => 0,
+    };
+    ((lo | hi) & 0xF) as u32
 }
 
 /// The camera's view-projection of the world-space positions.

@@ -187,6 +187,130 @@ pub fn orientation(v: &[[f32; 4]; 3]) -> f64 {
     dot3(cols[0], cross3(cols[1], cols[2]))
 }
 
+/// Relative margin of [`front_face_shown`]'s f32 determinant: its
+/// rounding error is below 5·2⁻²⁴ ≈ 3e-7 of the sum of the terms' sizes
+/// (to first order), so a value above 2e-6 of that sum has the exact
+/// determinant's sign with ~6× slack. (A triangle under ~0.2 % of the
+/// view across has too little area against its terms in f32 and is left
+/// to setup.)
+const FRONT_MARGIN: f32 = 2e-6;
+
+/// Whether `setup` (and `setup_x4`) with `Cull::Front` would skip the
+/// triangle of clip-space vertices `v` as culled by its facing, shown in
+/// f32: every coordinate valid (not NaN, |c| ≤ `MAX_CLIP_COORD`, which is
+/// 2⁵⁰, exact in f32), the vertices not all beyond one clip plane
+/// (`outcode`'s comparisons, exact in f32 as in f64), and the determinant
+/// `orientation` evaluates positive. The last is shown from the same
+/// expression in f32, d, and the sum of its terms' sizes,
+/// P = |x₀|(|y₁w₂| + |w₁y₂|) + |y₀|(|w₁x₂| + |x₁w₂|) + |w₀|(|x₁y₂| + |y₁x₂|):
+/// d − D is below 5·2⁻²⁴·P to first order for D the exact determinant, and
+/// `orientation`'s f64 value is within 5·2⁻⁵³·P of D, so d > 2e-6·P gives
+/// D > 0 and a positive, finite f64 determinant (its products stay far
+/// below f64's range for valid coordinates). Overflow (inf or NaN in f32)
+/// fails the comparison; d > 1e-20 keeps clear of f32's subnormals (their
+/// absolute error, ~1e-45, times coordinates up to 2⁵⁰ stays below 1e-29).
+/// `false` says nothing: `setup` decides. Tested against `setup` itself.
+#[inline(always)]
+pub fn front_face_shown(v: &[[f32; 4]; 3]) -> bool {
+    let [[x0, y0, _, w0], [x1, y1, _, w1], [x2, y2, _, w2]] = *v;
+    let (a, b) = (y1 * w2, w1 * y2);
+    let (c, d) = (w1 * x2, x1 * w2);
+    let (e, f) = (x1 * y2, y1 * x2);
+    let det = x0 * (a - b) + y0 * (c - d) + w0 * (e - f);
+    let size = x0.abs() * (a.abs() + b.abs())
+        + y0.abs() * (c.abs() + d.abs())
+        + w0.abs() * (e.abs() + f.abs());
+    if !(det > FRONT_MARGIN * size && det > 1e-20) {
+        return false;
+    }
+    const MAX: f32 = MAX_CLIP_COORD as f32;
+    let valid = v.iter().flatten().all(|c| c.abs() <= MAX);
+    let all3 = |f: fn(&[f32; 4]) -> bool| f(&v[0]) && f(&v[1]) && f(&v[2]);
+    let outside = all3(|p| p[0] < -p[3])
+        || all3(|p| p[0] > p[3])
+        || all3(|p| p[1] < -p[3])
+        || all3(|p| p[1] > p[3])
+        || all3(|p| p[2] > p[3])
+        || all3(|p| p[2] < 0.0);
+    valid && !outside
+}
+
+/// Vertex `j` of the 8 triangles `tris` as (x, y, z, w) columns, lane k
+/// for `tris[k]`: one 16-byte load a vertex, transposed in registers.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[inline(always)]
+fn corners_x8(clip: &[[f32; 4]], tris: &[[u32; 3]; 8], j: usize) -> [wide::f32x8; 4] {
+    use core::arch::x86_64::{
+        __m128, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps,
+        _mm_loadu_ps,
+    };
+    let load = |k: usize| -> __m128 {
+        let p: &[f32; 4] = &clip[tris[k][j] as usize];
+        // SAFETY: AVX is enabled (cfg); `p` is 16 readable bytes.
+        unsafe { _mm_loadu_ps(p.as_ptr()) }
+    };
+    // SAFETY: AVX is enabled (cfg). Rows (x, y, z, w) of triangles k and
+    // k + 4 share a register; a 4×4 transpose in each 128-bit half.
+    unsafe {
+        let t0 = _mm256_set_m128(load(4), load(0));
+        let t1 = _mm256_set_m128(load(5), load(1));
+        let t2 = _mm256_set_m128(load(6), load(2));
+        let t3 = _mm256_set_m128(load(7), load(3));
+        let (u0, u1) = (_mm256_unpacklo_ps(t0, t1), _mm256_unpackhi_ps(t0, t1));
+        let (u2, u3) = (_mm256_unpacklo_ps(t2, t3), _mm256_unpackhi_ps(t2, t3));
+        [
+            bytemuck::cast(_mm256_shuffle_ps::<0x44>(u0, u2)),
+            bytemuck::cast(_mm256_shuffle_ps::<0xEE>(u0, u2)),
+            bytemuck::cast(_mm256_shuffle_ps::<0x44>(u1, u3)),
+            bytemuck::cast(_mm256_shuffle_ps::<0xEE>(u1, u3)),
+        ]
+    }
+}
+
+/// See the AVX version.
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+#[inline(always)]
+fn corners_x8(clip: &[[f32; 4]], tris: &[[u32; 3]; 8], j: usize) -> [wide::f32x8; 4] {
+    let p: [[f32; 4]; 8] = std::array::from_fn(|k| clip[tris[k][j] as usize]);
+    std::array::from_fn(|c| wide::f32x8::new(std::array::from_fn(|k| p[k][c])))
+}
+
+/// [`front_face_shown`] of the 8 triangles `tris` (indices into
+/// `clip`): bit k for `tris[k]`. The same f32 operations lane by lane, so
+/// the same answers (tested); about a tenth of the instructions. Panics,
+/// as indexing does, on an index past `clip`.
+#[inline]
+pub fn front_faces_shown_x8(clip: &[[f32; 4]], tris: &[[u32; 3]; 8]) -> u32 {
+    use wide::f32x8;
+    let [x0, y0, z0, w0] = corners_x8(clip, tris, 0);
+    let [x1, y1, z1, w1] = corners_x8(clip, tris, 1);
+    let [x2, y2, z2, w2] = corners_x8(clip, tris, 2);
+    let (a, b) = (y1 * w2, w1 * y2);
+    let (c, d) = (w1 * x2, x1 * w2);
+    let (e, f) = (x1 * y2, y1 * x2);
+    let det = x0 * (a - b) + y0 * (c - d) + w0 * (e - f);
+    let size = x0.abs() * (a.abs() + b.abs())
+        + y0.abs() * (c.abs() + d.abs())
+        + w0.abs() * (e.abs() + f.abs());
+    let shown = det.simd_gt(f32x8::splat(FRONT_MARGIN) * size) & det.simd_gt(f32x8::splat(1e-20));
+    if shown.to_bitmask() == 0 {
+        return 0;
+    }
+    let max = f32x8::splat(MAX_CLIP_COORD as f32);
+    let mut valid = shown;
+    for v in [x0, y0, z0, w0, x1, y1, z1, w1, x2, y2, z2, w2] {
+        valid &= v.abs().simd_le(max);
+    }
+    let zero = f32x8::ZERO;
+    let outside = (x0.simd_lt(-w0) & x1.simd_lt(-w1) & x2.simd_lt(-w2))
+        | (x0.simd_gt(w0) & x1.simd_gt(w1) & x2.simd_gt(w2))
+        | (y0.simd_lt(-w0) & y1.simd_lt(-w1) & y2.simd_lt(-w2))
+        | (y0.simd_gt(w0) & y1.simd_gt(w1) & y2.simd_gt(w2))
+        | (z0.simd_gt(w0) & z1.simd_gt(w1) & z2.simd_gt(w2))
+        | (z0.simd_lt(zero) & z1.simd_lt(zero) & z2.simd_lt(zero));
+    valid.to_bitmask() & !outside.to_bitmask()
+}
+
 impl SetupContext {
     /// Sets up the triangle of id `tri` (clip-space vertices `v`), skipping
     /// it if `cull` says its facing is not drawn. Pushes its

@@ -413,3 +413,74 @@ fn orientation_is_the_sign_setup_culls_by() {
     }
     assert!(front > 5_000 && back > 5_000, "{front} front, {back} back");
 }
+
+/// `front_face_shown` only says "culled" where `setup` with `Cull::Front`
+/// does cull (every kind of input: odd coordinates, vertices behind the
+/// eye, outside, slivers, huge values, nearly collinear), says it for
+/// almost every well-conditioned front face, and the 8-wide version gives
+/// the scalar answer lane by lane.
+#[test]
+fn a_shown_front_face_is_one_setup_culls() {
+    use crate::setup::{front_face_shown, front_faces_shown_x8};
+    let ctx = ctx(64, 48);
+    let mut rng = StdRng::seed_from_u64(23);
+    let mut tris: Vec<Tri> = random_mix(&mut rng, &ctx, 40_000)
+        .into_iter()
+        .map(|(v, _)| v)
+        .collect();
+    tris.extend(edge_cases(&mut rng, &ctx));
+    // Nearly collinear at every scale: the margin decides.
+    for _ in 0..20_000 {
+        let mut v = mesh_like(&mut rng);
+        let t = rng.random_range(-2.0f32..3.0);
+        let e = 10f32.powf(rng.random_range(-9.0..-3.0)) * rng.random_range(-1.0f32..1.0);
+        let scale = 10f32.powf(rng.random_range(-20.0..14.0));
+        v[2] = std::array::from_fn(|c| v[0][c] + t * (v[1][c] - v[0][c]) + e * v[0][c].abs());
+        tris.push(v.map(|p| p.map(|c| c * scale)));
+    }
+    tris.truncate(tris.len() / 8 * 8);
+    let (mut shown, mut front_ok) = (0, 0);
+    for v in &tris {
+        let mut counts = SetupCounts::default();
+        ctx.setup(0, *v, Cull::Front, &mut Vec::new(), &mut counts);
+        let culled = counts.culled_backface == 1;
+        if front_face_shown(v) {
+            assert!(culled, "{v:?}: shown front, setup {counts:?}");
+            shown += 1;
+        }
+        // A plain front face: in front of the eye at a usual distance (f32
+        // products of the coordinates in range), on screen, not thin.
+        let on = v
+            .iter()
+            .all(|p| p[3] > 1e-3 && p[3] < 1e6 && p[0].abs() < p[3] && p[1].abs() < p[3]);
+        let o = crate::setup::orientation(v);
+        let s = v.map(|p| [p[0] as f64 / p[3] as f64, p[1] as f64 / p[3] as f64]);
+        let area =
+            (s[1][0] - s[0][0]) * (s[2][1] - s[0][1]) - (s[2][0] - s[0][0]) * (s[1][1] - s[0][1]);
+        let sides =
+            [0, 1, 2].map(|k| (s[k][0] - s[(k + 1) % 3][0]).hypot(s[k][1] - s[(k + 1) % 3][1]));
+        let long = sides.iter().copied().fold(0.0, f64::max);
+        let short = sides.iter().copied().fold(f64::INFINITY, f64::min);
+        if on && culled && o > 0.0 && short > 0.02 && area > 0.05 * long * long {
+            front_ok += 1;
+            assert!(front_face_shown(v), "{v:?}: a plain front face not shown");
+        }
+    }
+    assert!(
+        shown > 10_000 && front_ok > 1_000,
+        "{shown} shown, {front_ok} plain front faces"
+    );
+    // Positions in one array, triangles of 8 in random order.
+    let clip: Vec<[f32; 4]> = tris.iter().flatten().copied().collect();
+    for (g, _) in tris.chunks_exact(8).enumerate() {
+        let t8: [[u32; 3]; 8] = std::array::from_fn(|k| {
+            let t = (8 * g + (k * 5 + g) % 8) as u32;
+            [3 * t, 3 * t + 1, 3 * t + 2]
+        });
+        let mask = front_faces_shown_x8(&clip, &t8);
+        for (k, t) in t8.iter().enumerate() {
+            let v = t.map(|i| clip[i as usize]);
+            assert_eq!(mask >> k & 1 == 1, front_face_shown(&v), "{v:?}");
+        }
+    }
+}
