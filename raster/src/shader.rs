@@ -5,8 +5,10 @@
 //! [`PacketShader`]; the blanket impl turns it into a [`SurfaceShader`],
 //! the object-safe form the scene stores (`Arc<dyn SurfaceShader>`), with
 //! one monomorphized entry per lane width (f32x8 for the hot path, f32 for
-//! `--scalar`). The dynamic call happens once per packet and material;
-//! everything inside it (the light loop, the BRDF) is static. Crates above
+//! `--scalar`). The dynamic call happens once per packet and material, or
+//! once per run of packets of one material in a tile row
+//! ([`SurfaceShader::shade_x8_batch`]); everything inside it (the light
+//! loop, the BRDF) is static. Crates above
 //! raster (npr's toon and hatching shaders) add shaders this way without
 //! touching core or raster.
 //!
