@@ -183,13 +183,7 @@ impl PacketShader for Lit {
             type Output = ();
             #[inline(always)]
             fn visit<B: Brdf>(self, brdf: &B) {
-                let packets = self.frags.iter().zip(self.lanes).zip(self.out);
-                for ((frag, &lanes), out) in packets {
-                    let input = ShadeInput {
-                        frag,
-                        surface: None,
-                        lanes,
-                    };
+                for (input, out) in ShadeInput::batch(self.frags, self.lanes).zip(self.out) {
                     *out = LightLoop {
                         input: &input,
                         env: self.env,

@@ -35,7 +35,7 @@ pub struct ShadeInput<'a, R: Real> {
     pub lanes: u32,
 }
 
-impl<R: Real> ShadeInput<'_, R> {
+impl<'a, R: Real> ShadeInput<'a, R> {
     /// The local shading frame (normal +Z). Its tangent follows the mesh's
     /// uv tangents when the shader asked for the surface and the mesh has
     /// uvs; otherwise it is some tangent orthogonal to the normal (fine for
@@ -48,6 +48,17 @@ impl<R: Real> ShadeInput<'_, R> {
             Some(s) => s.frame,
             None => ShadingFrame::from_normal(self.frag.n),
         }
+    }
+
+    /// The inputs of a batch (no surface): `frags[i]` under `lanes[i]`
+    /// ([`PacketShader::shade_batch`]).
+    #[inline(always)]
+    pub fn batch(frags: &'a [Fragment<R>], lanes: &'a [u32]) -> impl Iterator<Item = Self> + 'a {
+        frags.iter().zip(lanes).map(|(frag, &lanes)| ShadeInput {
+            frag,
+            surface: None,
+            lanes,
+        })
     }
 }
 
@@ -76,12 +87,7 @@ pub trait PacketShader: Debug + Send + Sync + 'static {
         env: &ShadeEnv,
         out: &mut [Rgb<R>],
     ) {
-        for ((frag, &lanes), out) in frags.iter().zip(lanes).zip(out) {
-            let input = ShadeInput {
-                frag,
-                surface: None,
-                lanes,
-            };
+        for (input, out) in ShadeInput::batch(frags, lanes).zip(out) {
             *out = self.shade(&input, env);
         }
     }
