@@ -1,5 +1,8 @@
-//! Shared setup for specula's criterion benchmarks: the benchmark scene
-//! (fixtures/scenes/sphere-grid.toml, 1920×1080) and explicit thread pools.
+//! Shared setup for specula's criterion benchmarks and measuring examples:
+//! the benchmark scene (fixtures/scenes/sphere-grid.toml, 1920×1080) and
+//! its variants, explicit thread pools, Embree's visibility (`embree`), the
+//! NPR line passes on the benchmark frame (`lines`), and timing in
+//! alternation for ratios on a noisy host (`paired`).
 
 use specula::scene::{load_scene, LoadedScene};
 use std::path::PathBuf;
@@ -88,3 +91,5 @@ pub fn pool(n: usize) -> rayon::ThreadPool {
 }
 
 pub mod embree;
+pub mod lines;
+pub mod paired;
