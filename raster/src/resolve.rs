@@ -120,6 +120,24 @@ impl PacketTris {
         p
     }
 
+    /// Whether this grouping holds one triangle over all 8 lanes and the
+    /// first 8 of `ids` all show it: then [`PacketTris::fill`] of `ids`
+    /// would write what is already here (with the same context). Most
+    /// packets of a large triangle follow one of the same triangle.
+    #[inline(always)]
+    pub fn is_one_triangle_of(&self, ids: &[u32]) -> bool {
+        if self.n != 1 || self.covered != 0xFF {
+            return false;
+        }
+        let Some(ids) = ids.first_chunk::<8>() else {
+            return false;
+        };
+        u32x8::new(*ids)
+            .simd_eq(u32x8::splat(self.id[0]))
+            .to_bitmask()
+            == 0xFF
+    }
+
     /// [`PacketTris::new`] in place: the shading pass keeps one across
     /// packets. (Returning the struct by value cost a third of the pass:
     /// its fields are written by scalar stores and the copy reads them

@@ -210,7 +210,12 @@ pub unsafe fn shade_tile<R: ShadeLanes>(
                     }
                 }
             }
-            tris.fill(&ids[at..], R::LANES, Some(ctx));
+            // A packet showing the previous packet's one triangle in all
+            // its lanes keeps that grouping (~100 instructions a packet
+            // for the ground's packets).
+            if !(R::LANES == 8 && tris.is_one_triangle_of(&ids[at..])) {
+                tris.fill(&ids[at..], R::LANES, Some(ctx));
+            }
             let px = lx..lx + n_px;
             lx += R::LANES;
             if tris.n == 0 {
