@@ -446,4 +446,40 @@ mod tests {
             assert_eq!(p.covered, scalar_covered, "{ids:?}");
         }
     }
+
+    #[test]
+    fn a_grouping_is_kept_only_where_a_fresh_one_would_be_the_same() {
+        let packets: [[u32; 8]; 7] = [
+            [5; 8],
+            [5; 8],
+            [5, 5, 5, 5, 5, 5, 5, 6],
+            [MISS, 5, 5, 5, 5, 5, 5, 5],
+            [6; 8],
+            [MISS; 8],
+            [6; 8],
+        ];
+        let mut kept = PacketTris::default();
+        let mut reused = 0;
+        for pair in packets.windows(2) {
+            let [before, now] = [pair[0], pair[1]];
+            kept.fill(&before, 8, None);
+            let fresh = PacketTris::group(&now, 8);
+            if kept.is_one_triangle_of(&now) {
+                reused += 1;
+                let k = (kept.n, kept.id[0], kept.lanes[0], kept.covered, kept.groups);
+                let f = (
+                    fresh.n,
+                    fresh.id[0],
+                    fresh.lanes[0],
+                    fresh.covered,
+                    fresh.groups,
+                );
+                assert_eq!(k, f, "{before:?} -> {now:?}");
+            }
+        }
+        // Only [5; 8] after [5; 8]: not after a packet with a MISS lane or
+        // a second triangle, not for another triangle, not after none.
+        assert_eq!(reused, 1);
+        assert!(!kept.is_one_triangle_of(&[6; 7]), "fewer than 8 ids");
+    }
 }
