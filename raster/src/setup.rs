@@ -18,11 +18,15 @@ pub struct Edge {
 
 /// A screen-space triangle ready for scan conversion (a clipped triangle
 /// becomes several, all with the id of the triangle they came from).
+///
+/// The fields the scan of a small triangle reads (`small`, `bbox`, `tri`)
+/// come first, in the struct's first 60 bytes (`repr(C)` keeps the order):
+/// with the compiler's own order they lay at both ends of the 160, so a
+/// small triangle's scan touched two or three cache lines of it instead of
+/// one or two.
 #[derive(Clone, Copy, Debug)]
+#[repr(C)]
 pub struct RasterTri {
-    pub edges: [Edge; 3],
-    /// 1 / (256·|A|) per edge (0 where A = 0): see [`RasterTri::span`].
-    pub inv_step: [f64; 3],
     /// For triangles whose vertices span at most `SMALL_PX` pixels each
     /// way: the edge values at the centre of pixel (bbox x0, bbox y0) in
     /// i32, the form the 8-wide coverage test of `scan` evaluates.
@@ -31,6 +35,9 @@ pub struct RasterTri {
     pub bbox: [i32; 4],
     /// Id of the source triangle (its index in the scene).
     pub tri: u32,
+    pub edges: [Edge; 3],
+    /// 1 / (256·|A|) per edge (0 where A = 0): see [`RasterTri::span`].
+    pub inv_step: [f64; 3],
 }
 
 /// How a triangle covers a rectangle of pixels ([`RasterTri::rect_coverage`]).
