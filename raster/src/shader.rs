@@ -119,13 +119,6 @@ pub trait SurfaceShader: Debug + Send + Sync + 'static {
         env: &ShadeEnv,
         out: &mut [Rgb<f32x8>],
     );
-    fn shade_x1_batch(
-        &self,
-        frags: &[Fragment<f32>],
-        lanes: &[u32],
-        env: &ShadeEnv,
-        out: &mut [Rgb<f32>],
-    );
     fn needs_surface(&self) -> bool;
     fn check_lights(&self, lights: &[Light]) -> Result<(), String>;
     /// For callers that need the concrete shader back (benchmarks swapping
@@ -146,15 +139,6 @@ impl<T: PacketShader> SurfaceShader for T {
         lanes: &[u32],
         env: &ShadeEnv,
         out: &mut [Rgb<f32x8>],
-    ) {
-        self.shade_batch(frags, lanes, env, out)
-    }
-    fn shade_x1_batch(
-        &self,
-        frags: &[Fragment<f32>],
-        lanes: &[u32],
-        env: &ShadeEnv,
-        out: &mut [Rgb<f32>],
     ) {
         self.shade_batch(frags, lanes, env, out)
     }
@@ -214,6 +198,9 @@ impl ShadeLanes for f32 {
     fn shade_with(s: &dyn SurfaceShader, input: &ShadeInput<Self>, env: &ShadeEnv) -> Rgb<Self> {
         s.shade_x1(input, env)
     }
+    /// One call a packet: the shading pass does not batch the scalar twin
+    /// (a 1-pixel packet pays more for its place in a batch than it saves
+    /// of the call), so this only has to be right.
     #[inline(always)]
     fn shade_batch_with(
         s: &dyn SurfaceShader,
@@ -222,7 +209,9 @@ impl ShadeLanes for f32 {
         env: &ShadeEnv,
         out: &mut [Rgb<Self>],
     ) {
-        s.shade_x1_batch(frags, lanes, env, out)
+        for (input, out) in ShadeInput::batch(frags, lanes).zip(out) {
+            *out = s.shade_x1(&input, env);
+        }
     }
 }
 
