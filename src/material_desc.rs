@@ -13,7 +13,7 @@ use specula_core::Model;
 use specula_npr::hatching::{builtin_tam, Hatching};
 use specula_npr::tam::TamTexture;
 use specula_npr::toon::{Hard, Ramp, Toon};
-use specula_raster::textured::TexturedLit;
+use specula_raster::maps::ParamMaps;
 use specula_raster::{Lit, Material, Unlit};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -508,13 +508,16 @@ impl MaterialDesc {
                 Some(path) => {
                     let map = crate::textures::load_color_map(path, read)
                         .map_err(|e| format!("base_color_texture: {e}"))?;
+                    let maps = ParamMaps {
+                        base_color: Some(map),
+                    };
                     let name_ = model.name();
-                    let shader = TexturedLit::new(model, map).ok_or_else(|| {
+                    let shader = Lit::with_maps(model, maps).map_err(|_| {
                         format!("base_color_texture: the \"{name_}\" model takes no texture")
                     })?;
                     Material::new(name, shader, double_sided)
                 }
-                None => Material::new(name, Lit { model }, double_sided),
+                None => Material::new(name, Lit::new(model), double_sided),
             },
             Shading::Unlit(u) => Material::new(name, u, double_sided),
         })
@@ -662,7 +665,9 @@ impl ToonDesc {
         };
         Ok(Toon {
             base_color: self.base_color,
-            base_color_map,
+            maps: ParamMaps {
+                base_color: base_color_map,
+            },
             ramp,
             specular: hard(
                 "specular_threshold",

@@ -118,7 +118,7 @@ pub fn ltc_refusal(model: &Model) -> Option<String> {
 pub fn check_materials(materials: &[Material]) -> Result<(), String> {
     for m in materials {
         if let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() {
-            if let Some(why) = ltc_refusal(&lit.model) {
+            if let Some(why) = ltc_refusal(lit.model()) {
                 return Err(format!("material {:?}: {why}", m.name));
             }
         }

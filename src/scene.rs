@@ -404,7 +404,7 @@ fn default_material() -> Material {
         roughness: 0.5,
         metallic: 0.0,
     });
-    Material::new("default", Lit { model }, false)
+    Material::new("default", Lit::new(model), false)
 }
 
 /// The metallic-roughness reading of an MTL material: `Kd` base colour, `Pr`
@@ -456,13 +456,14 @@ fn mtl_material(
             let path = obj_dir.join(tex.trim());
             let map = crate::textures::load_color_map(&path, read)
                 .map_err(|e| format!("material {}: map_Kd: {e}", m.name))?;
-            let shader =
-                specula_raster::textured::TexturedLit::new(model, map).ok_or_else(|| {
-                    format!("material {}: map_Kd: the model takes no texture", m.name)
-                })?;
+            let maps = specula_raster::maps::ParamMaps {
+                base_color: Some(map),
+            };
+            let shader = Lit::with_maps(model, maps)
+                .map_err(|e| format!("material {}: map_Kd: {e}", m.name))?;
             Ok(Material::new(&m.name, shader, false))
         }
-        None => Ok(Material::new(&m.name, Lit { model }, false)),
+        None => Ok(Material::new(&m.name, Lit::new(model), false)),
     }
 }
 
@@ -882,5 +883,5 @@ fn is_metallic_roughness(m: &Material) -> bool {
     m.shader
         .as_any()
         .downcast_ref::<Lit>()
-        .is_some_and(|l| matches!(l.model, Model::MetallicRoughness(_)))
+        .is_some_and(|l| matches!(l.model(), Model::MetallicRoughness(_)))
 }

@@ -3,8 +3,8 @@
 //! v = 0 is the bottom of the picture (the OBJ/MTL convention for `vt`).
 
 use crate::material_desc::ReadFile;
+use specula_raster::maps::ColorMap;
 use specula_raster::texture::{Encoding, Filter, Sampler, Texture, Wrap};
-use specula_raster::textured::ColorMap;
 use std::path::Path;
 use std::sync::Arc;
 

@@ -39,12 +39,12 @@ fn benches(c: &mut Criterion) {
             roughness: 0.4,
             metallic: 0.0,
         });
-        Material::new(n, Lit { model }, false)
+        Material::new(n, Lit::new(model), false)
     });
     let toon = with_all(&scene, &|n| {
         let shader = Toon {
             base_color: [0.8, 0.5, 0.3],
-            base_color_map: None,
+            maps: Default::default(),
             ramp: Ramp::bands(3).expect("3 bands"),
             specular: Some(Hard {
                 threshold: 0.98,

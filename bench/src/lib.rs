@@ -31,7 +31,7 @@ pub fn benchmark_scene_microfacet() -> LoadedScene {
         let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() else {
             continue;
         };
-        if let Model::MetallicRoughness(mr) = &lit.model {
+        if let Model::MetallicRoughness(mr) = lit.model() {
             let params = MicrofacetParams {
                 ndf: Ndf::Ggx,
                 alpha: mr.alpha(),
@@ -44,7 +44,7 @@ pub fn benchmark_scene_microfacet() -> LoadedScene {
                 gtr_lambda: Default::default(),
             };
             let model = Model::Microfacet(Microfacet::new(params, None));
-            *m = specula_raster::Material::new(&m.name, Lit { model }, m.double_sided);
+            *m = specula_raster::Material::new(&m.name, Lit::new(model), m.double_sided);
         }
     }
     s
@@ -64,7 +64,7 @@ pub fn benchmark_scene_disney() -> LoadedScene {
         let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() else {
             continue;
         };
-        if let Model::MetallicRoughness(mr) = &lit.model {
+        if let Model::MetallicRoughness(mr) = lit.model() {
             let params = DisneyParams {
                 base_color: mr.base_color,
                 roughness: mr.roughness,
@@ -76,7 +76,7 @@ pub fn benchmark_scene_disney() -> LoadedScene {
                 ..DisneyParams::default()
             };
             let model = Model::Disney(Disney::new(params, false));
-            *m = specula_raster::Material::new(&m.name, Lit { model }, m.double_sided);
+            *m = specula_raster::Material::new(&m.name, Lit::new(model), m.double_sided);
         }
     }
     s

@@ -122,10 +122,10 @@ impl AlbedoTables {
         [t.a, t.b, t.c]
     }
 
-    /// A, B, C per lane (μo per lane, α per material).
+    /// A, B, C per lane.
     #[inline(always)]
-    pub fn ggx_schlick<R: Real>(&self, alpha: f32, mu_o: R) -> SplitSum<R> {
-        let [a, b] = self.ab.lookup(mu_o, R::splat(alpha as f64));
+    pub fn ggx_schlick<R: Real>(&self, alpha: R, mu_o: R) -> SplitSum<R> {
+        let [a, b] = self.ab.lookup(mu_o, alpha);
         let [c] = self.c.lookup(mu_o);
         SplitSum { a, b, c }
     }

@@ -1,13 +1,29 @@
 //! The interface every material model implements, and the dispatch from the
 //! runtime [`Model`] value to monomorphized kernels.
 //!
-//! Shading is split in two steps, so that work that depends only on the
-//! pixel is done once per packet however many lights there are:
+//! A model is split the way pbrt splits a Material from its BxDF, and
+//! Filament its MaterialInputs from its PixelParams:
 //!
-//! 1. [`Brdf::prepare`] takes the view direction `wo` in the local shading
-//!    frame ([`ShadingFrame`]: tangent +X, bitangent +Y, normal +Z) and
-//!    returns the model's per-pixel state (μo, table lookups such as E(μo),
-//!    later LTC matrices and texture samples);
+//! - the model value (`&self`) holds what is fixed for the whole material
+//!   by construction: which terms it composes (NDF, Smith, Fresnel kinds)
+//!   and the tables built at its parameters (E(μo) at its α, the
+//!   compensation slice);
+//! - [`Brdf::Params`] holds, per lane, what may differ from pixel to pixel
+//!   (base colour, roughness, metallic, …). [`Brdf::params`] broadcasts the
+//!   material's constants, the fast path of untextured materials; a shader
+//!   with texture maps overwrites lanes of it before shading
+//!   ([`LaneParams`]). Each model's docs say which of its parameters are
+//!   lanes.
+//!
+//! Shading is then split in two steps, so that work that depends only on
+//! the pixel is done once per packet however many lights there are:
+//!
+//! 1. [`Brdf::pixel`] derives from the parameters what does not depend
+//!    on the view (F0, the diffuse albedo: Filament's PixelParams), and
+//!    [`Brdf::prepare_with`] takes that and the view direction `wo` in the
+//!    local shading frame ([`ShadingFrame`]: tangent +X, bitangent +Y,
+//!    normal +Z) and returns the model's per-pixel BRDF (μo, table lookups
+//!    such as E(μo));
 //! 2. each light then asks that state for what it needs: a delta light for
 //!    f(wi, wo) cos θi at one local direction ([`Brdf::f_cos_local`]), the
 //!    uniform environment for the directional albedo
@@ -190,11 +206,27 @@ impl<R: Real> HalfAngles<R> {
     }
 }
 
+/// A model's parameters per lane ([`Brdf::Params`]): the slots a texture
+/// map may fill. A slot the model does not have answers `None`, and a
+/// scene that maps it is refused when it loads.
+pub trait LaneParams<R: Real>: Copy {
+    /// The base colour, which a base-colour map multiplies texel by texel.
+    #[inline(always)]
+    fn base_color_mut(&mut self) -> Option<&mut Rgb<R>> {
+        None
+    }
+}
+
 /// A BRDF in its local shading frame (normal +Z, tangent +X); directions
 /// are unit length and point away from the surface, `wi` toward the light,
 /// `wo` toward the viewer.
 pub trait Brdf: Send + Sync {
-    /// What the model computes once per pixel from the view direction.
+    /// The parameters that may vary per pixel, one value per lane (module
+    /// docs).
+    type Params<R: Real>: LaneParams<R>;
+
+    /// What the model computes once per pixel from its parameters and the
+    /// view direction: the pixel's BRDF, stateless from then on.
     type Prepared<R: Real>: Copy;
 
     /// The model reads the tangent (anisotropic): the shading pass then
@@ -205,8 +237,29 @@ pub trait Brdf: Send + Sync {
     /// The model integrates polygon lights ([`Brdf::polygon_local`]).
     const POLYGON_LIGHTS: bool = false;
 
-    /// Per-pixel state from the unit local view direction.
-    fn prepare<R: Real>(&self, wo: V3<R>) -> Self::Prepared<R>;
+    /// What the parameters determine before the view is known (F0, the
+    /// diffuse lobe's albedo): made once per packet, or once per run of
+    /// packets whose parameters are the material's constants.
+    type Pixel<R: Real>: Copy;
+
+    /// The material's constant parameters in every lane.
+    fn params<R: Real>(&self) -> Self::Params<R>;
+
+    /// Lane `i` of `params` in f64 (for references integrated per lane).
+    fn params_lane<R: Real>(params: &Self::Params<R>, i: usize) -> Self::Params<f64>;
+
+    /// The view-independent part of the pixel's BRDF.
+    fn pixel<R: Real>(&self, params: &Self::Params<R>) -> Self::Pixel<R>;
+
+    /// The pixel's BRDF from its [`Brdf::pixel`] and the unit local view
+    /// direction.
+    fn prepare_with<R: Real>(&self, pixel: &Self::Pixel<R>, wo: V3<R>) -> Self::Prepared<R>;
+
+    /// [`Brdf::prepare_with`] at the material's constant parameters.
+    #[inline(always)]
+    fn prepare<R: Real>(&self, wo: V3<R>) -> Self::Prepared<R> {
+        self.prepare_with(&self.pixel(&self.params()), wo)
+    }
 
     /// f(wi, wo) for a unit local `wi`, no cosine folded in; zero when
     /// either direction is at or below the horizon.

@@ -22,7 +22,7 @@ pub mod real;
 pub mod table;
 pub mod vec3;
 
-pub use brdf::{Brdf, BrdfVisitor, Model, Outgoing, ShadingFrame};
+pub use brdf::{Brdf, BrdfVisitor, LaneParams, Model, Outgoing, ShadingFrame};
 pub use real::{Mask, Real};
 pub use vec3::{Rgb, V3};
 pub use wide::f32x8;

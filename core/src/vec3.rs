@@ -37,6 +37,15 @@ impl<R: Real> V3<R> {
     pub fn zero() -> Self {
         Self::splat(R::ZERO)
     }
+    /// Lane `i`, in f64.
+    #[inline(always)]
+    pub fn lane(self, i: usize) -> V3<f64> {
+        V3 {
+            x: self.x.lane(i),
+            y: self.y.lane(i),
+            z: self.z.lane(i),
+        }
+    }
     #[inline(always)]
     pub fn dot(self, o: Self) -> R {
         self.x.mul_add(o.x, self.y.mul_add(o.y, self.z * o.z))

@@ -11,11 +11,13 @@
 //! equal width in n·l, value (k + 1)/n on [k/n, (k + 1)/n) and 0 where
 //! n·l ≤ 0; an explicit ramp gives colour c_i from edge e_i up to the next
 //! edge, black below the first. base is `base_color`, times the
-//! base-colour texture where there is one.
+//! base-colour texture where there is one: the shader's lane parameters
+//! ([`ToonParams`]) are filled by its maps the way a physically based
+//! model's are (raster's maps.rs).
 
 use crate::lights::for_each_light;
-use specula_core::{Real, Rgb};
-use specula_raster::textured::ColorMap;
+use specula_core::{LaneParams, Real, Rgb};
+use specula_raster::maps::ParamMaps;
 use specula_raster::{PacketShader, ShadeEnv, ShadeInput};
 
 /// A step function of n·l: (edge, RGB factor) pairs, edges increasing.
@@ -89,11 +91,25 @@ pub struct Hard {
     pub color: [f32; 3],
 }
 
+/// The toon shader's parameters per lane.
+#[derive(Clone, Copy, Debug)]
+pub struct ToonParams<R: Real> {
+    pub base_color: Rgb<R>,
+}
+
+impl<R: Real> LaneParams<R> for ToonParams<R> {
+    #[inline(always)]
+    fn base_color_mut(&mut self) -> Option<&mut Rgb<R>> {
+        Some(&mut self.base_color)
+    }
+}
+
 /// The `toon` shader; see the module docs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Toon {
     pub base_color: [f32; 3],
-    pub base_color_map: Option<ColorMap>,
+    /// Maps of its parameters (the base colour).
+    pub maps: ParamMaps,
     pub ramp: Ramp,
     pub specular: Option<Hard>,
     pub rim: Option<Hard>,
@@ -104,10 +120,11 @@ impl PacketShader for Toon {
     fn shade<R: Real>(&self, input: &ShadeInput<R>, env: &ShadeEnv) -> Rgb<R> {
         let frag = input.frag;
         let n = frag.n;
-        let mut base = Rgb::from_f32(self.base_color);
-        if let Some(m) = &self.base_color_map {
-            base = base.mul_elem(m.sample(input));
-        }
+        let mut params = ToonParams {
+            base_color: Rgb::from_f32(self.base_color),
+        };
+        self.maps.fill(input, &mut params);
+        let base = params.base_color;
         let diffuse = base * R::FRAC_1_PI;
         let mut acc = Rgb::zero();
         for_each_light(frag.p, env, |wi, e| {
@@ -131,6 +148,6 @@ impl PacketShader for Toon {
     }
 
     fn needs_surface(&self) -> bool {
-        self.base_color_map.is_some()
+        !self.maps.is_empty()
     }
 }

@@ -11,8 +11,8 @@
 //! shader (`shader`: `lit` for the physically based models, `unlit`) 8
 //! pixels at a time (`shade`) into row-major frame buffers (`buffers`:
 //! colour, depth, normal, id); `texture` is the mip-mapped texture
-//! sampler shaders read (base-colour maps, tonal art maps), `textured` the
-//! lit models with a base-colour map; `post` runs the post stages (supersampling
+//! sampler shaders read (base-colour maps, tonal art maps), `maps` fills a
+//! material's per-pixel parameters from it; `post` runs the post stages (supersampling
 //! resolve, exposure, tone map, encode, and any custom image-space stage).
 
 pub mod bin;
@@ -23,6 +23,7 @@ pub mod fixed;
 pub mod frame;
 pub mod geometry;
 pub mod lit;
+pub mod maps;
 pub mod occlusion;
 pub mod post;
 pub mod resolve;
@@ -34,7 +35,6 @@ pub mod shade;
 pub mod shader;
 pub mod target;
 pub mod texture;
-pub mod textured;
 pub mod unlit;
 
 pub use buffers::{BufferSet, FrameBuffers, Planes3};

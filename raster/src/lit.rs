@@ -1,39 +1,92 @@
 //! The physically based shader: a core [`Model`] lit by the scene's lights.
 //!
-//! Per packet the model first prepares what depends on the pixel alone
-//! ([`Brdf::prepare`] with wo in the local frame); then each light adds its
+//! Per packet the model's parameters are made (its constants, then its
+//! texture maps where it has any: maps.rs); the model then prepares what
+//! depends on the pixel alone ([`Brdf::prepare_with`] with wo in the local
+//! frame); then each light adds its
 //! part in the local frame: delta lights (point, directional) through one
 //! direction, polygon lights through the model's integral over the polygon,
 //! the uniform environment through the directional albedo.
 
+use crate::maps::ParamMaps;
 use crate::resolve::Fragment;
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
 use specula_core::light::{AreaMethod, Light, PolygonLocal, MAX_POLYGON_VERTICES};
 use specula_core::ltc::reference::polygon_reference_lanes;
 use specula_core::{Brdf, BrdfVisitor, Model, Real, Rgb, ShadingFrame, V3};
 
-/// A model under the scene's lights.
+/// A model under the scene's lights, its parameters filled per pixel by
+/// its maps.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Lit {
-    pub model: Model,
+    model: Model,
+    maps: ParamMaps,
+}
+
+impl Lit {
+    /// The model with its constant parameters.
+    pub fn new(model: Model) -> Lit {
+        Lit {
+            model,
+            maps: ParamMaps::default(),
+        }
+    }
+
+    /// The model with parameters from `maps`; an error names the first map
+    /// whose parameter the model does not have.
+    pub fn with_maps(model: Model, maps: ParamMaps) -> Result<Lit, String> {
+        struct Check<'a>(&'a ParamMaps);
+        impl BrdfVisitor for Check<'_> {
+            type Output = Option<&'static str>;
+            fn visit<B: Brdf>(self, b: &B) -> Option<&'static str> {
+                self.0.unsupported(b.params::<f32>())
+            }
+        }
+        match model.visit(Check(&maps)) {
+            Some(map) => Err(format!(
+                "{map}: the \"{}\" model has no parameter it can map",
+                model.name()
+            )),
+            None => Ok(Lit { model, maps }),
+        }
+    }
+
+    pub fn model(&self) -> &Model {
+        &self.model
+    }
 }
 
 /// Squared distances below this are treated as this, so a light lying on a
 /// surface gives a large finite value instead of inf·0 = NaN.
 const MIN_DIST2: f64 = 1e-8;
 
+/// The parameters of `brdf` at a packet (its constants, then its maps),
+/// and what they determine before the view is known.
+#[inline(always)]
+fn pixel_at<B: Brdf, R: Real>(
+    brdf: &B,
+    maps: &ParamMaps,
+    input: &ShadeInput<R>,
+) -> (B::Params<R>, B::Pixel<R>) {
+    let mut params = brdf.params();
+    if !maps.is_empty() {
+        maps.fill(input, &mut params);
+    }
+    (params, brdf.pixel(&params))
+}
+
 struct LightLoop<'a, 'b, R: Real> {
     input: &'a ShadeInput<'b, R>,
     env: &'a ShadeEnv<'a>,
+    maps: &'a ParamMaps,
 }
 
-impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
-    type Output = Rgb<R>;
-
+impl<R: Real> LightLoop<'_, '_, R> {
+    /// Every light on one packet whose parameters determined `pixel`.
     #[inline(always)]
-    fn visit<B: Brdf>(self, brdf: &B) -> Rgb<R> {
+    fn shade<B: Brdf>(self, brdf: &B, pixel: &B::Pixel<R>) -> Rgb<R> {
         let (frag, frame) = (self.input.frag, &self.input.frame());
-        let prepared = brdf.prepare(frame.to_local(frag.wo));
+        let prepared = brdf.prepare_with(pixel, frame.to_local(frag.wo));
         let mut acc = Rgb::zero();
         let mut rest = self.env.lights;
         while let [light, tail @ ..] = rest {
@@ -43,7 +96,7 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
             // out-of-line loop that makes the polygons' per-pixel state
             // once for all of them.
             if B::POLYGON_LIGHTS && matches!(light, Light::Polygon { .. }) {
-                acc += lights_from_polygon(brdf, self.input, rest);
+                acc += lights_from_polygon(brdf, self.maps, self.input, rest);
                 break;
             }
             acc = add_delta_light(brdf, &prepared, frag, frame, light, acc);
@@ -53,6 +106,16 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
             acc += brdf.albedo_local(&prepared).mul_elem(V3::from_f32(env));
         }
         acc
+    }
+}
+
+impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
+    type Output = Rgb<R>;
+
+    #[inline(always)]
+    fn visit<B: Brdf>(self, brdf: &B) -> Rgb<R> {
+        let (_, pixel) = pixel_at(brdf, self.maps, self.input);
+        self.shade(brdf, &pixel)
     }
 }
 
@@ -110,18 +173,21 @@ fn add_delta_light<B: Brdf, R: Real>(
 /// ([`Brdf::prepare_polygons`]: the LTC lookup) is made here, once for all
 /// of them, so pixels lit only by point lights never pay for it.
 ///
-/// The frame and the prepared view are made again here (the same values,
-/// bit for bit) rather than passed by reference: a reference made the
-/// light loop store both to memory in every call, polygon lights or not.
+/// The parameters, the frame and the prepared view are made again here
+/// (the same values, bit for bit) rather than passed by reference: a
+/// reference made the light loop store them to memory in every call,
+/// polygon lights or not.
 #[inline(never)]
 #[cold]
 fn lights_from_polygon<B: Brdf, R: Real>(
     brdf: &B,
+    maps: &ParamMaps,
     input: &ShadeInput<R>,
     lights: &[Light],
 ) -> Rgb<R> {
     let (frag, frame) = (input.frag, &input.frame());
-    let prepared = &brdf.prepare(frame.to_local(frag.wo));
+    let (params, pixel) = pixel_at(brdf, maps, input);
+    let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
     let mut poly = PolygonLocal {
         vertices: [V3::zero(); MAX_POLYGON_VERTICES],
         len: 0,
@@ -150,7 +216,9 @@ fn lights_from_polygon<B: Brdf, R: Real>(
                 let pp = per_pixel.get_or_insert_with(|| brdf.prepare_polygons(prepared));
                 brdf.polygon_local_with(prepared, pp, &poly)
             }
-            AreaMethod::Reference => polygon_reference_lanes(brdf, frame.to_local(frag.wo), &poly),
+            AreaMethod::Reference => {
+                polygon_reference_lanes(brdf, &params, frame.to_local(frag.wo), &poly)
+            }
         };
         acc += e.mul_elem(V3::from_f32(*radiance));
     }
@@ -160,11 +228,17 @@ fn lights_from_polygon<B: Brdf, R: Real>(
 impl PacketShader for Lit {
     #[inline(always)]
     fn shade<R: Real>(&self, input: &ShadeInput<R>, env: &ShadeEnv) -> Rgb<R> {
-        self.model.visit(LightLoop { input, env })
+        self.model.visit(LightLoop {
+            input,
+            env,
+            maps: &self.maps,
+        })
     }
 
-    /// The model is dispatched once for the batch, so its constants are
-    /// made once too.
+    /// The model is dispatched once for the batch, so its parameters and
+    /// what they determine before the view are made once too: batches hold
+    /// only packets of materials without maps (which need no surface),
+    /// whose parameters are their constants.
     #[inline(always)]
     fn shade_batch<R: Real>(
         &self,
@@ -173,6 +247,12 @@ impl PacketShader for Lit {
         env: &ShadeEnv,
         out: &mut [Rgb<R>],
     ) {
+        if !self.maps.is_empty() {
+            for (input, out) in ShadeInput::batch(frags, lanes).zip(out) {
+                *out = self.shade(&input, env);
+            }
+            return;
+        }
         struct Packets<'a, R: Real> {
             frags: &'a [Fragment<R>],
             lanes: &'a [u32],
@@ -183,12 +263,15 @@ impl PacketShader for Lit {
             type Output = ();
             #[inline(always)]
             fn visit<B: Brdf>(self, brdf: &B) {
+                let pixel = brdf.pixel(&brdf.params());
+                let maps = &ParamMaps::default();
                 for (input, out) in ShadeInput::batch(self.frags, self.lanes).zip(self.out) {
                     *out = LightLoop {
                         input: &input,
                         env: self.env,
+                        maps,
                     }
-                    .visit(brdf);
+                    .shade(brdf, &pixel);
                 }
             }
         }
@@ -208,7 +291,7 @@ impl PacketShader for Lit {
                 B::ANISOTROPIC
             }
         }
-        self.model.visit(Aniso)
+        self.model.visit(Aniso) || !self.maps.is_empty()
     }
 
     fn check_lights(&self, lights: &[Light]) -> Result<(), String> {

@@ -276,12 +276,13 @@ pub fn integrate_polygon(
     Estimate { value, error }
 }
 
-/// The reference for every lane of a packet: each lane's view and polygon
-/// taken to f64 and integrated at [`Tolerance::RENDER`] with the model's
-/// own f cos θi. Slow (thousands of BRDF evaluations per lane); for
+/// The reference for every lane of a packet: each lane's parameters, view
+/// and polygon taken to f64 and integrated at [`Tolerance::RENDER`] with the
+/// model's own f cos θi. Slow (thousands of BRDF evaluations per lane); for
 /// `area_lights = "reference"`.
 pub fn polygon_reference_lanes<B: Brdf, R: Real>(
     brdf: &B,
+    params: &B::Params<R>,
     wo: V3<R>,
     poly: &PolygonLocal<R>,
 ) -> Rgb<R> {
@@ -290,7 +291,7 @@ pub fn polygon_reference_lanes<B: Brdf, R: Real>(
     for lane in 0..R::LANES {
         let get = |v: V3<R>| V3::new(v.x.lane(lane), v.y.lane(lane), v.z.lane(lane));
         let wo = get(wo).normalize_or(V3::new(0.0, 0.0, 1.0));
-        let p = brdf.prepare::<f64>(wo);
+        let p = brdf.prepare_with(&brdf.pixel(&B::params_lane(params, lane)), wo);
         let verts: Vec<V3<f64>> = poly.vertices().iter().map(|v| get(*v)).collect();
         let f = |wi: V3<f64>| {
             let c = brdf.f_cos_local(&p, wi);

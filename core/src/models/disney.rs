@@ -102,11 +102,20 @@
 //! - Compensation: its lobe as its albedo factor · (1 − E(μo)) times the
 //!   form factor, like `microfacet`'s.
 //!
+//! **Lane parameters** ([`DisneyLaneParams`]): the lobes' colours
+//! ((1 − metallic) C_d / π, the sheen colour, C_spec0) and the diffuse
+//! lobes' roughness and subsurface, as the kernels read them. No texture
+//! map may set them yet: the directional albedo is tabulated per material
+//! over all parameters, so a pixel whose parameters differ from the
+//! material's would be lit by the environment with the wrong albedo. The
+//! specular and clearcoat α, which select tables and LTC forms, are the
+//! material's.
+//!
 //! All lobes together over roughness 0.05–1, metallic 0/1, anisotropic
 //! 0/0.5/1, clearcoat 0/1, sheen 0/1: median 0.17 %, p90 3.2 %, max 47 %
 //! of the directional albedo (isotropic lobes: p90 2.1 %, max 10.9 %).
 
-use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
+use crate::brdf::{Brdf, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
 use crate::diffuse::{f_subsurface_burley, fd_burley, sheen_burley};
 use crate::fresnel::{f_schlick, schlick_weight};
 use crate::kulla_conty::KcColor;
@@ -280,10 +289,27 @@ pub struct Disney {
     albedo: Table2<3>,
 }
 
+/// A Disney material's parameters per lane (module docs, "Lane
+/// parameters").
+#[derive(Clone, Copy, Debug)]
+pub struct DisneyLaneParams<R: Real> {
+    /// (1 − metallic) C_d / π.
+    pub diffuse: Rgb<R>,
+    /// (1 − metallic) sheen C_sheen.
+    pub sheen: Rgb<R>,
+    /// C_spec0, the specular lobe's Schlick F0.
+    pub cspec0: Rgb<R>,
+    pub roughness: R,
+    pub subsurface: R,
+}
+
+impl<R: Real> LaneParams<R> for DisneyLaneParams<R> {}
+
 /// Per-pixel state of a Disney material.
 #[derive(Clone, Copy)]
 pub struct DisneyPrepared<R: Real> {
     pub o: Outgoing<R>,
+    pub lanes: DisneyLaneParams<R>,
     /// (1 − μo)⁵.
     pub w_o: R,
     /// Smith G1(o) of the specular and of the clearcoat lobe.
@@ -390,11 +416,12 @@ impl Disney {
         let w_i = schlick_weight(ci);
         let w_h = sheen_burley(h.cos_d);
 
-        let rough = R::splat(d.roughness);
+        let l = &p.lanes;
+        let rough = l.roughness;
         let fd = fd_burley(rough, cos2_d, w_i, p.w_o);
         let ss = f_subsurface_burley(rough, cos2_d, w_i, p.w_o, ci, co);
-        let base = (ss - fd).mul_add(R::splat(d.subsurface), fd);
-        let diffuse = rgb::<R>(d.diffuse) * base + rgb::<R>(d.sheen) * w_h;
+        let base = (ss - fd).mul_add(l.subsurface, fd);
+        let diffuse = l.diffuse * base + l.sheen * w_h;
 
         let inv_4 = (R::splat(4.0) * ci * co).rcp();
         let (ax, ay) = (R::splat(d.alpha_x), R::splat(d.alpha_y));
@@ -407,7 +434,7 @@ impl Disney {
             h.cos2_h,
         );
         let g1_i = g1_smith(lambda_ggx_aniso(ax, ay, wi.x, wi.y, ci));
-        let mut specular = f_schlick(rgb(d.cspec0), h.cos_d) * (d_s * g1_i * p.g1_o * inv_4);
+        let mut specular = f_schlick(l.cspec0, h.cos_d) * (d_s * g1_i * p.g1_o * inv_4);
         if let Some(k) = &self.kc {
             specular += k.f(ci, p.one_minus_e_o);
         }
@@ -645,15 +672,22 @@ impl Disney {
     /// [`diffuse_albedo_table`].
     #[inline(always)]
     pub fn diffuse_albedo<R: Real>(&self, cos_o: R) -> Rgb<R> {
-        let d = &self.d;
-        let c = diffuse_albedo_table().lookup(cos_o);
-        let r = R::splat(d.roughness);
-        let fd = c[2].mul_add(r, c[1]).mul_add(r, c[0]);
-        let ss = c[5].mul_add(r, c[4]).mul_add(r, c[3]);
-        let base = (ss - fd).mul_add(R::splat(d.subsurface), fd);
-        rgb::<R>(d.diffuse) * base + rgb::<R>(d.sheen) * c[6]
+        diffuse_albedo_of(&self.params(), cos_o)
     }
 }
+
+/// [`Disney::diffuse_albedo`] for parameters per lane.
+#[inline(always)]
+fn diffuse_albedo_of<R: Real>(l: &DisneyLaneParams<R>, cos_o: R) -> Rgb<R> {
+    let c = diffuse_albedo_table().lookup(cos_o);
+    let r = l.roughness;
+    let fd = c[2].mul_add(r, c[1]).mul_add(r, c[0]);
+    let ss = c[5].mul_add(r, c[4]).mul_add(r, c[3]);
+    let base = (ss - fd).mul_add(l.subsurface, fd);
+    l.diffuse * base + l.sheen * c[6]
+}
+
+impl Disney {}
 
 impl Disney {
     /// The GGX LTC of the anisotropic specular lobe at the view `wo`
@@ -699,6 +733,8 @@ impl Disney {
 }
 
 impl Brdf for Disney {
+    type Params<R: Real> = DisneyLaneParams<R>;
+    type Pixel<R: Real> = DisneyLaneParams<R>;
     type Prepared<R: Real> = DisneyPrepared<R>;
     type PolygonPrepared<R: Real> = DisneyPolygons<R>;
 
@@ -706,7 +742,36 @@ impl Brdf for Disney {
     const POLYGON_LIGHTS: bool = true;
 
     #[inline(always)]
-    fn prepare<R: Real>(&self, wo: V3<R>) -> DisneyPrepared<R> {
+    fn params<R: Real>(&self) -> DisneyLaneParams<R> {
+        let d = &self.d;
+        DisneyLaneParams {
+            diffuse: rgb(d.diffuse),
+            sheen: rgb(d.sheen),
+            cspec0: rgb(d.cspec0),
+            roughness: R::splat(d.roughness),
+            subsurface: R::splat(d.subsurface),
+        }
+    }
+
+    /// The parameters themselves: nothing to derive before the view.
+    #[inline(always)]
+    fn pixel<R: Real>(&self, params: &DisneyLaneParams<R>) -> DisneyLaneParams<R> {
+        *params
+    }
+
+    #[inline(always)]
+    fn params_lane<R: Real>(p: &DisneyLaneParams<R>, i: usize) -> DisneyLaneParams<f64> {
+        DisneyLaneParams {
+            diffuse: p.diffuse.lane(i),
+            sheen: p.sheen.lane(i),
+            cspec0: p.cspec0.lane(i),
+            roughness: p.roughness.lane(i),
+            subsurface: p.subsurface.lane(i),
+        }
+    }
+
+    #[inline(always)]
+    fn prepare_with<R: Real>(&self, params: &DisneyLaneParams<R>, wo: V3<R>) -> DisneyPrepared<R> {
         let o = Outgoing::new(wo);
         let (ax, ay) = (R::splat(self.d.alpha_x), R::splat(self.d.alpha_y));
         DisneyPrepared {
@@ -718,6 +783,7 @@ impl Brdf for Disney {
                 None => R::ZERO,
             },
             o,
+            lanes: *params,
         }
     }
 
@@ -733,11 +799,11 @@ impl Brdf for Disney {
         } else {
             LtcGgx::new(R::splat(d.spec_ltc_alpha), o.wo)
         };
-        let c = d.cspec0;
+        let c = p.lanes.cspec0;
         let specular = Rgb::new(
-            spec.schlick_albedo(R::splat(c[0])),
-            spec.schlick_albedo(R::splat(c[1])),
-            spec.schlick_albedo(R::splat(c[2])),
+            spec.schlick_albedo(c.x),
+            spec.schlick_albedo(c.y),
+            spec.schlick_albedo(c.z),
         );
         // A material constant: the branch is the same in every lane.
         let coat = (d.clearcoat_weight > 0.0).then(|| {
@@ -746,7 +812,7 @@ impl Brdf for Disney {
             c.scale = c.scale.map(|s| k * s);
             c
         });
-        let mut diffuse = self.diffuse_albedo(o.cos_o.min(R::ONE));
+        let mut diffuse = diffuse_albedo_of(&p.lanes, o.cos_o.min(R::ONE));
         if let Some(k) = &self.kc {
             diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
         }

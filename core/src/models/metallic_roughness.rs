@@ -5,15 +5,18 @@
 //!   + (1 − F_Schlick(F0)) (1 − metallic) base_color / π
 //!
 //! with α = roughness², F0 = mix(0.04, base_color, metallic).   [glTF2, Appendix B]
+//!
+//! Every parameter (base colour, roughness, metallic) is a lane parameter:
+//! its tables are indexed per lane.
 
 use crate::albedo_tables::AlbedoTables;
-use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
+use crate::brdf::{Brdf, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
 use crate::diffuse::f_lambert;
 use crate::fresnel::schlick_weight_half;
 use crate::light::PolygonLocal;
 use crate::ltc::ggx::LtcGgx;
 use crate::masking::{dv_ggx_correlated, smith_ggx_root};
-use crate::real::Real;
+use crate::real::{Mask, Real};
 use crate::vec3::{Rgb, V3};
 
 /// Parameters as the user gives them; see the module docs for the formula.
@@ -49,14 +52,68 @@ impl MetallicRoughness {
     pub fn diffuse_color(&self) -> [f32; 3] {
         self.base_color.map(|c| c * (1.0 - self.metallic))
     }
+}
 
+/// The model's parameters per lane: all of them.
+#[derive(Clone, Copy, Debug)]
+pub struct MetallicRoughnessLaneParams<R: Real> {
+    /// Linear RGB.
+    pub base_color: Rgb<R>,
+    /// α = roughness², floored at [`ALPHA_MIN`].
+    pub alpha: R,
+    pub metallic: R,
+}
+
+impl<R: Real> MetallicRoughnessLaneParams<R> {
+    /// Parameters from a perceptual roughness per lane (α = roughness²,
+    /// floored as [`MetallicRoughness::alpha`] does).
+    #[inline(always)]
+    pub fn new(base_color: Rgb<R>, roughness: R, metallic: R) -> Self {
+        MetallicRoughnessLaneParams {
+            base_color,
+            alpha: (roughness * roughness).max(R::splat(ALPHA_MIN as f64)),
+            metallic,
+        }
+    }
+}
+
+impl<R: Real> LaneParams<R> for MetallicRoughnessLaneParams<R> {
+    #[inline(always)]
+    fn base_color_mut(&mut self) -> Option<&mut Rgb<R>> {
+        Some(&mut self.base_color)
+    }
+}
+
+/// What a metallic-roughness pixel's parameters determine before the
+/// view is known.
+#[derive(Clone, Copy, Debug)]
+pub struct MetallicRoughnessPixel<R: Real> {
+    pub alpha: R,
+    /// F0 = mix(0.04, base_color, metallic), and 1 − F0.
+    pub f0: Rgb<R>,
+    pub one_minus_f0: Rgb<R>,
+    /// Albedo of the diffuse lobe, (1 − metallic) base_color, and its
+    /// Lambertian lobe ρd/π.
+    pub diffuse: Rgb<R>,
+    pub kd: Rgb<R>,
+}
+
+/// A metallic-roughness pixel: its view, the Smith root of the view, and
+/// what its parameters determine.
+#[derive(Clone, Copy)]
+pub struct MetallicRoughnessPrepared<R: Real> {
+    pub o: Outgoing<R>,
+    pub px: MetallicRoughnessPixel<R>,
+    /// √(α² + (1 − α²) μo²) (masking.rs).
+    pub smith_root_o: R,
+}
+
+impl<R: Real> MetallicRoughnessPrepared<R> {
     /// f from the half-vector quantities of the pixel's view and a light.
     #[inline(always)]
-    fn f_half<R: Real>(&self, p: &MetallicRoughnessPrepared<R>, h: HalfAngles<R>) -> Rgb<R> {
-        let alpha = R::splat(self.alpha() as f64);
-        let f0 = self.f0();
-        let kd = f_lambert(Rgb::from_f32(self.diffuse_color()));
-
+    fn f_half(&self, h: HalfAngles<R>) -> Rgb<R> {
+        let px = &self.px;
+        let kd = px.kd;
         let HalfAngles {
             cos_i,
             cos_o,
@@ -69,54 +126,95 @@ impl MetallicRoughness {
 
         let w = schlick_weight_half(len);
         let dv = dv_ggx_correlated(
-            alpha,
+            px.alpha,
             s,
             len2,
             cos_i,
             cos_o,
-            smith_ggx_root(alpha, cos_i),
-            p.smith_root_o,
+            smith_ggx_root(px.alpha, cos_i),
+            self.smith_root_o,
         );
         // F·DV + (1 − F)·kd = kd + F·(DV − kd), with Schlick's
         // F = F0 + (1 − F0) w per channel: two fused steps a channel.
-        let channel = |f0: f32, kd: R| {
-            let f = R::splat(1.0 - f0 as f64).mul_add(w, R::splat(f0 as f64));
+        let channel = |f0: R, one_minus_f0: R, kd: R| {
+            let f = one_minus_f0.mul_add(w, f0);
             f.mul_add(dv - kd, kd)
         };
+        let (f0, f0c) = (px.f0, px.one_minus_f0);
         let f = Rgb::new(
-            channel(f0[0], kd.x),
-            channel(f0[1], kd.y),
-            channel(f0[2], kd.z),
+            channel(f0.x, f0c.x, kd.x),
+            channel(f0.y, f0c.y, kd.y),
+            channel(f0.z, f0c.z, kd.z),
         );
         Rgb::select(above, f, Rgb::zero())
     }
 }
 
-/// Per-pixel state: the view direction and its Smith root.
-#[derive(Clone, Copy)]
-pub struct MetallicRoughnessPrepared<R: Real> {
-    pub o: Outgoing<R>,
-    /// √(α² + (1 − α²) μo²) (masking.rs).
-    pub smith_root_o: R,
-}
-
 impl Brdf for MetallicRoughness {
+    type Params<R: Real> = MetallicRoughnessLaneParams<R>;
+    type Pixel<R: Real> = MetallicRoughnessPixel<R>;
     type Prepared<R: Real> = MetallicRoughnessPrepared<R>;
     type PolygonPrepared<R: Real> = MetallicRoughnessPolygons<R>;
     const POLYGON_LIGHTS: bool = true;
 
     #[inline(always)]
-    fn prepare<R: Real>(&self, wo: V3<R>) -> MetallicRoughnessPrepared<R> {
+    fn params<R: Real>(&self) -> MetallicRoughnessLaneParams<R> {
+        MetallicRoughnessLaneParams {
+            base_color: Rgb::from_f32(self.base_color),
+            alpha: R::splat(self.alpha() as f64),
+            metallic: R::splat(self.metallic as f64),
+        }
+    }
+
+    #[inline(always)]
+    fn params_lane<R: Real>(
+        p: &MetallicRoughnessLaneParams<R>,
+        i: usize,
+    ) -> MetallicRoughnessLaneParams<f64> {
+        MetallicRoughnessLaneParams {
+            base_color: p.base_color.lane(i),
+            alpha: p.alpha.lane(i),
+            metallic: p.metallic.lane(i),
+        }
+    }
+
+    /// F0 = mix(0.04, base_color, metallic) and the diffuse albedo
+    /// (1 − metallic) base_color, with 1 − F0 and ρd/π.
+    #[inline(always)]
+    fn pixel<R: Real>(&self, params: &MetallicRoughnessLaneParams<R>) -> MetallicRoughnessPixel<R> {
+        let m = params.metallic;
+        let f0_d = R::splat(F0_DIELECTRIC as f64);
+        // Unfused, as [`MetallicRoughness::f0`] rounds it.
+        let mix = |c: R| f0_d + (c - f0_d) * m;
+        let b = params.base_color;
+        let f0 = Rgb::new(mix(b.x), mix(b.y), mix(b.z));
+        let diffuse = b * (R::ONE - m);
+        MetallicRoughnessPixel {
+            alpha: params.alpha,
+            f0,
+            one_minus_f0: Rgb::splat(R::ONE) - f0,
+            diffuse,
+            kd: f_lambert(diffuse),
+        }
+    }
+
+    #[inline(always)]
+    fn prepare_with<R: Real>(
+        &self,
+        px: &MetallicRoughnessPixel<R>,
+        wo: V3<R>,
+    ) -> MetallicRoughnessPrepared<R> {
         let o = Outgoing::new(wo);
         MetallicRoughnessPrepared {
-            smith_root_o: smith_ggx_root(R::splat(self.alpha() as f64), o.cos_o),
+            smith_root_o: smith_ggx_root(px.alpha, o.cos_o),
+            px: *px,
             o,
         }
     }
 
     #[inline(always)]
     fn f_local<R: Real>(&self, p: &MetallicRoughnessPrepared<R>, wi: V3<R>) -> Rgb<R> {
-        self.f_half(p, HalfAngles::new(wi, &p.o))
+        p.f_half(HalfAngles::new(wi, &p.o))
     }
 
     #[inline(always)]
@@ -126,23 +224,21 @@ impl Brdf for MetallicRoughness {
         v: V3<R>,
         inv_len: R,
     ) -> Rgb<R> {
-        self.f_half(p, HalfAngles::scaled(v, inv_len, &p.o))
+        p.f_half(HalfAngles::scaled(v, inv_len, &p.o))
     }
 
     #[inline(always)]
     fn albedo_local<R: Real>(&self, p: &MetallicRoughnessPrepared<R>) -> Rgb<R> {
         let o = &p.o;
-        let t = AlbedoTables::get().ggx_schlick(self.alpha(), o.wo.z.max(R::ZERO));
+        let t = AlbedoTables::get().ggx_schlick(p.px.alpha, o.wo.z.max(R::ZERO));
         // Split sum: E_spec = F0·A + B, E_diff = (1 − F0)(1 − C)·ρd   (see albedo_tables)
-        let f0: Rgb<R> = Rgb::from_f32(self.f0());
-        let diffuse: Rgb<R> = Rgb::from_f32(self.diffuse_color());
+        let f0 = p.px.f0;
         let spec = Rgb::new(
             f0.x.mul_add(t.a, t.b),
             f0.y.mul_add(t.a, t.b),
             f0.z.mul_add(t.a, t.b),
         );
-        let one = Rgb::splat(R::ONE);
-        let diff = (one - f0).mul_elem(diffuse) * (R::ONE - t.c);
+        let diff = p.px.one_minus_f0.mul_elem(p.px.diffuse) * (R::ONE - t.c);
         Rgb::select(o.above, spec + diff, Rgb::zero())
     }
 
@@ -155,20 +251,22 @@ impl Brdf for MetallicRoughness {
         p: &MetallicRoughnessPrepared<R>,
     ) -> MetallicRoughnessPolygons<R> {
         let o = &p.o;
-        let ltc = LtcGgx::new(R::splat(self.alpha() as f64), o.wo);
-        let f0: Rgb<R> = Rgb::from_f32(self.f0());
+        let ltc = LtcGgx::new(p.px.alpha, o.wo);
+        let f0 = p.px.f0;
         let specular = Rgb::new(
             ltc.schlick_albedo(f0.x),
             ltc.schlick_albedo(f0.y),
             ltc.schlick_albedo(f0.z),
         );
         let c = AlbedoTables::get().c(o.wo.z.max(R::ZERO));
-        let diffuse: Rgb<R> = Rgb::from_f32(self.diffuse_color());
-        let diffuse = (Rgb::splat(R::ONE) - f0).mul_elem(diffuse) * (R::ONE - c);
+        let diffuse = p.px.one_minus_f0.mul_elem(p.px.diffuse) * (R::ONE - c);
+        let zero = R::ZERO;
         MetallicRoughnessPolygons {
             ltc,
             specular: Rgb::select(o.above, specular, Rgb::zero()),
             diffuse: Rgb::select(o.above, diffuse, Rgb::zero()),
+            metal: !(p.px.diffuse.x.gt(zero) | p.px.diffuse.y.gt(zero) | p.px.diffuse.z.gt(zero))
+                .any(),
         }
     }
 
@@ -182,9 +280,10 @@ impl Brdf for MetallicRoughness {
         pp: &MetallicRoughnessPolygons<R>,
         poly: &PolygonLocal<R>,
     ) -> Rgb<R> {
-        if self.diffuse_color() == [0.0; 3] {
-            // A metal: no diffuse lobe, so no form factor to integrate
-            // (the specular integral is the same either way, bit for bit).
+        if pp.metal {
+            // Metal in every lane: no diffuse lobe, so no form factor to
+            // integrate (the specular integral is the same either way, bit
+            // for bit).
             return pp.specular * pp.ltc.integral(poly);
         }
         let (ff, spec) = pp.ltc.form_factor_and_integral(poly);
@@ -200,4 +299,6 @@ pub struct MetallicRoughnessPolygons<R: Real> {
     pub specular: Rgb<R>,
     /// (1 − F0) ρd (1 − C(μo)): what multiplies the form factor.
     pub diffuse: Rgb<R>,
+    /// No lane has a diffuse lobe.
+    pub metal: bool,
 }

@@ -12,8 +12,12 @@
 //!
 //! Uniform environment light needs the directional albedo E(μo): it is
 //! tabulated per material when the material is built (`AlbedoTable`).
+//!
+//! Lane parameters: the diffuse base ρd. The terms (NDF, Smith, Fresnel)
+//! and α are the material's: E(μo) and the compensation slice are
+//! tabulated at its α.
 
-use crate::brdf::{Brdf, HalfAngles, Outgoing, ALPHA_MIN};
+use crate::brdf::{Brdf, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
 use crate::fresnel::{f_conductor, f_dielectric, f_schlick, r0_from_ior};
 use crate::gtr_lambda::GtrLambdaTable;
 use crate::kulla_conty::{color_factor, f_avg, slice_for, KcColor, KcSlice};
@@ -374,10 +378,21 @@ impl Microfacet {
     }
 }
 
+/// The microfacet model's parameters per lane (module docs).
+#[derive(Clone, Copy, Debug)]
+pub struct MicrofacetLaneParams<R: Real> {
+    /// Lambertian albedo ρd added to the specular lobe.
+    pub diffuse: Rgb<R>,
+}
+
+impl<R: Real> LaneParams<R> for MicrofacetLaneParams<R> {}
+
 /// A microfacet material's per-pixel state.
 #[derive(Clone, Copy)]
 pub struct MicrofacetPrepared<R: Real> {
     pub o: Outgoing<R>,
+    /// ρd.
+    pub diffuse: Rgb<R>,
     /// Smith Λ(o) of the view direction.
     pub lambda_o: R,
     /// 1 − E(μo) of the compensation lobe (unused without compensation).
@@ -385,14 +400,41 @@ pub struct MicrofacetPrepared<R: Real> {
 }
 
 impl Brdf for Microfacet {
+    type Params<R: Real> = MicrofacetLaneParams<R>;
+    type Pixel<R: Real> = MicrofacetLaneParams<R>;
     type Prepared<R: Real> = MicrofacetPrepared<R>;
     type PolygonPrepared<R: Real> = MicrofacetPolygons<R>;
     const POLYGON_LIGHTS: bool = true;
 
     #[inline(always)]
-    fn prepare<R: Real>(&self, wo: V3<R>) -> MicrofacetPrepared<R> {
+    fn params<R: Real>(&self) -> MicrofacetLaneParams<R> {
+        MicrofacetLaneParams {
+            diffuse: Rgb::from_f32(self.params.diffuse),
+        }
+    }
+
+    /// The parameters themselves: nothing to derive before the view.
+    #[inline(always)]
+    fn pixel<R: Real>(&self, params: &MicrofacetLaneParams<R>) -> MicrofacetLaneParams<R> {
+        *params
+    }
+
+    #[inline(always)]
+    fn params_lane<R: Real>(p: &MicrofacetLaneParams<R>, i: usize) -> MicrofacetLaneParams<f64> {
+        MicrofacetLaneParams {
+            diffuse: p.diffuse.lane(i),
+        }
+    }
+
+    #[inline(always)]
+    fn prepare_with<R: Real>(
+        &self,
+        params: &MicrofacetLaneParams<R>,
+        wo: V3<R>,
+    ) -> MicrofacetPrepared<R> {
         let o = Outgoing::new(wo);
         MicrofacetPrepared {
+            diffuse: params.diffuse,
             lambda_o: self.params.lambda(o.cos_o),
             o,
             one_minus_e_o: match &self.kc {
@@ -406,7 +448,7 @@ impl Brdf for Microfacet {
     fn f_local<R: Real>(&self, p: &MicrofacetPrepared<R>, wi: V3<R>) -> Rgb<R> {
         let params = &self.params;
         let h = HalfAngles::new(wi, &p.o);
-        let mut f = params.specular(&h, p.lambda_o) + Rgb::from_f32(params.diffuse) * R::FRAC_1_PI;
+        let mut f = params.specular(&h, p.lambda_o) + p.diffuse * R::FRAC_1_PI;
         if let Some(k) = &self.kc {
             f += k.f(h.cos_i, p.one_minus_e_o);
         }
@@ -415,8 +457,11 @@ impl Brdf for Microfacet {
 
     #[inline(always)]
     fn albedo_local<R: Real>(&self, p: &MicrofacetPrepared<R>) -> Rgb<R> {
+        // The table holds the material's own ρd: a pixel's ρd replaces it
+        // (exactly nothing to add where the pixel has the material's).
         let [r, g, b] = self.albedo.e.lookup(p.o.wo.z);
-        Rgb::select(p.o.above, Rgb::new(r, g, b), Rgb::zero())
+        let e = Rgb::new(r, g, b) + (p.diffuse - Rgb::from_f32(self.params.diffuse));
+        Rgb::select(p.o.above, e, Rgb::zero())
     }
 
     /// The GGX LTC lookup at this α and the view, with the factors of
@@ -432,7 +477,7 @@ impl Brdf for Microfacet {
             ltc.schlick_albedo(f0[1]),
             ltc.schlick_albedo(f0[2]),
         );
-        let mut diffuse = Rgb::from_f32(params.diffuse);
+        let mut diffuse = p.diffuse;
         if let Some(k) = &self.kc {
             diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
         }

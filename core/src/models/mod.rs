@@ -6,7 +6,9 @@ pub mod lambert;
 pub mod metallic_roughness;
 pub mod microfacet;
 
-pub use disney::{Disney, DisneyParams};
-pub use lambert::Lambert;
-pub use metallic_roughness::MetallicRoughness;
-pub use microfacet::{Fresnel, GtrLambda, Microfacet, MicrofacetParams, Ndf, Smith};
+pub use disney::{Disney, DisneyLaneParams, DisneyParams};
+pub use lambert::{Lambert, LambertLaneParams};
+pub use metallic_roughness::{MetallicRoughness, MetallicRoughnessLaneParams};
+pub use microfacet::{
+    Fresnel, GtrLambda, Microfacet, MicrofacetLaneParams, MicrofacetParams, Ndf, Smith,
+};
