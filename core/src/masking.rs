@@ -35,7 +35,7 @@ pub fn smith_ggx_root<R: Real>(alpha: R, cos_theta: R) -> R {
     let a2 = alpha * alpha;
     // The hardware root, not x·rsqrt(x): on the Zen 5 benchmark machine
     // it runs beside the multipliers the light loop is bound by, and the
-    // shading pass measured ~5 % faster for it (performance-log.md).
+    // shading pass measured ~5 % faster for it.
     let r = (cos_theta * cos_theta).mul_add(R::ONE - a2, a2);
     r.sqrt()
 }
@@ -68,7 +68,7 @@ pub fn v_smith_ggx_correlated_roots<R: Real>(cos_i: R, cos_o: R, s_i: R, s_o: R)
 /// A true division, not `rcp` (estimate + Newton step): one operation on
 /// the light loop's dependency chain instead of four, and the divider
 /// runs beside the multipliers (measured ~2.5 % of a frame on the Zen 5
-/// benchmark machine, performance-log.md).
+/// benchmark machine).
 #[inline(always)]
 pub fn dv_ggx_correlated<R: Real>(
     alpha: R,

@@ -49,7 +49,7 @@
 //! detection reads each field row once: every source's measure 8 samples
 //! at a time in one pass ([`detect_block`]), the frame's normals
 //! prefetched two rows ahead; and the blend prefetches the image lines
-//! near the marks two rows ahead (docs/performance-log.md). A block of 64
+//! near the marks two rows ahead. A block of 64
 //! samples first drops every source whose measure a bound over the
 //! block's values keeps under its threshold ([`block_sources`]): flat
 //! ground and the insides of large faces are not measured.

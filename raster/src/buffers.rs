@@ -152,7 +152,7 @@ impl<'a, T> TileWriter<'a, T> {
     /// tile row only TILE × 4 bytes before the next row's page, too short a
     /// run for the hardware prefetcher, and without this every packet's
     /// store waited on a line from memory: the shading pass ran ~25 %
-    /// slower than into a tile-local buffer (measured, docs/performance-log.md).
+    /// slower than into a tile-local buffer (measured).
     #[inline(always)]
     pub fn prefetch_row(&self, x0: usize, y: usize) {
         if self.width == 0 || y >= self.height {

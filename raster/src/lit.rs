@@ -145,7 +145,7 @@ fn add_delta_light<B: Brdf, R: Real>(
             // local frame while its rsqrt is computed, the model folds the
             // 1/d into its first step, and the factors of f are multiplied
             // into I / d² · cos θi before f is ready, so f reaches the sum
-            // in one step (performance-log.md).
+            // in one step.
             let v = frame.to_local(to_light);
             let k = (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d);
             let radiance = V3::from_f32(*intensity) * k;

@@ -280,7 +280,7 @@ impl ResolveContext<'_> {
         // The normal is interpolated with the unnormalized weights k = b·Σk
         // (its direction is the same: Σk > 0), so its chain of dependent
         // steps does not wait for the reciprocal (1.6 % of a frame's CPU
-        // time, performance-log.md); |k| ≥ |b|/w_far keeps the cancellation
+        // time); |k| ≥ |b|/w_far keeps the cancellation
         // test of `normalize_or` meaningful. The facing sign goes into the
         // weights: ±1, so the normal is the same bits as flipping it after.
         // (No array `map` here: its closure was not inlined.)
