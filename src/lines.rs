@@ -439,7 +439,6 @@ pub fn build(
                 true,
             ));
             let stage = Arc::new(specula_npr::extrude::Extrude::new(data, *width));
-            stage.set_ssaa(output.ssaa);
             let id_base = data.geometry.iter().map(|p| p.ids().end).max().unwrap_or(0) as u32;
             let passes =
                 specula_npr::extrude::extrusion_passes(data, stage.clone(), m, id_base, &|mat| {

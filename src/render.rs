@@ -82,7 +82,9 @@ impl RenderSettings {
         let w = self.width.checked_mul(self.ssaa);
         let h = self.height.checked_mul(self.ssaa);
         match (w, h) {
-            (Some(w), Some(h)) if self.width > 0 && self.height > 0 => Target::new(w, h).map_err(|e| e.to_string()),
+            (Some(w), Some(h)) if self.width > 0 && self.height > 0 => Target::new(w, h)
+                .map(|t| t.with_ssaa(self.ssaa))
+                .map_err(|e| e.to_string()),
             _ => Err(format!(
                 "image size {}×{} with ssaa {} is out of range: width and height must be ≥ 1 and at most {} after supersampling",
                 self.width,
@@ -187,9 +189,6 @@ pub fn render_scene(
         .build()
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
     let repeat = settings.repeat.max(1);
-    for e in &scene.lines.extrusions {
-        e.set_ssaa(settings.ssaa);
-    }
     let post = settings.post();
     post.validate(target.width, target.height)?;
     let buffers = settings.buffers.union(post.buffers());

@@ -134,6 +134,7 @@ fn every_line_field_is_checked_and_named() {
 
 use specula::render::{render_scene, RenderSettings};
 use specula_raster::target::MISS;
+use specula_raster::FrameContext;
 
 /// A sphere of `radius` at the origin seen from (0, 0, `distance`),
 /// `size`² pixels, fov 40°, with `extra` appended.
@@ -419,14 +420,13 @@ fn an_extrusion_stage_moved_between_views_matches_a_fresh_one() {
     let moving = Extrude::new(data, 2.0);
     let mut out = Vec::new();
     for (i, (view, ssaa)) in views.iter().enumerate() {
-        moving.set_ssaa(*ssaa);
+        let frame = FrameContext { view, ssaa: *ssaa };
         for _ in 0..2 {
             out.clear();
-            moving.clip_positions(data, view, &mut out);
+            moving.clip_positions(&frame, data, &mut out);
             let fresh = Extrude::new(data, 2.0);
-            fresh.set_ssaa(*ssaa);
             let mut want = Vec::new();
-            fresh.clip_positions(data, view, &mut want);
+            fresh.clip_positions(&frame, data, &mut want);
             assert_eq!(out.len(), data.positions.len());
             assert!(bits(&out) == bits(&want), "view {i}");
         }
@@ -1290,15 +1290,15 @@ materials = ["a"]
 fn an_open_plane_copy_is_skipped_only_when_its_boundary_is_off_screen() {
     use specula_raster::frame::{visibility, FrameStats};
     use specula_raster::geometry::{Cull, GeometryPass, VertexStage};
-    use specula_raster::{SceneData, Target, View};
+    use specula_raster::{SceneData, Target};
     use std::sync::Arc;
 
     /// The extrusion stage, never skipping: every pass drawn.
     #[derive(Debug)]
     struct NeverHidden(Arc<dyn VertexStage>);
     impl VertexStage for NeverHidden {
-        fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>) {
-            self.0.clip_positions(scene, view, out)
+        fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+            self.0.clip_positions(frame, scene, out)
         }
     }
     let scene = |size: f32| {
@@ -1351,7 +1351,11 @@ width = 1.5
             .collect();
         assert_eq!(open.len(), 1, "size {size}");
         let view = data.camera.view(96, 72);
-        open[0].vertex.clip_positions(data, &view, &mut Vec::new());
+        let frame = FrameContext {
+            view: &view,
+            ssaa: 1,
+        };
+        open[0].vertex.clip_positions(&frame, data, &mut Vec::new());
         assert_eq!(
             open[0].vertex.hidden(open[0].triangles.clone()),
             off_screen,
@@ -1391,7 +1395,7 @@ width = 1.5
 fn extrusion_front_faces_skipped_before_setup_change_nothing() {
     use specula_raster::frame::{visibility, FrameStats};
     use specula_raster::geometry::{Cull, VertexStage};
-    use specula_raster::{SceneData, Target, View};
+    use specula_raster::{SceneData, Target};
     use std::ops::Range;
     use std::sync::Arc;
 
@@ -1399,8 +1403,8 @@ fn extrusion_front_faces_skipped_before_setup_change_nothing() {
     #[derive(Debug)]
     struct NoMask(Arc<dyn VertexStage>);
     impl VertexStage for NoMask {
-        fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>) {
-            self.0.clip_positions(scene, view, out)
+        fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+            self.0.clip_positions(frame, scene, out)
         }
         fn hidden(&self, triangles: Range<u32>) -> bool {
             self.0.hidden(triangles)

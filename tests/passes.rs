@@ -9,7 +9,7 @@ use common::scene;
 use specula::render::{render_scene, RenderSettings};
 use specula_raster::frame::{render, visibility, FrameStats, ShadePath};
 use specula_raster::{
-    Cull, GeometryPass, Material, SceneData, Target, Unlit, VertexStage, View, MISS,
+    Cull, FrameContext, GeometryPass, Material, SceneData, Target, Unlit, VertexStage, MISS,
 };
 use std::sync::Arc;
 
@@ -72,7 +72,8 @@ fn a_scene_split_into_two_passes_gives_the_same_visibility_buffer() {
 struct Inflate(f32);
 
 impl VertexStage for Inflate {
-    fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>) {
+    fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+        let view = frame.view;
         out.extend(
             scene
                 .positions

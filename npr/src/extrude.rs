@@ -58,20 +58,19 @@
 //! and the frame skips it. On the benchmark scene that is the ground's
 //! copy, two screen-filling triangles that wrote no pixel.
 //!
-//! The width is in output pixels; the renderer tells the stage its
-//! supersampling ([`Extrude::set_ssaa`]) so the ring is `width × ssaa`
+//! The width is in output pixels; each frame tells the stage its
+//! supersampling ([`FrameContext::ssaa`]) so the ring is `width × ssaa`
 //! samples wide and `width` pixels after the resolve.
 
 use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use specula_raster::camera::View;
 use specula_raster::clip::GuardBand;
-use specula_raster::geometry::{Cull, GeometryPass, VertexStage};
+use specula_raster::geometry::{Cull, FrameContext, GeometryPass, VertexStage};
 use specula_raster::setup::{front_face_shown, front_faces_shown_x8, orientation, MAX_CLIP_COORD};
 use specula_raster::SceneData;
 use std::collections::HashMap;
 use std::ops::Range;
-use std::sync::atomic::{AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 
 /// Longest miter, in widths: |m| = 1/cos(φ/2) for outward normals φ
@@ -88,7 +87,6 @@ pub const OPEN_DEPTH_PUSH: f32 = 1e-3;
 pub struct Extrude {
     /// Ring width in output pixels.
     pub width: f32,
-    ssaa: AtomicU32,
     /// Smoothed unit normal per scene vertex (module docs).
     smooth: Vec<Vec3>,
     topo: Topology,
@@ -397,7 +395,6 @@ impl Extrude {
     pub fn new(scene: &SceneData, width: f32) -> Extrude {
         Extrude {
             width,
-            ssaa: AtomicU32::new(1),
             smooth: smooth_normals(&scene.positions, &scene.normals),
             topo: Topology::new(&scene.positions, &scene.triangles),
             face_normals: scene
@@ -411,12 +408,6 @@ impl Extrude {
                 .collect(),
             state: Mutex::new(ViewState::default()),
         }
-    }
-
-    /// Supersampling of the frames to come: the push is `width × ssaa`
-    /// samples.
-    pub fn set_ssaa(&self, ssaa: u32) {
-        self.ssaa.store(ssaa.max(1), Ordering::Relaxed);
     }
 
     pub fn smoothed_normals(&self) -> &[Vec3] {
@@ -580,9 +571,10 @@ pub fn smooth_normals(positions: &[Vec3], normals: &[Vec3]) -> Vec<Vec3> {
 }
 
 impl VertexStage for Extrude {
-    fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>) {
+    fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+        let view = frame.view;
         let m = view.view_proj;
-        let px = self.width * self.ssaa.load(Ordering::Relaxed) as f32;
+        let px = self.width * frame.ssaa.max(1) as f32;
         let (hw, hh) = (view.width * 0.5, view.height * 0.5);
         let key = FrameKey {
             view_proj: m.to_cols_array(),

@@ -9,7 +9,7 @@ use crate::bin::{BinnedChunk, CHUNK};
 use crate::buffers::{BufferSet, FrameBuffers, Planes3, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
-use crate::geometry::{mask_bits4, Cull, GeometryPass};
+use crate::geometry::{mask_bits4, Cull, FrameContext, GeometryPass};
 use crate::occlusion::{tile_minima, DepthBounds, TileMinima};
 use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
@@ -150,7 +150,11 @@ fn geometry_pass(
     let t = Instant::now();
     if !same_stage {
         out.clip.clear();
-        pass.vertex.clip_positions(scene, &out.view, &mut out.clip);
+        let frame = FrameContext {
+            view: &out.view,
+            ssaa: target.ssaa,
+        };
+        pass.vertex.clip_positions(&frame, scene, &mut out.clip);
     }
     assert_eq!(
         out.clip.len(),

@@ -31,11 +31,23 @@ pub enum Cull {
     None,
 }
 
+/// What a frame tells the stages that draw it: everything a stage may
+/// depend on besides the scene and its own construction, handed to it per
+/// frame rather than set on it from outside.
+#[derive(Clone, Copy, Debug)]
+pub struct FrameContext<'a> {
+    /// The camera's view of this frame, at the sample resolution.
+    pub view: &'a View,
+    /// Samples per output pixel along each axis (widths given in output
+    /// pixels are this many samples).
+    pub ssaa: u32,
+}
+
 /// Where a pass puts the scene's vertices.
 pub trait VertexStage: Debug + Send + Sync {
     /// Clip-space position of every scene vertex (`scene.positions` order)
     /// into `out`, which arrives cleared.
-    fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>);
+    fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>);
 
     /// Right after `clip_positions` for a frame's view: whether source
     /// triangles `triangles`, drawn from those positions by a pass that
@@ -76,8 +88,8 @@ pub fn mask_bits4(mask: &[u64], t: usize) -> u32 {
 pub struct Project;
 
 impl VertexStage for Project {
-    fn clip_positions(&self, scene: &SceneData, view: &View, out: &mut Vec<[f32; 4]>) {
-        let m = view.view_proj;
+    fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+        let m = frame.view.view_proj;
         scene
             .positions
             .par_iter()

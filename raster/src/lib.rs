@@ -43,7 +43,7 @@ pub use frame::{
     render, render_into, render_ldr, render_ldr_into, render_with, shade, shade_into, visibility,
     visibility_into, Frame, FrameStats, PassTimes, ShadePath, Visibility,
 };
-pub use geometry::{Cull, GeometryPass, Project, VertexStage};
+pub use geometry::{Cull, FrameContext, GeometryPass, Project, VertexStage};
 pub use lit::Lit;
 pub use scene::SceneData;
 pub use shader::{Material, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};

@@ -16,10 +16,14 @@ pub const MISS: u32 = u32::MAX;
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Target {
+    /// Size in samples (the output size times `ssaa`).
     pub width: u32,
     pub height: u32,
     pub tiles_x: u32,
     pub tiles_y: u32,
+    /// Samples per output pixel along each axis: what the post's resolve
+    /// will average, and what stages sized in output pixels scale by.
+    pub ssaa: u32,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
@@ -49,7 +53,17 @@ impl Target {
             height,
             tiles_x: width.div_ceil(t),
             tiles_y: height.div_ceil(t),
+            ssaa: 1,
         })
+    }
+
+    /// The target of an image supersampled `ssaa` × `ssaa` (its size is
+    /// already the sample count; 0 is taken as 1).
+    pub fn with_ssaa(self, ssaa: u32) -> Target {
+        Target {
+            ssaa: ssaa.max(1),
+            ..self
+        }
     }
 
     pub fn tile_count(&self) -> usize {
