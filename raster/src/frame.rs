@@ -1,6 +1,6 @@
 //! One frame as a list of passes: the scene's geometry passes (each:
 //! vertex → clip + setup → bin → raster) into one visibility buffer, then
-//! resolve + shade into the frame buffers; post stages (post.rs) follow.
+//! resolve + shade into the frame buffers; post stages (post/) follow.
 //! Each pass is timed (geometry passes summed per stage); parallel work is
 //! split in fixed pieces (vertex and setup chunks, tiles) so that the result
 //! does not depend on the thread count.
