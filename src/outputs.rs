@@ -311,14 +311,12 @@ mod tests {
         )
         .unwrap_err();
         assert!(e.contains("input"), "{e}");
-        let e = plan(
-            &[("--stats-json", Path::new("/nonexistent/s.json"))],
-            &[],
-            None,
-        )
-        .unwrap_err();
+        // A folder this test owns and never makes, so it is missing on
+        // any machine.
+        let missing = d.join("missing-folder").join("s.json");
+        let e = plan(&[("--stats-json", &missing)], &[], None).unwrap_err();
         assert!(
-            e.contains("--stats-json") && e.contains("/nonexistent"),
+            e.contains("--stats-json") && e.contains("missing-folder"),
             "{e}"
         );
         let e = plan(&[("-o", &d)], &[], None).unwrap_err();

@@ -157,9 +157,9 @@ fn every_output_path_is_checked_before_rendering() {
             "-o",
             "out.png",
             "--stats-json",
-            "/nonexistent/s.json",
+            "missing-folder/s.json",
         ],
-        &["--stats-json", "/nonexistent"],
+        &["--stats-json", "missing-folder"],
     );
 }
 
