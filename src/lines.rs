@@ -370,8 +370,6 @@ impl StrokesDesc {
 pub struct LineStages {
     /// Post stages, in the tables' order (after the tone map).
     pub post: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
-    /// Extrusion vertex stages: the renderer tells them the supersampling.
-    pub extrusions: Vec<std::sync::Arc<specula_npr::extrude::Extrude>>,
     /// The stroke overlay (also among `post`), for `--svg-lines`.
     pub strokes: Option<std::sync::Arc<specula_npr::overlay::Strokes>>,
 }
@@ -440,12 +438,10 @@ pub fn build(
             ));
             let stage = Arc::new(specula_npr::extrude::Extrude::new(data, *width));
             let id_base = data.geometry.iter().map(|p| p.ids().end).max().unwrap_or(0) as u32;
-            let passes =
-                specula_npr::extrude::extrusion_passes(data, stage.clone(), m, id_base, &|mat| {
-                    sel.as_ref().is_none_or(|s| s.contains(&mat))
-                });
+            let passes = specula_npr::extrude::extrusion_passes(data, stage, m, id_base, &|mat| {
+                sel.as_ref().is_none_or(|s| s.contains(&mat))
+            });
             data.geometry.extend(passes);
-            out.extrusions.push(stage);
         }
     }
     let id_material = id_materials(data);

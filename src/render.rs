@@ -59,7 +59,7 @@ impl RenderSettings {
         let mut p = Post::standard(self.ssaa, self.exposure, self.tonemap);
         let encode = p.stages.pop();
         p.stages
-            .extend(self.post_stages.iter().cloned().map(Stage::Custom));
+            .extend(self.post_stages.iter().map(|s| Stage::Custom(s.instance())));
         p.stages.extend(encode);
         p
     }
@@ -189,7 +189,7 @@ pub fn render_scene(
         .build()
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
     let repeat = settings.repeat.max(1);
-    let post = settings.post();
+    let mut post = settings.post();
     post.validate(target.width, target.height)?;
     let buffers = settings.buffers.union(post.buffers());
     let in_shading = settings.ldr_in_shading();

@@ -417,14 +417,14 @@ fn an_extrusion_stage_moved_between_views_matches_a_fresh_one() {
         view(0.7, 1),
     ];
     let bits = |v: &[[f32; 4]]| v.iter().map(|p| p.map(f32::to_bits)).collect::<Vec<_>>();
-    let moving = Extrude::new(data, 2.0);
+    let mut moving = Extrude::new(data, 2.0);
     let mut out = Vec::new();
     for (i, (view, ssaa)) in views.iter().enumerate() {
         let frame = FrameContext { view, ssaa: *ssaa };
         for _ in 0..2 {
             out.clear();
             moving.clip_positions(&frame, data, &mut out);
-            let fresh = Extrude::new(data, 2.0);
+            let mut fresh = Extrude::new(data, 2.0);
             let mut want = Vec::new();
             fresh.clip_positions(&frame, data, &mut want);
             assert_eq!(out.len(), data.positions.len());
@@ -1295,9 +1295,17 @@ fn an_open_plane_copy_is_skipped_only_when_its_boundary_is_off_screen() {
 
     /// The extrusion stage, never skipping: every pass drawn.
     #[derive(Debug)]
-    struct NeverHidden(Arc<dyn VertexStage>);
+    struct NeverHidden(Box<dyn VertexStage>);
     impl VertexStage for NeverHidden {
-        fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+        fn instance(&self) -> Box<dyn VertexStage> {
+            Box::new(NeverHidden(self.0.instance()))
+        }
+        fn clip_positions(
+            &mut self,
+            frame: &FrameContext,
+            scene: &SceneData,
+            out: &mut Vec<[f32; 4]>,
+        ) {
             self.0.clip_positions(frame, scene, out)
         }
     }
@@ -1355,15 +1363,16 @@ width = 1.5
             view: &view,
             ssaa: 1,
         };
-        open[0].vertex.clip_positions(&frame, data, &mut Vec::new());
+        let mut stage = open[0].vertex.instance();
+        stage.clip_positions(&frame, data, &mut Vec::new());
         assert_eq!(
-            open[0].vertex.hidden(open[0].triangles.clone()),
+            stage.hidden(open[0].triangles.clone()),
             off_screen,
             "size {size}"
         );
         let mut drawn = data.clone();
         for p in drawn.geometry.iter_mut().skip(1) {
-            p.vertex = Arc::new(NeverHidden(p.vertex.clone()));
+            p.vertex = Arc::new(NeverHidden(p.vertex.instance()));
         }
         let (mut st_a, mut st_b) = (FrameStats::default(), FrameStats::default());
         let a = visibility(data, &target, &mut st_a);
@@ -1401,9 +1410,17 @@ fn extrusion_front_faces_skipped_before_setup_change_nothing() {
 
     /// The stage without its front-face mask: setup decides every face.
     #[derive(Debug)]
-    struct NoMask(Arc<dyn VertexStage>);
+    struct NoMask(Box<dyn VertexStage>);
     impl VertexStage for NoMask {
-        fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+        fn instance(&self) -> Box<dyn VertexStage> {
+            Box::new(NoMask(self.0.instance()))
+        }
+        fn clip_positions(
+            &mut self,
+            frame: &FrameContext,
+            scene: &SceneData,
+            out: &mut Vec<[f32; 4]>,
+        ) {
             self.0.clip_positions(frame, scene, out)
         }
         fn hidden(&self, triangles: Range<u32>) -> bool {
@@ -1464,10 +1481,10 @@ width = 2.0
     for (eye, ssaa) in views {
         let s = common::scene(&scene(eye, ssaa), &[]);
         let data = &s.data;
-        let target = Target::new(80 * ssaa, 60 * ssaa).unwrap();
+        let target = Target::new(80 * ssaa, 60 * ssaa).unwrap().with_ssaa(ssaa);
         let mut plain = data.clone();
         for p in plain.geometry.iter_mut().skip(1) {
-            p.vertex = Arc::new(NoMask(p.vertex.clone()));
+            p.vertex = Arc::new(NoMask(p.vertex.instance()));
         }
         let (mut st_a, mut st_b) = (FrameStats::default(), FrameStats::default());
         let a = visibility(data, &target, &mut st_a);
@@ -1481,9 +1498,8 @@ width = 2.0
         let pass = (data.geometry.iter())
             .find(|p| p.name == "outline-extrusion" && p.cull == Cull::Front)
             .expect("a back-face pass");
-        let mask = pass
-            .vertex
-            .front_faces()
+        let mask = (a.stage(&pass.vertex))
+            .and_then(|stage| stage.front_faces())
             .expect("a mask for the frame's view");
         let skipped: u32 = (pass.triangles.clone())
             .map(|t| (mask[t as usize / 64] >> (t % 64) & 1) as u32)

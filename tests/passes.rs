@@ -72,7 +72,11 @@ fn a_scene_split_into_two_passes_gives_the_same_visibility_buffer() {
 struct Inflate(f32);
 
 impl VertexStage for Inflate {
-    fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+    fn instance(&self) -> Box<dyn VertexStage> {
+        Box::new(Inflate(self.0))
+    }
+
+    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
         let view = frame.view;
         out.extend(
             scene

@@ -191,7 +191,7 @@ fn a_frame_drawn_into_reused_buffers_equals_a_fresh_one() {
 
     let mut settings = RenderSettings::from_scene(&small);
     settings.ssaa = 1;
-    let post = settings.post();
+    let mut post = settings.post();
     let expected = post.run(&fresh.buffers).expect("post").ldr;
     let dirty = PostOutput {
         ldr: Some(vec![0xA5u8; 480 * 270 * 3 + 1000]),

@@ -88,7 +88,7 @@ fn benches(c: &mut Criterion) {
         fuse: false,
         ..fused.clone()
     };
-    for (name, post) in [("fused", &fused), ("stages", &staged)] {
+    for (name, mut post) in [("fused", fused), ("stages", staged)] {
         g.bench_function(BenchmarkId::new(name, 2), |b| {
             b.iter(|| p.install(|| post.run(&frame.buffers).expect("post")))
         });

@@ -59,10 +59,11 @@ fn benches(c: &mut Criterion) {
 
     // The image is copied outside the timed part (a 25 MB clone per
     // iteration is not the stage's work).
+    let mut sobel = lp.sobel.clone();
     g.bench_function("sobel", |b| {
         b.iter_batched_ref(
             || lp.image.clone(),
-            |im| p.install(|| lp.sobel(im)),
+            |im| p.install(|| lp.run_sobel(&mut sobel, im)),
             BatchSize::LargeInput,
         )
     });
@@ -74,7 +75,10 @@ fn benches(c: &mut Criterion) {
     // strokes blend over it again; the cost does not depend on its values)
     // and the stage's canvases kept, as from frame to frame.
     let mut im = lp.image.clone();
-    g.bench_function("strokes", |b| b.iter(|| p.install(|| lp.strokes(&mut im))));
+    let mut strokes = lp.strokes.clone();
+    g.bench_function("strokes", |b| {
+        b.iter(|| p.install(|| lp.run_strokes(&mut strokes, &mut im)))
+    });
     // Before the banded drawing: the same polylines drawn on one fresh
     // pixmap, turned into a coverage image (what `lines/strokes` measured
     // until 2026-12-01's second session).

@@ -32,6 +32,7 @@ fn main() {
     let mut vis_outlined = p.install(|| lp.first_visibility(&lp.outlined));
     let mut sobel_img = lp.image.clone();
     let mut strokes_img = lp.image.clone();
+    let (mut sobel, mut strokes) = (lp.sobel.clone(), lp.strokes.clone());
 
     let names = ["frame", "vis plain", "vis extrusion", "sobel", "strokes"];
     let t = rounds(
@@ -43,8 +44,8 @@ fn main() {
             &mut || p.install(|| lp.visibility_again(&lp.outlined, &mut vis_outlined)),
             // Both stages draw over their image again each call: their
             // cost does not depend on its values (neither reads colour).
-            &mut || p.install(|| lp.sobel(&mut sobel_img)),
-            &mut || p.install(|| lp.strokes(&mut strokes_img)),
+            &mut || p.install(|| lp.run_sobel(&mut sobel, &mut sobel_img)),
+            &mut || p.install(|| lp.run_strokes(&mut strokes, &mut strokes_img)),
         ],
     );
 

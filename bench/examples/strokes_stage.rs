@@ -16,7 +16,7 @@
 //! ```
 
 use specula::render::{median, render_scene, RenderSettings};
-use specula_npr::overlay::Canvases;
+use specula_npr::overlay::{Canvases, Strokes};
 use specula_raster::post::{HdrImage, PostStage};
 use std::time::Instant;
 
@@ -32,11 +32,14 @@ fn main() {
     let n: usize = n;
     let scene =
         specula::scene::load_scene(std::path::Path::new(path)).unwrap_or_else(|e| panic!("{e}"));
-    let stage = scene
-        .lines
-        .strokes
-        .clone()
-        .unwrap_or_else(|| panic!("{path} has no [strokes]"));
+    // The scene's stage as a run of frames uses it (canvases of its own).
+    let mut stage = Strokes::clone(
+        scene
+            .lines
+            .strokes
+            .as_deref()
+            .unwrap_or_else(|| panic!("{path} has no [strokes]")),
+    );
     let r = render_scene(&scene, &RenderSettings::from_scene(&scene), 0.0).expect("render");
     let ssaa = r.ssaa as usize;
     let img = HdrImage {

@@ -172,15 +172,17 @@ impl LinePasses {
         visibility_into(data, &self.target, vis, &mut FrameStats::default());
     }
 
-    /// The Sobel stage over `image` (a copy of [`LinePasses::image`]).
-    pub fn sobel(&self, image: &mut HdrImage) {
-        self.sobel.apply(image, &self.frame.buffers);
+    /// The Sobel stage `stage` (a run's instance of [`LinePasses::sobel`])
+    /// over `image` (a copy of [`LinePasses::image`]).
+    pub fn run_sobel(&self, stage: &mut Sobel, image: &mut HdrImage) {
+        stage.apply(image, &self.frame.buffers);
     }
 
-    /// The stroke overlay stage over `image` (its canvases kept from the
-    /// previous call, as from frame to frame).
-    pub fn strokes(&self, image: &mut HdrImage) {
-        self.strokes.apply(image, &self.frame.buffers);
+    /// The stroke overlay stage `stage` (a run's instance of
+    /// [`LinePasses::strokes`], its canvases kept from call to call, as
+    /// from frame to frame) over `image`.
+    pub fn run_strokes(&self, stage: &mut Strokes, image: &mut HdrImage) {
+        stage.apply(image, &self.frame.buffers);
     }
 }
 

@@ -71,7 +71,7 @@ use specula_raster::setup::{front_face_shown, front_faces_shown_x8, orientation,
 use specula_raster::SceneData;
 use std::collections::HashMap;
 use std::ops::Range;
-use std::sync::{Arc, Mutex};
+use std::sync::Arc;
 
 /// Longest miter, in widths: |m| = 1/cos(φ/2) for outward normals φ
 /// apart, 2 at φ = 120° (a corner of 60° on screen).
@@ -87,6 +87,20 @@ pub const OPEN_DEPTH_PUSH: f32 = 1e-3;
 pub struct Extrude {
     /// Ring width in output pixels.
     pub width: f32,
+    /// What the stage derives from the scene's mesh when it is built,
+    /// shared by its instances.
+    mesh: Arc<ExtrudeMesh>,
+    /// The last view's clip positions and what they were made for (an
+    /// outline's passes, closed and open runs, share one vertex stage and
+    /// one frame, so the later passes copy them), and the per-view work
+    /// vectors (~9.5 MB on the benchmark scene), kept from view to view
+    /// by the frames' instance of the stage (`VertexStage::instance`).
+    state: ViewState,
+}
+
+/// See [`Extrude::mesh`].
+#[derive(Debug)]
+struct ExtrudeMesh {
     /// Smoothed unit normal per scene vertex (module docs).
     smooth: Vec<Vec3>,
     topo: Topology,
@@ -94,17 +108,6 @@ pub struct Extrude {
     /// needs besides the eye (the same products a per-view computation
     /// would make, so the same facing).
     face_normals: Vec<Vec3>,
-    /// The last view's clip positions and what they were made for (an
-    /// outline's passes, closed and open runs, share one vertex stage and
-    /// one frame, so the later passes copy them), and the per-view work
-    /// vectors (~9.5 MB on the benchmark scene), kept from view to view:
-    /// with the camera moving every frame the stage took 2.0 ms instead of
-    /// 3.0 ms with vectors allocated and freed per view (2 threads; no page
-    /// faults either way), at ~2,100 more page faults in a render's first
-    /// frame (the frame's later allocations no longer reuse that memory).
-    /// A stage belongs to the scene it was built for, whose positions do
-    /// not change; frames run one at a time, so the lock is uncontended.
-    state: Mutex<ViewState>,
 }
 
 /// See [`Extrude::state`].
@@ -395,31 +398,35 @@ impl Extrude {
     pub fn new(scene: &SceneData, width: f32) -> Extrude {
         Extrude {
             width,
-            smooth: smooth_normals(&scene.positions, &scene.normals),
-            topo: Topology::new(&scene.positions, &scene.triangles),
-            face_normals: scene
-                .triangles
-                .par_iter()
-                .with_min_len(4096)
-                .map(|tri| {
-                    let [a, b, c] = tri.map(|v| scene.positions[v as usize]);
-                    (b - a).cross(c - a)
-                })
-                .collect(),
-            state: Mutex::new(ViewState::default()),
+            mesh: Arc::new(ExtrudeMesh {
+                smooth: smooth_normals(&scene.positions, &scene.normals),
+                topo: Topology::new(&scene.positions, &scene.triangles),
+                face_normals: scene
+                    .triangles
+                    .par_iter()
+                    .with_min_len(4096)
+                    .map(|tri| {
+                        let [a, b, c] = tri.map(|v| scene.positions[v as usize]);
+                        (b - a).cross(c - a)
+                    })
+                    .collect(),
+            }),
+            state: ViewState::default(),
         }
     }
 
     pub fn smoothed_normals(&self) -> &[Vec3] {
-        &self.smooth
+        &self.mesh.smooth
     }
 
     /// Whether triangle `t`'s connected piece of mesh is open (module
     /// docs): its copy is drawn front side out, not back faces.
     pub fn is_open(&self, t: usize) -> bool {
-        self.topo.tri_open.get(t).copied().unwrap_or(false)
+        self.mesh.topo.tri_open.get(t).copied().unwrap_or(false)
     }
+}
 
+impl ExtrudeMesh {
     /// Per welded vertex, where it moves this frame (module docs): the
     /// offset in widths (screen pixels, y up) and the screen gradient of
     /// z/w (per pixel) of its outline edges' faces, for open pieces, into
@@ -571,7 +578,15 @@ pub fn smooth_normals(positions: &[Vec3], normals: &[Vec3]) -> Vec<Vec3> {
 }
 
 impl VertexStage for Extrude {
-    fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+    fn instance(&self) -> Box<dyn VertexStage> {
+        Box::new(Extrude {
+            width: self.width,
+            mesh: self.mesh.clone(),
+            state: ViewState::default(),
+        })
+    }
+
+    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
         let view = frame.view;
         let m = view.view_proj;
         let px = self.width * frame.ssaa.max(1) as f32;
@@ -583,8 +598,8 @@ impl VertexStage for Extrude {
             px,
             vertices: scene.positions.len(),
         };
-        let mut guard = self.state.lock().unwrap_or_else(|e| e.into_inner());
-        let st = &mut *guard;
+        let mesh = &*self.mesh;
+        let st = &mut self.state;
         if st.key == Some(key) {
             // In parallel: 16 bytes a vertex (1.5 MB on the benchmark) is
             // worth both threads.
@@ -602,9 +617,9 @@ impl VertexStage for Extrude {
             .with_min_len(4096)
             .map(|p| m * Vec4::from((*p, 1.0)))
             .collect_into_vec(&mut st.clip);
-        self.moves(scene, view, st);
+        mesh.moves(scene, view, st);
         let (clip, moves) = (&st.clip, &st.moves);
-        let t = &self.topo;
+        let t = &mesh.topo;
         (0..clip.len())
             .into_par_iter()
             .with_min_len(4096)
@@ -630,7 +645,7 @@ impl VertexStage for Extrude {
                 } else if open {
                     return [c.x, c.y, z, c.w];
                 } else {
-                    let nc = m * Vec4::from((self.smooth[i], 0.0));
+                    let nc = m * Vec4::from((mesh.smooth[i], 0.0));
                     let dx = (nc.x - c.x / c.w * nc.w) * hw;
                     let dy = (nc.y - c.y / c.w * nc.w) * hh;
                     let len = (dx * dx + dy * dy).sqrt();
@@ -648,7 +663,7 @@ impl VertexStage for Extrude {
             })
             .collect_into_vec(&mut st.out);
         let (w, h) = (view.width as f64, view.height as f64);
-        st.hidden = (self.topo.flat.iter())
+        st.hidden = (mesh.topo.flat.iter())
             .map(|p| copy_hidden(scene, p, &st.clip, &st.out, w, h))
             .collect();
         // The closed pieces' pass culls front faces: those shown front
@@ -686,18 +701,24 @@ impl VertexStage for Extrude {
     }
 
     fn front_faces(&self) -> Option<Arc<Vec<u64>>> {
-        let st = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let st = &self.state;
         st.key.is_some().then(|| st.front_mask.clone())
     }
 
     /// True when every triangle of `triangles` is on a flat open piece
     /// whose copy [`copy_hidden`] showed hidden for the last view.
     fn hidden(&self, triangles: Range<u32>) -> bool {
-        let st = self.state.lock().unwrap_or_else(|e| e.into_inner());
+        let st = &self.state;
         st.key.is_some()
             && !triangles.is_empty()
             && triangles.into_iter().all(|t| {
-                let k = self.topo.tri_flat.get(t as usize).copied().unwrap_or(NONE);
+                let k = self
+                    .mesh
+                    .topo
+                    .tri_flat
+                    .get(t as usize)
+                    .copied()
+                    .unwrap_or(NONE);
                 k != NONE && st.hidden.get(k as usize).copied().unwrap_or(false)
             })
     }

@@ -232,7 +232,11 @@ impl PostStage for ShadingOutline {
         }
     }
 
-    fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
+    fn instance(&self) -> Box<dyn PostStage> {
+        Box::new(self.clone())
+    }
+
+    fn apply(&mut self, img: &mut HdrImage, frame: &FrameBuffers) {
         let cov = self.coverage_map(frame);
         composite(img, frame, &cov, self.color);
     }

@@ -18,7 +18,7 @@ use specula_raster::buffers::prefetch;
 use specula_raster::post::{srgb_encode, HdrImage, PostStage};
 use specula_raster::{BufferSet, Camera, FrameBuffers};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
+use std::sync::Arc;
 use tiny_skia::{FillRule, Mask, Paint, Path, PathBuilder, PathSegment, Pixmap, Stroke, Transform};
 pub use tiny_skia::{LineCap, LineJoin};
 
@@ -41,13 +41,26 @@ pub struct StrokeStyle {
 /// included) is found once; a frame tests their visibility, chains and
 /// draws them.
 pub struct Strokes {
-    edges: MeshEdges,
+    edges: Arc<MeshEdges>,
     camera: Camera,
     pub style: StrokeStyle,
     /// [`MeshEdges::classify`] from the camera's eye.
-    drawn: Vec<(u32, u32, EdgeKind)>,
-    /// Kept from frame to frame (frames run one at a time).
-    canvases: Mutex<Canvases>,
+    drawn: Arc<Vec<(u32, u32, EdgeKind)>>,
+    /// Kept from frame to frame by the post list's instance of the stage.
+    canvases: Canvases,
+}
+
+/// A clone shares the edges and starts with no canvases.
+impl Clone for Strokes {
+    fn clone(&self) -> Strokes {
+        Strokes {
+            edges: self.edges.clone(),
+            camera: self.camera.clone(),
+            style: self.style,
+            drawn: self.drawn.clone(),
+            canvases: Canvases::default(),
+        }
+    }
 }
 
 impl std::fmt::Debug for Strokes {
@@ -65,11 +78,11 @@ impl Strokes {
     pub fn new(edges: MeshEdges, camera: Camera, style: StrokeStyle) -> Strokes {
         let drawn = edges.classify(camera.eye);
         Strokes {
-            edges,
+            edges: Arc::new(edges),
             camera,
             style,
-            drawn,
-            canvases: Mutex::new(Canvases::default()),
+            drawn: Arc::new(drawn),
+            canvases: Canvases::default(),
         }
     }
 
@@ -1309,16 +1322,13 @@ impl PostStage for Strokes {
         }
     }
 
-    fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
+    fn instance(&self) -> Box<dyn PostStage> {
+        Box::new(self.clone())
+    }
+
+    fn apply(&mut self, img: &mut HdrImage, frame: &FrameBuffers) {
         let lines = self.polylines(frame, ssaa_of(img, frame));
-        // A panic mid-draw (none is known) could leave paint on a canvas:
-        // start again from fresh ones.
-        let mut canvases = self.canvases.lock().unwrap_or_else(|e| {
-            let mut c = e.into_inner();
-            *c = Canvases::default();
-            c
-        });
-        canvases.blend(&lines, &self.style, img);
+        self.canvases.blend(&lines, &self.style, img);
     }
 }
 

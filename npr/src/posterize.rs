@@ -94,7 +94,11 @@ impl PostStage for Posterize {
         "posterize"
     }
 
-    fn apply(&self, img: &mut HdrImage, _frame: &FrameBuffers) {
+    fn instance(&self) -> Box<dyn PostStage> {
+        Box::new(self.clone())
+    }
+
+    fn apply(&mut self, img: &mut HdrImage, _frame: &FrameBuffers) {
         let p = &mut img.rgb;
         for i in 0..p.r.len() {
             let [r, g, b] = self.pixel([p.r[i], p.g[i], p.b[i]]);

@@ -60,7 +60,6 @@ use specula_core::{Mask, Real};
 use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::target::MISS;
 use specula_raster::{BufferSet, FrameBuffers, Planes3};
-use std::sync::Mutex;
 use wide::{f32x8, i32x8, u32x8};
 
 pub use crate::dilate::{
@@ -96,10 +95,9 @@ pub struct Sobel {
 /// The buffers a [`Sobel`] stage keeps from frame to frame, so that a
 /// steady frame neither allocates nor touches fresh pages. None carries a
 /// value from one frame to the next: each is written before it is read,
-/// so the output is that of fresh buffers. Frames run one at a time; a
-/// second concurrent `apply` on the same stage waits. A clone starts empty.
+/// so the output is that of fresh buffers. A clone starts empty.
 #[derive(Default)]
-pub struct Scratch(Mutex<Buffers>);
+pub struct Scratch(Buffers);
 
 #[derive(Default)]
 struct Buffers {
@@ -998,15 +996,10 @@ impl Sobel {
         b.mask.rows_marked(&mut b.marked);
     }
 
-    fn lock(&self) -> std::sync::MutexGuard<'_, Buffers> {
-        // Scratch only: a panic of an earlier frame leaves nothing that
-        // is read before it is written.
-        self.scratch.0.lock().unwrap_or_else(|e| e.into_inner())
-    }
-
-    /// Per-sample coverage over `frame` for a stage at supersampling `ssaa`.
+    /// Per-sample coverage over `frame` for a stage at supersampling `ssaa`
+    /// (in buffers of its own: the stage's scratch is its instance's).
     pub fn coverage_map(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<f32> {
-        let mut b = self.lock();
+        let mut b = Buffers::default();
         self.detect(frame, &mut b);
         let cover = Cover::new(self.width * ssaa as f32, self.antialias);
         let (w, h) = (frame.width as usize, frame.height as usize);
@@ -1114,10 +1107,24 @@ impl PostStage for Sobel {
     /// c·(1 − 0) + colour·0 gives back c: the same value, and the same
     /// bits except that −0 would become +0 (the tone map, before this
     /// stage, writes no −0; and either encodes to code 0).
-    fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers) {
+    fn instance(&self) -> Box<dyn PostStage> {
+        Box::new(self.clone())
+    }
+
+    fn apply(&mut self, img: &mut HdrImage, frame: &FrameBuffers) {
         let ssaa = ssaa_of(img, frame);
-        let mut b = self.lock();
-        self.detect(frame, &mut b);
+        // Taken out for the call (so `self` stays readable), put back at
+        // the end.
+        let mut scratch = std::mem::take(&mut self.scratch);
+        self.blend(img, frame, ssaa, &mut scratch.0);
+        self.scratch = scratch;
+    }
+}
+
+impl Sobel {
+    /// [`PostStage::apply`] with the stage's buffers `b`.
+    fn blend(&self, img: &mut HdrImage, frame: &FrameBuffers, ssaa: usize, b: &mut Buffers) {
+        self.detect(frame, b);
         let cover = Cover::new(self.width * ssaa as f32, self.antialias);
         if cover.radius() > BOUNDED_RADIUS {
             let (w, h) = (frame.width as usize, frame.height as usize);
@@ -1883,7 +1890,7 @@ mod tests {
             for selection in selections {
                 for width in [1.0f32, 2.0, 3.5, 9.0, 40.0] {
                     for antialias in [true, false] {
-                        let stage = Sobel {
+                        let mut stage = Sobel {
                             sources: sources.clone(),
                             width,
                             color: [0.1, 0.2, 0.9],

@@ -6,7 +6,6 @@ use specula_npr::posterize::{Posterize, PosterizeMode};
 use specula_raster::post::{Post, Stage, Tonemap};
 use specula_raster::{BufferSet, FrameBuffers, Target};
 use std::collections::BTreeSet;
-use std::sync::Arc;
 
 /// A 240 × 120 frame whose red ramps 0 → 1.2 along x, green along y, blue
 /// through the whole frame: every tone-mapped value of [0, 1] occurs.
@@ -26,7 +25,7 @@ fn ramp_frame() -> FrameBuffers {
 
 fn with_stage(stage: Posterize) -> Post {
     let mut p = Post::standard(1, 0.0, Tonemap::Clamp);
-    p.stages.insert(3, Stage::Custom(Arc::new(stage)));
+    p.stages.insert(3, Stage::Custom(Box::new(stage)));
     p
 }
 

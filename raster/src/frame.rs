@@ -9,7 +9,7 @@ use crate::bin::{BinnedChunk, CHUNK};
 use crate::buffers::{BufferSet, FrameBuffers, Planes3, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
-use crate::geometry::{mask_bits4, Cull, FrameContext, GeometryPass};
+use crate::geometry::{mask_bits4, Cull, FrameContext, GeometryPass, VertexStage};
 use crate::occlusion::{tile_minima, DepthBounds, TileMinima};
 use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
@@ -61,6 +61,32 @@ pub struct Visibility {
     /// each tile's part of them, taken in the first pass's raster sweep.
     occluder: DepthBounds,
     tile_bounds: Vec<TileMinima>,
+    /// The frames' instances of the scene's vertex stages, each beside the
+    /// stage it was made from (held, so its address names it).
+    stages: Vec<(Arc<dyn VertexStage>, Box<dyn VertexStage>)>,
+}
+
+impl Visibility {
+    /// The instance of the scene's vertex stage `stage` that drew this
+    /// frame, if a pass of the frame used it (what it kept of the frame:
+    /// [`VertexStage::front_faces`], [`VertexStage::hidden`]).
+    pub fn stage(&self, stage: &Arc<dyn VertexStage>) -> Option<&dyn VertexStage> {
+        (self.stages.iter())
+            .find(|(s, _)| Arc::ptr_eq(s, stage))
+            .map(|(_, i)| &**i)
+    }
+
+    /// The index in `stages` of the instance of `stage` this run of
+    /// frames uses (made on first use).
+    fn stage_index(&mut self, stage: &Arc<dyn VertexStage>) -> usize {
+        match self.stages.iter().position(|(s, _)| Arc::ptr_eq(s, stage)) {
+            Some(i) => i,
+            None => {
+                self.stages.push((stage.clone(), stage.instance()));
+                self.stages.len() - 1
+            }
+        }
+    }
 }
 
 fn ms_since(t: Instant) -> f64 {
@@ -78,6 +104,7 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         chunks: Vec::new(),
         occluder: DepthBounds::default(),
         tile_bounds: Vec::new(),
+        stages: Vec::new(),
     };
     visibility_into(scene, target, &mut v, stats);
     v
@@ -103,6 +130,10 @@ pub fn visibility_into(
         .max()
         .unwrap_or(0);
     out.planes.resize(ids as usize, TriPlanes::default());
+    // Instances of stages this scene no longer has (a frame reused for
+    // another scene) go.
+    out.stages
+        .retain(|(s, _)| scene.geometry.iter().any(|p| Arc::ptr_eq(&p.vertex, s)));
     let mut bounds_built = false;
     for (i, pass) in scene.geometry.iter().enumerate() {
         // A pass whose vertex stage is the previous pass's (one outline's
@@ -148,13 +179,16 @@ fn geometry_pass(
 ) {
     let first = index == 0;
     let t = Instant::now();
+    let stage = out.stage_index(&pass.vertex);
     if !same_stage {
         out.clip.clear();
         let frame = FrameContext {
             view: &out.view,
             ssaa: target.ssaa,
         };
-        pass.vertex.clip_positions(&frame, scene, &mut out.clip);
+        out.stages[stage]
+            .1
+            .clip_positions(&frame, scene, &mut out.clip);
     }
     assert_eq!(
         out.clip.len(),
@@ -163,7 +197,7 @@ fn geometry_pass(
         pass.name
     );
     let clip = &out.clip;
-    let hidden = !first && pass.vertex.hidden(pass.triangles.clone());
+    let hidden = !first && out.stages[stage].1.hidden(pass.triangles.clone());
     stats.times.vertex += ms_since(t);
     if hidden {
         let n = pass.triangles.len() as u64;
@@ -193,7 +227,7 @@ fn geometry_pass(
     // Triangles the vertex stage showed front-facing: a `Cull::Front`
     // pass skips their groups of 4 whole (setup would cull each).
     let front = match pass.cull {
-        Cull::Front => pass.vertex.front_faces(),
+        Cull::Front => out.stages[stage].1.front_faces(),
         _ => None,
     };
     let mask: &[u64] = front.as_deref().map_or(&[], Vec::as_slice);

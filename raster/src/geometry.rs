@@ -44,10 +44,19 @@ pub struct FrameContext<'a> {
 }
 
 /// Where a pass puts the scene's vertices.
+///
+/// The scene holds each stage as built (`GeometryPass::vertex`, shared by
+/// the passes that use it); frames run their own instance of it
+/// ([`VertexStage::instance`]), kept with the frame's visibility buffers,
+/// which may keep what it likes from frame to frame in its own fields.
 pub trait VertexStage: Debug + Send + Sync {
+    /// A stage for a run of frames: the same construction, none of an
+    /// earlier frame's state.
+    fn instance(&self) -> Box<dyn VertexStage>;
+
     /// Clip-space position of every scene vertex (`scene.positions` order)
     /// into `out`, which arrives cleared.
-    fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>);
+    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>);
 
     /// Right after `clip_positions` for a frame's view: whether source
     /// triangles `triangles`, drawn from those positions by a pass that
@@ -88,7 +97,11 @@ pub fn mask_bits4(mask: &[u64], t: usize) -> u32 {
 pub struct Project;
 
 impl VertexStage for Project {
-    fn clip_positions(&self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+    fn instance(&self) -> Box<dyn VertexStage> {
+        Box::new(Project)
+    }
+
+    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
         let m = frame.view.view_proj;
         scene
             .positions

@@ -44,19 +44,26 @@ impl HdrImage {
 /// supersampled image before [`Stage::Resolve`], on the output image after
 /// it (`img.width` tells), in linear HDR before [`Stage::Tonemap`] and in
 /// tone-mapped [0, 1] values after it.
+///
+/// A scene holds each stage as built; a [`Post`] list runs its own
+/// instance ([`PostStage::instance`]), which may keep buffers in its own
+/// fields from frame to frame.
 pub trait PostStage: std::fmt::Debug + Send + Sync {
     fn name(&self) -> &str;
     /// The frame buffers the stage reads (colour is always there).
     fn buffers(&self) -> BufferSet {
         BufferSet::default()
     }
+    /// A stage for a run of frames: the same construction, none of an
+    /// earlier frame's buffers.
+    fn instance(&self) -> Box<dyn PostStage>;
     /// Transforms `img`; `frame` holds the shading pass's buffers at the
     /// supersampled size.
-    fn apply(&self, img: &mut HdrImage, frame: &FrameBuffers);
+    fn apply(&mut self, img: &mut HdrImage, frame: &FrameBuffers);
 }
 
 /// One named step of the post list.
-#[derive(Clone, Debug)]
+#[derive(Debug)]
 pub enum Stage {
     /// Box-filters ssaa × ssaa samples into one pixel (linear HDR).
     Resolve {
@@ -70,7 +77,20 @@ pub enum Stage {
     Tonemap(Tonemap),
     /// sRGB encoding to 8 bits; the last stage when present.
     Encode,
-    Custom(std::sync::Arc<dyn PostStage>),
+    Custom(Box<dyn PostStage>),
+}
+
+/// A copy of a list runs fresh instances of its custom stages.
+impl Clone for Stage {
+    fn clone(&self) -> Stage {
+        match self {
+            Stage::Resolve { ssaa } => Stage::Resolve { ssaa: *ssaa },
+            Stage::Exposure { stops } => Stage::Exposure { stops: *stops },
+            Stage::Tonemap(t) => Stage::Tonemap(*t),
+            Stage::Encode => Stage::Encode,
+            Stage::Custom(c) => Stage::Custom(c.instance()),
+        }
+    }
 }
 
 impl Stage {
@@ -192,7 +212,7 @@ impl Post {
     }
 
     /// Runs the stages over the frame's colour.
-    pub fn run(&self, frame: &FrameBuffers) -> Result<PostOutput, String> {
+    pub fn run(&mut self, frame: &FrameBuffers) -> Result<PostOutput, String> {
         self.run_reusing(frame, PostOutput::default())
     }
 
@@ -210,7 +230,7 @@ impl Post {
     /// the HDR image ([`resolve_hdr_into`]); both give the bytes of the
     /// stage-by-stage list (tested).
     pub fn run_reusing(
-        &self,
+        &mut self,
         frame: &FrameBuffers,
         recycled: PostOutput,
     ) -> Result<PostOutput, String> {
@@ -234,7 +254,7 @@ impl Post {
                     height: frame.height / ssaa,
                     rgb,
                 };
-                (img, &self.stages[3..])
+                (img, &mut self.stages[3..])
             }
             None => {
                 copy_planes(&frame.color, &mut rgb);
@@ -243,7 +263,7 @@ impl Post {
                     height: frame.height,
                     rgb,
                 };
-                (img, &self.stages[..])
+                (img, &mut self.stages[..])
             }
         };
         let mut ldr = None;
@@ -315,7 +335,7 @@ mod tests {
         }
         for ssaa in [1, 3] {
             for tonemap in [Tonemap::Clamp, Tonemap::Reinhard, Tonemap::Aces] {
-                let fused = Post::standard(ssaa, 0.5, tonemap);
+                let mut fused = Post::standard(ssaa, 0.5, tonemap);
                 let mut staged = fused.clone();
                 staged.fuse = false;
                 let (a, b) = (fused.run(&fb).unwrap(), staged.run(&fb).unwrap());
@@ -337,7 +357,11 @@ mod tests {
             "ramp"
         }
 
-        fn apply(&self, img: &mut HdrImage, _frame: &FrameBuffers) {
+        fn instance(&self) -> Box<dyn PostStage> {
+            Box::new(Ramp)
+        }
+
+        fn apply(&mut self, img: &mut HdrImage, _frame: &FrameBuffers) {
             let w = img.width as usize;
             for p in [&mut img.rgb.r, &mut img.rgb.g, &mut img.rgb.b] {
                 for (i, v) in p.iter_mut().enumerate() {
@@ -366,7 +390,7 @@ mod tests {
             for tonemap in [Tonemap::Clamp, Tonemap::Reinhard, Tonemap::Aces] {
                 let mut fused = Post::standard(ssaa, -0.75, tonemap);
                 let encode = fused.stages.pop().unwrap();
-                fused.stages.push(Stage::Custom(std::sync::Arc::new(Ramp)));
+                fused.stages.push(Stage::Custom(Box::new(Ramp)));
                 fused.stages.push(encode);
                 let mut staged = fused.clone();
                 staged.fuse = false;
