@@ -3,6 +3,24 @@
 use crate::real::Real;
 use crate::vec3::Rgb;
 
+/// Which Fresnel term a microfacet material uses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fresnel {
+    Schlick {
+        f0: [f32; 3],
+    },
+    /// Relative IOR (inside over outside); below 1 total internal
+    /// reflection occurs past the critical angle.
+    Dielectric {
+        ior: f32,
+    },
+    /// Complex IOR η + iκ per channel.
+    Conductor {
+        eta: [f32; 3],
+        k: [f32; 3],
+    },
+}
+
 /// Schlick's weight (1 − cos θ)⁵, the part of [`f_schlick`] that does not
 /// depend on F0. `cos_theta` is clamped to [0, 1] so a lane slightly below
 /// the horizon does not raise a weight above 1.   [Schlick94]

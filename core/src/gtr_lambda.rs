@@ -50,6 +50,27 @@ use crate::quadrature::GaussLegendre;
 use crate::real::Real;
 use crate::table::{Axis, Nodes, Table1, Warp};
 use std::f64::consts::FRAC_PI_2;
+use std::sync::Arc;
+
+/// Which Smith Λ a GTR distribution uses (the other NDFs ignore it).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum GtrLambda {
+    /// GGX's Λ at the same α: cheap, exact at γ = 2, and for γ < 2 a lobe
+    /// that reflects more than it receives at grazing angles (the docs of
+    /// models/microfacet.rs).
+    #[default]
+    Ggx,
+    /// The distribution's own Λ, tabulated at the material's (γ, α)
+    /// ([`GtrLambdaTable`]).
+    Exact(Arc<GtrLambdaTable>),
+}
+
+impl GtrLambda {
+    /// The exact Λ of GTR(γ, α), tabulated now (~1e5 evaluations of D).
+    pub fn exact(gamma: f32, alpha: f32) -> GtrLambda {
+        GtrLambda::Exact(Arc::new(GtrLambdaTable::new(gamma as f64, alpha as f64)))
+    }
+}
 
 /// Nodes of the μΛ table.
 pub const N_X: usize = 2048;

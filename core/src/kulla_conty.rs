@@ -58,8 +58,12 @@
 //! installs (the user's cache folder).
 
 use crate::brdf::ALPHA_MIN;
-use crate::models::microfacet::{Fresnel, GtrLambda, MicrofacetParams, Ndf, Smith};
+use crate::fresnel::Fresnel;
+use crate::gtr_lambda::GtrLambda;
+use crate::masking::Smith;
+use crate::ndf::Ndf;
 use crate::real::Real;
+use crate::specular_lobe::MicrofacetParams;
 use crate::table::{Axis, Nodes, Table1, Table2, Warp};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};

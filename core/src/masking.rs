@@ -4,6 +4,13 @@
 use crate::real::Real;
 use crate::vec3::V3;
 
+/// Which Smith G2 a microfacet material forms from the two Λ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Smith {
+    Separable,
+    HeightCorrelated,
+}
+
 /// Smith Λ for GGX: Λ(θ) = (−1 + √(1 + α² tan²θ)) / 2   [Walter07, Heitz14]
 ///
 /// Written as (√(α² + (1−α²) cos²θ) / cos θ − 1) / 2, which avoids forming

@@ -11,6 +11,17 @@
 
 use crate::real::Real;
 
+/// Which NDF a microfacet material uses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ndf {
+    Ggx,
+    Beckmann,
+    /// Generalized Trowbridge–Reitz with exponent γ > 0 (γ = 2 is GGX).
+    Gtr {
+        gamma: f32,
+    },
+}
+
 /// GGX / Trowbridge–Reitz NDF: D(m) = α² / (π ((n·m)²(α²−1) + 1)²)   [Walter07]
 ///
 /// The denominator's base is formed as sin²θm + α² cos²θm (module docs).
