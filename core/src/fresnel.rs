@@ -25,7 +25,7 @@ pub enum Fresnel {
 /// depend on F0. `cos_theta` is clamped to [0, 1] so a lane slightly below
 /// the horizon does not raise a weight above 1.   [Schlick94]
 #[inline(always)]
-pub fn schlick_weight<R: Real>(cos_theta: R) -> R {
+pub(crate) fn schlick_weight<R: Real>(cos_theta: R) -> R {
     let m = (R::ONE - cos_theta).clamp(R::ZERO, R::ONE);
     let m2 = m * m;
     m2 * m2 * m
@@ -37,7 +37,7 @@ pub fn schlick_weight<R: Real>(cos_theta: R) -> R {
 /// two fewer operations on the light loop's longest dependency chain,
 /// which bounds it. Within one rounding of `schlick_weight(len / 2)`.
 #[inline(always)]
-pub fn schlick_weight_half<R: Real>(len: R) -> R {
+pub(crate) fn schlick_weight_half<R: Real>(len: R) -> R {
     let m = len.mul_add(-R::HALF, R::ONE).max(R::ZERO);
     let m2 = m * m;
     m2 * m2 * m

@@ -70,7 +70,7 @@ impl MicrofacetParams {
 
     /// G2 from Λ(i) and Λ(o) already formed.
     #[inline(always)]
-    pub fn g2_lambdas<R: Real>(&self, li: R, lo: R) -> R {
+    pub(crate) fn g2_lambdas<R: Real>(&self, li: R, lo: R) -> R {
         match self.smith {
             Smith::Separable => g2_separable(li, lo),
             Smith::HeightCorrelated => g2_height_correlated(li, lo),

@@ -34,7 +34,7 @@ use crate::vec3::{Rgb, V3};
 /// Directional albedo E(μo) per channel at `N_MU` texel centres
 /// μ_j = (j + ½)/N_MU, linear interpolation clamped at the ends.
 #[derive(Clone, Debug, PartialEq)]
-pub struct AlbedoTable {
+pub(crate) struct AlbedoTable {
     e: Table1<3>,
 }
 
