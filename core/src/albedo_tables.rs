@@ -27,7 +27,7 @@ pub const N_ALPHA: usize = 32;
 const SAMPLES: u32 = 2048;
 
 /// The three integrals of the module docs, per lane.
-pub struct SplitSum<R> {
+pub(crate) struct SplitSum<R> {
     pub a: R,
     pub b: R,
     pub c: R,
@@ -116,7 +116,7 @@ impl AlbedoTables {
         T.get_or_init(Self::build)
     }
 
-    /// A, B, C for one (μo, α); [`AlbedoTables::ggx_schlick`] at f32.
+    /// A, B, C for one (μo, α); `AlbedoTables::ggx_schlick` at f32.
     pub fn lookup(&self, mu_o: f32, alpha: f32) -> [f32; 3] {
         let t = self.ggx_schlick(alpha, mu_o);
         [t.a, t.b, t.c]
@@ -124,13 +124,13 @@ impl AlbedoTables {
 
     /// A, B, C per lane.
     #[inline(always)]
-    pub fn ggx_schlick<R: Real>(&self, alpha: R, mu_o: R) -> SplitSum<R> {
+    pub(crate) fn ggx_schlick<R: Real>(&self, alpha: R, mu_o: R) -> SplitSum<R> {
         let [a, b] = self.ab.lookup(mu_o, alpha);
         let [c] = self.c.lookup(mu_o);
         SplitSum { a, b, c }
     }
 
-    /// C alone ([`AlbedoTables::ggx_schlick`]'s c), per lane.
+    /// C alone (`AlbedoTables::ggx_schlick`'s c), per lane.
     #[inline(always)]
     pub fn c<R: Real>(&self, mu_o: R) -> R {
         let [c] = self.c.lookup(mu_o);

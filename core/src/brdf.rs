@@ -145,7 +145,7 @@ pub struct HalfAngles<R: Real> {
 /// |s|² ∈ [1, 3], so formulas may take |s|⁴ times the angle terms without
 /// leaving f32's normal range. Unscaled lanes have |s| ≥ 1e-3: wi and wo
 /// more than 0.06° from opposite, rare as both must be above the horizon.
-pub const HALF_LEN2_MIN: f64 = 1e-6;
+pub(crate) const HALF_LEN2_MIN: f64 = 1e-6;
 
 impl<R: Real> HalfAngles<R> {
     /// From a unit local `wi` and the prepared view direction.
@@ -267,7 +267,7 @@ pub trait Brdf: Send + Sync {
 
     /// [`Brdf::f_local`] at wi = v · inv_len, for an unnormalized local `v`
     /// and inv_len = 1/|v| (a point light's direction): a model may fold
-    /// the scale into its first step ([`HalfAngles::scaled`]).
+    /// the scale into its first step (`HalfAngles::scaled`).
     #[inline(always)]
     fn f_local_scaled<R: Real>(&self, p: &Self::Prepared<R>, v: V3<R>, inv_len: R) -> Rgb<R> {
         self.f_local(p, v * inv_len)

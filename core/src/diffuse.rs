@@ -6,7 +6,7 @@ use crate::vec3::Rgb;
 
 /// Lambertian BRDF f = ρ / π (no cosine folded in).   [Lambert1760]
 #[inline(always)]
-pub fn f_lambert<R: Real>(albedo: Rgb<R>) -> Rgb<R> {
+pub(crate) fn f_lambert<R: Real>(albedo: Rgb<R>) -> Rgb<R> {
     albedo * R::FRAC_1_PI
 }
 
@@ -21,7 +21,7 @@ pub fn f_lambert<R: Real>(albedo: Rgb<R>) -> Rgb<R> {
 /// half; past roughness ¼ F_D90 can exceed 1 (the retro-reflection peak),
 /// and the lobe then reflects more than it receives at grazing angles.
 #[inline(always)]
-pub fn fd_burley<R: Real>(roughness: R, cos2_theta_d: R, w_i: R, w_o: R) -> R {
+pub(crate) fn fd_burley<R: Real>(roughness: R, cos2_theta_d: R, w_i: R, w_o: R) -> R {
     let fd90_m1 = (R::splat(2.0) * cos2_theta_d).mul_add(roughness, -R::HALF);
     fd90_m1.mul_add(w_i, R::ONE) * fd90_m1.mul_add(w_o, R::ONE)
 }
@@ -35,7 +35,7 @@ pub fn fd_burley<R: Real>(roughness: R, cos2_theta_d: R, w_i: R, w_o: R) -> R {
 /// The 1.25 roughly preserves the albedo of the Lambertian lobe it is
 /// blended with; `cos_i`, `cos_o` > 0 (floored by the caller).
 #[inline(always)]
-pub fn f_subsurface_burley<R: Real>(
+pub(crate) fn f_subsurface_burley<R: Real>(
     roughness: R,
     cos2_theta_d: R,
     w_i: R,
@@ -54,6 +54,6 @@ pub fn f_subsurface_burley<R: Real>(
 /// cloth-like surfaces [Burley12, §5.4]. No 1/π: the sheen lobe is added
 /// to the diffuse lobe's f as is.
 #[inline(always)]
-pub fn sheen_burley<R: Real>(cos_theta_d: R) -> R {
+pub(crate) fn sheen_burley<R: Real>(cos_theta_d: R) -> R {
     schlick_weight(cos_theta_d)
 }

@@ -3,11 +3,29 @@
 use crate::real::Real;
 use crate::vec3::Rgb;
 
+/// Which Fresnel term a microfacet material uses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Fresnel {
+    Schlick {
+        f0: [f32; 3],
+    },
+    /// Relative IOR (inside over outside); below 1 total internal
+    /// reflection occurs past the critical angle.
+    Dielectric {
+        ior: f32,
+    },
+    /// Complex IOR η + iκ per channel.
+    Conductor {
+        eta: [f32; 3],
+        k: [f32; 3],
+    },
+}
+
 /// Schlick's weight (1 − cos θ)⁵, the part of [`f_schlick`] that does not
 /// depend on F0. `cos_theta` is clamped to [0, 1] so a lane slightly below
 /// the horizon does not raise a weight above 1.   [Schlick94]
 #[inline(always)]
-pub fn schlick_weight<R: Real>(cos_theta: R) -> R {
+pub(crate) fn schlick_weight<R: Real>(cos_theta: R) -> R {
     let m = (R::ONE - cos_theta).clamp(R::ZERO, R::ONE);
     let m2 = m * m;
     m2 * m2 * m
@@ -19,7 +37,7 @@ pub fn schlick_weight<R: Real>(cos_theta: R) -> R {
 /// two fewer operations on the light loop's longest dependency chain,
 /// which bounds it. Within one rounding of `schlick_weight(len / 2)`.
 #[inline(always)]
-pub fn schlick_weight_half<R: Real>(len: R) -> R {
+pub(crate) fn schlick_weight_half<R: Real>(len: R) -> R {
     let m = len.mul_add(-R::HALF, R::ONE).max(R::ZERO);
     let m2 = m * m;
     m2 * m2 * m

@@ -50,20 +50,41 @@ use crate::quadrature::GaussLegendre;
 use crate::real::Real;
 use crate::table::{Axis, Nodes, Table1, Warp};
 use std::f64::consts::FRAC_PI_2;
+use std::sync::Arc;
+
+/// Which Smith Λ a GTR distribution uses (the other NDFs ignore it).
+#[derive(Clone, Debug, PartialEq, Default)]
+pub enum GtrLambda {
+    /// GGX's Λ at the same α: cheap, exact at γ = 2, and for γ < 2 a lobe
+    /// that reflects more than it receives at grazing angles (the docs of
+    /// models/microfacet.rs).
+    #[default]
+    Ggx,
+    /// The distribution's own Λ, tabulated at the material's (γ, α)
+    /// ([`GtrLambdaTable`]).
+    Exact(Arc<GtrLambdaTable>),
+}
+
+impl GtrLambda {
+    /// The exact Λ of GTR(γ, α), tabulated now (~1e5 evaluations of D).
+    pub fn exact(gamma: f32, alpha: f32) -> GtrLambda {
+        GtrLambda::Exact(Arc::new(GtrLambdaTable::new(gamma as f64, alpha as f64)))
+    }
+}
 
 /// Nodes of the μΛ table.
-pub const N_X: usize = 2048;
+pub(crate) const N_X: usize = 2048;
 /// Quadrature intervals below and above μ = SPLIT_OVER_ALPHA · α, each
 /// side evenly spaced in x: μΛ is computed by quadrature only at their
 /// ends, and the N_X table nodes take a cubic through the four nearest of
 /// those (ln q is smooth in ln μ, so the cubic's h⁴ error is far below the
 /// lerp's h²).
-pub const N_LOW: usize = 12;
+pub(crate) const N_LOW: usize = 12;
 /// See [`N_LOW`].
-pub const N_HIGH: usize = 100;
+pub(crate) const N_HIGH: usize = 100;
 /// Where the quadrature nodes change spacing: μ = SPLIT_OVER_ALPHA · α.
 /// Below it q is nearly flat (it tends to its μ = 0 limit like μ/α).
-pub const SPLIT_OVER_ALPHA: f64 = 0.003;
+pub(crate) const SPLIT_OVER_ALPHA: f64 = 0.003;
 /// Smallest μ of the table, relative to α.
 const MU_MIN_OVER_ALPHA: f64 = 1e-5;
 /// Panels and Gauss–Legendre points per panel of the θ integral: equal

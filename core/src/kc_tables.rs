@@ -31,7 +31,8 @@
 //! [`KcTable::store_name`]: crate::kulla_conty::KcTable::store_name
 
 use crate::kulla_conty::{gamma_node, KcTable, N_ALPHA, N_GAMMA, N_MU};
-use crate::models::microfacet::{Ndf, Smith};
+use crate::masking::Smith;
+use crate::ndf::Ndf;
 use std::collections::HashMap;
 use std::sync::OnceLock;
 

@@ -58,8 +58,12 @@
 //! installs (the user's cache folder).
 
 use crate::brdf::ALPHA_MIN;
-use crate::models::microfacet::{Fresnel, GtrLambda, MicrofacetParams, Ndf, Smith};
+use crate::fresnel::Fresnel;
+use crate::gtr_lambda::GtrLambda;
+use crate::masking::Smith;
+use crate::ndf::Ndf;
 use crate::real::Real;
+use crate::specular_lobe::MicrofacetParams;
 use crate::table::{Axis, Nodes, Table1, Table2, Warp};
 use std::collections::HashMap;
 use std::sync::{Arc, Mutex, OnceLock};
@@ -81,13 +85,13 @@ type TableKey = (u8, u32, bool, bool);
 /// The μ axis of E: see the module docs.
 pub const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Sqrt, Nodes::Ends).linear_between_nodes();
 /// The α axis of E: see the module docs.
-pub const ALPHA_AXIS: Axis = Axis::new(N_ALPHA, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
+pub(crate) const ALPHA_AXIS: Axis = Axis::new(N_ALPHA, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
 
 /// GTR's γ axis: x = log₂ γ over [GAMMA_LOG2_LO, GAMMA_LOG2_HI], nodes on
 /// both ends, one every third of an octave (module docs, "GTR and γ").
-pub const GAMMA_LOG2_LO: f64 = -2.0;
-pub const GAMMA_LOG2_HI: f64 = 7.0;
-pub const N_GAMMA: usize = 28;
+pub(crate) const GAMMA_LOG2_LO: f64 = -2.0;
+pub(crate) const GAMMA_LOG2_HI: f64 = 7.0;
+pub(crate) const N_GAMMA: usize = 28;
 pub const GAMMA_AXIS: Axis = Axis::new(
     N_GAMMA,
     GAMMA_LOG2_LO,
@@ -392,7 +396,7 @@ impl KcSlice {
 }
 
 /// Colour factor multiplying f_ms (module docs), per channel.
-pub fn color_factor(f_avg: f64, e_avg: f64, mode: KcColor) -> f64 {
+pub(crate) fn color_factor(f_avg: f64, e_avg: f64, mode: KcColor) -> f64 {
     let total = f_avg * e_avg / (1.0 - f_avg * (1.0 - e_avg));
     match mode {
         KcColor::KullaConty => total * f_avg,

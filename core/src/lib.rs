@@ -6,8 +6,8 @@
 //! the viewer. Citation keys such as `[Walter07]` resolve in docs/REFERENCES.md.
 
 pub mod albedo_tables;
-pub mod brdf;
-pub mod diffuse;
+mod brdf;
+mod diffuse;
 pub mod fresnel;
 pub mod gtr_lambda;
 pub mod kc_tables;
@@ -19,8 +19,9 @@ pub mod models;
 pub mod ndf;
 pub mod quadrature;
 pub mod real;
+mod specular_lobe;
 pub mod table;
-pub mod vec3;
+mod vec3;
 
 pub use brdf::{Brdf, BrdfVisitor, LaneParams, Model, Outgoing, ShadingFrame};
 pub use real::{Mask, Real};

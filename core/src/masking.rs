@@ -4,6 +4,13 @@
 use crate::real::Real;
 use crate::vec3::V3;
 
+/// Which Smith G2 a microfacet material forms from the two Λ.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Smith {
+    Separable,
+    HeightCorrelated,
+}
+
 /// Smith Λ for GGX: Λ(θ) = (−1 + √(1 + α² tan²θ)) / 2   [Walter07, Heitz14]
 ///
 /// Written as (√(α² + (1−α²) cos²θ) / cos θ − 1) / 2, which avoids forming
@@ -23,7 +30,7 @@ pub fn lambda_ggx<R: Real>(alpha: R, cos_theta: R) -> R {
 /// (substitute Λ above into G2 and simplify).   [Heitz14, eq. 99]
 /// `cos_i`, `cos_o` must be > 0.
 #[inline(always)]
-pub fn v_smith_ggx_correlated<R: Real>(alpha: R, cos_i: R, cos_o: R) -> R {
+pub(crate) fn v_smith_ggx_correlated<R: Real>(alpha: R, cos_i: R, cos_o: R) -> R {
     let (s_i, s_o) = (smith_ggx_root(alpha, cos_i), smith_ggx_root(alpha, cos_o));
     v_smith_ggx_correlated_roots(cos_i, cos_o, s_i, s_o)
 }
@@ -31,7 +38,7 @@ pub fn v_smith_ggx_correlated<R: Real>(alpha: R, cos_i: R, cos_o: R) -> R {
 /// √(α² + (1 − α²) cos²θ), the per-direction root of
 /// [`v_smith_ggx_correlated`]: a shader computes the view's once per pixel.
 #[inline(always)]
-pub fn smith_ggx_root<R: Real>(alpha: R, cos_theta: R) -> R {
+pub(crate) fn smith_ggx_root<R: Real>(alpha: R, cos_theta: R) -> R {
     let a2 = alpha * alpha;
     // The hardware root, not x·rsqrt(x): on the Zen 5 benchmark machine
     // it runs beside the multipliers the light loop is bound by, and the
@@ -43,7 +50,7 @@ pub fn smith_ggx_root<R: Real>(alpha: R, cos_theta: R) -> R {
 /// [`v_smith_ggx_correlated`] from the two roots of [`smith_ggx_root`]:
 /// V = 0.5 / (μo s_i + μi s_o).
 #[inline(always)]
-pub fn v_smith_ggx_correlated_roots<R: Real>(cos_i: R, cos_o: R, s_i: R, s_o: R) -> R {
+pub(crate) fn v_smith_ggx_correlated_roots<R: Real>(cos_i: R, cos_o: R, s_i: R, s_o: R) -> R {
     R::HALF * cos_o.mul_add(s_i, cos_i * s_o).rcp()
 }
 
@@ -70,7 +77,7 @@ pub fn v_smith_ggx_correlated_roots<R: Real>(cos_i: R, cos_o: R, s_i: R, s_o: R)
 /// runs beside the multipliers (measured ~2.5 % of a frame on the Zen 5
 /// benchmark machine).
 #[inline(always)]
-pub fn dv_ggx_correlated<R: Real>(
+pub(crate) fn dv_ggx_correlated<R: Real>(
     alpha: R,
     s: V3<R>,
     len2: R,
@@ -93,7 +100,7 @@ pub fn dv_ggx_correlated<R: Real>(
 /// `cos_theta` in (0, 1]; at cos θ = 1, a = ∞ and Λ = 0 (the formula's
 /// terms are guarded so no inf·0 appears).
 #[inline(always)]
-pub fn lambda_beckmann<R: Real>(alpha: R, cos_theta: R) -> R {
+pub(crate) fn lambda_beckmann<R: Real>(alpha: R, cos_theta: R) -> R {
     let sin_theta = (R::ONE - cos_theta * cos_theta).max(R::ZERO).sqrt();
     // a ≥ 1e-30 and finite: cap at 1e15, far past where Λ underflows to 0.
     let a = (cos_theta / (alpha * sin_theta)).min(R::splat(1e15));
@@ -105,7 +112,7 @@ pub fn lambda_beckmann<R: Real>(alpha: R, cos_theta: R) -> R {
 /// The error function, Abramowitz & Stegun 7.1.26 (|error| ≤ 1.5e-7), odd
 /// extension for x < 0.   [AS64]
 #[inline(always)]
-pub fn erf<R: Real>(x: R) -> R {
+pub(crate) fn erf<R: Real>(x: R) -> R {
     let ax = x.abs();
     let t = R::ONE / R::splat(0.327_591_1).mul_add(ax, R::ONE);
     let poly = t * R::splat(1.061_405_429)
@@ -119,19 +126,19 @@ pub fn erf<R: Real>(x: R) -> R {
 
 /// Smith G1 = 1 / (1 + Λ).   [Heitz14, eq. 43]
 #[inline(always)]
-pub fn g1_smith<R: Real>(lambda: R) -> R {
+pub(crate) fn g1_smith<R: Real>(lambda: R) -> R {
     R::ONE / (R::ONE + lambda)
 }
 
 /// Separable (uncorrelated) Smith G2 = G1(i) G1(o).   [Heitz14, eq. 98]
 #[inline(always)]
-pub fn g2_separable<R: Real>(lambda_i: R, lambda_o: R) -> R {
+pub(crate) fn g2_separable<R: Real>(lambda_i: R, lambda_o: R) -> R {
     g1_smith(lambda_i) * g1_smith(lambda_o)
 }
 
 /// Height-correlated Smith G2 = 1 / (1 + Λ(i) + Λ(o)).   [Heitz14, eq. 99]
 #[inline(always)]
-pub fn g2_height_correlated<R: Real>(lambda_i: R, lambda_o: R) -> R {
+pub(crate) fn g2_height_correlated<R: Real>(lambda_i: R, lambda_o: R) -> R {
     R::ONE / (R::ONE + lambda_i + lambda_o)
 }
 
@@ -144,7 +151,7 @@ pub fn g2_height_correlated<R: Real>(lambda_i: R, lambda_o: R) -> R {
 /// avoids tan²θ (it overflows as vz → 0). `cos_theta` = vz must be > 0
 /// (callers pass the floored cosine).
 #[inline(always)]
-pub fn lambda_ggx_aniso<R: Real>(alpha_x: R, alpha_y: R, vx: R, vy: R, cos_theta: R) -> R {
+pub(crate) fn lambda_ggx_aniso<R: Real>(alpha_x: R, alpha_y: R, vx: R, vy: R, cos_theta: R) -> R {
     let (ax, ay) = (alpha_x * vx, alpha_y * vy);
     let s = ax.mul_add(ax, ay.mul_add(ay, cos_theta * cos_theta)).sqrt();
     (s / cos_theta - R::ONE) * R::HALF

@@ -11,6 +11,17 @@
 
 use crate::real::Real;
 
+/// Which NDF a microfacet material uses.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Ndf {
+    Ggx,
+    Beckmann,
+    /// Generalized Trowbridge–Reitz with exponent γ > 0 (γ = 2 is GGX).
+    Gtr {
+        gamma: f32,
+    },
+}
+
 /// GGX / Trowbridge–Reitz NDF: D(m) = α² / (π ((n·m)²(α²−1) + 1)²)   [Walter07]
 ///
 /// The denominator's base is formed as sin²θm + α² cos²θm (module docs).
@@ -28,7 +39,7 @@ pub fn d_ggx<R: Real>(alpha: R, cos2_theta_m: R, sin2_theta_m: R) -> R {
 ///
 /// tan²θm = sin²θm / cos²θm. Callers pass cos²θm > 0.
 #[inline(always)]
-pub fn d_beckmann<R: Real>(alpha: R, cos2_theta_m: R, sin2_theta_m: R) -> R {
+pub(crate) fn d_beckmann<R: Real>(alpha: R, cos2_theta_m: R, sin2_theta_m: R) -> R {
     let a2 = alpha * alpha;
     let c2 = cos2_theta_m;
     let tan2 = sin2_theta_m / c2;
@@ -123,7 +134,7 @@ pub fn d_gtr<R: Real>(alpha: R, gamma: f64, cos2_theta_m: R, sin2_theta_m: R) ->
 /// αx = αy = α it is [`d_ggx`]. The base is ≥ mz² + (mx² + my²) / max(α)²,
 /// > 0 for any unit m and finite α > 0.
 #[inline(always)]
-pub fn d_ggx_aniso<R: Real>(alpha_x: R, alpha_y: R, mx2: R, my2: R, mz2: R) -> R {
+pub(crate) fn d_ggx_aniso<R: Real>(alpha_x: R, alpha_y: R, mx2: R, my2: R, mz2: R) -> R {
     let t = (mx2 / (alpha_x * alpha_x)).mul_add(R::ONE, my2 / (alpha_y * alpha_y)) + mz2;
     R::ONE / (R::PI * alpha_x * alpha_y * t * t)
 }

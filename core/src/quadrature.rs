@@ -1,7 +1,7 @@
 //! Numeric integration for the tables (table.rs, albedo and Kulla–Conty
 //! tables, the per-material albedo), written once.
 //!
-//! - [`adaptive_simpson`]: for integrands with kinks at unknown places (the
+//! - `adaptive_simpson`: for integrands with kinks at unknown places (the
 //!   albedo ring of `MicrofacetParams::specular_albedo`), on C channels at
 //!   once, refining where any channel needs it.
 //! - [`GaussLegendre`]: n-point rule, exact for polynomials of degree
@@ -9,7 +9,7 @@
 //!   where the interpolant is a low-degree polynomial.
 
 /// Simpson's rule on [a, b] from f(a), f((a + b)/2), f(b), per channel.
-pub fn simpson<const C: usize>(
+pub(crate) fn simpson<const C: usize>(
     a: f64,
     b: f64,
     fa: [f64; C],
@@ -24,7 +24,7 @@ pub fn simpson<const C: usize>(
 /// `depth` runs out), then adds the Richardson correction. `fa`, `fm`, `fb`
 /// are f at a, the midpoint and b, `whole` their Simpson estimate.
 #[allow(clippy::too_many_arguments)]
-pub fn adaptive_simpson<const C: usize>(
+pub(crate) fn adaptive_simpson<const C: usize>(
     f: &dyn Fn(f64) -> [f64; C],
     a: f64,
     b: f64,

@@ -145,7 +145,7 @@ impl Axis {
     /// Lower node index (as an integral lane value) and the weight of the
     /// next node at x: steps 1–4 of the module docs.
     #[inline(always)]
-    pub fn locate<R: Real>(&self, x: R) -> (R, R) {
+    pub(crate) fn locate<R: Real>(&self, x: R) -> (R, R) {
         let last = (self.n - 1) as f64;
         let t = ((x - R::splat(self.lo)) * R::splat(self.inv_span)).clamp(R::ZERO, R::ONE);
         let u = self.warp.apply(t);
@@ -196,7 +196,7 @@ impl<const C: usize> Table1<C> {
     }
 
     /// A table from its node values, one `[f32; C]` per node.
-    pub fn from_nodes(axis: Axis, values: Vec<[f32; C]>) -> Table1<C> {
+    pub(crate) fn from_nodes(axis: Axis, values: Vec<[f32; C]>) -> Table1<C> {
         assert_eq!(values.len(), axis.n, "one value per node");
         assert!(axis.n * C <= MAX_LEN, "table too large for f32 indices");
         Table1 {
@@ -284,7 +284,7 @@ impl<const C: usize> Table2<C> {
     }
 
     /// A table from its rows (one per y node, each one value per x node).
-    pub fn from_rows(x: Axis, y: Axis, rows: Vec<Vec<[f32; C]>>) -> Table2<C> {
+    pub(crate) fn from_rows(x: Axis, y: Axis, rows: Vec<Vec<[f32; C]>>) -> Table2<C> {
         assert_eq!(rows.len(), y.n, "one row per y node");
         assert!(rows.iter().all(|r| r.len() == x.n), "one value per x node");
         assert!(x.n * y.n * C <= MAX_LEN, "table too large for f32 indices");

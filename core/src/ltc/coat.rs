@@ -57,11 +57,11 @@ pub const NX: usize = 12;
 /// Nodes in √(1 − μo).
 pub const NY: usize = 32;
 /// Channels per node (module docs): 4 per cosine, its weight, n.
-pub const CHANNELS: usize = 5 * K + 1;
+pub(crate) const CHANNELS: usize = 5 * K + 1;
 
 /// The range of the clearcoat's α: mix(0.1, 0.001, clearcoat_gloss).
-pub const ALPHA_LO: f64 = 0.001;
-pub const ALPHA_HI: f64 = 0.1;
+pub(crate) const ALPHA_LO: f64 = 0.001;
+pub(crate) const ALPHA_HI: f64 = 0.1;
 /// ln α: see the module docs (ln 0.001 = −3 ln 10 to ln 0.1 = −ln 10;
 /// checked by a test).
 pub const X_AXIS: Axis = Axis::new(NX, -3.0 * LN_10, -LN_10, Warp::Linear, Nodes::Ends);

@@ -56,7 +56,7 @@ use std::sync::OnceLock;
 /// Nodes per axis.
 pub const N: usize = 64;
 /// Channels per node: m00, m02, m20, m22, n, n_w (module docs).
-pub const CHANNELS: usize = 6;
+pub(crate) const CHANNELS: usize = 6;
 
 /// √α: see the module docs.
 pub const X_AXIS: Axis = Axis::new(N, 0.031_622_776_601_683_79, 1.0, Warp::Linear, Nodes::Ends);
@@ -153,7 +153,7 @@ impl<R: Real> LtcGgx<R> {
     /// m20, m22 (m11 = 1), the magnitudes n and n_w, turned to the
     /// azimuth of the unit local view `wo`.
     #[inline(always)]
-    pub fn from_inverse(m: [R; 4], n: R, n_w: R, wo: V3<R>) -> LtcGgx<R> {
+    pub(crate) fn from_inverse(m: [R; 4], n: R, n_w: R, wo: V3<R>) -> LtcGgx<R> {
         let [m00, m02, m20, m22] = m;
         // cos φo, sin φo of the view's azimuth (1, 0 at the normal).
         let r2 = wo.x.mul_add(wo.x, wo.y * wo.y);
@@ -194,14 +194,14 @@ impl<R: Real> LtcGgx<R> {
     /// one pass where the polygon needs no clipping
     /// ([`form_factor_pair_signed`]).
     #[inline(always)]
-    pub fn form_factor_and_integral(&self, poly: &PolygonLocal<R>) -> (R, R) {
+    pub(crate) fn form_factor_and_integral(&self, poly: &PolygonLocal<R>) -> (R, R) {
         let (ff, spec) = form_factor_pair_signed(poly.vertices(), |v| self.map(v));
         (sided(ff, poly.two_sided), sided(spec, poly.two_sided))
     }
 
     /// F0 (n − n_w) + n_w: the lobe's albedo under Schlick's F.
     #[inline(always)]
-    pub fn schlick_albedo(&self, f0: R) -> R {
+    pub(crate) fn schlick_albedo(&self, f0: R) -> R {
         f0.mul_add(self.n - self.n_w, self.n_w)
     }
 }

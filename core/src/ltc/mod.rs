@@ -7,12 +7,9 @@
 //!   against and what `area_lights = "reference"` renders.
 
 pub mod coat;
-pub mod file;
+mod file;
 pub mod ggx;
-pub mod polygon;
+mod polygon;
 pub mod reference;
 
-pub use polygon::{
-    edge_integral, form_factor, form_factor_pair_signed, form_factor_signed,
-    form_factor_signed_mapped, sided, theta_over_sin,
-};
+pub use polygon::{form_factor, form_factor_signed, sided};

@@ -72,7 +72,7 @@ const MIN_SQ: f64 = 1e-30;
 /// (Lawson's iteration on 20 001 points), coefficients lowest first.
 /// Measured: 4.4e-7 relative in f64, 6.2e-7 evaluated in f32
 /// (`theta_over_sin_against_the_exact_form`).
-pub const THETA_OVER_SIN: [f64; 8] = [
+pub(crate) const THETA_OVER_SIN: [f64; 8] = [
     1.570_795_646_530_537_3,
     -0.999_909_773_204_423_1,
     0.783_392_880_862_160_7,
@@ -85,7 +85,7 @@ pub const THETA_OVER_SIN: [f64; 8] = [
 
 /// The polynomial [`THETA_OVER_SIN`] at x = cos θ ∈ [0, 1], by Horner.
 #[inline(always)]
-pub fn theta_over_sin<R: Real>(x: R) -> R {
+pub(crate) fn theta_over_sin<R: Real>(x: R) -> R {
     let k = |i: usize| R::splat(THETA_OVER_SIN[i]);
     let mut p = k(7);
     for i in (0..7).rev() {
@@ -97,7 +97,7 @@ pub fn theta_over_sin<R: Real>(x: R) -> R {
 /// [`theta_over_sin`] at two arguments, step by step together: the
 /// same operations, each coefficient loaded once for both.
 #[inline(always)]
-pub fn theta_over_sin_pair<R: Real>(x0: R, x1: R) -> (R, R) {
+pub(crate) fn theta_over_sin_pair<R: Real>(x0: R, x1: R) -> (R, R) {
     let k = |i: usize| R::splat(THETA_OVER_SIN[i]);
     let (mut p0, mut p1) = (k(7), k(7));
     for i in (0..7).rev() {
@@ -178,7 +178,7 @@ fn edge_normal<R: Real>(a: V3<R>, b: V3<R>) -> (V3<R>, R) {
 /// 2π × the signed integral (module docs, with the sign of a × b; callers
 /// sum edges in reverse order). Zero for points in line with the origin.
 #[inline(always)]
-pub fn edge_integral<R: Real>(a: V3<R>, b: V3<R>) -> R {
+pub(crate) fn edge_integral<R: Real>(a: V3<R>, b: V3<R>) -> R {
     let (n, c) = edge_normal(a, b);
     arc(n.z, n.length_squared(), c)
 }
@@ -188,7 +188,7 @@ pub fn edge_integral<R: Real>(a: V3<R>, b: V3<R>) -> R {
 /// equal to the single form: the two share the polynomial's constants
 /// (loaded once per step instead of twice) and one test for obtuse arcs.
 #[inline(always)]
-pub fn edge_integral_pair<R: Real>(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V3<R>) -> (R, R) {
+pub(crate) fn edge_integral_pair<R: Real>(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V3<R>) -> (R, R) {
     let (n0, c0) = edge_normal(a0, b0);
     let (n1, c1) = edge_normal(a1, b1);
     let (q0, q1) = (n0.length_squared(), n1.length_squared());
@@ -249,7 +249,10 @@ pub fn form_factor_signed<R: Real>(vertices: &[V3<R>]) -> R {
 /// `map(vertices[k])` (a linear map, e.g. an LTC's M⁻¹), formed as the
 /// integral needs them rather than stored.
 #[inline(always)]
-pub fn form_factor_signed_mapped<R: Real>(vertices: &[V3<R>], map: impl Fn(V3<R>) -> V3<R>) -> R {
+pub(crate) fn form_factor_signed_mapped<R: Real>(
+    vertices: &[V3<R>],
+    map: impl Fn(V3<R>) -> V3<R>,
+) -> R {
     let n = vertices.len();
     // Lanes where every vertex is above, lanes where any is.
     let mut all: R::Mask = R::ZERO.le(R::ZERO);
@@ -315,7 +318,7 @@ pub fn form_factor_signed_mapped<R: Real>(vertices: &[V3<R>], map: impl Fn(V3<R>
 /// material under a polygon light needs: the diffuse form factor and the
 /// LTC integral.
 #[inline(always)]
-pub fn form_factor_pair_signed<R: Real>(
+pub(crate) fn form_factor_pair_signed<R: Real>(
     vertices: &[V3<R>],
     map: impl Fn(V3<R>) -> V3<R>,
 ) -> (R, R) {

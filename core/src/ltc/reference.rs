@@ -60,7 +60,7 @@ impl Tolerance {
         max_nodes: 200_000,
     };
     /// What reference renders use per pixel: 1e-3 relative.
-    pub const RENDER: Tolerance = Tolerance {
+    pub(crate) const RENDER: Tolerance = Tolerance {
         relative: 1e-3,
         absolute: 1e-6,
         max_nodes: 4_000,
@@ -69,7 +69,7 @@ impl Tolerance {
 
 /// Newell's normal: twice the polygon's vector area, pointing to the side
 /// from which the vertices run counter-clockwise (its front).
-pub fn newell_normal(v: &[V3<f64>]) -> V3<f64> {
+pub(crate) fn newell_normal(v: &[V3<f64>]) -> V3<f64> {
     let mut n = V3::zero();
     for (k, a) in v.iter().enumerate() {
         n += a.cross(v[(k + 1) % v.len()]);
@@ -78,7 +78,7 @@ pub fn newell_normal(v: &[V3<f64>]) -> V3<f64> {
 }
 
 /// The part of the polygon with z ≥ 0 (Sutherland–Hodgman).
-pub fn clip_to_horizon(v: &[V3<f64>]) -> Vec<V3<f64>> {
+pub(crate) fn clip_to_horizon(v: &[V3<f64>]) -> Vec<V3<f64>> {
     let mut out = Vec::with_capacity(v.len() + 2);
     for (k, &a) in v.iter().enumerate() {
         let b = v[(k + 1) % v.len()];
@@ -277,7 +277,7 @@ pub fn integrate_polygon(
 }
 
 /// The reference for every lane of a packet: each lane's parameters, view
-/// and polygon taken to f64 and integrated at [`Tolerance::RENDER`] with the
+/// and polygon taken to f64 and integrated at `Tolerance::RENDER` with the
 /// model's own f cos θi. Slow (thousands of BRDF evaluations per lane); for
 /// `area_lights = "reference"`.
 pub fn polygon_reference_lanes<B: Brdf, R: Real>(

@@ -54,7 +54,7 @@
 //!   Kulla–Conty table is read at. An isotropic lobe cannot follow an
 //!   anisotropic one, though (p90 26 %, max 57 % of the albedo at
 //!   anisotropic = 1; the RMS α √((αx² + αy²)/2) was no better: p90 15 %,
-//!   max 77 %), so anisotropic lobes ([`Disney::anisotropic_ltc`]) shear
+//!   max 77 %), so anisotropic lobes (`Disney::anisotropic_ltc`) shear
 //!   the fit's cosine: the half-vector slopes have covariance
 //!   C = [[p, κ], [κ, q]] in the view's frame (x along its azimuth φo:
 //!   p = αx² cos²φo + αy² sin²φo, q = αx² + αy² − p, κ = (αy² − αx²)
@@ -96,7 +96,7 @@
 //!   this view (exact for a light filling the hemisphere). For fixed
 //!   directions F_d and ss are quadratic in roughness, so their albedos
 //!   are three μo curves each, plus sheen's (1 − cos θd)⁵: one
-//!   process-wide table ([`diffuse_albedo_table`], 64 μo × 7, within
+//!   process-wide table (`diffuse_albedo_table`, 64 μo × 7, within
 //!   2.2e-4 of the model's quadrature) serves every material. Measured:
 //!   p90 2.4 %, max 13.5 % (retro-reflection and sheen at grazing views).
 //! - Compensation: its lobe as its albedo factor · (1 − E(μo)) times the
@@ -192,7 +192,7 @@ impl DisneyParams {
 
     /// C_tint: the base colour with its luminance divided out (hue and
     /// saturation only), white for a black base.
-    pub fn tint(&self) -> [f64; 3] {
+    pub(crate) fn tint(&self) -> [f64; 3] {
         let c = self.base_color.map(|v| v as f64);
         let lum = 0.3 * c[0] + 0.6 * c[1] + 0.1 * c[2];
         if lum > 0.0 {
@@ -606,12 +606,12 @@ const DIFFUSE_MU_AXIS: Axis = Axis::new(64, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
 /// ∫ F_d μi dωi = c₀ + c₁ r + c₂ r², ∫ ss μi dωi = c₃ + c₄ r + c₅ r²,
 /// ∫ F_H μi dωi = c₆ (F_d and ss are quadratic in r for fixed directions).
 /// Built once per process (~10 ms).
-pub fn diffuse_albedo_table() -> &'static Table1<7> {
+pub(crate) fn diffuse_albedo_table() -> &'static Table1<7> {
     static T: OnceLock<Table1<7>> = OnceLock::new();
     T.get_or_init(|| Table1::build(DIFFUSE_MU_AXIS, diffuse_albedo_coefficients))
 }
 
-/// The seven coefficients of [`diffuse_albedo_table`] at μo, by
+/// The seven coefficients of `diffuse_albedo_table` at μo, by
 /// Gauss–Legendre in t with μi = t² (64 nodes) times the midpoint rule in
 /// φ over [0, π] (64 nodes; every term is even in φ).
 pub fn diffuse_albedo_coefficients(mu_o: f64) -> [f64; 7] {
@@ -669,7 +669,7 @@ pub struct DisneyPolygons<R: Real> {
 impl Disney {
     /// The directional albedo of the diffuse lobes (diffuse, subsurface
     /// blend, sheen; × (1 − metallic)) at μo, per channel, from
-    /// [`diffuse_albedo_table`].
+    /// `diffuse_albedo_table`.
     #[inline(always)]
     pub fn diffuse_albedo<R: Real>(&self, cos_o: R) -> Rgb<R> {
         diffuse_albedo_of(&self.params(), cos_o)
@@ -696,7 +696,7 @@ impl Disney {
     /// 2 × 2 covariance of the half-vector slopes in the view's frame
     /// (x along the view's azimuth, y across it).
     #[inline(always)]
-    pub fn anisotropic_ltc<R: Real>(&self, wo: V3<R>) -> LtcGgx<R> {
+    pub(crate) fn anisotropic_ltc<R: Real>(&self, wo: V3<R>) -> LtcGgx<R> {
         let d = &self.d;
         let (ax2, ay2) = (d.alpha_x * d.alpha_x, d.alpha_y * d.alpha_y);
         let r2 = wo.x.mul_add(wo.x, wo.y * wo.y);

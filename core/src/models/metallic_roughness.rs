@@ -33,7 +33,7 @@ pub struct MetallicRoughness {
 const F0_DIELECTRIC: f32 = 0.04;
 
 impl MetallicRoughness {
-    /// α = roughness², floored at [`ALPHA_MIN`] (α = 0 would make D a delta and
+    /// α = roughness², floored at `ALPHA_MIN` (α = 0 would make D a delta and
     /// the formula 0/0 at the peak).
     #[inline]
     pub fn alpha(&self) -> f32 {
@@ -59,7 +59,7 @@ impl MetallicRoughness {
 pub struct MetallicRoughnessLaneParams<R: Real> {
     /// Linear RGB.
     pub base_color: Rgb<R>,
-    /// α = roughness², floored at [`ALPHA_MIN`].
+    /// α = roughness², floored at `ALPHA_MIN`.
     pub alpha: R,
     pub metallic: R,
 }

@@ -2,8 +2,8 @@
 //! `ndf`, `masking` and `diffuse`. A model adds no formula of its own.
 
 pub mod disney;
-pub mod lambert;
-pub mod metallic_roughness;
+mod lambert;
+mod metallic_roughness;
 pub mod microfacet;
 
 pub use disney::{Disney, DisneyLaneParams, DisneyParams};
