@@ -11,7 +11,7 @@
 //! of each new file is checked to be writable, all before rendering.
 
 use image::ImageFormat;
-use std::fs::{File, OpenOptions};
+use std::fs::OpenOptions;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -186,12 +186,10 @@ pub fn plan(
     Ok(planned)
 }
 
-/// A temporary file beside its destination, removed when dropped unless
-/// renamed into place: no error path (or panic) leaves it behind.
-struct TempFile {
-    path: PathBuf,
-    file: Option<File>,
-}
+/// A temporary file beside its destination (`tempfile`'s `NamedTempFile`),
+/// removed when dropped unless renamed into place: no error path (or panic)
+/// leaves it behind.
+struct TempFile(tempfile::NamedTempFile);
 
 impl TempFile {
     fn create(dest: &Path) -> std::io::Result<TempFile> {
@@ -199,37 +197,29 @@ impl TempFile {
             .file_name()
             .map(|n| n.to_string_lossy().into_owned())
             .unwrap_or_default();
-        let path = dest.with_file_name(format!(".{name}.{}.tmp", std::process::id()));
-        let file = OpenOptions::new()
-            .write(true)
-            .create(true)
-            .truncate(true)
-            .open(&path)?;
-        Ok(TempFile {
-            path,
-            file: Some(file),
-        })
+        let prefix = format!(".{name}.");
+        let mut builder = tempfile::Builder::new();
+        builder.prefix(&prefix).suffix(".tmp");
+        // tempfile's default mode is 0600; an output is an ordinary file,
+        // so it gets what creating it in place would give (0666 less the
+        // umask).
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            builder.permissions(std::fs::Permissions::from_mode(0o666));
+        }
+        builder.tempfile_in(folder(dest)).map(TempFile)
     }
 
     /// Writes all of `bytes`, makes sure they reached the disk (a full disk
     /// may only show at sync), and renames the file to `dest`.
     fn persist(mut self, bytes: &[u8], dest: &Path) -> std::io::Result<()> {
-        let mut f = self.file.take().expect("open until persisted");
+        let f = self.0.as_file_mut();
         f.write_all(bytes)?;
         f.sync_all()?;
-        drop(f);
-        std::fs::rename(&self.path, dest)?;
-        self.path = PathBuf::new();
+        // On failure the error owns the temporary file and removes it.
+        self.0.persist(dest)?;
         Ok(())
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        self.file.take();
-        if !self.path.as_os_str().is_empty() {
-            let _ = std::fs::remove_file(&self.path);
-        }
     }
 }
 

@@ -15,7 +15,7 @@ use specula_core::Model;
 use specula_raster::post::Tonemap;
 use specula_raster::{Camera, SceneData};
 use specula_raster::{GeometryPass, Lit, Material};
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, HashSet};
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -480,100 +480,278 @@ pub fn load_scene_str(
     };
     let desc: SceneFile =
         toml::from_str(text).map_err(|e| err(format!("{}", e).trim_end().to_string()))?;
-    let mut warnings = Vec::new();
-    let mut inputs = vec![path.to_path_buf()];
+    build_scene(path, desc, read).map_err(err)
+}
 
-    let c = &desc.camera;
+/// Builds a parsed scene, one table after another. The order is part of
+/// the behaviour: the first table with a problem is the one reported, and
+/// later tables see what earlier ones added (meshes name materials,
+/// visible lights add geometry, outlines name materials).
+fn build_scene(
+    path: &Path,
+    desc: SceneFile,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<LoadedScene, String> {
+    let camera = build_camera(&desc.camera)?;
+    check_output(&desc.output)?;
+    let mut scene = SceneBuilder::new(path, read, camera, desc.output.background);
+    scene.add_materials(&desc.materials)?;
+    scene.add_meshes(&desc.meshes)?;
+    scene.add_lights(&desc.lights, desc.render.area_lights)?;
+    if let Some(e) = &desc.environment {
+        scene.data.environment = Some(build_environment(e)?);
+    }
+    scene.warm_tables();
+    let outlines = check_outlines(&desc.outlines, &scene.materials.by_name)?;
+    let strokes = desc.strokes.as_ref().map(|s| s.check()).transpose()?;
+
+    let SceneBuilder {
+        mut data,
+        materials,
+        inputs,
+        warnings,
+        ..
+    } = scene;
+    data.materials = materials.list;
+    data.geometry = vec![GeometryPass::main(data.triangles.len())];
+    let mut lines = crate::lines::build(&mut data, &outlines, strokes.as_ref(), &desc.output);
+    data.validate()?;
+    let mut post_stages = build_posterize(desc.posterize.as_ref())?;
+    post_stages.extend(std::mem::take(&mut lines.post));
+    Ok(LoadedScene {
+        data,
+        output: desc.output,
+        inputs,
+        warnings,
+        post_stages,
+        outlines,
+        strokes,
+        lines,
+    })
+}
+
+/// `[camera]`: finite, inside the world, a usable field of view and depth
+/// range, and a frame that eye, target and up can span.
+fn build_camera(c: &CameraDesc) -> Result<Camera, String> {
     for (f, v) in [
         ("camera.eye", &c.eye),
         ("camera.target", &c.target),
         ("camera.up", &c.up),
     ] {
-        check_finite(f, v).map_err(&err)?;
+        check_finite(f, v)?;
     }
-    check_point("camera.eye", c.eye).map_err(&err)?;
-    check_point("camera.target", c.target).map_err(&err)?;
+    check_point("camera.eye", c.eye)?;
+    check_point("camera.target", c.target)?;
     if !(MIN_FOV_Y_DEG..=MAX_FOV_Y_DEG).contains(&c.fov_y) {
-        return Err(err(format!(
+        return Err(format!(
             "camera.fov_y: must be in [{MIN_FOV_Y_DEG}, {MAX_FOV_Y_DEG}] degrees, got {}",
             c.fov_y
-        )));
+        ));
     }
     // Depth is reversed (camera.rs), so any near/far ratio keeps its
     // precision; only the near plane must be a positive finite distance.
     // `far = inf` (TOML's infinity) is an infinite far plane.
     if !(c.near > 0.0 && c.near.is_finite() && c.far > c.near) {
-        return Err(err(format!(
+        return Err(format!(
             "camera.near / camera.far: need 0 < near < far (far may be inf), got {} and {}",
             c.near, c.far
-        )));
+        ));
     }
     let forward = Vec3::from(c.target) - Vec3::from(c.eye);
     if forward.length_squared() == 0.0 || forward.cross(Vec3::from(c.up)).length_squared() == 0.0 {
-        return Err(err("camera: eye, target and up must span a frame (target ≠ eye, up not parallel to the view)".into()));
+        return Err("camera: eye, target and up must span a frame (target ≠ eye, up not parallel to the view)".into());
     }
-    let camera = Camera {
+    Ok(Camera {
         eye: c.eye.into(),
         target: c.target.into(),
         up: c.up.into(),
         fov_y_deg: c.fov_y,
         near: c.near,
         far: c.far,
-    };
+    })
+}
 
-    let o = &desc.output;
-    check_output_size(o).map_err(&err)?;
-    check_radiometric("output.background", o.background).map_err(&err)?;
+/// `[output]` and its `[[output.label]]`s.
+fn check_output(o: &OutputDesc) -> Result<(), String> {
+    check_output_size(o)?;
+    check_radiometric("output.background", o.background)?;
     if !o.exposure.is_finite() {
-        return Err(err("output.exposure: must be finite".into()));
+        return Err("output.exposure: must be finite".into());
     }
     for (i, l) in o.labels.iter().enumerate() {
-        l.validate()
-            .map_err(|e| err(format!("output.label[{i}].{e}")))?;
+        l.validate().map_err(|e| format!("output.label[{i}].{e}"))?;
     }
+    Ok(())
+}
 
-    // Materials: scene materials first, so they win over MTL ones of the same name.
-    let mut materials = Vec::new();
-    let mut by_name: HashMap<String, u32> = HashMap::new();
-    // Materials that read uvs (textures, tonal art maps).
-    let mut textured = std::collections::HashSet::new();
-    for (name, m) in &desc.materials {
-        let mut notes = Vec::new();
-        let built = m
-            .build_with(name, crate::material_desc::Tables::Build, &mut notes, read)
-            .map_err(|e| err(format!("materials.{name}.{e}")))?;
-        if m.needs_uvs() {
-            textured.insert(materials.len() as u32);
+/// `[environment]`: the uniform radiance.
+fn build_environment(e: &EnvironmentDesc) -> Result<[f32; 3], String> {
+    check_radiometric("environment.uniform", e.uniform)?;
+    Ok(e.uniform)
+}
+
+/// `[[outline]]`s; the materials they name must exist.
+fn check_outlines(
+    descs: &[crate::lines::OutlineDesc],
+    by_name: &HashMap<String, u32>,
+) -> Result<Vec<crate::lines::OutlineSpec>, String> {
+    descs
+        .iter()
+        .enumerate()
+        .map(|(i, o)| o.check(&format!("outline[{i}]"), &|n| by_name.contains_key(n)))
+        .collect()
+}
+
+/// `[posterize]`: the image-space stage it asks for, if any.
+fn build_posterize(
+    p: Option<&PosterizeDesc>,
+) -> Result<Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>, String> {
+    let mut post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>> = Vec::new();
+    if let Some(p) = p {
+        use specula_npr::posterize::{Posterize, PosterizeMode};
+        let mode = match p.mode {
+            PosterizeModeDesc::Rgb => PosterizeMode::Rgb,
+            PosterizeModeDesc::Luminance => PosterizeMode::Luminance,
+        };
+        let stage = Posterize::new(p.levels, mode).map_err(|e| format!("posterize.{e}"))?;
+        post_stages.push(std::sync::Arc::new(stage));
+    }
+    Ok(post_stages)
+}
+
+/// The scene's materials as they are gathered: `[materials]` first, then
+/// MTL materials and the default as meshes ask for them, then visible
+/// lights' own.
+struct Materials {
+    list: Vec<Material>,
+    /// Ids of `[materials]` and MTL materials by name (not lights' own).
+    by_name: HashMap<String, u32>,
+    /// Materials that read uvs (textures, tonal art maps).
+    textured: HashSet<u32>,
+    /// The default material's id, once a mesh needed it.
+    default_id: Option<u32>,
+}
+
+/// Where a mesh goes in the world: its model matrix, the matrix for its
+/// normals, and whether it mirrors (which flips the winding).
+struct Placement {
+    model: Mat4,
+    normal_m: Mat3,
+    flip: bool,
+}
+
+/// What the tables add up to while they are read in order.
+struct SceneBuilder<'a> {
+    path: &'a Path,
+    read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    data: SceneData,
+    materials: Materials,
+    /// Whether some mesh brought texture coordinates.
+    any_uvs: bool,
+    inputs: Vec<PathBuf>,
+    warnings: Vec<String>,
+}
+
+impl<'a> SceneBuilder<'a> {
+    fn new(
+        path: &'a Path,
+        read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+        camera: Camera,
+        background: [f32; 3],
+    ) -> Self {
+        SceneBuilder {
+            path,
+            read,
+            data: SceneData {
+                positions: Vec::new(),
+                normals: Vec::new(),
+                uvs: Vec::new(),
+                tangents: Vec::new(),
+                triangles: Vec::new(),
+                tri_material: Vec::new(),
+                materials: Vec::new(),
+                geometry: Vec::new(),
+                lights: Vec::new(),
+                environment: None,
+                background,
+                camera,
+            },
+            materials: Materials {
+                list: Vec::new(),
+                by_name: HashMap::new(),
+                textured: HashSet::new(),
+                default_id: None,
+            },
+            any_uvs: false,
+            inputs: vec![path.to_path_buf()],
+            warnings: Vec::new(),
         }
-        inputs.extend(m.base_color_texture().map(Path::to_path_buf));
-        warnings.extend(
-            notes
-                .into_iter()
-                .map(|n| format!("{}: materials.{name}.{n}", path.display())),
-        );
-        by_name.insert(name.clone(), materials.len() as u32);
-        materials.push(built);
     }
-    let mut default_id = None;
 
-    let mut data = SceneData {
-        positions: Vec::new(),
-        normals: Vec::new(),
-        uvs: Vec::new(),
-        tangents: Vec::new(),
-        triangles: Vec::new(),
-        tri_material: Vec::new(),
-        materials: Vec::new(),
-        geometry: Vec::new(),
-        lights: Vec::new(),
-        environment: None,
-        background: o.background,
-        camera,
-    };
-    let mut any_uvs = false;
+    /// `[materials]`: built before the meshes, so they win over MTL
+    /// materials of the same name.
+    fn add_materials(&mut self, descs: &BTreeMap<String, MaterialDesc>) -> Result<(), String> {
+        let mats = &mut self.materials;
+        for (name, m) in descs {
+            let mut notes = Vec::new();
+            let built = m
+                .build_with(
+                    name,
+                    crate::material_desc::Tables::Build,
+                    &mut notes,
+                    self.read,
+                )
+                .map_err(|e| format!("materials.{name}.{e}"))?;
+            if m.needs_uvs() {
+                mats.textured.insert(mats.list.len() as u32);
+            }
+            self.inputs
+                .extend(m.base_color_texture().map(Path::to_path_buf));
+            self.warnings.extend(
+                notes
+                    .into_iter()
+                    .map(|n| format!("{}: materials.{name}.{n}", self.path.display())),
+            );
+            mats.by_name.insert(name.clone(), mats.list.len() as u32);
+            mats.list.push(built);
+        }
+        Ok(())
+    }
 
-    for (i, md) in desc.meshes.iter().enumerate() {
-        let field = format!("mesh[{i}]");
+    /// `[[mesh]]`s, appended in order; then the scene-wide uvs and
+    /// tangents.
+    fn add_meshes(&mut self, descs: &[MeshDesc]) -> Result<(), String> {
+        for (i, md) in descs.iter().enumerate() {
+            self.add_mesh(&format!("mesh[{i}]"), md)?;
+        }
+        let data = &mut self.data;
+        if !self.any_uvs {
+            data.uvs.clear();
+        }
+        data.tangents = specula_raster::scene::compute_tangents(
+            &data.positions,
+            &data.normals,
+            &data.uvs,
+            &data.triangles,
+        );
+        if data.triangles.is_empty() {
+            self.warnings.push("the scene has no triangles".into());
+        }
+        Ok(())
+    }
+
+    /// One `[[mesh]]`: its shape, its materials, its placement.
+    fn add_mesh(&mut self, field: &str, md: &MeshDesc) -> Result<(), String> {
+        let mesh = self.build_shape(field, md)?;
+        let local = self.mesh_materials(field, md, &mesh)?;
+        self.check_uvs(field, md, &mesh, &local)?;
+        let placement = place_mesh(field, md, &mesh.positions)?;
+        self.append_mesh(&mesh, &placement, &local);
+        Ok(())
+    }
+
+    /// The mesh's geometry: exactly one of obj, sphere, plane, cube.
+    fn build_shape(&mut self, field: &str, md: &MeshDesc) -> Result<MeshData, String> {
         let shapes = [
             md.obj.is_some(),
             md.sphere.is_some(),
@@ -581,155 +759,140 @@ pub fn load_scene_str(
             md.cube.is_some(),
         ];
         if shapes.iter().filter(|s| **s).count() != 1 {
-            return Err(err(format!(
+            return Err(format!(
                 "{field}: give exactly one of obj, sphere, plane, cube"
-            )));
+            ));
         }
-        let mesh: MeshData = if let Some(p) = &md.obj {
-            let bytes = read(p)
-                .map_err(|e| err(format!("{field}.obj: cannot read {}: {e}", p.display())))?;
-            memory::reserve(
-                &format!("{field}.obj ({} bytes)", bytes.len()),
-                memory::obj_bytes(bytes.len() as u64),
-            )
-            .map_err(&err)?;
-            inputs.push(p.clone());
-            let m =
-                mesh::load_obj(p, &bytes, read).map_err(|e| err(format!("{field}.obj: {e}")))?;
-            inputs.extend(m.mtl_files.iter().cloned());
-            warnings.extend(m.warnings.iter().cloned());
-            let limit = specula_raster::setup::MAX_CLIP_COORD as f32;
-            let bad = m
-                .positions
-                .iter()
-                .filter(|v| v.is_nan() || v.abs().max_element() > limit)
-                .count();
-            if bad > 0 {
-                warnings.push(format!(
-                    "{}: {bad} vertices are not finite or beyond ±{limit:e}; triangles using them are skipped",
-                    p.display()
-                ));
-            }
-            m
+        if let Some(p) = &md.obj {
+            self.load_obj(field, p)
         } else if let Some(s) = &md.sphere {
-            check_segments(&format!("{field}.sphere.segments"), s.segments, 3).map_err(&err)?;
-            check_segments(&format!("{field}.sphere.rings"), s.rings, 2).map_err(&err)?;
-            check_extent(&format!("{field}.sphere.radius"), s.radius).map_err(&err)?;
-            let (u, v) = (s.segments as u64, s.rings as u64);
-            memory::reserve(
-                &format!("{field}.sphere ({u} segments × {v} rings)"),
-                memory::mesh_bytes((u + 1) * (v + 1), 2 * u * v),
-            )
-            .map_err(&err)?;
-            mesh::sphere(s.radius, s.segments, s.rings)
+            build_sphere(field, s)
         } else if let Some(p) = &md.plane {
-            for (k, v) in p.segments.iter().enumerate() {
-                check_segments(&format!("{field}.plane.segments[{k}]"), *v, 1).map_err(&err)?;
-                check_extent(&format!("{field}.plane.size[{k}]"), p.size[k]).map_err(&err)?;
-            }
-            let (u, v) = (p.segments[0] as u64, p.segments[1] as u64);
-            memory::reserve(
-                &format!("{field}.plane ({u} × {v} segments)"),
-                memory::mesh_bytes((u + 1) * (v + 1), 2 * u * v),
-            )
-            .map_err(&err)?;
-            mesh::plane(p.size, p.segments)
+            build_plane(field, p)
         } else {
-            let c = md.cube.as_ref().expect("one shape is set");
-            check_segments(&format!("{field}.cube.segments"), c.segments, 1).map_err(&err)?;
-            check_extent(&format!("{field}.cube.size"), c.size).map_err(&err)?;
-            let n = c.segments as u64;
-            memory::reserve(
-                &format!("{field}.cube ({n} segments)"),
-                memory::mesh_bytes(6 * (n + 1) * (n + 1), 12 * n * n),
-            )
-            .map_err(&err)?;
-            mesh::cube(c.size, c.segments)
-        };
+            build_cube(field, md.cube.as_ref().expect("one shape is set"))
+        }
+    }
 
-        // Material ids of this mesh → scene material ids.
+    /// An OBJ file (and its MTLs), recorded as inputs; vertices the
+    /// rasterizer will skip are worth a warning.
+    fn load_obj(&mut self, field: &str, p: &Path) -> Result<MeshData, String> {
+        let bytes =
+            (self.read)(p).map_err(|e| format!("{field}.obj: cannot read {}: {e}", p.display()))?;
+        memory::reserve(
+            &format!("{field}.obj ({} bytes)", bytes.len()),
+            memory::obj_bytes(bytes.len() as u64),
+        )?;
+        self.inputs.push(p.to_path_buf());
+        let m = mesh::load_obj(p, &bytes, self.read).map_err(|e| format!("{field}.obj: {e}"))?;
+        self.inputs.extend(m.mtl_files.iter().cloned());
+        self.warnings.extend(m.warnings.iter().cloned());
+        let limit = specula_raster::setup::MAX_CLIP_COORD as f32;
+        let bad = m
+            .positions
+            .iter()
+            .filter(|v| v.is_nan() || v.abs().max_element() > limit)
+            .count();
+        if bad > 0 {
+            self.warnings.push(format!(
+                "{}: {bad} vertices are not finite or beyond ±{limit:e}; triangles using them are skipped",
+                p.display()
+            ));
+        }
+        Ok(m)
+    }
+
+    /// The mesh's material ids → scene material ids: the mesh's `material`
+    /// (or else the OBJ's) looked up in `[materials]`, then in the mesh's
+    /// MTL (built on first use); unnamed ones get the default material.
+    fn mesh_materials(
+        &mut self,
+        field: &str,
+        md: &MeshDesc,
+        mesh: &MeshData,
+    ) -> Result<Vec<u32>, String> {
+        let mats = &mut self.materials;
         let mut local = Vec::with_capacity(mesh.material_names.len());
         for name in &mesh.material_names {
             let name = md.material.as_ref().or(name.as_ref());
             let id = match name {
-                Some(n) => match by_name.get(n) {
+                Some(n) => match mats.by_name.get(n) {
                     Some(&id) => id,
                     None => {
                         let Some(mt) = mesh.mtl.iter().find(|m| &m.name == n) else {
-                            return Err(err(format!("{field}.material: no material named {n:?} in [materials] or the mesh's MTL")));
+                            return Err(format!("{field}.material: no material named {n:?} in [materials] or the mesh's MTL"));
                         };
                         let obj_dir = md.obj.as_deref().and_then(Path::parent);
-                        let built = mtl_material(mt, obj_dir.unwrap_or(Path::new("")), read)
-                            .map_err(|e| err(format!("{field}.obj: {e}")))?;
+                        let built = mtl_material(mt, obj_dir.unwrap_or(Path::new("")), self.read)
+                            .map_err(|e| format!("{field}.obj: {e}"))?;
                         if mt.diffuse_texture.is_some() {
-                            textured.insert(materials.len() as u32);
+                            mats.textured.insert(mats.list.len() as u32);
                         }
-                        let id = materials.len() as u32;
-                        materials.push(built);
-                        by_name.insert(n.clone(), id);
+                        let id = mats.list.len() as u32;
+                        mats.list.push(built);
+                        mats.by_name.insert(n.clone(), id);
                         id
                     }
                 },
-                None => *default_id.get_or_insert_with(|| {
-                    materials.push(default_material());
-                    materials.len() as u32 - 1
+                None => *mats.default_id.get_or_insert_with(|| {
+                    mats.list.push(default_material());
+                    mats.list.len() as u32 - 1
                 }),
             };
             local.push(id);
         }
-        if mesh.uvs.is_empty() {
-            let used: std::collections::BTreeSet<u32> = mesh
-                .tri_material
-                .iter()
-                .map(|m| local[*m as usize])
-                .collect();
-            if let Some(m) = used.iter().find(|m| textured.contains(m)) {
-                let what = match &md.obj {
-                    Some(p) => format!(
-                        "{field}.obj: {} has no texture coordinates (vt)",
-                        p.display()
-                    ),
-                    None => format!("{field}: the mesh has no texture coordinates"),
-                };
-                return Err(err(format!(
-                    "{what}, and its material {:?} samples a texture (give the mesh uvs or use an untextured material)",
-                    materials[*m as usize].name
-                )));
-            }
-        }
+        Ok(local)
+    }
 
-        let scale = match md.scale {
-            Scale::Uniform(s) => Vec3::splat(s),
-            Scale::Axes(a) => Vec3::from(a),
-        };
-        check_finite(&format!("{field}.translate"), &md.translate).map_err(&err)?;
-        check_finite(&format!("{field}.rotate"), &md.rotate).map_err(&err)?;
-        if !(scale.abs().cmpge(Vec3::splat(MIN_SCALE)) & scale.abs().cmple(Vec3::splat(MAX_SCALE)))
-            .all()
-        {
-            return Err(err(format!(
-                "{field}.scale: every component must be a number with {MIN_SCALE:e} ≤ |s| ≤ {MAX_SCALE:e}, got {scale}"
-            )));
+    /// A mesh without uvs may not use a material that samples a texture.
+    fn check_uvs(
+        &self,
+        field: &str,
+        md: &MeshDesc,
+        mesh: &MeshData,
+        local: &[u32],
+    ) -> Result<(), String> {
+        if !mesh.uvs.is_empty() {
+            return Ok(());
         }
-        let r = md.rotate.map(f32::to_radians);
-        let rot = Quat::from_euler(EulerRot::ZYX, r[2], r[1], r[0]);
-        let model = Mat4::from_scale_rotation_translation(scale, rot, md.translate.into());
-        // (R·S)⁻ᵀ = R·S⁻¹, scaled by the smallest |s| so no entry overflows
-        // (normals are renormalized anyway).
-        let normal_m = Mat3::from_quat(rot)
-            * Mat3::from_diagonal(Vec3::splat(scale.abs().min_element()) / scale);
-        let flip = model.determinant() < 0.0;
-        check_transform(&field, &mesh.positions, &model).map_err(&err)?;
+        let used: std::collections::BTreeSet<u32> = mesh
+            .tri_material
+            .iter()
+            .map(|m| local[*m as usize])
+            .collect();
+        if let Some(m) = used.iter().find(|m| self.materials.textured.contains(m)) {
+            let what = match &md.obj {
+                Some(p) => format!(
+                    "{field}.obj: {} has no texture coordinates (vt)",
+                    p.display()
+                ),
+                None => format!("{field}: the mesh has no texture coordinates"),
+            };
+            return Err(format!(
+                "{what}, and its material {:?} samples a texture (give the mesh uvs or use an untextured material)",
+                self.materials.list[*m as usize].name
+            ));
+        }
+        Ok(())
+    }
 
+    /// Appends a checked, placed mesh to the scene's buffers.
+    fn append_mesh(&mut self, mesh: &MeshData, placement: &Placement, local: &[u32]) {
+        let Placement {
+            model,
+            normal_m,
+            flip,
+        } = placement;
+        let data = &mut self.data;
         let base = data.positions.len() as u32;
         data.positions
             .extend(mesh.positions.iter().map(|p| model.transform_point3(*p)));
         data.normals.extend(
             mesh.normals
                 .iter()
-                .map(|n| (normal_m * *n).try_normalize().unwrap_or(Vec3::Z)),
+                .map(|n| (*normal_m * *n).try_normalize().unwrap_or(Vec3::Z)),
         );
-        any_uvs |= !mesh.uvs.is_empty();
+        self.any_uvs |= !mesh.uvs.is_empty();
         data.uvs.extend(mesh.uvs.iter().copied());
         if mesh.uvs.is_empty() {
             data.uvs
@@ -737,33 +900,36 @@ pub fn load_scene_str(
         }
         for (t, m) in mesh.triangles.iter().zip(&mesh.tri_material) {
             // A mirroring transform turns counter-clockwise into clockwise.
-            let t = if flip { [t[0], t[2], t[1]] } else { *t };
+            let t = if *flip { [t[0], t[2], t[1]] } else { *t };
             data.triangles.push(t.map(|k| k + base));
             data.tri_material.push(local[*m as usize]);
         }
     }
-    if !any_uvs {
-        data.uvs.clear();
-    }
-    data.tangents = specula_raster::scene::compute_tangents(
-        &data.positions,
-        &data.normals,
-        &data.uvs,
-        &data.triangles,
-    );
-    if data.triangles.is_empty() {
-        warnings.push("the scene has no triangles".into());
+
+    /// `[[light]]`s, in order. Visible polygon lights add their own
+    /// geometry and material.
+    fn add_lights(&mut self, descs: &[LightDesc], area: AreaLightsDesc) -> Result<(), String> {
+        for (i, l) in descs.iter().enumerate() {
+            let light = self.build_light(i, l, area)?;
+            self.data.lights.push(light);
+        }
+        Ok(())
     }
 
-    for (i, l) in desc.lights.iter().enumerate() {
+    fn build_light(
+        &mut self,
+        i: usize,
+        l: &LightDesc,
+        area: AreaLightsDesc,
+    ) -> Result<Light, String> {
         let field = format!("light[{i}]");
         let light = match l {
             LightDesc::Point {
                 position,
                 intensity,
             } => {
-                check_point(&format!("{field}.position"), *position).map_err(&err)?;
-                check_radiometric(&format!("{field}.intensity"), *intensity).map_err(&err)?;
+                check_point(&format!("{field}.position"), *position)?;
+                check_radiometric(&format!("{field}.intensity"), *intensity)?;
                 Light::Point {
                     position: *position,
                     intensity: *intensity,
@@ -773,9 +939,8 @@ pub fn load_scene_str(
                 direction,
                 irradiance,
             } => {
-                check_radiometric(&format!("{field}.irradiance"), *irradiance).map_err(&err)?;
-                let d = crate::validate::direction(&format!("{field}.direction"), *direction)
-                    .map_err(&err)?;
+                check_radiometric(&format!("{field}.irradiance"), *irradiance)?;
+                let d = crate::validate::direction(&format!("{field}.direction"), *direction)?;
                 Light::Directional {
                     to_light: (-d).to_array(),
                     irradiance: *irradiance,
@@ -789,13 +954,13 @@ pub fn load_scene_str(
             } => {
                 use crate::polygon_light::{add_visible, check_polygon};
                 use specula_core::light::AreaMethod;
-                check_polygon(&format!("{field}.vertices"), vertices).map_err(&err)?;
-                check_radiometric(&format!("{field}.radiance"), *radiance).map_err(&err)?;
+                check_polygon(&format!("{field}.vertices"), vertices)?;
+                check_radiometric(&format!("{field}.radiance"), *radiance)?;
                 if *visible {
                     let name = format!("light[{i}]");
                     add_visible(
-                        &mut data,
-                        &mut materials,
+                        &mut self.data,
+                        &mut self.materials.list,
                         &name,
                         vertices,
                         *radiance,
@@ -806,7 +971,7 @@ pub fn load_scene_str(
                     vertices: vertices.clone(),
                     radiance: *radiance,
                     two_sided: *two_sided,
-                    method: match desc.render.area_lights {
+                    method: match area {
                         AreaLightsDesc::Ltc => AreaMethod::Ltc,
                         AreaLightsDesc::Reference => AreaMethod::Reference,
                     },
@@ -814,66 +979,100 @@ pub fn load_scene_str(
             }
         };
         if matches!(light, Light::Polygon { .. }) {
-            crate::polygon_light::check_materials(&materials)
-                .map_err(|e| err(format!("{field}: {e}")))?;
+            crate::polygon_light::check_materials(&self.materials.list)
+                .map_err(|e| format!("{field}: {e}"))?;
         }
-        data.lights.push(light);
+        Ok(light)
     }
-    if let Some(e) = &desc.environment {
-        check_radiometric("environment.uniform", e.uniform).map_err(&err)?;
-        data.environment = Some(e.uniform);
+
+    /// Tables built once per process on first use: made here, so that
+    /// their cost (the split-sum tables: ~400 M instructions) counts as
+    /// loading and not as the first frame's shading pass.
+    fn warm_tables(&self) {
+        let polygon_lights = self
+            .data
+            .lights
+            .iter()
+            .any(|l| matches!(l, Light::Polygon { .. }));
+        if polygon_lights {
+            specula_core::ltc::ggx::table();
+        }
+        if (polygon_lights || self.data.environment.is_some())
+            && self.materials.list.iter().any(is_metallic_roughness)
+        {
+            specula_core::albedo_tables::AlbedoTables::get();
+        }
     }
-    // Tables built once per process on first use: made here, so that
-    // their cost (the split-sum tables: ~400 M instructions) counts as
-    // loading and not as the first frame's shading pass.
-    let polygon_lights = data
-        .lights
-        .iter()
-        .any(|l| matches!(l, Light::Polygon { .. }));
-    if polygon_lights {
-        specula_core::ltc::ggx::table();
+}
+
+/// `sphere`: segment and ring counts, radius, and the memory it takes.
+fn build_sphere(field: &str, s: &SphereDesc) -> Result<MeshData, String> {
+    check_segments(&format!("{field}.sphere.segments"), s.segments, 3)?;
+    check_segments(&format!("{field}.sphere.rings"), s.rings, 2)?;
+    check_extent(&format!("{field}.sphere.radius"), s.radius)?;
+    let (u, v) = (s.segments as u64, s.rings as u64);
+    memory::reserve(
+        &format!("{field}.sphere ({u} segments × {v} rings)"),
+        memory::mesh_bytes((u + 1) * (v + 1), 2 * u * v),
+    )?;
+    Ok(mesh::sphere(s.radius, s.segments, s.rings))
+}
+
+/// `plane`: segments and size per axis, and the memory it takes.
+fn build_plane(field: &str, p: &PlaneDesc) -> Result<MeshData, String> {
+    for (k, v) in p.segments.iter().enumerate() {
+        check_segments(&format!("{field}.plane.segments[{k}]"), *v, 1)?;
+        check_extent(&format!("{field}.plane.size[{k}]"), p.size[k])?;
     }
-    if (polygon_lights || data.environment.is_some()) && materials.iter().any(is_metallic_roughness)
+    let (u, v) = (p.segments[0] as u64, p.segments[1] as u64);
+    memory::reserve(
+        &format!("{field}.plane ({u} × {v} segments)"),
+        memory::mesh_bytes((u + 1) * (v + 1), 2 * u * v),
+    )?;
+    Ok(mesh::plane(p.size, p.segments))
+}
+
+/// `cube`: segments and size, and the memory it takes.
+fn build_cube(field: &str, c: &CubeDesc) -> Result<MeshData, String> {
+    check_segments(&format!("{field}.cube.segments"), c.segments, 1)?;
+    check_extent(&format!("{field}.cube.size"), c.size)?;
+    let n = c.segments as u64;
+    memory::reserve(
+        &format!("{field}.cube ({n} segments)"),
+        memory::mesh_bytes(6 * (n + 1) * (n + 1), 12 * n * n),
+    )?;
+    Ok(mesh::cube(c.size, c.segments))
+}
+
+/// The mesh's `translate`, `rotate` and `scale`, checked, and checked to
+/// keep its vertices inside the world.
+fn place_mesh(field: &str, md: &MeshDesc, positions: &[Vec3]) -> Result<Placement, String> {
+    let scale = match md.scale {
+        Scale::Uniform(s) => Vec3::splat(s),
+        Scale::Axes(a) => Vec3::from(a),
+    };
+    check_finite(&format!("{field}.translate"), &md.translate)?;
+    check_finite(&format!("{field}.rotate"), &md.rotate)?;
+    if !(scale.abs().cmpge(Vec3::splat(MIN_SCALE)) & scale.abs().cmple(Vec3::splat(MAX_SCALE)))
+        .all()
     {
-        specula_core::albedo_tables::AlbedoTables::get();
+        return Err(format!(
+            "{field}.scale: every component must be a number with {MIN_SCALE:e} ≤ |s| ≤ {MAX_SCALE:e}, got {scale}"
+        ));
     }
-    let outlines = desc
-        .outlines
-        .iter()
-        .enumerate()
-        .map(|(i, o)| o.check(&format!("outline[{i}]"), &|n| by_name.contains_key(n)))
-        .collect::<Result<Vec<_>, _>>()
-        .map_err(&err)?;
-    let strokes = desc
-        .strokes
-        .as_ref()
-        .map(|s| s.check())
-        .transpose()
-        .map_err(&err)?;
-    data.materials = materials;
-    data.geometry = vec![GeometryPass::main(data.triangles.len())];
-    let mut lines = crate::lines::build(&mut data, &outlines, strokes.as_ref(), &desc.output);
-    data.validate().map_err(err)?;
-    let mut post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>> = Vec::new();
-    if let Some(p) = &desc.posterize {
-        use specula_npr::posterize::{Posterize, PosterizeMode};
-        let mode = match p.mode {
-            PosterizeModeDesc::Rgb => PosterizeMode::Rgb,
-            PosterizeModeDesc::Luminance => PosterizeMode::Luminance,
-        };
-        let stage = Posterize::new(p.levels, mode).map_err(|e| err(format!("posterize.{e}")))?;
-        post_stages.push(std::sync::Arc::new(stage));
-    }
-    post_stages.extend(std::mem::take(&mut lines.post));
-    Ok(LoadedScene {
-        data,
-        output: desc.output,
-        inputs,
-        warnings,
-        post_stages,
-        outlines,
-        strokes,
-        lines,
+    let r = md.rotate.map(f32::to_radians);
+    let rot = Quat::from_euler(EulerRot::ZYX, r[2], r[1], r[0]);
+    let model = Mat4::from_scale_rotation_translation(scale, rot, md.translate.into());
+    // (R·S)⁻ᵀ = R·S⁻¹, scaled by the smallest |s| so no entry overflows
+    // (normals are renormalized anyway).
+    let normal_m =
+        Mat3::from_quat(rot) * Mat3::from_diagonal(Vec3::splat(scale.abs().min_element()) / scale);
+    let flip = model.determinant() < 0.0;
+    check_transform(field, positions, &model)?;
+    Ok(Placement {
+        model,
+        normal_m,
+        flip,
     })
 }
 

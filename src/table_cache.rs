@@ -5,10 +5,11 @@
 //! keeps so that it is paid once per machine, not once per run.
 //!
 //! Folder: `$SPECULA_CACHE_DIR` when set (empty: no cache), else
-//! `$XDG_CACHE_HOME/specula`, else `$HOME/.cache/specula`. One file per
-//! table, `<name>.f32`: its node values as f32 little-endian, the name
-//! carrying everything the table depends on and the table format's
-//! version. A file of the wrong length or with non-finite values is
+//! `specula` in the user's cache folder as `dirs::cache_dir` finds it (on
+//! Linux `$XDG_CACHE_HOME` when it is an absolute path, else `~/.cache`).
+//! One file per table, `<name>.f32`: its node values as f32 little-endian,
+//! the name carrying everything the table depends on and the table
+//! format's version. A file of the wrong length or with non-finite values is
 //! ignored and rebuilt; files are written to a temporary name and renamed,
 //! so a reader never sees half a file. The cache is an optimisation only:
 //! any I/O error leaves the table built in memory, silently. Deleting the
@@ -22,12 +23,7 @@ pub fn cache_dir() -> Option<PathBuf> {
     if let Some(d) = std::env::var_os("SPECULA_CACHE_DIR") {
         return (!d.is_empty()).then(|| PathBuf::from(d));
     }
-    if let Some(d) = std::env::var_os("XDG_CACHE_HOME").filter(|d| !d.is_empty()) {
-        return Some(PathBuf::from(d).join("specula"));
-    }
-    std::env::var_os("HOME")
-        .filter(|d| !d.is_empty())
-        .map(|h| PathBuf::from(h).join(".cache").join("specula"))
+    dirs::cache_dir().map(|d| d.join("specula"))
 }
 
 /// Tables as files in one folder.
