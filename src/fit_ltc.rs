@@ -372,12 +372,12 @@ pub fn run(out: &std::path::Path) -> Result<(), String> {
 }
 
 /// Writes a fitted table's bytes to `out`, checked and written like every
-/// output (outputs.rs): no device or link is replaced, the write is atomic.
+/// output (output_plan.rs): no device or link is replaced, the write is atomic.
 pub(crate) fn write_table(out: &std::path::Path, bytes: &[u8]) -> Result<(), String> {
-    let sink = crate::outputs::Output {
+    let sink = crate::output_plan::Output {
         flag: "--output".into(),
         path: out.to_path_buf(),
-        sink: crate::outputs::resolve(out, false)?,
+        sink: crate::output_plan::resolve(out, false)?,
     };
     sink.write(bytes)?;
     eprintln!("wrote {}", out.display());

@@ -56,13 +56,7 @@ impl LabelDesc {
                 self.size
             ));
         }
-        if !self.color.iter().all(|c| (0.0..=1.0).contains(c)) {
-            return Err(format!(
-                "color: components must be in [0, 1], got {:?}",
-                self.color
-            ));
-        }
-        Ok(())
+        crate::checks::display_color("color", self.color)
     }
 }
 

@@ -2,24 +2,25 @@
 //! core. This facade ties the crates together: scene files (`scene`), meshes
 //! (`mesh`), the material contract shared by scenes and `specula eval`
 //! (`material_desc`), rendering with statistics (`render`) and image output
-//! (`output`), image files as textures (`textures`), text labels on images
+//! (`image_file`; where files go: `output_plan`), image files as textures (`textures`), text labels on images
 //! (`label`). The built-in demo lives in `demo`; `fuzzing` holds the fuzz
 //! targets' entry points.
 
+pub mod checks;
 pub mod demo;
 pub mod eval;
 pub mod fit_ltc;
 pub mod fit_ltc_coat;
 pub mod furnace;
 pub mod fuzzing;
+pub mod image_file;
 pub mod label;
 pub mod lines;
 pub mod material_desc;
 pub mod memory;
 pub mod mesh;
 pub mod objcheck;
-pub mod output;
-pub mod outputs;
+pub mod output_plan;
 pub mod polygon_light;
 pub mod render;
 pub mod scene;

@@ -166,16 +166,6 @@ pub struct StrokesSpec {
     pub cap: CapDesc,
 }
 
-fn check_color(field: &str, c: [f32; 3]) -> Result<(), String> {
-    if c.iter().all(|v| (0.0..=1.0).contains(v)) {
-        Ok(())
-    } else {
-        Err(format!(
-            "{field}: every component must be in [0, 1], got {c:?}"
-        ))
-    }
-}
-
 fn check_width(field: &str, w: f32) -> Result<(), String> {
     // `contains` is false for NaN.
     if w > 0.0 && w <= MAX_WIDTH {
@@ -210,7 +200,7 @@ impl OutlineDesc {
     /// Checks the table (`field` is e.g. `outline[2]`); `known` says
     /// whether a material name exists in the scene.
     pub fn check(&self, field: &str, known: &dyn Fn(&str) -> bool) -> Result<OutlineSpec, String> {
-        check_color(&format!("{field}.color"), self.color)?;
+        crate::checks::display_color(&format!("{field}.color"), self.color)?;
         check_materials(&format!("{field}.materials"), &self.materials, known)?;
         let method = match self.method {
             MethodDesc::Shading => "shading",
@@ -349,7 +339,7 @@ impl StrokesDesc {
             ));
         }
         check_width(&format!("{f}.width"), self.width)?;
-        check_color(&format!("{f}.color"), self.color)?;
+        crate::checks::display_color(&format!("{f}.color"), self.color)?;
         if !(0.0..=1.0).contains(&self.taper) {
             return Err(format!("{f}.taper: must be in [0, 1], got {}", self.taper));
         }
@@ -397,12 +387,14 @@ fn radiance_for(
 }
 
 /// Builds the checked outlines into `data` (extrusion passes and their
-/// materials) and post stages; `camera` for the shading outline.
+/// materials) and post stages; outline colours are display colours after
+/// the output's `tonemap` and `exposure`.
 pub fn build(
     data: &mut specula_raster::SceneData,
     outlines: &[OutlineSpec],
     strokes: Option<&StrokesSpec>,
-    output: &crate::scene::OutputDesc,
+    tonemap: specula_raster::post::Tonemap,
+    exposure: f32,
 ) -> LineStages {
     use specula_npr::outline::id_materials;
     use specula_npr::outline::{Selection, ShadingOutline};
@@ -426,7 +418,7 @@ pub fn build(
         } = o
         {
             let sel = index(data, materials);
-            let radiance = radiance_for(*color, output.tonemap.into(), output.exposure);
+            let radiance = radiance_for(*color, tonemap, exposure);
             let m = data.materials.len() as u32;
             data.materials.push(specula_raster::Material::new(
                 &format!("outline[{k}]"),

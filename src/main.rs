@@ -7,7 +7,7 @@ use image::ImageFormat;
 use specula::render::{depth_aov, id_aov, normal_aov, render_scene, RenderSettings};
 use specula::scene::load_scene;
 use specula::validate::truncate_lines;
-use specula::{demo, memory, output, outputs};
+use specula::{demo, image_file, memory, output_plan};
 use specula_raster::frame::ShadePath;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
@@ -183,7 +183,7 @@ fn parse_aov(s: &str) -> Result<Aov, String> {
 /// Whether the main output's name asks for an HDR format (for the memory
 /// estimate; the format itself is checked with the other outputs).
 fn is_hdr_name(p: &Path) -> bool {
-    ImageFormat::from_path(p).is_ok_and(output::is_hdr)
+    ImageFormat::from_path(p).is_ok_and(image_file::is_hdr)
 }
 
 fn run_render(a: RenderArgs) -> Result<(), String> {
@@ -258,7 +258,7 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
         ));
     }
     outs.extend(a.svg_lines.as_deref().map(|p| ("--svg-lines", p)));
-    let plan = outputs::plan(&outs, &scene.inputs, Some("-o"))?;
+    let plan = output_plan::plan(&outs, &scene.inputs, Some("-o"))?;
     let main_format = plan[0].image_format(ImageFormat::Png)?;
     for o in &plan[1..] {
         if o.flag != "--aov id"
@@ -277,24 +277,24 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
 
     let mut r = render_scene(&scene, &settings, load_ms)?;
     let t = Instant::now();
-    let main_bytes = if output::is_hdr(main_format) {
-        output::encode_hdr(r.width, r.height, &r.hdr(), main_format)?
+    let main_bytes = if image_file::is_hdr(main_format) {
+        image_file::encode_hdr(r.width, r.height, &r.hdr(), main_format)?
     } else {
-        output::encode_ldr(r.width, r.height, std::mem::take(&mut r.ldr), main_format)?
+        image_file::encode_ldr(r.width, r.height, std::mem::take(&mut r.ldr), main_format)?
     };
     plan[0].write(&main_bytes)?;
     if a.exr.is_some() {
-        let bytes = output::encode_hdr(r.width, r.height, &r.hdr(), ImageFormat::OpenExr)?;
+        let bytes = image_file::encode_hdr(r.width, r.height, &r.hdr(), ImageFormat::OpenExr)?;
         by_flag("--exr").write(&bytes)?;
     }
     let (tw, th) = (r.frame.target.width, r.frame.target.height);
-    let exr = |rgb: &[[f32; 3]]| output::encode_hdr(tw, th, rgb, ImageFormat::OpenExr);
+    let exr = |rgb: &[[f32; 3]]| image_file::encode_hdr(tw, th, rgb, ImageFormat::OpenExr);
     for aov in &aovs {
         match aov {
             Aov::Depth(_) => by_flag("--aov depth").write(&exr(&depth_aov(&r.frame)?)?)?,
             Aov::Normal(_) => by_flag("--aov normal").write(&exr(&normal_aov(&r.frame)?)?)?,
             Aov::Id(_) => {
-                by_flag("--aov id").write(&output::encode_ids(tw, th, id_aov(&r.frame)?))?
+                by_flag("--aov id").write(&image_file::encode_ids(tw, th, id_aov(&r.frame)?))?
             }
         }
     }
@@ -306,7 +306,7 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
     if a.stats {
         // With the image on standard output, the report goes to stderr.
-        if plan[0].sink == outputs::Sink::Stdout {
+        if plan[0].sink == output_plan::Sink::Stdout {
             eprint!("{}", r.stats.report());
         } else {
             print!("{}", r.stats.report());
@@ -327,7 +327,7 @@ fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
     print!("{}", specula::furnace::table(&curves));
     if let Some(p) = &a.output {
         // Not `-`: the table already goes to standard output.
-        let plan = outputs::plan(&[("-o", p)], &[], None)?;
+        let plan = output_plan::plan(&[("-o", p)], &[], None)?;
         if plan[0].image_format(ImageFormat::Png)? != ImageFormat::Png {
             return Err(format!(
                 "-o {}: the plot is written as PNG; give the name a .png extension",
@@ -364,10 +364,10 @@ fn run_demo() -> Result<(), String> {
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     let settings = RenderSettings::from_scene(&scene);
     let out = PathBuf::from("specula-demo.png");
-    let plan = outputs::plan(&[("demo", &out)], &[], None)?;
+    let plan = output_plan::plan(&[("demo", &out)], &[], None)?;
     let mut r = render_scene(&scene, &settings, load_ms)?;
     let t = Instant::now();
-    plan[0].write(&output::encode_ldr(
+    plan[0].write(&image_file::encode_ldr(
         r.width,
         r.height,
         std::mem::take(&mut r.ldr),

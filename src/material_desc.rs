@@ -2,6 +2,7 @@
 //! in `specula eval` share these serde types, so the field names are one
 //! contract (documented in the README).
 
+use crate::checks;
 use serde::Deserialize;
 use specula_core::kulla_conty::KcColor;
 use specula_core::models::microfacet::clamp_alpha;
@@ -18,9 +19,7 @@ use specula_raster::{Lit, Material, Unlit};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-/// Supplies the files a material names (textures, tonal art maps),
-/// relative to the scene's folder.
-pub type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
+pub use crate::textures::ReadFile;
 
 /// One material description; `model` selects the variant.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
@@ -263,7 +262,7 @@ impl DisneyDesc {
     ///   to negative reflectance; aspect = √(1 − 0.9 anisotropic) turns
     ///   imaginary past 1.11) and of `clearcoat_gloss` (α of the coat < 0).
     fn params(&self, warnings: &mut Vec<String>) -> Result<DisneyParams, String> {
-        check_color("base_color", self.base_color)?;
+        checks::linear_color("base_color", self.base_color)?;
         if self.base_color.iter().any(|c| *c > 1.0) {
             warnings.push(format!(
                 "base_color {:?} has components above 1: the material reflects more than it receives",
@@ -286,7 +285,7 @@ impl DisneyDesc {
             ("clearcoat_gloss", self.clearcoat_gloss),
         ] {
             finite_nonneg(field, v)?;
-            check_unit(field, v)?;
+            checks::unit(field, v)?;
         }
         for (field, v, max, why) in [
             (
@@ -337,24 +336,6 @@ impl DisneyDesc {
             clearcoat: self.clearcoat,
             clearcoat_gloss: self.clearcoat_gloss,
         })
-    }
-}
-
-fn check_color(field: &str, c: [f32; 3]) -> Result<(), String> {
-    if c.iter().all(|v| v.is_finite() && *v >= 0.0) {
-        Ok(())
-    } else {
-        Err(format!(
-            "{field}: colour components must be finite and ≥ 0, got {c:?}"
-        ))
-    }
-}
-
-fn check_unit(field: &str, v: f32) -> Result<(), String> {
-    if (0.0..=1.0).contains(&v) {
-        Ok(())
-    } else {
-        Err(format!("{field}: must be in [0, 1], got {v}"))
     }
 }
 
@@ -415,10 +396,10 @@ impl MicrofacetDesc {
                 )
             }
         };
-        check_color("diffuse", self.diffuse)?;
+        checks::linear_color("diffuse", self.diffuse)?;
         let fresnel = match &self.fresnel {
             FresnelDesc::Schlick { f0 } => {
-                check_color("fresnel.f0", *f0)?;
+                checks::linear_color("fresnel.f0", *f0)?;
                 if f0.iter().any(|c| *c > 1.0) {
                     return Err(format!("fresnel.f0: components must be ≤ 1, got {f0:?}"));
                 }
@@ -569,7 +550,7 @@ impl MaterialDesc {
                 return Err("model: a stylized shader has no BRDF".into())
             }
             MaterialDesc::Unlit(d) => {
-                check_color("color", d.color)?;
+                checks::linear_color("color", d.color)?;
                 if !(d.intensity.is_finite() && d.intensity >= 0.0) {
                     return Err(format!(
                         "intensity: must be finite and ≥ 0, got {}",
@@ -589,7 +570,7 @@ impl MaterialDesc {
                 return Ok((Shading::Unlit(u), d.double_sided));
             }
             MaterialDesc::Lambert(d) => {
-                check_color("base_color", d.base_color)?;
+                checks::linear_color("base_color", d.base_color)?;
                 (
                     Model::Lambert(Lambert {
                         base_color: d.base_color,
@@ -598,9 +579,9 @@ impl MaterialDesc {
                 )
             }
             MaterialDesc::MetallicRoughness(d) => {
-                check_color("base_color", d.base_color)?;
-                check_unit("roughness", d.roughness)?;
-                check_unit("metallic", d.metallic)?;
+                checks::linear_color("base_color", d.base_color)?;
+                checks::unit("roughness", d.roughness)?;
+                checks::unit("metallic", d.metallic)?;
                 (
                     Model::MetallicRoughness(MetallicRoughness {
                         base_color: d.base_color,
@@ -637,7 +618,7 @@ impl MaterialDesc {
 
 impl ToonDesc {
     fn shader(&self, read: ReadFile) -> Result<Toon, String> {
-        check_color("base_color", self.base_color)?;
+        checks::linear_color("base_color", self.base_color)?;
         let ramp = match (&self.bands, &self.ramp) {
             (Some(_), Some(_)) => return Err("bands / ramp: give one of them, not both".into()),
             (_, Some(r)) => Ramp::explicit(r.clone())?,
@@ -648,7 +629,7 @@ impl ToonDesc {
                 if !(-1.0..=1.0).contains(&t) {
                     return Err(format!("{field}: must be in [-1, 1], got {t}"));
                 }
-                check_color(cfield, color)?;
+                checks::linear_color(cfield, color)?;
                 Ok(Hard {
                     threshold: t,
                     color,
@@ -687,8 +668,8 @@ impl ToonDesc {
 
 impl HatchingDesc {
     fn shader(&self, read: ReadFile) -> Result<Hatching, String> {
-        check_color("ink", self.ink)?;
-        check_color("paper", self.paper)?;
+        checks::linear_color("ink", self.ink)?;
+        checks::linear_color("paper", self.paper)?;
         check_positive("scale", self.scale)?;
         let tam = match &self.tam {
             Some(dir) => {

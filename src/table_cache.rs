@@ -69,10 +69,10 @@ pub fn write_committed(out: &std::path::Path) -> Result<(), String> {
         "GTR at gamma = 2^(-2 + 9 k / 27), k = 0..27, with GGX's and with the exact Lambda; names as KcTable::store_name".into(),
     ];
     let bytes = specula_core::kc_tables::encode(&tables, &comments);
-    let sink = crate::outputs::Output {
+    let sink = crate::output_plan::Output {
         flag: "--output".into(),
         path: out.to_path_buf(),
-        sink: crate::outputs::resolve(out, false)?,
+        sink: crate::output_plan::resolve(out, false)?,
     };
     sink.write(&bytes)?;
     eprintln!(

@@ -2,11 +2,14 @@
 //! here) through `image`, decoded from sRGB to linear, rows flipped so that
 //! v = 0 is the bottom of the picture (the OBJ/MTL convention for `vt`).
 
-use crate::material_desc::ReadFile;
 use specula_raster::maps::ColorMap;
 use specula_raster::texture::{Encoding, Filter, Sampler, Texture, Wrap};
 use std::path::Path;
 use std::sync::Arc;
+
+/// Supplies the files a material names (textures, tonal art maps),
+/// relative to the scene's folder.
+pub type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
 
 /// Reads an sRGB colour image (alpha dropped) with its mip chain, sampled
 /// with repeat wrapping and trilinear filtering.

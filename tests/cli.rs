@@ -107,7 +107,7 @@ fn good_scene_renders_and_writes_every_output() {
     assert_eq!((png.width(), png.height()), (64, 48));
     let exr = image::open(dir.join("out.exr")).unwrap().into_rgb32f();
     assert_eq!(exr.dimensions(), (64, 48));
-    let (w, h, ids) = specula::output::read_ids(&dir.join("ids.bin")).unwrap();
+    let (w, h, ids) = specula::image_file::read_ids(&dir.join("ids.bin")).unwrap();
     assert_eq!((w, h), (64, 48));
     assert_eq!(ids[0], u32::MAX, "corner is background");
     assert_ne!(

@@ -6,7 +6,7 @@ mod common;
 use common::{fixtures, temp_dir};
 use specula::render::{render_scene, RenderSettings};
 use specula::scene::{load_scene, LoadedScene};
-use specula::{demo, output};
+use specula::{demo, image_file};
 use specula_raster::frame::ShadePath;
 use specula_raster::post::PostOutput;
 
@@ -63,8 +63,8 @@ fn benchmark_scene_bytes_do_not_depend_on_the_thread_count() {
         let r = render_scene(&scene, &s, 0.0).expect("render");
         let png = dir.join(format!("t{threads}.png"));
         let exr = dir.join(format!("t{threads}.exr"));
-        output::write_png(&png, r.width, r.height, r.ldr.clone()).expect("png");
-        output::write_exr(&exr, r.width, r.height, &r.hdr()).expect("exr");
+        image_file::write_png(&png, r.width, r.height, r.ldr.clone()).expect("png");
+        image_file::write_exr(&exr, r.width, r.height, &r.hdr()).expect("exr");
         files.push((std::fs::read(png).unwrap(), std::fs::read(exr).unwrap()));
     }
     for (i, f) in files.iter().enumerate().skip(1) {

@@ -1,357 +1,30 @@
-//! Scene files (TOML): camera, output, meshes, materials, lights,
-//! environment. Parsed with serde into the `*Desc` types, validated once, and
-//! turned into a `SceneData` the rasterizer trusts. Every error names the
-//! file and the line (TOML syntax, unknown fields) or the field.
+//! Each table of a parsed scene checked and turned into the renderer's
+//! values: the camera, output, environment, materials (MTL and the
+//! scene's), meshes (OBJ and procedural, placed), lights and lines.
 
+use super::desc::*;
+use crate::checks;
 use crate::material_desc::MaterialDesc;
 use crate::memory;
 use crate::mesh::{self, MeshData};
 use crate::validate::{check_extent, check_point, MAX_FOV_Y_DEG, MAX_WORLD, MIN_FOV_Y_DEG};
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
-use serde::Deserialize;
 use specula_core::light::Light;
 use specula_core::models::MetallicRoughness;
 use specula_core::Model;
-use specula_raster::post::Tonemap;
 use specula_raster::{Camera, SceneData};
-use specula_raster::{GeometryPass, Lit, Material};
+use specula_raster::{Lit, Material};
 use std::collections::{BTreeMap, HashMap, HashSet};
-use std::fmt;
 use std::path::{Path, PathBuf};
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SceneFile {
-    camera: CameraDesc,
-    #[serde(default)]
-    output: OutputDesc,
-    environment: Option<EnvironmentDesc>,
-    #[serde(default, rename = "mesh")]
-    meshes: Vec<MeshDesc>,
-    #[serde(default)]
-    materials: BTreeMap<String, MaterialDesc>,
-    #[serde(default, rename = "light")]
-    lights: Vec<LightDesc>,
-    posterize: Option<PosterizeDesc>,
-    #[serde(default)]
-    render: RenderDesc,
-    /// `[[outline]]` and `[strokes]` (lines.rs).
-    #[serde(default, rename = "outline")]
-    outlines: Vec<crate::lines::OutlineDesc>,
-    strokes: Option<crate::lines::StrokesDesc>,
-}
-
-/// `[posterize]`: quantize the tone-mapped image (npr/src/posterize.rs).
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct PosterizeDesc {
-    levels: u32,
-    #[serde(default)]
-    mode: PosterizeModeDesc,
-}
-
-#[derive(Debug, Deserialize, Default, Clone, Copy)]
-#[serde(rename_all = "snake_case")]
-enum PosterizeModeDesc {
-    #[default]
-    Rgb,
-    Luminance,
-}
-
-/// How the frame is lit (the `[render]` table).
-#[derive(Debug, Default, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct RenderDesc {
-    /// How polygon lights are integrated: "ltc" (closed form) or
-    /// "reference" (converged quadrature per pixel, slow).
-    #[serde(default)]
-    area_lights: AreaLightsDesc,
-}
-
-#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-enum AreaLightsDesc {
-    #[default]
-    Ltc,
-    Reference,
-}
-
-fn yes() -> bool {
-    true
-}
-
-fn default_up() -> [f32; 3] {
-    [0.0, 1.0, 0.0]
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CameraDesc {
-    eye: [f32; 3],
-    target: [f32; 3],
-    #[serde(default = "default_up")]
-    up: [f32; 3],
-    /// Vertical field of view, degrees.
-    fov_y: f32,
-    near: f32,
-    far: f32,
-}
-
-/// How the image is produced; CLI flags override the size and supersampling.
-#[derive(Clone, Debug, Deserialize, PartialEq)]
-#[serde(deny_unknown_fields, default)]
-pub struct OutputDesc {
-    pub width: u32,
-    pub height: u32,
-    pub ssaa: u32,
-    pub tonemap: TonemapDesc,
-    /// Exposure in stops: radiance is scaled by 2^exposure before tone mapping.
-    pub exposure: f32,
-    /// Radiance of uncovered pixels when there is no environment.
-    pub background: [f32; 3],
-    /// Text written on the image (`[[output.label]]`, label.rs).
-    #[serde(rename = "label")]
-    pub labels: Vec<crate::label::LabelDesc>,
-}
-
-impl Default for OutputDesc {
-    fn default() -> Self {
-        OutputDesc {
-            width: 960,
-            height: 540,
-            ssaa: 1,
-            tonemap: TonemapDesc::Clamp,
-            exposure: 0.0,
-            background: [0.0; 3],
-            labels: Vec::new(),
-        }
-    }
-}
-
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
-#[serde(rename_all = "snake_case")]
-pub enum TonemapDesc {
-    #[default]
-    Clamp,
-    Reinhard,
-    Aces,
-}
-
-impl From<TonemapDesc> for Tonemap {
-    fn from(t: TonemapDesc) -> Tonemap {
-        match t {
-            TonemapDesc::Clamp => Tonemap::Clamp,
-            TonemapDesc::Reinhard => Tonemap::Reinhard,
-            TonemapDesc::Aces => Tonemap::Aces,
-        }
-    }
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct EnvironmentDesc {
-    /// Radiance arriving equally from every direction.
-    uniform: [f32; 3],
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct SphereDesc {
-    #[serde(default = "one")]
-    radius: f32,
-    #[serde(default = "sphere_segments")]
-    segments: u32,
-    #[serde(default = "sphere_rings")]
-    rings: u32,
-}
-
-fn one() -> f32 {
-    1.0
-}
-fn sphere_segments() -> u32 {
-    64
-}
-fn sphere_rings() -> u32 {
-    32
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct PlaneDesc {
-    #[serde(default = "unit2")]
-    size: [f32; 2],
-    #[serde(default = "one2")]
-    segments: [u32; 2],
-}
-
-fn unit2() -> [f32; 2] {
-    [1.0, 1.0]
-}
-fn one2() -> [u32; 2] {
-    [1, 1]
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct CubeDesc {
-    #[serde(default = "one")]
-    size: f32,
-    #[serde(default = "one_u")]
-    segments: u32,
-}
-
-fn one_u() -> u32 {
-    1
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(untagged)]
-enum Scale {
-    Uniform(f32),
-    Axes([f32; 3]),
-}
-
-impl Default for Scale {
-    fn default() -> Self {
-        Scale::Uniform(1.0)
-    }
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(deny_unknown_fields)]
-struct MeshDesc {
-    obj: Option<PathBuf>,
-    sphere: Option<SphereDesc>,
-    plane: Option<PlaneDesc>,
-    cube: Option<CubeDesc>,
-    /// Material for every triangle of the mesh (overrides the MTL's).
-    material: Option<String>,
-    #[serde(default)]
-    translate: [f32; 3],
-    /// Euler angles in degrees, applied about X, then Y, then Z.
-    #[serde(default)]
-    rotate: [f32; 3],
-    #[serde(default)]
-    scale: Scale,
-}
-
-#[derive(Debug, Deserialize)]
-#[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-enum LightDesc {
-    Point {
-        position: [f32; 3],
-        /// Radiant intensity (W/sr), RGB.
-        intensity: [f32; 3],
-    },
-    Directional {
-        /// Direction the light travels (from the light toward the scene).
-        direction: [f32; 3],
-        /// Irradiance on a surface facing the light, RGB.
-        irradiance: [f32; 3],
-    },
-    Polygon {
-        /// A planar simple polygon (convex or not), 3 to 16 vertices,
-        /// counter-clockwise seen from the side it lights.
-        vertices: Vec<[f32; 3]>,
-        /// Radiance (W/m²/sr), RGB.
-        radiance: [f32; 3],
-        /// Emits from both sides.
-        #[serde(default)]
-        two_sided: bool,
-        /// Drawn as unlit geometry of its radiance.
-        #[serde(default = "yes")]
-        visible: bool,
-    },
-}
-
-/// A scene-loading error: where, and what.
-#[derive(Debug, Clone, PartialEq)]
-pub struct SceneError {
-    pub file: PathBuf,
-    pub message: String,
-}
-
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.file.display(), self.message)
-    }
-}
-
-impl std::error::Error for SceneError {}
-
-/// A loaded scene, ready to render.
-pub struct LoadedScene {
-    pub data: SceneData,
-    pub output: OutputDesc,
-    /// Files the scene was read from (the scene file, OBJs, MTLs; relative
-    /// ones against the scene's folder): outputs
-    /// must never overwrite them.
-    pub inputs: Vec<PathBuf>,
-    /// Things worth telling the user that did not stop the load.
-    pub warnings: Vec<String>,
-    /// Image-space stages the scene asks for, run after the tone map and
-    /// before the encode (`[posterize]`).
-    pub post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
-    /// The checked `[[outline]]` tables, in order, and `[strokes]` (lines.rs).
-    pub outlines: Vec<crate::lines::OutlineSpec>,
-    pub strokes: Option<crate::lines::StrokesSpec>,
-    /// The extrusion outlines' vertex stages and the stroke overlay
-    /// (lines.rs), for the renderer and `--svg-lines`.
-    pub lines: crate::lines::LineStages,
-}
-
-/// Reads a scene file from disk; relative paths resolve against its folder.
-pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
-    let err = |message: String| SceneError {
-        file: path.to_path_buf(),
-        message,
-    };
-    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
-    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
-    let read = move |p: &Path| std::fs::read(dir.join(p));
-    let mut scene = load_scene_str(path, &text, &read)?;
-    let base = path.parent().unwrap_or(Path::new(""));
-    for p in scene.inputs.iter_mut().skip(1) {
-        *p = base.join(&p);
-    }
-    Ok(scene)
-}
-
-fn check_finite(field: &str, v: &[f32]) -> Result<(), String> {
-    if v.iter().all(|x| x.is_finite()) {
-        Ok(())
-    } else {
-        Err(format!(
-            "{field}: every component must be finite, got {v:?}"
-        ))
-    }
-}
-
-/// Largest accepted radiometric value (radiance, intensity, irradiance).
-/// A pixel sums lights × BRDF (up to ~3e5 at α = 1e-3) over up to 256
-/// supersamples: 1e20 · 3e5 · 256 ≈ 8e27 leaves f32 (3.4e38) room for many
-/// lights; a uniform environment of 3e38 overflowed at ssaa 4.
-const MAX_RADIOMETRIC: f32 = 1e20;
-
-fn check_radiometric(field: &str, v: [f32; 3]) -> Result<(), String> {
-    check_finite(field, &v)?;
-    if v.iter().all(|x| (0.0..=MAX_RADIOMETRIC).contains(x)) {
-        Ok(())
-    } else {
-        Err(format!(
-            "{field}: every component must be in [0, {MAX_RADIOMETRIC:e}], got {v:?}"
-        ))
-    }
-}
 
 /// The accepted |scale| per axis: their ratio (≤ 1e24) keeps the normal
 /// matrix finite in f32.
-const MIN_SCALE: f32 = 1e-12;
-const MAX_SCALE: f32 = 1e12;
+pub(super) const MIN_SCALE: f32 = 1e-12;
+pub(super) const MAX_SCALE: f32 = 1e12;
 
 /// Checks that a mesh's transform keeps its (finite, in-range) vertices
 /// inside ±MAX_WORLD.
-fn check_transform(field: &str, positions: &[Vec3], model: &Mat4) -> Result<(), String> {
+pub(super) fn check_transform(field: &str, positions: &[Vec3], model: &Mat4) -> Result<(), String> {
     let inside = |p: Vec3| p.is_finite() && p.abs().max_element() <= MAX_WORLD;
     if let Some(p) = positions
         .iter()
@@ -367,7 +40,7 @@ fn check_transform(field: &str, positions: &[Vec3], model: &Mat4) -> Result<(), 
 
 /// The image size and supersampling: each side, supersampled, within the
 /// render target's limit.
-fn check_output_size(o: &OutputDesc) -> Result<(), String> {
+pub(super) fn check_output_size(o: &OutputDesc) -> Result<(), String> {
     let max = specula_raster::target::MAX_DIM;
     if !(1..=16).contains(&o.ssaa) {
         return Err(format!("output.ssaa: must be in 1..=16, got {}", o.ssaa));
@@ -385,9 +58,9 @@ fn check_output_size(o: &OutputDesc) -> Result<(), String> {
 }
 
 /// Largest segment count a procedural mesh accepts (per axis).
-const MAX_SEGMENTS: u32 = 4096;
+pub(super) const MAX_SEGMENTS: u32 = 4096;
 
-fn check_segments(field: &str, v: u32, min: u32) -> Result<(), String> {
+pub(super) fn check_segments(field: &str, v: u32, min: u32) -> Result<(), String> {
     if (min..=MAX_SEGMENTS).contains(&v) {
         Ok(())
     } else {
@@ -398,7 +71,7 @@ fn check_segments(field: &str, v: u32, min: u32) -> Result<(), String> {
 }
 
 /// The material used where neither the scene nor an MTL gives one.
-fn default_material() -> Material {
+pub(super) fn default_material() -> Material {
     let model = Model::MetallicRoughness(MetallicRoughness {
         base_color: [0.8, 0.8, 0.8],
         roughness: 0.5,
@@ -412,7 +85,7 @@ fn default_material() -> Material {
 /// from Phong `Ns` through α² = 2 / (Ns + 2) [Walter07, §5.2]; defaults 0.5
 /// and 0.
 /// `map_Kd` (relative to the OBJ's folder) becomes the base-colour texture.
-fn mtl_material(
+pub(super) fn mtl_material(
     m: &tobj::Material,
     obj_dir: &Path,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
@@ -467,78 +140,15 @@ fn mtl_material(
     }
 }
 
-/// Parses and builds a scene from its text; `read` supplies the files it
-/// names (relative to the scene's folder). `path` is only used in messages.
-pub fn load_scene_str(
-    path: &Path,
-    text: &str,
-    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Result<LoadedScene, SceneError> {
-    let err = |message: String| SceneError {
-        file: path.to_path_buf(),
-        message,
-    };
-    let desc: SceneFile =
-        toml::from_str(text).map_err(|e| err(format!("{}", e).trim_end().to_string()))?;
-    build_scene(path, desc, read).map_err(err)
-}
-
-/// Builds a parsed scene, one table after another. The order is part of
-/// the behaviour: the first table with a problem is the one reported, and
-/// later tables see what earlier ones added (meshes name materials,
-/// visible lights add geometry, outlines name materials).
-fn build_scene(
-    path: &Path,
-    desc: SceneFile,
-    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Result<LoadedScene, String> {
-    let camera = build_camera(&desc.camera)?;
-    check_output(&desc.output)?;
-    let mut scene = SceneBuilder::new(path, read, camera, desc.output.background);
-    scene.add_materials(&desc.materials)?;
-    scene.add_meshes(&desc.meshes)?;
-    scene.add_lights(&desc.lights, desc.render.area_lights)?;
-    if let Some(e) = &desc.environment {
-        scene.data.environment = Some(build_environment(e)?);
-    }
-    scene.warm_tables();
-    let outlines = check_outlines(&desc.outlines, &scene.materials.by_name)?;
-    let strokes = desc.strokes.as_ref().map(|s| s.check()).transpose()?;
-
-    let SceneBuilder {
-        mut data,
-        materials,
-        inputs,
-        warnings,
-        ..
-    } = scene;
-    data.materials = materials.list;
-    data.geometry = vec![GeometryPass::main(data.triangles.len())];
-    let mut lines = crate::lines::build(&mut data, &outlines, strokes.as_ref(), &desc.output);
-    data.validate()?;
-    let mut post_stages = build_posterize(desc.posterize.as_ref())?;
-    post_stages.extend(std::mem::take(&mut lines.post));
-    Ok(LoadedScene {
-        data,
-        output: desc.output,
-        inputs,
-        warnings,
-        post_stages,
-        outlines,
-        strokes,
-        lines,
-    })
-}
-
 /// `[camera]`: finite, inside the world, a usable field of view and depth
 /// range, and a frame that eye, target and up can span.
-fn build_camera(c: &CameraDesc) -> Result<Camera, String> {
+pub(super) fn build_camera(c: &CameraDesc) -> Result<Camera, String> {
     for (f, v) in [
         ("camera.eye", &c.eye),
         ("camera.target", &c.target),
         ("camera.up", &c.up),
     ] {
-        check_finite(f, v)?;
+        checks::finite(f, v)?;
     }
     check_point("camera.eye", c.eye)?;
     check_point("camera.target", c.target)?;
@@ -572,9 +182,9 @@ fn build_camera(c: &CameraDesc) -> Result<Camera, String> {
 }
 
 /// `[output]` and its `[[output.label]]`s.
-fn check_output(o: &OutputDesc) -> Result<(), String> {
+pub(super) fn check_output(o: &OutputDesc) -> Result<(), String> {
     check_output_size(o)?;
-    check_radiometric("output.background", o.background)?;
+    checks::radiometric("output.background", o.background)?;
     if !o.exposure.is_finite() {
         return Err("output.exposure: must be finite".into());
     }
@@ -585,13 +195,13 @@ fn check_output(o: &OutputDesc) -> Result<(), String> {
 }
 
 /// `[environment]`: the uniform radiance.
-fn build_environment(e: &EnvironmentDesc) -> Result<[f32; 3], String> {
-    check_radiometric("environment.uniform", e.uniform)?;
+pub(super) fn build_environment(e: &EnvironmentDesc) -> Result<[f32; 3], String> {
+    checks::radiometric("environment.uniform", e.uniform)?;
     Ok(e.uniform)
 }
 
 /// `[[outline]]`s; the materials they name must exist.
-fn check_outlines(
+pub(super) fn check_outlines(
     descs: &[crate::lines::OutlineDesc],
     by_name: &HashMap<String, u32>,
 ) -> Result<Vec<crate::lines::OutlineSpec>, String> {
@@ -603,7 +213,7 @@ fn check_outlines(
 }
 
 /// `[posterize]`: the image-space stage it asks for, if any.
-fn build_posterize(
+pub(super) fn build_posterize(
     p: Option<&PosterizeDesc>,
 ) -> Result<Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>, String> {
     let mut post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>> = Vec::new();
@@ -622,38 +232,38 @@ fn build_posterize(
 /// The scene's materials as they are gathered: `[materials]` first, then
 /// MTL materials and the default as meshes ask for them, then visible
 /// lights' own.
-struct Materials {
-    list: Vec<Material>,
+pub(super) struct Materials {
+    pub(super) list: Vec<Material>,
     /// Ids of `[materials]` and MTL materials by name (not lights' own).
-    by_name: HashMap<String, u32>,
+    pub(super) by_name: HashMap<String, u32>,
     /// Materials that read uvs (textures, tonal art maps).
-    textured: HashSet<u32>,
+    pub(super) textured: HashSet<u32>,
     /// The default material's id, once a mesh needed it.
-    default_id: Option<u32>,
+    pub(super) default_id: Option<u32>,
 }
 
 /// Where a mesh goes in the world: its model matrix, the matrix for its
 /// normals, and whether it mirrors (which flips the winding).
-struct Placement {
-    model: Mat4,
-    normal_m: Mat3,
-    flip: bool,
+pub(super) struct Placement {
+    pub(super) model: Mat4,
+    pub(super) normal_m: Mat3,
+    pub(super) flip: bool,
 }
 
 /// What the tables add up to while they are read in order.
-struct SceneBuilder<'a> {
-    path: &'a Path,
-    read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-    data: SceneData,
-    materials: Materials,
+pub(super) struct SceneBuilder<'a> {
+    pub(super) path: &'a Path,
+    pub(super) read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    pub(super) data: SceneData,
+    pub(super) materials: Materials,
     /// Whether some mesh brought texture coordinates.
-    any_uvs: bool,
-    inputs: Vec<PathBuf>,
-    warnings: Vec<String>,
+    pub(super) any_uvs: bool,
+    pub(super) inputs: Vec<PathBuf>,
+    pub(super) warnings: Vec<String>,
 }
 
 impl<'a> SceneBuilder<'a> {
-    fn new(
+    pub(super) fn new(
         path: &'a Path,
         read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
         camera: Camera,
@@ -690,7 +300,10 @@ impl<'a> SceneBuilder<'a> {
 
     /// `[materials]`: built before the meshes, so they win over MTL
     /// materials of the same name.
-    fn add_materials(&mut self, descs: &BTreeMap<String, MaterialDesc>) -> Result<(), String> {
+    pub(super) fn add_materials(
+        &mut self,
+        descs: &BTreeMap<String, MaterialDesc>,
+    ) -> Result<(), String> {
         let mats = &mut self.materials;
         for (name, m) in descs {
             let mut notes = Vec::new();
@@ -720,7 +333,7 @@ impl<'a> SceneBuilder<'a> {
 
     /// `[[mesh]]`s, appended in order; then the scene-wide uvs and
     /// tangents.
-    fn add_meshes(&mut self, descs: &[MeshDesc]) -> Result<(), String> {
+    pub(super) fn add_meshes(&mut self, descs: &[MeshDesc]) -> Result<(), String> {
         for (i, md) in descs.iter().enumerate() {
             self.add_mesh(&format!("mesh[{i}]"), md)?;
         }
@@ -741,7 +354,7 @@ impl<'a> SceneBuilder<'a> {
     }
 
     /// One `[[mesh]]`: its shape, its materials, its placement.
-    fn add_mesh(&mut self, field: &str, md: &MeshDesc) -> Result<(), String> {
+    pub(super) fn add_mesh(&mut self, field: &str, md: &MeshDesc) -> Result<(), String> {
         let mesh = self.build_shape(field, md)?;
         let local = self.mesh_materials(field, md, &mesh)?;
         self.check_uvs(field, md, &mesh, &local)?;
@@ -751,7 +364,7 @@ impl<'a> SceneBuilder<'a> {
     }
 
     /// The mesh's geometry: exactly one of obj, sphere, plane, cube.
-    fn build_shape(&mut self, field: &str, md: &MeshDesc) -> Result<MeshData, String> {
+    pub(super) fn build_shape(&mut self, field: &str, md: &MeshDesc) -> Result<MeshData, String> {
         let shapes = [
             md.obj.is_some(),
             md.sphere.is_some(),
@@ -776,7 +389,7 @@ impl<'a> SceneBuilder<'a> {
 
     /// An OBJ file (and its MTLs), recorded as inputs; vertices the
     /// rasterizer will skip are worth a warning.
-    fn load_obj(&mut self, field: &str, p: &Path) -> Result<MeshData, String> {
+    pub(super) fn load_obj(&mut self, field: &str, p: &Path) -> Result<MeshData, String> {
         let bytes =
             (self.read)(p).map_err(|e| format!("{field}.obj: cannot read {}: {e}", p.display()))?;
         memory::reserve(
@@ -805,7 +418,7 @@ impl<'a> SceneBuilder<'a> {
     /// The mesh's material ids → scene material ids: the mesh's `material`
     /// (or else the OBJ's) looked up in `[materials]`, then in the mesh's
     /// MTL (built on first use); unnamed ones get the default material.
-    fn mesh_materials(
+    pub(super) fn mesh_materials(
         &mut self,
         field: &str,
         md: &MeshDesc,
@@ -845,7 +458,7 @@ impl<'a> SceneBuilder<'a> {
     }
 
     /// A mesh without uvs may not use a material that samples a texture.
-    fn check_uvs(
+    pub(super) fn check_uvs(
         &self,
         field: &str,
         md: &MeshDesc,
@@ -877,7 +490,7 @@ impl<'a> SceneBuilder<'a> {
     }
 
     /// Appends a checked, placed mesh to the scene's buffers.
-    fn append_mesh(&mut self, mesh: &MeshData, placement: &Placement, local: &[u32]) {
+    pub(super) fn append_mesh(&mut self, mesh: &MeshData, placement: &Placement, local: &[u32]) {
         let Placement {
             model,
             normal_m,
@@ -908,7 +521,11 @@ impl<'a> SceneBuilder<'a> {
 
     /// `[[light]]`s, in order. Visible polygon lights add their own
     /// geometry and material.
-    fn add_lights(&mut self, descs: &[LightDesc], area: AreaLightsDesc) -> Result<(), String> {
+    pub(super) fn add_lights(
+        &mut self,
+        descs: &[LightDesc],
+        area: AreaLightsDesc,
+    ) -> Result<(), String> {
         for (i, l) in descs.iter().enumerate() {
             let light = self.build_light(i, l, area)?;
             self.data.lights.push(light);
@@ -916,7 +533,7 @@ impl<'a> SceneBuilder<'a> {
         Ok(())
     }
 
-    fn build_light(
+    pub(super) fn build_light(
         &mut self,
         i: usize,
         l: &LightDesc,
@@ -929,7 +546,7 @@ impl<'a> SceneBuilder<'a> {
                 intensity,
             } => {
                 check_point(&format!("{field}.position"), *position)?;
-                check_radiometric(&format!("{field}.intensity"), *intensity)?;
+                checks::radiometric(&format!("{field}.intensity"), *intensity)?;
                 Light::Point {
                     position: *position,
                     intensity: *intensity,
@@ -939,7 +556,7 @@ impl<'a> SceneBuilder<'a> {
                 direction,
                 irradiance,
             } => {
-                check_radiometric(&format!("{field}.irradiance"), *irradiance)?;
+                checks::radiometric(&format!("{field}.irradiance"), *irradiance)?;
                 let d = crate::validate::direction(&format!("{field}.direction"), *direction)?;
                 Light::Directional {
                     to_light: (-d).to_array(),
@@ -955,7 +572,7 @@ impl<'a> SceneBuilder<'a> {
                 use crate::polygon_light::{add_visible, check_polygon};
                 use specula_core::light::AreaMethod;
                 check_polygon(&format!("{field}.vertices"), vertices)?;
-                check_radiometric(&format!("{field}.radiance"), *radiance)?;
+                checks::radiometric(&format!("{field}.radiance"), *radiance)?;
                 if *visible {
                     let name = format!("light[{i}]");
                     add_visible(
@@ -988,7 +605,7 @@ impl<'a> SceneBuilder<'a> {
     /// Tables built once per process on first use: made here, so that
     /// their cost (the split-sum tables: ~400 M instructions) counts as
     /// loading and not as the first frame's shading pass.
-    fn warm_tables(&self) {
+    pub(super) fn warm_tables(&self) {
         let polygon_lights = self
             .data
             .lights
@@ -1006,7 +623,7 @@ impl<'a> SceneBuilder<'a> {
 }
 
 /// `sphere`: segment and ring counts, radius, and the memory it takes.
-fn build_sphere(field: &str, s: &SphereDesc) -> Result<MeshData, String> {
+pub(super) fn build_sphere(field: &str, s: &SphereDesc) -> Result<MeshData, String> {
     check_segments(&format!("{field}.sphere.segments"), s.segments, 3)?;
     check_segments(&format!("{field}.sphere.rings"), s.rings, 2)?;
     check_extent(&format!("{field}.sphere.radius"), s.radius)?;
@@ -1019,7 +636,7 @@ fn build_sphere(field: &str, s: &SphereDesc) -> Result<MeshData, String> {
 }
 
 /// `plane`: segments and size per axis, and the memory it takes.
-fn build_plane(field: &str, p: &PlaneDesc) -> Result<MeshData, String> {
+pub(super) fn build_plane(field: &str, p: &PlaneDesc) -> Result<MeshData, String> {
     for (k, v) in p.segments.iter().enumerate() {
         check_segments(&format!("{field}.plane.segments[{k}]"), *v, 1)?;
         check_extent(&format!("{field}.plane.size[{k}]"), p.size[k])?;
@@ -1033,7 +650,7 @@ fn build_plane(field: &str, p: &PlaneDesc) -> Result<MeshData, String> {
 }
 
 /// `cube`: segments and size, and the memory it takes.
-fn build_cube(field: &str, c: &CubeDesc) -> Result<MeshData, String> {
+pub(super) fn build_cube(field: &str, c: &CubeDesc) -> Result<MeshData, String> {
     check_segments(&format!("{field}.cube.segments"), c.segments, 1)?;
     check_extent(&format!("{field}.cube.size"), c.size)?;
     let n = c.segments as u64;
@@ -1046,13 +663,17 @@ fn build_cube(field: &str, c: &CubeDesc) -> Result<MeshData, String> {
 
 /// The mesh's `translate`, `rotate` and `scale`, checked, and checked to
 /// keep its vertices inside the world.
-fn place_mesh(field: &str, md: &MeshDesc, positions: &[Vec3]) -> Result<Placement, String> {
+pub(super) fn place_mesh(
+    field: &str,
+    md: &MeshDesc,
+    positions: &[Vec3],
+) -> Result<Placement, String> {
     let scale = match md.scale {
         Scale::Uniform(s) => Vec3::splat(s),
         Scale::Axes(a) => Vec3::from(a),
     };
-    check_finite(&format!("{field}.translate"), &md.translate)?;
-    check_finite(&format!("{field}.rotate"), &md.rotate)?;
+    checks::finite(&format!("{field}.translate"), &md.translate)?;
+    checks::finite(&format!("{field}.rotate"), &md.rotate)?;
     if !(scale.abs().cmpge(Vec3::splat(MIN_SCALE)) & scale.abs().cmple(Vec3::splat(MAX_SCALE)))
         .all()
     {
@@ -1078,7 +699,7 @@ fn place_mesh(field: &str, md: &MeshDesc, positions: &[Vec3]) -> Result<Placemen
 
 /// Whether a material is `metallic_roughness`, whose polygon-light and
 /// environment terms read the process-wide split-sum tables.
-fn is_metallic_roughness(m: &Material) -> bool {
+pub(super) fn is_metallic_roughness(m: &Material) -> bool {
     m.shader
         .as_any()
         .downcast_ref::<Lit>()

@@ -1,5 +1,5 @@
 //! Writing images: PNG (tone-mapped sRGB), OpenEXR (linear HDR) and AOVs.
-//! Encoders produce bytes in memory; [`crate::outputs`] decides where they
+//! Encoders produce bytes in memory; [`crate::output_plan`] decides where they
 //! go (temporary file + rename, a device written through, or stdout).
 
 use image::{ImageFormat, Rgb32FImage, RgbImage};
@@ -43,10 +43,10 @@ pub fn is_hdr(format: ImageFormat) -> bool {
     matches!(format, ImageFormat::OpenExr | ImageFormat::Hdr)
 }
 
-/// Writes `bytes` to `path` as [`crate::outputs`] resolves it.
+/// Writes `bytes` to `path` as [`crate::output_plan`] resolves it.
 fn write_path(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let sink = crate::outputs::resolve(path, false)?;
-    crate::outputs::Output {
+    let sink = crate::output_plan::resolve(path, false)?;
+    crate::output_plan::Output {
         flag: String::new(),
         path: path.to_path_buf(),
         sink,

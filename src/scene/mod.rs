@@ -1,0 +1,137 @@
+//! Scene files (TOML): camera, output, meshes, materials, lights,
+//! environment. Parsed with serde into the `*Desc` types, validated once, and
+//! turned into a `SceneData` the rasterizer trusts. Every error names the
+//! file and the line (TOML syntax, unknown fields) or the field.
+
+mod build;
+mod desc;
+
+use build::*;
+use desc::*;
+pub use desc::{OutputDesc, TonemapDesc};
+use specula_raster::GeometryPass;
+use specula_raster::SceneData;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A scene-loading error: where, and what.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SceneError {
+    pub file: PathBuf,
+    pub message: String,
+}
+
+impl fmt::Display for SceneError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}: {}", self.file.display(), self.message)
+    }
+}
+
+impl std::error::Error for SceneError {}
+
+/// A loaded scene, ready to render.
+pub struct LoadedScene {
+    pub data: SceneData,
+    pub output: OutputDesc,
+    /// Files the scene was read from (the scene file, OBJs, MTLs; relative
+    /// ones against the scene's folder): outputs
+    /// must never overwrite them.
+    pub inputs: Vec<PathBuf>,
+    /// Things worth telling the user that did not stop the load.
+    pub warnings: Vec<String>,
+    /// Image-space stages the scene asks for, run after the tone map and
+    /// before the encode (`[posterize]`).
+    pub post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
+    /// The checked `[[outline]]` tables, in order, and `[strokes]` (lines.rs).
+    pub outlines: Vec<crate::lines::OutlineSpec>,
+    pub strokes: Option<crate::lines::StrokesSpec>,
+    /// The extrusion outlines' vertex stages and the stroke overlay
+    /// (lines.rs), for the renderer and `--svg-lines`.
+    pub lines: crate::lines::LineStages,
+}
+
+/// Reads a scene file from disk; relative paths resolve against its folder.
+pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
+    let err = |message: String| SceneError {
+        file: path.to_path_buf(),
+        message,
+    };
+    let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
+    let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
+    let read = move |p: &Path| std::fs::read(dir.join(p));
+    let mut scene = load_scene_str(path, &text, &read)?;
+    let base = path.parent().unwrap_or(Path::new(""));
+    for p in scene.inputs.iter_mut().skip(1) {
+        *p = base.join(&p);
+    }
+    Ok(scene)
+}
+
+/// Parses and builds a scene from its text; `read` supplies the files it
+/// names (relative to the scene's folder). `path` is only used in messages.
+pub fn load_scene_str(
+    path: &Path,
+    text: &str,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<LoadedScene, SceneError> {
+    let err = |message: String| SceneError {
+        file: path.to_path_buf(),
+        message,
+    };
+    let desc: SceneFile =
+        toml::from_str(text).map_err(|e| err(format!("{}", e).trim_end().to_string()))?;
+    build_scene(path, desc, read).map_err(err)
+}
+
+/// Builds a parsed scene, one table after another. The order is part of
+/// the behaviour: the first table with a problem is the one reported, and
+/// later tables see what earlier ones added (meshes name materials,
+/// visible lights add geometry, outlines name materials).
+fn build_scene(
+    path: &Path,
+    desc: SceneFile,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<LoadedScene, String> {
+    let camera = build_camera(&desc.camera)?;
+    check_output(&desc.output)?;
+    let mut scene = SceneBuilder::new(path, read, camera, desc.output.background);
+    scene.add_materials(&desc.materials)?;
+    scene.add_meshes(&desc.meshes)?;
+    scene.add_lights(&desc.lights, desc.render.area_lights)?;
+    if let Some(e) = &desc.environment {
+        scene.data.environment = Some(build_environment(e)?);
+    }
+    scene.warm_tables();
+    let outlines = check_outlines(&desc.outlines, &scene.materials.by_name)?;
+    let strokes = desc.strokes.as_ref().map(|s| s.check()).transpose()?;
+
+    let SceneBuilder {
+        mut data,
+        materials,
+        inputs,
+        warnings,
+        ..
+    } = scene;
+    data.materials = materials.list;
+    data.geometry = vec![GeometryPass::main(data.triangles.len())];
+    let mut lines = crate::lines::build(
+        &mut data,
+        &outlines,
+        strokes.as_ref(),
+        desc.output.tonemap.into(),
+        desc.output.exposure,
+    );
+    data.validate()?;
+    let mut post_stages = build_posterize(desc.posterize.as_ref())?;
+    post_stages.extend(std::mem::take(&mut lines.post));
+    Ok(LoadedScene {
+        data,
+        output: desc.output,
+        inputs,
+        warnings,
+        post_stages,
+        outlines,
+        strokes,
+        lines,
+    })
+}
