@@ -174,9 +174,9 @@ impl<R: Real> HalfAngles<R> {
         // 1e-155] in f64) makes |s|² underflow and 1/|s|² infinite. The
         // angles depend only on s's direction, so such an s is first scaled
         // by 1/max|sₖ| (other lanes are untouched: the factor is exactly 1).
-        // Behind a branch taken almost never: on every light of every
-        // packet the rescale cost ~5 % of the shading pass. (cos θd by the
-        // hardware root, not x·rsqrt(x): see `smith_ggx_root`.)
+        // Behind a branch taken almost never: done on every light of every
+        // packet, the rescale is a visible share of the shading pass. (cos
+        // θd by the hardware root, not x·rsqrt(x): see `smith_ggx_root`.)
         let tiny = len2.lt(R::splat(HALF_LEN2_MIN));
         // |s| (the unscaled length) in each branch: the common one then has
         // no multiply by an `unscale` of 1.

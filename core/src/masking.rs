@@ -40,9 +40,9 @@ pub(crate) fn v_smith_ggx_correlated<R: Real>(alpha: R, cos_i: R, cos_o: R) -> R
 #[inline(always)]
 pub(crate) fn smith_ggx_root<R: Real>(alpha: R, cos_theta: R) -> R {
     let a2 = alpha * alpha;
-    // The hardware root, not x·rsqrt(x): on the Zen 5 benchmark machine
-    // it runs beside the multipliers the light loop is bound by, and the
-    // shading pass measured ~5 % faster for it.
+    // The hardware root, not x·rsqrt(x): it runs beside the multipliers
+    // the light loop is bound by, where the estimate and its Newton step
+    // would add to them (docs/PERFORMANCE.md lists the experiment).
     let r = (cos_theta * cos_theta).mul_add(R::ONE - a2, a2);
     r.sqrt()
 }
@@ -74,8 +74,7 @@ pub(crate) fn v_smith_ggx_correlated_roots<R: Real>(cos_i: R, cos_o: R, s_i: R, 
 ///
 /// A true division, not `rcp` (estimate + Newton step): one operation on
 /// the light loop's dependency chain instead of four, and the divider
-/// runs beside the multipliers (measured ~2.5 % of a frame on the Zen 5
-/// benchmark machine).
+/// runs beside the multipliers.
 #[inline(always)]
 pub(crate) fn dv_ggx_correlated<R: Real>(
     alpha: R,

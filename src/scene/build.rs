@@ -603,7 +603,7 @@ impl<'a> SceneBuilder<'a> {
     }
 
     /// Tables built once per process on first use: made here, so that
-    /// their cost (the split-sum tables: ~400 M instructions) counts as
+    /// their cost (the split-sum tables above all) counts as
     /// loading and not as the first frame's shading pass.
     pub(super) fn warm_tables(&self) {
         let polygon_lights = self

@@ -87,9 +87,10 @@
 //!   integral fewer) measured p90 2.0 %, max 13.6 %; the two-GGX
 //!   stand-in before them (two GGX fits, whose G and Fresnel are not the
 //!   coat's, mixed to GTR1's cumulative distribution) p90 6.2 %,
-//!   max 17.4 %. Cost: the shading pass of a coated Disney plane under
-//!   two polygon lights runs 65.2 M instructions, 57.2 M with two
-//!   cosines, 38.7 M without a coat (callgrind).
+//!   max 17.4 %. Cost: each cosine is one more clipped polygon integral
+//!   per light, so the coat's three make a coated material's polygon
+//!   lights markedly dearer than an uncoated one's
+//!   (`specula-bench`'s `disney` bench measures it).
 //! - Diffuse, subsurface blend and sheen (× (1 − metallic)): the polygon's
 //!   exact Lambert form factor times the lobes' directional albedo at μo,
 //!   i.e. the lobes replaced by the Lambertian lobe of the same albedo at
@@ -605,7 +606,7 @@ const DIFFUSE_MU_AXIS: Axis = Axis::new(64, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
 /// over μo, for any Disney material (module docs, "Polygon lights"):
 /// ∫ F_d μi dωi = c₀ + c₁ r + c₂ r², ∫ ss μi dωi = c₃ + c₄ r + c₅ r²,
 /// ∫ F_H μi dωi = c₆ (F_d and ss are quadratic in r for fixed directions).
-/// Built once per process (~10 ms).
+/// Built once per process.
 pub(crate) fn diffuse_albedo_table() -> &'static Table1<7> {
     static T: OnceLock<Table1<7>> = OnceLock::new();
     T.get_or_init(|| Table1::build(DIFFUSE_MU_AXIS, diffuse_albedo_coefficients))

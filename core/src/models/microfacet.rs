@@ -92,7 +92,7 @@ impl Compensation {
 impl Microfacet {
     /// Takes α already clamped into [ALPHA_MIN, 1] (the caller warns),
     /// sets up compensation when asked (`kc`), and tabulates the directional
-    /// albedo: single scattering (quadrature, ~1 ms per entry), plus the
+    /// albedo: single scattering (an adaptive quadrature per entry), plus the
     /// compensation lobe's exact factor · (1 − E(μo)), plus the diffuse ρd.
     pub fn new(params: MicrofacetParams, kc: Option<KcColor>) -> Microfacet {
         let kc = kc.map(|mode| Compensation::new(&params, mode));
