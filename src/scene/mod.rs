@@ -11,23 +11,15 @@ use desc::*;
 pub use desc::{OutputDesc, TonemapDesc};
 use specula_raster::GeometryPass;
 use specula_raster::SceneData;
-use std::fmt;
 use std::path::{Path, PathBuf};
 
 /// A scene-loading error: where, and what.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("{}: {message}", file.display())]
 pub struct SceneError {
     pub file: PathBuf,
     pub message: String,
 }
-
-impl fmt::Display for SceneError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}: {}", self.file.display(), self.message)
-    }
-}
-
-impl std::error::Error for SceneError {}
 
 /// A loaded scene, ready to render.
 pub struct LoadedScene {
@@ -78,9 +70,26 @@ pub fn load_scene_str(
         file: path.to_path_buf(),
         message,
     };
-    let desc: SceneFile =
-        toml::from_str(text).map_err(|e| err(format!("{}", e).trim_end().to_string()))?;
+    let desc = parse(text).map_err(err)?;
     build_scene(path, desc, read).map_err(err)
+}
+
+/// The scene's tables from its text. A TOML error says the line; a value
+/// of the wrong kind or a missing field also names the table and field it
+/// belongs to (`in `mesh[1].sphere``), which the line alone does not show
+/// (a missing field is reported at its table's first line).
+fn parse(text: &str) -> Result<SceneFile, String> {
+    let toml_message = |e: toml::de::Error| e.to_string().trim_end().to_string();
+    let de = toml::Deserializer::parse(text).map_err(toml_message)?;
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let at = e.path().to_string();
+        let message = toml_message(e.into_inner());
+        if at.is_empty() || at == "." {
+            message
+        } else {
+            format!("{message} (in `{at}`)")
+        }
+    })
 }
 
 /// Builds a parsed scene, one table after another. The order is part of
