@@ -1,5 +1,5 @@
 //! The scene file's line tables: `[[outline]]` (any number, drawn in
-//! order) and `[strokes]` (npr/src/outline.rs, sobel.rs, extrude.rs,
+//! order) and `[strokes]` (npr/src/outline.rs, sobel/, extrude.rs,
 //! edges.rs, overlay/). Parsed with serde like the rest of the scene,
 //! every field checked once here with a message naming it; the checked
 //! description then becomes post stages and geometry passes.

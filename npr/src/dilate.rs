@@ -467,3 +467,152 @@ pub fn dilate_row_lanes(
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn distance_transform_equals_brute_force() {
+        let (w, h) = (37, 23);
+        let mask: Vec<bool> = (0..w * h).map(|i| (i * 7919) % 97 == 3).collect();
+        let d = distance(&mask, w, h);
+        for (i, di) in d.iter().enumerate() {
+            let (x, y) = ((i % w) as f32, (i / w) as f32);
+            let best = (0..w * h)
+                .filter(|&j| mask[j])
+                .map(|j| {
+                    let (a, b) = ((j % w) as f32, (j / w) as f32);
+                    ((x - a).powi(2) + (y - b).powi(2)).sqrt()
+                })
+                .fold(f32::INFINITY, f32::min);
+            assert!((di - best).abs() < 1e-4, "{i}: {di} vs {best}");
+        }
+    }
+
+    #[test]
+    fn a_dilated_line_has_the_requested_width() {
+        // A vertical step marked on columns 49 and 50: the line of width W
+        // is centred on x = 50 (between them) and its ink sums to W per row.
+        let (w, h) = (100, 8);
+        let mask: Vec<bool> = (0..w * h).map(|i| i % w == 49 || i % w == 50).collect();
+        for width in [2.0f32, 3.0, 4.5, 8.0] {
+            let c = dilate(&mask, w, h, width, true);
+            let ink: f32 = c[3 * w..4 * w].iter().sum();
+            assert!((ink - width).abs() < 1e-5, "width {width}: {ink}");
+            let hard = dilate(&mask, w, h, width, false);
+            let ink: f32 = hard[3 * w..4 * w].iter().sum();
+            assert!((ink - width).abs() <= 1.0, "width {width} aliased: {ink}");
+        }
+    }
+
+    #[test]
+    fn bounded_dilation_equals_the_distance_transform_bit_for_bit() {
+        let (w, h) = (53, 31);
+        for density in [3usize, 17, 101] {
+            let mask: Vec<bool> = (0..w * h)
+                .map(|i| (i * 7919 + density) % density == 0)
+                .collect();
+            let d = distance(&mask, w, h);
+            for width in [0.5f32, 1.0, 2.0, 3.0, 4.5, 8.0, 13.0, 32.0] {
+                for aa in [true, false] {
+                    let half = width * 0.5;
+                    let want: Vec<f32> = d
+                        .iter()
+                        .map(|&d| {
+                            if aa {
+                                (half - d).clamp(0.0, 1.0)
+                            } else if d <= (half - 0.5).max(0.0) {
+                                1.0
+                            } else {
+                                0.0
+                            }
+                        })
+                        .collect();
+                    let got = dilate(&mask, w, h, width, aa);
+                    for i in 0..w * h {
+                        assert_eq!(
+                            got[i].to_bits(),
+                            want[i].to_bits(),
+                            "{density} {width} {aa} {i}"
+                        );
+                    }
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn a_line_of_marks_only_inks_no_other_sample() {
+        // An unmarked sample lies √k from the nearest mark, k ≥ 1 an
+        // integer: marks_only says that every such sample has coverage 0.
+        for i in 0..=24 {
+            let width = i as f32 * 0.25;
+            for aa in [true, false] {
+                let c = Cover::new(width, aa);
+                let off = (1..200).all(|k| c.at((k as f32).sqrt()) == 0.0);
+                assert_eq!(c.marks_only(), off, "width {width} aa {aa}");
+            }
+        }
+        // The limits its docs name.
+        assert!(Cover::new(2.0, true).marks_only() && !Cover::new(2.01, true).marks_only());
+        assert!(Cover::new(2.99, false).marks_only() && !Cover::new(3.0, false).marks_only());
+    }
+
+    #[test]
+    fn dilation_across_mask_words_equals_the_distance_transform() {
+        // Rows of several 64-sample words with lone marks just before and
+        // after word boundaries (and at the ends), so that ink reaches into
+        // words holding no mark of their own, and rows with none.
+        let (w, h) = (197, 29);
+        let cols = [0usize, 3, 62, 63, 64, 66, 127, 128, 150, 191, 192, 196];
+        let widths = [0.5f32, 1.0, 2.0, 3.0, 4.5, 8.0, 13.0, 32.0];
+        // One mark every other row, alone in its row; and sparse noise,
+        // whose rows leave the scratch of a task holding distances that
+        // the next row must not read.
+        let lone = |k: usize, i: usize| {
+            let (x, y) = (i % w, i / w);
+            y % 2 == k % 2 && x == cols[(y / 2 + k) % cols.len()]
+        };
+        let noise = |k: usize, i: usize| (i * 7919 + k * 31).is_multiple_of(60 + 40 * (k % 3));
+        let cases = widths
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &width)| [(k, width, false), (k, width, true)]);
+        for (k, width, noisy) in cases {
+            let mask: Vec<bool> = (0..w * h)
+                .map(|i| if noisy { noise(k, i) } else { lone(k, i) })
+                .collect();
+            assert!(mask.contains(&true));
+            let d = distance(&mask, w, h);
+            for aa in [true, false] {
+                let want: Vec<u32> = d
+                    .iter()
+                    .map(|&d| Cover::new(width, aa).at(d).to_bits())
+                    .collect();
+                let got: Vec<u32> = dilate(&mask, w, h, width, aa)
+                    .iter()
+                    .map(|v| v.to_bits())
+                    .collect();
+                assert!(got == want, "width {width} aa {aa}");
+                // Row by row with one scratch, the rows out of order: each
+                // row must not read what another left in it.
+                let bits = EdgeMask::from_bools(&mask, w, h);
+                let mut marked = Vec::new();
+                bits.rows_marked(&mut marked);
+                let mut s = RowScratch::default();
+                for y in (0..h).map(|k| (k * 11 + 5) % h) {
+                    let mut row = vec![0.0f32; w];
+                    dilate_row(&bits, &marked, y, Cover::new(width, aa), &mut s, |x, c| {
+                        row[x] = c
+                    });
+                    let row: Vec<u32> = row.iter().map(|v| v.to_bits()).collect();
+                    assert!(
+                        row == want[y * w..(y + 1) * w],
+                        "width {width} aa {aa} row {y}"
+                    );
+                }
+            }
+        }
+    }
+}
