@@ -142,7 +142,7 @@ pub enum GtrLambdaDesc {
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
 pub enum KcColorDesc {
-    /// F_avg² E_avg / (1 − F_avg (1 − E_avg)) [Kulla17].
+    /// F_avg² E_avg / (1 − F_avg (1 − E_avg)) \[Kulla17\].
     #[default]
     KullaConty,
     /// The course notes' F_avg E_avg / (1 − F_avg (1 − E_avg)).

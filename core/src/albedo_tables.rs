@@ -1,5 +1,5 @@
 //! Directional-albedo tables for uniform environment light on the
-//! metallic-roughness model (the "split sum" factorization, [Karis13]).
+//! metallic-roughness model (the "split sum" factorization, \[Karis13\]).
 //!
 //! With Schlick's F = F0 + (1 − F0) w, w = (1 − wi·h)⁵, and the specular
 //! integrand s(wi) = D(h) V(wi, wo) (n·wi) of GGX + height-correlated Smith:

@@ -55,7 +55,7 @@ pub struct ShadingFrame<R> {
 
 impl<R: Real> ShadingFrame<R> {
     /// Some frame around unit `n`, for isotropic models (any tangent will
-    /// do), without branches or normalization. [Duff17]:
+    /// do), without branches or normalization. \[Duff17\]:
     /// s = sign(n.z), a = −1/(s + n.z), c = n.x n.y a,
     /// t = (1 + s n.x² a, s c, −s n.x), b = (c, s + n.y² a, −n.y).
     #[inline(always)]

@@ -23,7 +23,7 @@ pub enum Fresnel {
 
 /// Schlick's weight (1 − cos θ)⁵, the part of [`f_schlick`] that does not
 /// depend on F0. `cos_theta` is clamped to [0, 1] so a lane slightly below
-/// the horizon does not raise a weight above 1.   [Schlick94]
+/// the horizon does not raise a weight above 1.   \[Schlick94\]
 #[inline(always)]
 pub(crate) fn schlick_weight<R: Real>(cos_theta: R) -> R {
     let m = (R::ONE - cos_theta).clamp(R::ZERO, R::ONE);
@@ -43,7 +43,7 @@ pub(crate) fn schlick_weight_half<R: Real>(len: R) -> R {
     m2 * m2 * m
 }
 
-/// Schlick's approximation F = F0 + (1 − F0)(1 − cos θ)⁵, per RGB channel.   [Schlick94]
+/// Schlick's approximation F = F0 + (1 − F0)(1 − cos θ)⁵, per RGB channel.   \[Schlick94\]
 #[inline(always)]
 pub fn f_schlick<R: Real>(f0: Rgb<R>, cos_theta: R) -> Rgb<R> {
     let w = schlick_weight(cos_theta);

@@ -1,4 +1,4 @@
-//! Kulla–Conty multiple-scattering compensation [Kulla17].
+//! Kulla–Conty multiple-scattering compensation \[Kulla17\].
 //!
 //! Single scattering loses energy at high roughness: with F = 1 the
 //! directional albedo E(μ) of the specular lobe is below 1. The added lobe

@@ -3,7 +3,7 @@
 //! Every term is written once, generic over [`Real`] (f32, f64, f32x8); see
 //! `real.rs`. Conventions: shading frame normal +Z, tangent +X, bitangent +Y;
 //! directions point away from the surface, `wi` toward the light, `wo` toward
-//! the viewer. Citation keys such as `[Walter07]` resolve in docs/REFERENCES.md.
+//! the viewer. Citation keys such as `\[Walter07\]` resolve in docs/REFERENCES.md.
 
 pub mod albedo_tables;
 mod brdf;

@@ -37,7 +37,7 @@ pub enum Light {
 /// How polygon lights are integrated (the scene's `area_lights`).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum AreaMethod {
-    /// Linearly transformed cosines: closed form, per pixel [Heitz16].
+    /// Linearly transformed cosines: closed form, per pixel \[Heitz16\].
     #[default]
     Ltc,
     /// The converged quadrature of `ltc::reference` (slow; for comparing).

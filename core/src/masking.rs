@@ -109,7 +109,7 @@ pub(crate) fn lambda_beckmann<R: Real>(alpha: R, cos_theta: R) -> R {
 }
 
 /// The error function, Abramowitz & Stegun 7.1.26 (|error| ≤ 1.5e-7), odd
-/// extension for x < 0.   [AS64]
+/// extension for x < 0.   \[AS64\]
 #[inline(always)]
 pub(crate) fn erf<R: Real>(x: R) -> R {
     let ax = x.abs();

@@ -22,7 +22,7 @@ pub enum Ndf {
     },
 }
 
-/// GGX / Trowbridge–Reitz NDF: D(m) = α² / (π ((n·m)²(α²−1) + 1)²)   [Walter07]
+/// GGX / Trowbridge–Reitz NDF: D(m) = α² / (π ((n·m)²(α²−1) + 1)²)   \[Walter07\]
 ///
 /// The denominator's base is formed as sin²θm + α² cos²θm (module docs).
 /// The result is finite for any α > 0, which is why alpha is floored where

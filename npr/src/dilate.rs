@@ -117,7 +117,7 @@ impl<T: Default> Pool<T> {
     }
 }
 
-/// Squared distance transform in one dimension [Felzenszwalb12]: d[q] =
+/// Squared distance transform in one dimension \[Felzenszwalb12\]: d[q] =
 /// min_p (q − p)² + f[p], by the lower envelope of parabolas.
 ///
 /// The parabola intersections are in f64: q² of a supersampled row

@@ -706,7 +706,7 @@ impl VertexStage for Extrude {
     }
 
     /// True when every triangle of `triangles` is on a flat open piece
-    /// whose copy [`copy_hidden`] showed hidden for the last view.
+    /// whose copy `copy_hidden` showed hidden for the last view.
     fn hidden(&self, triangles: Range<u32>) -> bool {
         let st = &self.state;
         st.key.is_some()

@@ -1,4 +1,4 @@
-//! `hatching`: the surface drawn with a tonal art map [Praun01].
+//! `hatching`: the surface drawn with a tonal art map \[Praun01\].
 //!
 //! 1. The shaded luminance: Y of Σ E max(n·l, 0)/π over the lights plus
 //!    the uniform environment (a white Lambertian surface), clamped to

@@ -3,7 +3,7 @@
 //! stylized shader can threshold the cosine itself (toon bands) or sum a
 //! Lambertian luminance (hatching).
 //!
-//! Polygon lights are reduced to their vector irradiance [Arvo94]:
+//! Polygon lights are reduced to their vector irradiance \[Arvo94\]:
 //! F = (1/2π) Σₖ θₖ ĉₖ over the edges (θₖ the angle the edge subtends,
 //! ĉₖ the unit normal of the plane through it and the shading point), so
 //! the irradiance on a plane of normal n is π L (F·n). The shaders see the

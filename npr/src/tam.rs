@@ -1,4 +1,4 @@
-//! Tonal art maps [Praun01]: a tone × mip-level set of hatching textures,
+//! Tonal art maps \[Praun01\]: a tone × mip-level set of hatching textures,
 //! drawn with tiny-skia strokes.
 //!
 //! - Tones run from light to dark; tone t's target mean darkness (ink

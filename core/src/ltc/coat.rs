@@ -1,6 +1,6 @@
 //! The project's own LTC fit of the Disney clearcoat lobe, loaded from
 //! `core/data/ltc_coat.bin`, which `specula fit-ltc-coat` writes
-//! (src/fit_ltc_coat.rs; rerun it to regenerate) [Heitz16].
+//! (src/fit_ltc_coat.rs; rerun it to regenerate) \[Heitz16\].
 //!
 //! **The lobe.** f_r μi with f_r = F_r D_r G_r / (4 μi μo) (models/disney.rs
 //! without its weight ¼ clearcoat): D_r GTR1 at α ∈ [0.001, 0.1], G_r

@@ -1,7 +1,7 @@
 //! The project's own LTC fit of the GGX lobe (height-correlated Smith,
 //! F = 1), loaded from `core/data/ltc_ggx.bin`, which `specula fit-ltc`
 //! writes (src/fit_ltc.rs; rerun it to regenerate), and its use on a
-//! polygon [Heitz16].
+//! polygon \[Heitz16\].
 //!
 //! **The lobe and its transform.** Per (α, view), with the view in the
 //! local xz-plane (x ≥ 0), the normalized lobe f(wi, wo) cos θi / n is

@@ -1,4 +1,4 @@
-//! Polygonal area lights with linearly transformed cosines [Heitz16].
+//! Polygonal area lights with linearly transformed cosines \[Heitz16\].
 //!
 //! - `polygon`: the clamped-cosine integral over a polygon clipped to the
 //!   upper hemisphere, in lane arithmetic (the runtime's geometry);

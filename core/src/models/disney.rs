@@ -1,5 +1,5 @@
 //! Burley's principled BRDF as the WDAS BRDF Explorer's `disney.brdf`
-//! defines it (2015 revision: anisotropic Smith GGX masking)   [Burley12]
+//! defines it (2015 revision: anisotropic Smith GGX masking)   \[Burley12\]
 //!
 //! f = (1 − metallic) ((1/π) mix(F_d, ss, subsurface) C_d + sheen C_sheen F_H)
 //!   + F_s D_s G_s / (4 μi μo)
@@ -39,7 +39,7 @@
 //! quadrature of this same BRDF when the material is built; see
 //! [`Disney::albedo_quadrature`].
 //!
-//! **Polygon lights** (linearly transformed cosines [Heitz16], the
+//! **Polygon lights** (linearly transformed cosines \[Heitz16\], the
 //! project's GGX fit in ltc/ggx.rs). Once per pixel, `prepare_polygons`
 //! looks up one LTC for the specular lobe (four with clearcoat) and the
 //! lobes' albedos; each light then costs one clipped polygon integral for

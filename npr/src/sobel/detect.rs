@@ -1,7 +1,7 @@
 //! Detection: the edge marks of a frame, row by row ([`detect_row`]) in
 //! bands of [`BAND_ROWS`] rows whose inputs each band computes itself
 //! (`Sobel::detect`). A row's interior goes 8 samples at a time through
-//! every source at once ([`detect_lanes`]), 64 at a time where the block
+//! every source at once (`detect_lanes`), 64 at a time where the block
 //! bounds allow ([`detect_block`]); its ends through the clamped scalar
 //! measure.
 
@@ -45,9 +45,9 @@ pub fn detect_edges(
 /// A sample is marked when any source's measure exceeds its threshold and
 /// `keep` allows it (asked only where a source does: most samples have no
 /// edge). The row's interior goes 8 samples at a time through every
-/// source at once ([`detect_lanes`]); its first and last sample (and every
-/// sample of a row under [`FUSED_MIN_WIDTH`]) through the clamped scalar
-/// [`measure_at`] ([`mark_clamped`]).
+/// source at once (`detect_lanes`); its first and last sample (and every
+/// sample of a row under `FUSED_MIN_WIDTH`) through the clamped scalar
+/// `measure_at` (`mark_clamped`).
 pub fn detect_row(
     input: &EdgeInput,
     sources: &[(Source, f32)],
@@ -145,11 +145,11 @@ fn detect_row_ahead(
 }
 
 /// Rows narrower than this (no interior chunk of 8 samples with its
-/// neighbours) are measured sample by sample ([`mark_clamped`]).
+/// neighbours) are measured sample by sample (`mark_clamped`).
 const FUSED_MIN_WIDTH: usize = 10;
 
 /// Marks sample x of a row (`rows` as in [`detect_row`]) if any source's
-/// clamped scalar [`measure_at`] exceeds its threshold.
+/// clamped scalar `measure_at` exceeds its threshold.
 fn mark_clamped(
     input: &EdgeInput,
     sources: &[(Source, f32)],
@@ -167,7 +167,7 @@ fn mark_clamped(
     }
 }
 
-/// Each source's threshold for [`detect_lanes`], `None` when it is not a
+/// Each source's threshold for `detect_lanes`, `None` when it is not a
 /// source. A source listed twice marks where its measure exceeds either
 /// threshold, i.e. the lesser (a NaN threshold marks nothing: dropped).
 #[derive(Clone, Copy)]
@@ -260,7 +260,7 @@ fn around8(f: &[f32], rows: [usize; 3], x: usize) -> [[f32x8; 3]; 3] {
 
 /// Sobel gradient (Gx, Gy) over a neighbourhood,
 /// [`gradient`](super::measure::gradient)'s sums in its order but for its
-/// leading 0 + (see [`detect_lanes`]): for squaring.
+/// leading 0 + (see `detect_lanes`): for squaring.
 #[inline(always)]
 fn gradient8(n: &[[f32x8; 3]; 3]) -> (f32x8, f32x8) {
     let w = W.map(f32x8::splat);
@@ -270,7 +270,7 @@ fn gradient8(n: &[[f32x8; 3]; 3]) -> (f32x8, f32x8) {
 }
 
 /// Whether the 8 samples x..x+8 of a row (bit i: sample x + i) exceed any
-/// source's threshold: every source's measure at once, each [`measure_at`]'s
+/// source's threshold: every source's measure at once, each `measure_at`'s
 /// operations in its order (no FMA) but for the leading 0 + of its sums
 /// (0 + p is p but for a zero's sign, which the squares and |·| drop),
 /// so the same values bit for bit

@@ -47,11 +47,11 @@
 //! and ids are far larger than the caches; profiles put most of the time
 //! on the first read of each row and on the blend's reads of the image),
 //! so the detection reads each field row once: every source's measure 8
-//! samples at a time in one pass ([`detect_block`](block::detect_block)),
+//! samples at a time in one pass (`detect_block`),
 //! the frame's normals prefetched two rows ahead; and the blend prefetches
 //! the image lines near the marks two rows ahead. A block of 64 samples
 //! first drops every source whose measure a bound over the block's values
-//! keeps under its threshold ([`block_sources`](block::block_sources)):
+//! keeps under its threshold (`block_sources`):
 //! flat ground and the insides of large faces are not measured.
 //!
 //! The files, in the order of the data flow:
