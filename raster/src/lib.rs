@@ -9,11 +9,11 @@
 //! the one visibility buffer (`scan`, `target`); the shading pass rebuilds
 //! attributes at pixel centres (`resolve`) and runs each material's surface
 //! shader (`shader`: `lit` for the physically based models, `unlit`) 8
-//! pixels at a time (`shade`) into row-major frame buffers (`buffers`:
+//! pixels at a time (`shading_pass`) into row-major frame buffers (`buffers`:
 //! colour, depth, normal, id); `texture` is the mip-mapped texture
 //! sampler shaders read (base-colour maps, tonal art maps), `maps` fills a
-//! material's per-pixel parameters from it; `post` runs the post stages (supersampling
-//! resolve, exposure, tone map, encode, and any custom image-space stage).
+//! material's per-pixel parameters from it; `post` runs the post stages (downsampling the
+//! supersamples, exposure, tone map, encode, and any custom image-space stage).
 
 pub mod bin;
 pub mod buffers;
@@ -31,8 +31,8 @@ pub mod scan;
 pub mod scene;
 pub mod setup;
 pub mod setup_x4;
-pub mod shade;
 pub mod shader;
+pub mod shading_pass;
 pub mod target;
 pub mod texture;
 pub mod unlit;

@@ -4,7 +4,7 @@
 //! constants, broadcast ([`specula_core::Brdf::params`]), then each map
 //! the material has overwrites its slot lane by lane ([`ParamMaps::fill`]).
 //! A material without maps skips the second step, and the shading pass
-//! then hands it whole runs of packets at once (shade.rs).
+//! then hands it whole runs of packets at once (shading_pass.rs).
 
 use crate::shader::ShadeInput;
 use crate::texture::{Sampler, Texture};
