@@ -7,7 +7,7 @@
 //! `setup_x4` does 4 triangles at once, bit-identical), bin
 //! screen triangles into 64×64 tiles (`bin`) and scan-convert each tile into
 //! the one visibility buffer (`scan`, `target`); the shading pass rebuilds
-//! attributes at pixel centres (`resolve`) and runs each material's surface
+//! attributes at pixel centres (`resolve`, into `fragment`'s types) and runs each material's surface
 //! shader (`shader`: `lit` for the physically based models, `unlit`) 8
 //! pixels at a time (`shading_pass`) into row-major frame buffers (`buffers`:
 //! colour, depth, normal, id); `texture` is the mip-mapped texture
@@ -20,6 +20,7 @@ pub mod buffers;
 pub mod camera;
 pub mod clip;
 pub mod fixed;
+pub mod fragment;
 pub mod frame;
 pub mod geometry;
 pub mod lit;

@@ -16,7 +16,7 @@
 //! [`specula_core::Model`] under the scene's lights) and
 //! [`crate::unlit::Unlit`] (a constant radiance).
 
-use crate::resolve::{Fragment, Surface};
+use crate::fragment::{Fragment, Surface};
 use specula_core::light::Light;
 use specula_core::{f32x8, Real, Rgb, ShadingFrame};
 use std::any::Any;

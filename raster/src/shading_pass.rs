@@ -3,8 +3,9 @@
 //! results go to the row-major frame buffers (buffers.rs).
 
 use crate::buffers::TileWriter;
+use crate::fragment::Fragment;
 use crate::post::LdrEncoding;
-use crate::resolve::{Fragment, PacketTris, ResolveContext};
+use crate::resolve::{PacketTris, ResolveContext};
 use crate::scene::SceneData;
 use crate::shader::{ShadeEnv, ShadeInput, ShadeLanes};
 use crate::target::{Target, TILE};
