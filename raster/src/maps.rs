@@ -53,7 +53,7 @@ impl ParamMaps {
     /// scene files write it; `None` when every map has its slot. Checked
     /// once when a material is built, so [`ParamMaps::fill`] never drops
     /// a map.
-    pub fn unsupported<P: LaneParams<f32>>(&self, mut params: P) -> Option<&'static str> {
+    pub(crate) fn unsupported<P: LaneParams<f32>>(&self, mut params: P) -> Option<&'static str> {
         if self.base_color.is_some() && params.base_color_mut().is_none() {
             return Some("base_color_texture");
         }

@@ -91,7 +91,7 @@ impl PacketTris {
     /// would write what is already here (with the same context). Most
     /// packets of a large triangle follow one of the same triangle.
     #[inline(always)]
-    pub fn is_one_triangle_of(&self, ids: &[u32]) -> bool {
+    pub(crate) fn is_one_triangle_of(&self, ids: &[u32]) -> bool {
         if self.n != 1 || self.covered != 0xFF {
             return false;
         }

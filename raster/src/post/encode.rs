@@ -78,7 +78,7 @@ impl LdrEncoding {
 
     /// Codes of the pixels with linear colours `r[i]`, `g[i]`, `b[i]` into
     /// `out[3i..3i + 3]`: the bytes [`downsample_ldr`](super::downsample_ldr) gives for them.
-    pub fn encode_row(&self, r: &[f32], g: &[f32], b: &[f32], out: &mut [u8]) {
+    pub(crate) fn encode_row(&self, r: &[f32], g: &[f32], b: &[f32], out: &mut [u8]) {
         match self.tonemap {
             Tonemap::Clamp => encode_planes::<0>(r, g, b, self.k, out),
             Tonemap::Reinhard => encode_planes::<1>(r, g, b, self.k, out),
