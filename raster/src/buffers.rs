@@ -122,6 +122,9 @@ pub(crate) struct TileWriter<'a, T> {
 // SAFETY: the writer hands out disjoint row segments (see the type docs);
 // T: Send lets the values cross threads.
 unsafe impl<T: Send> Send for TileWriter<'_, T> {}
+// SAFETY: a shared writer only gives out row segments through the
+// unsafe `tile_row`, whose callers keep to one worker per tile, so no two
+// threads reach the same element.
 unsafe impl<T: Send> Sync for TileWriter<'_, T> {}
 
 impl<'a, T> TileWriter<'a, T> {
