@@ -43,6 +43,8 @@ Build it for this machine instead: RUSTFLAGS=\"-C target-cpu=native\" cargo buil
         if max < 7 || max_ext < 0x8000_0001 {
             return false;
         }
+        // SAFETY: as above; leaves 1 and 7 are at most `max` and
+        // 0x8000_0001 at most `max_ext`, checked just before.
         let (l1, l7, ext) = unsafe { (__cpuid(1), __cpuid_count(7, 0), __cpuid(0x8000_0001)) };
         let cpu = bit(l1.ecx, 12) // FMA
             && bit(l1.ecx, 22) // MOVBE

@@ -25,6 +25,8 @@ pub struct EmbreeScene {
 // SAFETY: after rtcCommitScene, Embree allows concurrent rtcIntersect* calls
 // on a scene from any thread; nothing here mutates it afterwards.
 unsafe impl Send for EmbreeScene {}
+// SAFETY: as for Send: shared use is only rtcIntersect* on the committed
+// scene, which Embree allows from many threads at once.
 unsafe impl Sync for EmbreeScene {}
 
 /// Per-pixel results, row-major: triangle id (MISS where nothing is hit),
@@ -54,8 +56,11 @@ fn with_ftz_daz<T>(f: impl FnOnce() -> T) -> T {
     use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
     // SAFETY: reading and writing MXCSR flush modes has no memory effects.
     let old = unsafe { _mm_getcsr() };
+    // SAFETY: only the FTZ and DAZ bits are added to the current control
+    // word; no exception is unmasked, so no instruction starts to trap.
     unsafe { _mm_setcsr(old | 0x8040) };
     let r = f();
+    // SAFETY: puts back the control word this thread had on entry.
     unsafe { _mm_setcsr(old) };
     r
 }

@@ -11,7 +11,7 @@ use crate::setup::RasterTri;
 use crate::target::{Target, TILE};
 
 /// Source triangles per setup/bin chunk.
-pub const CHUNK: usize = 4096;
+pub(crate) const CHUNK: usize = 4096;
 
 /// One chunk's screen triangles and its per-tile index lists.
 #[derive(Default)]

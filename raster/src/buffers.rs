@@ -5,7 +5,7 @@
 //! contiguous tile at a time. Everything after shading is row-major, so an
 //! image-space stage reads a pixel's neighbours as `i ± 1` and `i ± width`
 //! whatever tile they were shaded in. Shading writes these planes per tile
-//! in parallel through [`TileWriter`], each tile its own rectangle.
+//! in parallel through `TileWriter`, each tile its own rectangle.
 
 use crate::target::{Target, TILE};
 use std::marker::PhantomData;
@@ -112,7 +112,7 @@ impl FrameBuffers {
 /// gives a tile its row segments. Soundness rests on one rule, kept by the
 /// shading pass (frame.rs): each tile index is handled by exactly one
 /// worker, and tile rectangles do not overlap.
-pub struct TileWriter<'a, T> {
+pub(crate) struct TileWriter<'a, T> {
     ptr: *mut T,
     width: usize,
     height: usize,
@@ -122,12 +122,15 @@ pub struct TileWriter<'a, T> {
 // SAFETY: the writer hands out disjoint row segments (see the type docs);
 // T: Send lets the values cross threads.
 unsafe impl<T: Send> Send for TileWriter<'_, T> {}
+// SAFETY: a shared writer only gives out row segments through the
+// unsafe `tile_row`, whose callers keep to one worker per tile, so no two
+// threads reach the same element.
 unsafe impl<T: Send> Sync for TileWriter<'_, T> {}
 
 impl<'a, T> TileWriter<'a, T> {
     /// A writer over `plane` (`width × height`, or empty: then `row` gives
     /// empty slices and nothing is written).
-    pub fn new(plane: &'a mut [T], target: &Target) -> TileWriter<'a, T> {
+    pub(crate) fn new(plane: &'a mut [T], target: &Target) -> TileWriter<'a, T> {
         let (width, height) = if plane.is_empty() {
             (0, 0)
         } else {
@@ -142,11 +145,6 @@ impl<'a, T> TileWriter<'a, T> {
         }
     }
 
-    /// Whether the plane is empty (not requested).
-    pub fn is_empty(&self) -> bool {
-        self.width == 0
-    }
-
     /// Asks the cache for row `y` of the tile at `x0` for writing (its lines
     /// arrive while the rows before it are shaded). Row-major planes give a
     /// tile row only TILE × 4 bytes before the next row's page, too short a
@@ -154,7 +152,7 @@ impl<'a, T> TileWriter<'a, T> {
     /// store waited on a line from memory: the shading pass ran ~25 %
     /// slower than into a tile-local buffer (measured).
     #[inline(always)]
-    pub fn prefetch_row(&self, x0: usize, y: usize) {
+    pub(crate) fn prefetch_row(&self, x0: usize, y: usize) {
         if self.width == 0 || y >= self.height {
             return;
         }
@@ -184,7 +182,7 @@ impl<'a, T> TileWriter<'a, T> {
     /// while the returned slice lives (see the type docs).
     #[inline(always)]
     #[allow(clippy::mut_from_ref)] // disjoint rows from a shared writer are its purpose
-    pub unsafe fn tile_row(&self, x0: usize, y: usize) -> &mut [T] {
+    pub(crate) unsafe fn tile_row(&self, x0: usize, y: usize) -> &mut [T] {
         if self.width == 0 {
             return &mut [];
         }

@@ -13,10 +13,10 @@
 //! (and walk it in opposite directions) create bit-identical vertices.
 
 /// A clip-space vertex (x, y, z, w).
-pub type ClipVertex = [f64; 4];
+pub(crate) type ClipVertex = [f64; 4];
 
 /// Most vertices a triangle can have after 5 planes (each adds at most one).
-pub const MAX_CLIPPED: usize = 8;
+pub(crate) const MAX_CLIPPED: usize = 8;
 
 /// A convex polygon of at most `MAX_CLIPPED` vertices.
 #[derive(Clone, Copy)]

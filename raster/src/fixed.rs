@@ -8,13 +8,13 @@
 //! `Target::new` limits images to MAX_DIM pixels, far inside the band.
 
 /// Fractional bits of a snapped coordinate.
-pub const SUBPIXEL_BITS: u32 = 8;
+pub(crate) const SUBPIXEL_BITS: u32 = 8;
 /// One pixel in fixed-point units.
 pub const SUBPIXEL_ONE: i64 = 1 << SUBPIXEL_BITS;
 /// Half a pixel: pixel centres sit at x·256 + 128.
-pub const SUBPIXEL_HALF: i64 = SUBPIXEL_ONE / 2;
+pub(crate) const SUBPIXEL_HALF: i64 = SUBPIXEL_ONE / 2;
 /// Half-width of the guard band in pixels, measured from the image origin.
-pub const GUARD_BAND_PX: f64 = (1u64 << 20) as f64;
+pub(crate) const GUARD_BAND_PX: f64 = (1u64 << 20) as f64;
 
 /// Snaps a screen coordinate (pixels) to fixed point, rounding to nearest
 /// (ties to even: one `roundsd`, where `round`'s ties-away is a libm call).

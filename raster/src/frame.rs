@@ -17,7 +17,7 @@ use crate::scan::rasterize_tile;
 use crate::scene::SceneData;
 use crate::setup::{SetupContext, SetupCounts, TriPlanes};
 use crate::setup_x4::{Vertices4, LANES};
-use crate::shade::{shade_tile, ShadeTargets};
+use crate::shading_pass::{shade_tile, ShadeTargets};
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use rayon::prelude::*;
 use specula_core::f32x8;

@@ -82,7 +82,7 @@ pub trait VertexStage: Debug + Send + Sync {
 /// Bits of triangles `t..t + 4` in a [`VertexStage::front_faces`] mask
 /// (bit k for triangle t + k; 0 past its end).
 #[inline(always)]
-pub fn mask_bits4(mask: &[u64], t: usize) -> u32 {
+pub(crate) fn mask_bits4(mask: &[u64], t: usize) -> u32 {
     let (word, off) = (t / 64, t % 64);
     let lo = mask.get(word).map_or(0, |w| w >> off);
     let hi = match off {
@@ -148,7 +148,7 @@ impl GeometryPass {
 
 /// Checks a pass list against the scene: triangle ranges in bounds, id
 /// ranges disjoint and below the miss id, override materials present.
-pub fn validate_passes(
+pub(crate) fn validate_passes(
     passes: &[GeometryPass],
     triangles: usize,
     materials: usize,
@@ -207,7 +207,7 @@ struct IdRange {
 }
 
 impl IdMap {
-    /// From passes that [`validate_passes`] accepted.
+    /// From passes that `validate_passes` accepted.
     pub fn new(passes: &[GeometryPass]) -> IdMap {
         let ranges: Vec<IdRange> = passes
             .iter()
@@ -224,7 +224,7 @@ impl IdMap {
     }
 
     /// Ids are the scene's triangle indices (one pass, no override).
-    pub fn is_identity(&self) -> bool {
+    pub(crate) fn is_identity(&self) -> bool {
         self.identity
     }
 

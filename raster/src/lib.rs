@@ -1,3 +1,4 @@
+#![warn(unreachable_pub)]
 //! specula-raster: the hand-written rasterizer and shading pass.
 //!
 //! A frame is a list of passes (`frame`): the scene's geometry passes
@@ -7,38 +8,40 @@
 //! `setup_x4` does 4 triangles at once, bit-identical), bin
 //! screen triangles into 64×64 tiles (`bin`) and scan-convert each tile into
 //! the one visibility buffer (`scan`, `target`); the shading pass rebuilds
-//! attributes at pixel centres (`resolve`) and runs each material's surface
+//! attributes at pixel centres (`resolve`, into `fragment`'s types) and runs each material's surface
 //! shader (`shader`: `lit` for the physically based models, `unlit`) 8
-//! pixels at a time (`shade`) into row-major frame buffers (`buffers`:
+//! pixels at a time (`shading_pass`) into row-major frame buffers (`buffers`:
 //! colour, depth, normal, id); `texture` is the mip-mapped texture
 //! sampler shaders read (base-colour maps, tonal art maps), `maps` fills a
-//! material's per-pixel parameters from it; `post` runs the post stages (supersampling
-//! resolve, exposure, tone map, encode, and any custom image-space stage).
+//! material's per-pixel parameters from it; `post` runs the post stages (downsampling the
+//! supersamples, exposure, tone map, encode, and any custom image-space stage).
 
-pub mod bin;
+mod bin;
 pub mod buffers;
 pub mod camera;
 pub mod clip;
-pub mod fixed;
+mod fixed;
+mod fragment;
 pub mod frame;
 pub mod geometry;
-pub mod lit;
+mod lit;
 pub mod maps;
-pub mod occlusion;
+mod occlusion;
 pub mod post;
 pub mod resolve;
-pub mod scan;
+mod scan;
 pub mod scene;
 pub mod setup;
-pub mod setup_x4;
-pub mod shade;
-pub mod shader;
+mod setup_x4;
+mod shader;
+mod shading_pass;
 pub mod target;
 pub mod texture;
-pub mod unlit;
+mod unlit;
 
 pub use buffers::{BufferSet, FrameBuffers, Planes3};
 pub use camera::{Camera, View};
+pub use fragment::{Fragment, Surface};
 pub use frame::{
     render, render_into, render_ldr, render_ldr_into, render_with, shade, shade_into, visibility,
     visibility_into, Frame, FrameStats, PassTimes, ShadePath, Visibility,
@@ -49,3 +52,17 @@ pub use scene::SceneData;
 pub use shader::{Material, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};
 pub use unlit::Unlit;
+
+/// The fixed-point setup, binning and scan conversion, reached past the
+/// frame's pass list. Public only so specula's fuzz entry points and this
+/// crate's coverage and occlusion tests can drive each step on its own;
+/// not part of the renderer's API.
+#[doc(hidden)]
+pub mod fuzzing {
+    pub use crate::bin::{bin_chunk, BinnedChunk};
+    pub use crate::fixed::{pixel_centre, snap, SUBPIXEL_ONE};
+    pub use crate::occlusion::DepthBounds;
+    pub use crate::scan::{covered_groups, rasterize_tile, scan_triangle};
+    pub use crate::setup::{RasterTri, RectCoverage, SetupContext, SetupCounts, TriPlanes};
+    pub use crate::setup_x4::LANES;
+}

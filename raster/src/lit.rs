@@ -8,8 +8,8 @@
 //! direction, polygon lights through the model's integral over the polygon,
 //! the uniform environment through the directional albedo.
 
+use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
-use crate::resolve::Fragment;
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
 use specula_core::light::{AreaMethod, Light, PolygonLocal, MAX_POLYGON_VERTICES};
 use specula_core::ltc::reference::polygon_reference_lanes;

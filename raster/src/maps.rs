@@ -4,7 +4,7 @@
 //! constants, broadcast ([`specula_core::Brdf::params`]), then each map
 //! the material has overwrites its slot lane by lane ([`ParamMaps::fill`]).
 //! A material without maps skips the second step, and the shading pass
-//! then hands it whole runs of packets at once (shade.rs).
+//! then hands it whole runs of packets at once (shading_pass.rs).
 
 use crate::shader::ShadeInput;
 use crate::texture::{Sampler, Texture};
@@ -53,7 +53,7 @@ impl ParamMaps {
     /// scene files write it; `None` when every map has its slot. Checked
     /// once when a material is built, so [`ParamMaps::fill`] never drops
     /// a map.
-    pub fn unsupported<P: LaneParams<f32>>(&self, mut params: P) -> Option<&'static str> {
+    pub(crate) fn unsupported<P: LaneParams<f32>>(&self, mut params: P) -> Option<&'static str> {
         if self.base_color.is_some() && params.base_color_mut().is_none() {
             return Some("base_color_texture");
         }

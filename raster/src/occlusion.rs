@@ -28,13 +28,13 @@ use wide::f64x4;
 
 /// Block edge in pixels; a divisor of `TILE`. 4 skips 5k more of the
 /// benchmark's back faces than 8 (2.4 M instructions a frame less).
-pub const BLOCK: usize = 4;
+pub(crate) const BLOCK: usize = 4;
 const PER_TILE: usize = TILE / BLOCK;
 
 /// How far (pixels) a covered pixel's centre may lie outside the box of
 /// the projected vertices: the snapping's 1/512, and room for the
 /// rounding of a clipped piece's vertices (far below it).
-pub const PIXEL_MARGIN: f64 = 1.0 / 64.0;
+pub(crate) const PIXEL_MARGIN: f64 = 1.0 / 64.0;
 /// Covered pixel x satisfies min − `LO_OFFSET` ≤ x ≤ max − `HI_OFFSET`
 /// (x + ½ within the box grown by `PIXEL_MARGIN`).
 const LO_OFFSET: f64 = 0.5 + PIXEL_MARGIN;
@@ -304,10 +304,10 @@ impl DepthBounds {
 }
 
 /// The least depth of each `BLOCK`² block of one tile, row-major.
-pub type TileMinima = [f32; PER_TILE * PER_TILE];
+pub(crate) type TileMinima = [f32; PER_TILE * PER_TILE];
 
 /// [`TileMinima`] of a tile's depth (`TILE_PIXELS` entries, row-major).
-pub fn tile_minima(tile: &[f32]) -> TileMinima {
+pub(crate) fn tile_minima(tile: &[f32]) -> TileMinima {
     let mut out = [0.0; PER_TILE * PER_TILE];
     for by in 0..PER_TILE {
         let mut acc = [f32::INFINITY; TILE];

@@ -3,47 +3,13 @@
 
 use crate::buffers::prefetch;
 use crate::camera::View;
+use crate::fragment::{Fragment, Surface};
 use crate::geometry::IdMap;
 use crate::scene::SceneData;
 use crate::setup::TriPlanes;
 use crate::target::MISS;
 use specula_core::{Mask, Real, ShadingFrame, V3};
 use wide::u32x8;
-
-/// Per-lane surface data the shading pass needs.
-#[derive(Clone, Copy, Debug)]
-pub struct Fragment<R: Real> {
-    /// World position.
-    pub p: V3<R>,
-    /// Unit shading normal (flipped toward the viewer on back faces of
-    /// double-sided materials).
-    pub n: V3<R>,
-    /// Unit direction toward the eye.
-    pub wo: V3<R>,
-    /// View depth w (distance along the camera's forward axis).
-    pub w: R,
-    /// Perspective-correct barycentrics of vertices 1 and 2 (b0 = 1 − b1 − b2).
-    pub b1: R,
-    pub b2: R,
-}
-
-/// Texture-space attributes of a fragment, for materials that sample
-/// textures (see [`ResolveContext::surface`]).
-#[derive(Clone, Copy, Debug)]
-pub struct Surface<R: Real> {
-    pub uv: [R; 2],
-    /// [∂u/∂x, ∂v/∂x] and [∂u/∂y, ∂v/∂y] per pixel: what mip selection needs.
-    pub duv_dx: [R; 2],
-    pub duv_dy: [R; 2],
-    /// Unit tangent (direction of increasing u), orthogonal to the shading
-    /// normal; zero where the mesh has no uvs.
-    pub tangent: V3<R>,
-    /// ±1: bitangent = sign · n × tangent (mirrored uv layouts give −1).
-    pub bitangent_sign: R,
-    /// The shading frame of the uv tangent where the mesh has one, any
-    /// frame around the normal elsewhere.
-    pub frame: ShadingFrame<R>,
-}
 
 /// Everything resolve and shading read, shared by all tiles.
 pub struct ResolveContext<'a> {
@@ -125,7 +91,7 @@ impl PacketTris {
     /// would write what is already here (with the same context). Most
     /// packets of a large triangle follow one of the same triangle.
     #[inline(always)]
-    pub fn is_one_triangle_of(&self, ids: &[u32]) -> bool {
+    pub(crate) fn is_one_triangle_of(&self, ids: &[u32]) -> bool {
         if self.n != 1 || self.covered != 0xFF {
             return false;
         }

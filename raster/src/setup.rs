@@ -55,7 +55,7 @@ pub enum RectCoverage {
 /// values are evaluated in i32. Relative to a pixel centre inside the
 /// vertices' box, |A|, |B| ≤ (SMALL_PX + 1)·256 < 2¹⁴·¹ and offsets likewise,
 /// so E = A·dx + B·dy + E(origin) stays below 2³¹ (3 terms of < 2²⁹·²).
-pub const SMALL_PX: i64 = 64;
+pub(crate) const SMALL_PX: i64 = 64;
 
 /// i32 edge functions relative to the bounding box's first pixel centre:
 /// E_k(x, y) = e0[k] + a[k]·(x − x0) + b[k]·(y − y0), x, y in pixels
@@ -105,7 +105,7 @@ pub const MAX_CLIP_COORD: f64 = (1u64 << 50) as f64;
 /// Largest magnitude a triangle's planes (`TriPlanes`) may reach at any
 /// pixel of the image; beyond it the triangle is skipped as degenerate
 /// (see `SetupContext::setup`).
-pub const MAX_PLANE_VALUE: f64 = 1e30;
+pub(crate) const MAX_PLANE_VALUE: f64 = 1e30;
 
 /// What happened to triangles in setup; sums over chunks.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -55,9 +55,9 @@ mod trace {
     /// Scalar, outside, culled, fast drawn, fast no samples, fast
     /// unbounded; and apart, fast lanes whose edges were scalar.
     #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-    pub struct Paths(pub [u64; 7]);
-    thread_local!(pub static PATHS: Cell<Paths> = Cell::new(Paths::default()));
-    pub fn hit(i: usize) {
+    pub(super) struct Paths(pub(super) [u64; 7]);
+    thread_local!(pub(super) static PATHS: Cell<Paths> = Cell::new(Paths::default()));
+    pub(super) fn hit(i: usize) {
         PATHS.with(|p| {
             let mut v = p.get();
             v.0[i] += 1;
@@ -218,7 +218,7 @@ impl SetupContext {
     }
 
     /// [`SetupContext::setup_x4_occluded`] of vertices already in
-    /// structure-of-arrays form ([`Vertices4::gather`] reads them straight
+    /// structure-of-arrays form (`Vertices4::gather` reads them straight
     /// from a clip-position array, as the frame does).
     #[allow(clippy::too_many_arguments)]
     pub fn setup_x4_vertices(

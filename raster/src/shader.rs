@@ -16,7 +16,7 @@
 //! [`specula_core::Model`] under the scene's lights) and
 //! [`crate::unlit::Unlit`] (a constant radiance).
 
-use crate::resolve::{Fragment, Surface};
+use crate::fragment::{Fragment, Surface};
 use specula_core::light::Light;
 use specula_core::{f32x8, Real, Rgb, ShadingFrame};
 use std::any::Any;
@@ -111,7 +111,7 @@ pub trait SurfaceShader: Debug + Send + Sync + 'static {
     fn shade_x1(&self, input: &ShadeInput<f32>, env: &ShadeEnv) -> Rgb<f32>;
     /// [`SurfaceShader::shade_x8`] of several packets in one call (no
     /// surface; `out[i]` for `frags[i]` under `lanes[i]`): see
-    /// [`ShadeLanes::shade_batch_with`].
+    /// `ShadeLanes::shade_batch_with`.
     fn shade_x8_batch(
         &self,
         frags: &[Fragment<f32x8>],
@@ -155,7 +155,7 @@ impl<T: PacketShader> SurfaceShader for T {
 
 /// The lane types the shading pass runs: picks the matching entry of a
 /// `dyn SurfaceShader`.
-pub trait ShadeLanes: Real {
+pub(crate) trait ShadeLanes: Real {
     fn shade_with(
         shader: &dyn SurfaceShader,
         input: &ShadeInput<Self>,

@@ -83,7 +83,7 @@ pub enum Encoding {
 
 /// Largest number of f32 values all levels together may hold: an f32 lane
 /// indexes exactly up to 2²⁴ (the gather's contract).
-pub const MAX_VALUES: usize = 1 << 24;
+pub(crate) const MAX_VALUES: usize = 1 << 24;
 
 /// Where a level lives in [`Texture`]'s data.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -110,7 +110,7 @@ pub struct Texture {
 }
 
 /// The size of the level below a w × h one.
-pub fn next_level_size(w: usize, h: usize) -> (usize, usize) {
+pub(crate) fn next_level_size(w: usize, h: usize) -> (usize, usize) {
     ((w / 2).max(1), (h / 2).max(1))
 }
 
@@ -270,7 +270,7 @@ impl Texture {
 
     /// A texture whose mip levels are given, level 0 first (e.g. a tonal art
     /// map, each level drawn at its own size): each (width, height, texels)
-    /// as in [`Texture::from_f32`], sizes halving as [`next_level_size`].
+    /// as in [`Texture::from_f32`], sizes halving as `next_level_size`.
     /// The chain may stop before 1 × 1; lookups clamp λ to the levels given.
     pub fn from_levels(
         channels: usize,

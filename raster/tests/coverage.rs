@@ -5,8 +5,8 @@
 use glam::{Mat3, Vec3};
 use rand::{Rng, SeedableRng};
 use specula_raster::clip::GuardBand;
-use specula_raster::fixed::{pixel_centre, SUBPIXEL_ONE};
-use specula_raster::scan::covered_groups;
+use specula_raster::fuzzing::covered_groups;
+use specula_raster::fuzzing::{pixel_centre, SUBPIXEL_ONE};
 use specula_raster::setup::{RasterTri, SetupContext, SetupCounts};
 use specula_raster::Cull;
 
@@ -80,8 +80,8 @@ fn snapped(v: [f32; 4]) -> [i64; 2] {
     let sx = (x / w + 1.0) * 0.5 * W as f64;
     let sy = (1.0 - y / w) * 0.5 * H as f64;
     [
-        specula_raster::fixed::snap(sx),
-        specula_raster::fixed::snap(sy),
+        specula_raster::fuzzing::snap(sx),
+        specula_raster::fuzzing::snap(sy),
     ]
 }
 

@@ -9,8 +9,8 @@
 
 use rand::{Rng, SeedableRng};
 use specula_raster::clip::GuardBand;
-use specula_raster::occlusion::DepthBounds;
-use specula_raster::scan::scan_triangle;
+use specula_raster::fuzzing::scan_triangle;
+use specula_raster::fuzzing::DepthBounds;
 use specula_raster::setup::{SetupContext, SetupCounts};
 use specula_raster::target::{Target, TILE_PIXELS};
 use specula_raster::{Cull, MISS};

@@ -1,6 +1,6 @@
 //! The 8-bit encode at the end of the post list: exposure, tone curve and
 //! sRGB code per pixel, eight pixels at a time ([`LdrEncoding`], which the
-//! shading pass runs on its rows, and the loop the fused resolve shares),
+//! shading pass runs on its rows, and the loop the fused downsample shares),
 //! and the encode of already tone-mapped planes ([`encode_ldr`]).
 
 use super::srgb::{SrgbEncoder, SrgbEncoderX8};
@@ -11,7 +11,7 @@ use specula_core::f32x8;
 use wide::i32x8;
 
 /// [`encode_pixels`] of one sample a pixel from the slices `r`, `g`, `b`
-/// (n = 1: the resolve's × (1/n) is × 1).
+/// (n = 1: the downsample's × (1/n) is × 1).
 #[inline(always)]
 pub(super) fn encode_planes<const CURVE: u8>(
     r: &[f32],
@@ -28,7 +28,7 @@ pub(super) fn encode_planes<const CURVE: u8>(
 
 /// Sample sum × (1/n) × k, tone curve and sRGB code of a run of pixels
 /// into `out` (3 bytes a pixel): `sums8(x0)` gives pixels x0..x0 + 8 per
-/// channel, `sum1(x)` pixel x. The resolve's loop and the shading pass's
+/// channel, `sum1(x)` pixel x. The downsample's loop and the shading pass's
 /// ([`LdrEncoding::encode_row`]), so both give the same bytes.
 #[inline(always)]
 pub(super) fn encode_pixels<const CURVE: u8>(
@@ -63,7 +63,7 @@ pub(super) fn encode_pixels<const CURVE: u8>(
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LdrEncoding {
     tonemap: Tonemap,
-    /// 2^exposure, as the resolve computes it (once here, not per row).
+    /// 2^exposure, as the downsample computes it (once here, not per row).
     k: f32,
 }
 
@@ -77,8 +77,8 @@ impl LdrEncoding {
     }
 
     /// Codes of the pixels with linear colours `r[i]`, `g[i]`, `b[i]` into
-    /// `out[3i..3i + 3]`: the bytes [`resolve_ldr`](super::resolve_ldr) gives for them.
-    pub fn encode_row(&self, r: &[f32], g: &[f32], b: &[f32], out: &mut [u8]) {
+    /// `out[3i..3i + 3]`: the bytes [`downsample_ldr`](super::downsample_ldr) gives for them.
+    pub(crate) fn encode_row(&self, r: &[f32], g: &[f32], b: &[f32], out: &mut [u8]) {
         match self.tonemap {
             Tonemap::Clamp => encode_planes::<0>(r, g, b, self.k, out),
             Tonemap::Reinhard => encode_planes::<1>(r, g, b, self.k, out),
@@ -166,7 +166,7 @@ pub fn encode_ldr(rgb: &Planes3) -> Vec<u8> {
     out
 }
 
-/// [`encode_ldr`] into `out` (see [`resolve_ldr_into`](super::resolve_ldr_into)).
+/// [`encode_ldr`] into `out` (see [`downsample_ldr_into`](super::downsample_ldr_into)).
 pub fn encode_ldr_into(rgb: &Planes3, out: &mut Vec<u8>) {
     let enc = SrgbEncoder::new();
     let enc8 = SrgbEncoderX8::new();

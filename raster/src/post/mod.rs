@@ -1,23 +1,23 @@
 //! After shading: a list of named post stages ([`Post`]) over the frame
-//! buffers: supersampling resolve (box filter, in linear HDR), exposure,
+//! buffers: downsampling the supersamples (box filter, in linear HDR), exposure,
 //! tone mapping and the one sRGB encode at the very end, plus any custom
 //! image-space stage ([`PostStage`]) where the list puts it. The standard
-//! list runs fused in one pass over the samples ([`resolve_ldr`]).
+//! list runs fused in one pass over the samples ([`downsample_ldr`]).
 //!
 //! This file holds the stage list and how it runs ([`Post`], [`Stage`],
 //! [`PostStage`], [`HdrImage`]); the tone curves are in `tonemap`, the sRGB
 //! transfer function and its 8-bit encoders in `srgb`, the fused 8-bit
 //! encode ([`LdrEncoding`], [`encode_ldr`]) in `encode` and the
-//! supersampling resolve ([`downsample`], [`resolve_ldr`],
-//! [`resolve_hdr_into`]) in `resolve`.
+//! downsampling of the supersamples ([`downsample`], [`downsample_ldr`],
+//! [`downsample_hdr_into`]) in `downsample`.
 
+mod downsample;
 mod encode;
-mod resolve;
 mod srgb;
 mod tonemap;
 
+pub use downsample::{downsample, downsample_hdr_into, downsample_ldr, downsample_ldr_into};
 pub use encode::{encode_ldr, encode_ldr_into, LdrEncoding};
-pub use resolve::{downsample, resolve_hdr_into, resolve_ldr, resolve_ldr_into};
 pub use srgb::{srgb_curve, srgb_curve_inverse, srgb_encode, SrgbEncoder, SrgbEncoderX8};
 pub use tonemap::Tonemap;
 
@@ -41,7 +41,7 @@ impl HdrImage {
 
 /// An image-space stage from outside this crate (npr's Sobel outlines,
 /// posterization, ...). It runs where the post list puts it: on the
-/// supersampled image before [`Stage::Resolve`], on the output image after
+/// supersampled image before [`Stage::Downsample`], on the output image after
 /// it (`img.width` tells), in linear HDR before [`Stage::Tonemap`] and in
 /// tone-mapped [0, 1] values after it.
 ///
@@ -66,7 +66,7 @@ pub trait PostStage: std::fmt::Debug + Send + Sync {
 #[derive(Debug)]
 pub enum Stage {
     /// Box-filters ssaa × ssaa samples into one pixel (linear HDR).
-    Resolve {
+    Downsample {
         ssaa: u32,
     },
     /// Multiplies radiance by 2^stops.
@@ -84,7 +84,7 @@ pub enum Stage {
 impl Clone for Stage {
     fn clone(&self) -> Stage {
         match self {
-            Stage::Resolve { ssaa } => Stage::Resolve { ssaa: *ssaa },
+            Stage::Downsample { ssaa } => Stage::Downsample { ssaa: *ssaa },
             Stage::Exposure { stops } => Stage::Exposure { stops: *stops },
             Stage::Tonemap(t) => Stage::Tonemap(*t),
             Stage::Encode => Stage::Encode,
@@ -96,7 +96,7 @@ impl Clone for Stage {
 impl Stage {
     pub fn name(&self) -> &str {
         match self {
-            Stage::Resolve { .. } => "resolve",
+            Stage::Downsample { .. } => "resolve", // the name messages use for this stage
             Stage::Exposure { .. } => "exposure",
             Stage::Tonemap(_) => "tonemap",
             Stage::Encode => "encode",
@@ -120,18 +120,18 @@ pub struct PostOutput {
 #[derive(Clone, Debug)]
 pub struct Post {
     pub stages: Vec<Stage>,
-    /// Run [`resolve_ldr`] (one pass over the samples, no HDR image in
-    /// between) when the list is exactly resolve, exposure, tone map,
+    /// Run [`downsample_ldr`] (one pass over the samples, no HDR image in
+    /// between) when the list is exactly downsample, exposure, tone map,
     /// encode. Off only to measure what fusing is worth.
     pub fuse: bool,
 }
 
 impl Post {
-    /// The default list: resolve, exposure, tone map, encode.
+    /// The default list: downsample, exposure, tone map, encode.
     pub fn standard(ssaa: u32, stops: f32, tonemap: Tonemap) -> Post {
         Post {
             stages: vec![
-                Stage::Resolve { ssaa },
+                Stage::Downsample { ssaa },
                 Stage::Exposure { stops },
                 Stage::Tonemap(tonemap),
                 Stage::Encode,
@@ -160,7 +160,7 @@ impl Post {
                 Stage::Encode if i + 1 != n => {
                     return Err("post: \"encode\" must be the last stage".into())
                 }
-                Stage::Resolve { ssaa } => {
+                Stage::Downsample { ssaa } => {
                     resolves += 1;
                     if *ssaa == 0 || !width.is_multiple_of(*ssaa) || !height.is_multiple_of(*ssaa) {
                         return Err(format!(
@@ -180,7 +180,7 @@ impl Post {
     /// The fused form's parameters, if the list has that shape.
     fn fused_form(&self) -> Option<(u32, f32, Tonemap)> {
         match self.stages.as_slice() {
-            [Stage::Resolve { ssaa }, Stage::Exposure { stops }, Stage::Tonemap(t), Stage::Encode]
+            [Stage::Downsample { ssaa }, Stage::Exposure { stops }, Stage::Tonemap(t), Stage::Encode]
                 if self.fuse =>
             {
                 Some((*ssaa, *stops, *t))
@@ -190,7 +190,7 @@ impl Post {
     }
 
     /// The list as an encoding the shading pass can run itself: the fused
-    /// standard list at ssaa 1 (no supersampling resolve, no custom stage).
+    /// standard list at ssaa 1 (no downsampling, no custom stage).
     pub fn ldr_in_shading(&self) -> Option<LdrEncoding> {
         match self.fused_form()? {
             (1, stops, tonemap) => Some(LdrEncoding::new(tonemap, stops)),
@@ -198,11 +198,11 @@ impl Post {
         }
     }
 
-    /// The fused head's parameters when the list starts resolve, exposure,
+    /// The fused head's parameters when the list starts downsample, exposure,
     /// tone map (custom stages and the encode after them).
     fn fused_head(&self) -> Option<(u32, f32, Tonemap)> {
         match self.stages.as_slice() {
-            [Stage::Resolve { ssaa }, Stage::Exposure { stops }, Stage::Tonemap(t), ..]
+            [Stage::Downsample { ssaa }, Stage::Exposure { stops }, Stage::Tonemap(t), ..]
                 if self.fuse =>
             {
                 Some((*ssaa, *stops, *t))
@@ -225,9 +225,9 @@ impl Post {
     /// page-faults` over `--repeat 10`).
     ///
     /// With `fuse` set, the standard list runs as one pass over the samples
-    /// ([`resolve_ldr`]), and a list that starts with resolve, exposure and
+    /// ([`downsample_ldr`]), and a list that starts with downsample, exposure and
     /// tone map and then has custom stages runs that head as one pass into
-    /// the HDR image ([`resolve_hdr_into`]); both give the bytes of the
+    /// the HDR image ([`downsample_hdr_into`]); both give the bytes of the
     /// stage-by-stage list (tested).
     pub fn run_reusing(
         &mut self,
@@ -237,7 +237,7 @@ impl Post {
         self.validate(frame.width, frame.height)?;
         let mut ldr_buf = recycled.ldr.unwrap_or_default();
         if let Some((ssaa, stops, tonemap)) = self.fused_form() {
-            resolve_ldr_into(frame, ssaa, tonemap, stops, &mut ldr_buf);
+            downsample_ldr_into(frame, ssaa, tonemap, stops, &mut ldr_buf);
             return Ok(PostOutput {
                 width: frame.width / ssaa,
                 height: frame.height / ssaa,
@@ -248,7 +248,7 @@ impl Post {
         let mut rgb = recycled.hdr.map(|h| h.rgb).unwrap_or_default();
         let (mut img, rest) = match self.fused_head() {
             Some((ssaa, stops, tonemap)) => {
-                resolve_hdr_into(frame, ssaa, tonemap, stops, &mut rgb);
+                downsample_hdr_into(frame, ssaa, tonemap, stops, &mut rgb);
                 let img = HdrImage {
                     width: frame.width / ssaa,
                     height: frame.height / ssaa,
@@ -269,8 +269,10 @@ impl Post {
         let mut ldr = None;
         for s in rest {
             match s {
-                Stage::Resolve { ssaa: 1 } => {}
-                Stage::Resolve { ssaa } => img = downsample(&img.rgb, img.width, img.height, *ssaa),
+                Stage::Downsample { ssaa: 1 } => {}
+                Stage::Downsample { ssaa } => {
+                    img = downsample(&img.rgb, img.width, img.height, *ssaa)
+                }
                 Stage::Exposure { stops } => {
                     let k = stops.exp2();
                     for p in [&mut img.rgb.r, &mut img.rgb.g, &mut img.rgb.b] {

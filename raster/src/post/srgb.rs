@@ -163,7 +163,7 @@ impl SrgbEncoderX8 {
 
     /// The codes 0..=255 as i32 lanes.
     #[inline(always)]
-    pub fn encode_i32(&self, v: f32x8) -> i32x8 {
+    pub(crate) fn encode_i32(&self, v: f32x8) -> i32x8 {
         // NaN → 0 like the scalar encoder (Real::clamp maps NaN to 0).
         let v = Real::clamp(v, f32x8::ZERO, f32x8::ONE);
         let bits: i32x8 = bytemuck::cast(v);

@@ -34,7 +34,7 @@ impl Tonemap {
     /// order (no fused multiply-adds), so every lane equals the scalar
     /// result bit for bit (a test checks it).
     #[inline(always)]
-    pub fn apply_x8(self, x: f32x8) -> f32x8 {
+    pub(crate) fn apply_x8(self, x: f32x8) -> f32x8 {
         let c = |v: f32| f32x8::splat(v);
         let x = Real::select(x.gt(f32x8::ZERO), Real::min(x, c(1e18)), f32x8::ZERO);
         match self {

@@ -1,7 +1,7 @@
-//! The supersampling resolve: a box filter over each output pixel's
+//! Downsampling the supersamples: a box filter over each output pixel's
 //! ssaa² samples, on its own into an HDR image ([`downsample`]) or fused
-//! with exposure and tone mapping ([`resolve_hdr_into`]) and with the sRGB
-//! encode as well ([`resolve_ldr`]), in one pass over the samples.
+//! with exposure and tone mapping ([`downsample_hdr_into`]) and with the sRGB
+//! encode as well ([`downsample_ldr`]), in one pass over the samples.
 
 use super::encode::{encode_pixels, encode_planes, load8, size_output};
 use super::tonemap::{curve_of, Tonemap};
@@ -25,7 +25,7 @@ fn box_sum(color: &Planes3, width: usize, ssaa: usize, x: usize, y: usize) -> [f
     s
 }
 
-/// The supersampling resolve: each output pixel the mean of its ssaa²
+/// The downsample: each output pixel the mean of its ssaa²
 /// samples of `color` (`width × height` samples).
 pub fn downsample(color: &Planes3, width: u32, height: u32, ssaa: u32) -> HdrImage {
     let (w, h) = (width / ssaa, height / ssaa);
@@ -58,13 +58,13 @@ pub fn downsample(color: &Planes3, width: u32, height: u32, ssaa: u32) -> HdrIma
     }
 }
 
-/// Supersampling resolve, exposure (in stops) and tone mapping in one pass
+/// Downsample, exposure (in stops) and tone mapping in one pass
 /// over the samples, into `out` (planes of (width / ssaa) × (height /
 /// ssaa), their allocations reused): the values the three stages give one
 /// after the other (the same products in the same order), without the
 /// copies and passes in between. The head of a post list with custom
 /// stages.
-pub fn resolve_hdr_into(
+pub fn downsample_hdr_into(
     frame: &FrameBuffers,
     ssaa: u32,
     tonemap: Tonemap,
@@ -72,13 +72,13 @@ pub fn resolve_hdr_into(
     out: &mut Planes3,
 ) {
     match tonemap {
-        Tonemap::Clamp => resolve_hdr_with::<0>(frame, ssaa, exposure, out),
-        Tonemap::Reinhard => resolve_hdr_with::<1>(frame, ssaa, exposure, out),
-        Tonemap::Aces => resolve_hdr_with::<2>(frame, ssaa, exposure, out),
+        Tonemap::Clamp => downsample_hdr_with::<0>(frame, ssaa, exposure, out),
+        Tonemap::Reinhard => downsample_hdr_with::<1>(frame, ssaa, exposure, out),
+        Tonemap::Aces => downsample_hdr_with::<2>(frame, ssaa, exposure, out),
     }
 }
 
-fn resolve_hdr_with<const CURVE: u8>(
+fn downsample_hdr_with<const CURVE: u8>(
     frame: &FrameBuffers,
     ssaa: u32,
     exposure: f32,
@@ -120,20 +120,20 @@ fn resolve_hdr_with<const CURVE: u8>(
         });
 }
 
-/// Supersampling resolve, exposure (in stops), tone mapping and sRGB
+/// Downsample, exposure (in stops), tone mapping and sRGB
 /// encoding in one pass over the samples: 8-bit RGB, row-major, of
 /// (width / ssaa) × (height / ssaa). Equal to the unfused stage list (a
 /// test checks it) without the HDR images in between.
-pub fn resolve_ldr(frame: &FrameBuffers, ssaa: u32, tonemap: Tonemap, exposure: f32) -> Vec<u8> {
+pub fn downsample_ldr(frame: &FrameBuffers, ssaa: u32, tonemap: Tonemap, exposure: f32) -> Vec<u8> {
     let mut out = Vec::new();
-    resolve_ldr_into(frame, ssaa, tonemap, exposure, &mut out);
+    downsample_ldr_into(frame, ssaa, tonemap, exposure, &mut out);
     out
 }
 
-/// [`resolve_ldr`] into `out`, resized to the output (its earlier bytes
+/// [`downsample_ldr`] into `out`, resized to the output (its earlier bytes
 /// are all overwritten, so an allocation from an earlier frame is reused
 /// as it is).
-pub fn resolve_ldr_into(
+pub fn downsample_ldr_into(
     frame: &FrameBuffers,
     ssaa: u32,
     tonemap: Tonemap,
@@ -142,13 +142,13 @@ pub fn resolve_ldr_into(
 ) {
     // One monomorphized loop per curve: no match per pixel.
     match tonemap {
-        Tonemap::Clamp => resolve_ldr_with::<0>(frame, ssaa, exposure, out),
-        Tonemap::Reinhard => resolve_ldr_with::<1>(frame, ssaa, exposure, out),
-        Tonemap::Aces => resolve_ldr_with::<2>(frame, ssaa, exposure, out),
+        Tonemap::Clamp => downsample_ldr_with::<0>(frame, ssaa, exposure, out),
+        Tonemap::Reinhard => downsample_ldr_with::<1>(frame, ssaa, exposure, out),
+        Tonemap::Aces => downsample_ldr_with::<2>(frame, ssaa, exposure, out),
     }
 }
 
-fn resolve_ldr_with<const CURVE: u8>(
+fn downsample_ldr_with<const CURVE: u8>(
     frame: &FrameBuffers,
     ssaa: u32,
     exposure: f32,

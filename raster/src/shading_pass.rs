@@ -3,8 +3,9 @@
 //! results go to the row-major frame buffers (buffers.rs).
 
 use crate::buffers::TileWriter;
+use crate::fragment::Fragment;
 use crate::post::LdrEncoding;
-use crate::resolve::{Fragment, PacketTris, ResolveContext};
+use crate::resolve::{PacketTris, ResolveContext};
 use crate::scene::SceneData;
 use crate::shader::{ShadeEnv, ShadeInput, ShadeLanes};
 use crate::target::{Target, TILE};
@@ -13,7 +14,7 @@ use std::ops::Range;
 
 /// The frame buffers of one frame, open for tile-parallel writes. Planes
 /// that were not requested are empty writers and get nothing.
-pub struct ShadeTargets<'a> {
+pub(crate) struct ShadeTargets<'a> {
     pub color: [TileWriter<'a, f32>; 3],
     pub depth: TileWriter<'a, f32>,
     pub normal: [TileWriter<'a, f32>; 3],
@@ -135,7 +136,7 @@ impl<R: ShadeLanes> Batch<R> {
 ///
 /// # Safety
 /// The caller hands tile `t` to this call alone (see [`TileWriter`]).
-pub unsafe fn shade_tile<R: ShadeLanes>(
+pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
     ctx: &ResolveContext,
     target: &Target,
     t: usize,
