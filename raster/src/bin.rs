@@ -56,8 +56,8 @@ pub fn bin_chunk(target: &Target, tris: Vec<RasterTri>) -> BinnedChunk {
 
 impl BinnedChunk {
     /// (Re)builds the per-tile lists of `self.tris`, reusing the vectors'
-    /// allocations: a frame drawn after frame keeps its chunks, and fresh
-    /// ones cost ~1,500 page faults a 1080p frame (`perf stat`).
+    /// allocations: a frame drawn after frame keeps its chunks, where
+    /// fresh ones would cost page faults every frame.
     pub fn bin(&mut self, target: &Target) {
         let BinnedChunk {
             tris,

@@ -149,8 +149,8 @@ impl<'a, T> TileWriter<'a, T> {
     /// arrive while the rows before it are shaded). Row-major planes give a
     /// tile row only TILE × 4 bytes before the next row's page, too short a
     /// run for the hardware prefetcher, and without this every packet's
-    /// store waited on a line from memory: the shading pass ran ~25 %
-    /// slower than into a tile-local buffer (measured).
+    /// store waited on a line from memory, and the shading pass ran
+    /// markedly slower than into a tile-local buffer.
     #[inline(always)]
     pub(crate) fn prefetch_row(&self, x0: usize, y: usize) {
         if self.width == 0 || y >= self.height {

@@ -285,7 +285,7 @@ fn geometry_pass(
             }
             // Binned in the same sweep, while its triangles are in cache:
             // a parallel pass of its own cost a wake-up of the other
-            // workers (about 0.5 ms a frame on 2 cores; `--stats`).
+            // workers.
             let tb = Instant::now();
             chunk.bin(target);
             (counts, ms_since(tb))

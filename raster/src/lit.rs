@@ -137,8 +137,8 @@ fn add_delta_light<B: Brdf, R: Real>(
         } => {
             let to_light = V3::from_f32(*position) - frag.p;
             let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
-            // rsqrt + Newton: √ then ÷ measured 4 % slower a frame (two
-            // long-latency steps in a row on the chain).
+            // rsqrt + Newton: √ then ÷ was slower (two long-latency steps
+            // in a row on the chain; docs/PERFORMANCE.md).
             let inv_d = d2.rsqrt();
             // The light loop is bound by its dependency chains (it is not
             // short of multipliers): the unnormalized vector goes to the

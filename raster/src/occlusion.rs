@@ -26,8 +26,8 @@ use crate::target::{Target, TILE, TILE_PIXELS};
 use rayon::prelude::*;
 use wide::f64x4;
 
-/// Block edge in pixels; a divisor of `TILE`. 4 skips 5k more of the
-/// benchmark's back faces than 8 (2.4 M instructions a frame less).
+/// Block edge in pixels; a divisor of `TILE`. 4 skips more of the
+/// benchmark's back faces than 8, for less work a frame.
 pub(crate) const BLOCK: usize = 4;
 const PER_TILE: usize = TILE / BLOCK;
 

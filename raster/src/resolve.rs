@@ -212,7 +212,7 @@ impl ResolveContext<'_> {
     /// planes' values of each lane weight. Evaluating everything of a
     /// triangle at once, or selecting its 21 inputs before evaluating them,
     /// kept more values live than the 16 registers hold: each further
-    /// triangle cost ~100 instructions with the spills, against ~70 now. (A
+    /// triangle cost more with the spills than it does now. (A
     /// per-lane gather through memory, 8 scalar stores then a vector load,
     /// stalls on store forwarding.) Lanes no triangle covers carry the first
     /// triangle's values, so they stay finite; callers mask them.
@@ -245,8 +245,7 @@ impl ResolveContext<'_> {
         let b2 = k2 * w;
         // The normal is interpolated with the unnormalized weights k = b·Σk
         // (its direction is the same: Σk > 0), so its chain of dependent
-        // steps does not wait for the reciprocal (1.6 % of a frame's CPU
-        // time); |k| ≥ |b|/w_far keeps the cancellation
+        // steps does not wait for the reciprocal; |k| ≥ |b|/w_far keeps the cancellation
         // test of `normalize_or` meaningful. The facing sign goes into the
         // weights: ±1, so the normal is the same bits as flipping it after.
         // (No array `map` here: its closure was not inlined.)
@@ -287,7 +286,7 @@ impl ResolveContext<'_> {
         // Bend such normals until n·wo = MIN_COS_VIEW (the usual
         // shading-normal fix; geometry and the eval contract are untouched).
         // Such lanes are few (near silhouettes), so the bend is skipped
-        // when a packet has none: it cost ~30 instructions a packet.
+        // when a packet has none.
         let cos_v = n.dot(wo);
         let min_cos = R::splat(MIN_COS_VIEW);
         let away = cos_v.lt(min_cos);

@@ -81,7 +81,7 @@ impl SceneData {
     }
 }
 
-/// Per-vertex tangent frames from uvs [Lengyel01]: each triangle's ∂p/∂u
+/// Per-vertex tangent frames from uvs \[Lengyel01\]: each triangle's ∂p/∂u
 /// and ∂p/∂v, summed per vertex (area weighted), the tangent made
 /// orthogonal to the normal; w = ±1 says whether (n × t) or its opposite
 /// points along ∂p/∂v. Degenerate uv triangles contribute nothing; a vertex

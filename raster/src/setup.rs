@@ -58,7 +58,7 @@ pub enum RectCoverage {
 pub(crate) const SMALL_PX: i64 = 64;
 
 /// i32 edge functions relative to the bounding box's first pixel centre:
-/// E_k(x, y) = e0[k] + a[k]·(x − x0) + b[k]·(y − y0), x, y in pixels
+/// E_k(x, y) = `e0[k] + a[k]·(x − x0) + b[k]·(y − y0)`, x, y in pixels
 /// (`a`, `b` already scaled by 256), bias included.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SmallEdges {
@@ -68,12 +68,12 @@ pub struct SmallEdges {
 }
 
 /// Screen-space affine functions of one source triangle, each evaluated as
-/// p[0]·(x − ox) + p[1]·(y − oy) + p[2] at pixel-centre coordinates (x, y) in
+/// `p[0]·(x − ox) + p[1]·(y − oy) + p[2]` at pixel-centre coordinates (x, y) in
 /// pixels. Relative to a nearby origin so f32 keeps the small values of
 /// small triangles accurate.
 ///
 /// With k = M⁻¹(nx, ny, 1), M the matrix whose columns are the clip-space
-/// (x, y, w) of the vertices [Olano97]: b_i = k_i / Σk are the
+/// (x, y, w) of the vertices \[Olano97\]: b_i = k_i / Σk are the
 /// perspective-correct barycentrics, Σk = 1/w, and Σ k_i z_i = z/w (NDC depth).
 /// All are affine in screen space, and the same for every clipped piece.
 #[derive(Clone, Copy, Debug, Default)]
@@ -567,8 +567,7 @@ impl RasterTri {
     /// with one f64 multiply by the stored 1/(256|A|), clamped into [xa, xb),
     /// and then made exact by stepping with the integer edge value (the
     /// estimate is within one pixel, |r| < 2⁶⁰ having 53 good bits): exact
-    /// like an integer division, without the division's ~40 cycles per edge
-    /// and row.
+    /// like an integer division, without a division per edge and row.
     #[inline]
     pub fn span(&self, y: i32, xa: i32, xb: i32) -> (i32, i32) {
         let yc = pixel_centre(y as i64);

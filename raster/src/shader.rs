@@ -164,8 +164,8 @@ pub(crate) trait ShadeLanes: Real {
 
     /// Several packets of one material, none needing the surface, in one
     /// dynamic call. Per call, a material's shader pays its prologue, the
-    /// model's dispatch and its constants (F0, the diffuse colour, α:
-    /// ~100 instructions with the call itself), so the shading pass hands
+    /// model's dispatch and its constants (F0, the diffuse colour, α),
+    /// so the shading pass hands
     /// it the runs of packets of one material a tile row shows.
     fn shade_batch_with(
         shader: &dyn SurfaceShader,

@@ -200,7 +200,7 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
             // twin), the first and last triangles of the next 8 (a new
             // triangle in a packet is almost always at one of its ends),
             // unless this packet resolves the same one (most packets show
-            // one large triangle: the hints cost ~50 instructions).
+            // one large triangle, and the hints are not free).
             if lx % 8 == 0 {
                 if let (Some(&a), Some(&b)) = (ids.get(at + 8), ids.get(at + 15)) {
                     if a != ids[at + 7] {
@@ -212,8 +212,7 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
                 }
             }
             // A packet showing the previous packet's one triangle in all
-            // its lanes keeps that grouping (~100 instructions a packet
-            // for the ground's packets).
+            // its lanes keeps that grouping instead of building it again.
             if !(R::LANES == 8 && tris.is_one_triangle_of(&ids[at..])) {
                 tris.fill(&ids[at..], R::LANES, Some(ctx));
             }

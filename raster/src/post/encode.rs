@@ -42,7 +42,7 @@ pub(super) fn encode_pixels<const CURVE: u8>(
     let (enc, enc8) = (SrgbEncoder::new(), SrgbEncoderX8::new());
     let full = out.len() / 3 / 8 * 8;
     // Eight pixels at a time: the per-channel scalar chain (scale, curve,
-    // two table reads) was ~50 cycles a pixel.
+    // two table reads) was the pass's cost.
     for (x0, px8) in (0..full).step_by(8).zip(out.chunks_exact_mut(24)) {
         let s = sums8(x0);
         let code = |ch| ldr_code(&enc8, curve, ch, inv_n, k);
@@ -105,7 +105,7 @@ pub(super) fn load8(p: &[f32], i: usize) -> f32x8 {
 /// r | g << 8 | b << 16 is each pixel's three bytes in one little-endian
 /// word; one byte shuffle packs each 128-bit half's four words into 12
 /// bytes, stored as 8 + 4 (4 stores for 8 pixels instead of 8 word
-/// extracts and 8 stores: ~18 instructions fewer per 8 pixels).
+/// extracts and 8 stores).
 #[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
 #[inline(always)]
 fn store_rgb8(px8: &mut [u8], [r, g, b]: [i32x8; 3]) {
@@ -139,7 +139,7 @@ fn store_rgb8(px8: &mut [u8], [r, g, b]: [i32x8; 3]) {
 
 /// The portable form of the store above: each pixel's word stored at
 /// 3 × lane (the next lane overwrites its fourth byte; the last writes
-/// three). A cast to u8 per channel was ~40 % of the fused pass.
+/// three). A cast to u8 per channel was a large share of the fused pass.
 #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
 #[inline(always)]
 fn store_rgb8(px8: &mut [u8], [r, g, b]: [i32x8; 3]) {
@@ -175,9 +175,9 @@ pub fn encode_ldr_into(rgb: &Planes3, out: &mut Vec<u8>) {
         .enumerate()
         .for_each(|(chunk, o)| {
             // Eight pixels at a time with the vector encoder (its codes are
-            // the scalar encoder's): the scalar loop was ~85 instructions a
-            // pixel, 2.4 times the whole fused post list, and ran whenever
-            // a custom stage unfuses the list (the outlines, strokes).
+            // the scalar encoder's): the scalar loop cost more than the
+            // whole fused post list, and ran whenever a custom stage
+            // unfuses the list (the outlines, strokes).
             let n = o.len() / 3;
             let full = n / 8 * 8;
             let base = chunk * 4096;

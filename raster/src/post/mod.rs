@@ -218,11 +218,10 @@ impl Post {
 
     /// [`Post::run`] writing into the buffers of `recycled`, an earlier
     /// frame's output, whose allocations are reused (their contents are
-    /// all overwritten): a fresh 1080p frame's 8-bit pixels (6 MB) and HDR
-    /// planes (25 MB) are ~7,600 pages, each a page fault in which the
-    /// kernel zeroes what the post then overwrites anyway (the Sobel
-    /// outline frame: 12.6k -> 6.1k faults a frame, `perf stat -e
-    /// page-faults` over `--repeat 10`).
+    /// all overwritten): a fresh frame's 8-bit pixels and HDR planes are
+    /// thousands of pages, each a page fault in which the kernel zeroes
+    /// what the post then overwrites anyway (`perf stat -e page-faults`
+    /// over `--repeat 10` shows it).
     ///
     /// With `fuse` set, the standard list runs as one pass over the samples
     /// ([`downsample_ldr`]), and a list that starts with downsample, exposure and

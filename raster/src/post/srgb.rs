@@ -143,12 +143,12 @@ fn srgb_cells() -> &'static [i32] {
 }
 
 /// [`SrgbEncoder`] on 8 values at once, with one table read per value
-/// instead of two: the float's top bits pick a cell ([`srgb_cells`]), and
+/// instead of two: the float's top bits pick a cell (`srgb_cells`), and
 /// an integer comparison of its low bits with the cell's threshold adds
 /// the last code. Its codes equal the scalar encoder's (a test checks every
 /// threshold, cell edge and a sweep). The two dependent reads per value
-/// (bin start, then threshold) were most of the fused post pass: a
-/// hardware gather costs ~17 cycles here.
+/// (bin start, then threshold) were most of the fused post pass, and a
+/// hardware gather is slow on the machines measured.
 #[derive(Clone, Copy)]
 pub struct SrgbEncoderX8 {
     cells: &'static [i32],

@@ -8,9 +8,9 @@ pub enum Tonemap {
     /// Clamp each channel to [0, 1].
     #[default]
     Clamp,
-    /// x / (1 + x) per channel.   [Reinhard02]
+    /// x / (1 + x) per channel.   \[Reinhard02\]
     Reinhard,
-    /// Narkowicz's fit of the ACES filmic curve.   [Narkowicz15]
+    /// Narkowicz's fit of the ACES filmic curve.   \[Narkowicz15\]
     Aces,
 }
 
