@@ -1,5 +1,5 @@
 //! NPR lines end to end: the `[[outline]]` / `[strokes]` schema, the three
-//! outline methods and the stroke overlays (issue 10).
+//! outline methods and the stroke overlays.
 
 mod common;
 

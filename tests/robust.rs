@@ -1,4 +1,4 @@
-//! Robustness on bad input (issue 13): every case here once crashed, lost a
+//! Robustness on bad input: every case here once crashed, lost a
 //! file, or was accepted silently. Each expects a clear message naming the
 //! file and line or field, a non-zero exit, no panic, and no stray files.
 

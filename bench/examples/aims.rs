@@ -1,4 +1,4 @@
-//! Issue 12's two in-process ratios on the benchmark frame, timed in
+//! The two in-process ratios on the benchmark frame, timed in
 //! alternation (`specula_bench::paired`) so that the host's phases move
 //! both sides of each ratio alike (the `frame` criterion bench times the
 //! same calls one benchmark after the other):

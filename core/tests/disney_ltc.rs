@@ -3,7 +3,7 @@
 //! stand-in α, diffuse lobes as their albedo times the form factor)
 //! against the reference integration of its full BRDF (ltc/reference.rs,
 //! checked against Monte Carlo in ltc_polygon.rs), over a parameter grid,
-//! views 0–85° at three azimuths, and issue 8's polygons. The error is a
+//! views 0–85° at three azimuths, and the shared test polygons. The error is a
 //! fraction of the directional albedo at that view, per channel (the
 //! worst channel). Also: each lobe alone, f32x8 against f64, and the
 //! diffuse-albedo polynomial against the model's own quadrature.

@@ -1,4 +1,4 @@
-//! Test polygons shared by the LTC tests: the cases of issue 8's error
+//! Test polygons shared by the LTC tests: the cases of the LTC error
 //! table (overhead, mirror direction, tilted, straddling, near and below
 //! the horizon).
 
