@@ -14,7 +14,7 @@ use wide::{f32x8, i32x8};
 /// each. Bits past a row's end are 0. 2 MB of booleans at 1920 × 1080
 /// are 259 KB here, and 64 samples with no mark are one zero word.
 #[derive(Clone, Debug, Default)]
-pub struct EdgeMask {
+pub(crate) struct EdgeMask {
     width: usize,
     height: usize,
     words: usize,
@@ -23,7 +23,7 @@ pub struct EdgeMask {
 
 impl EdgeMask {
     /// An empty mask.
-    pub fn new(width: usize, height: usize) -> EdgeMask {
+    pub(crate) fn new(width: usize, height: usize) -> EdgeMask {
         let mut m = EdgeMask::default();
         m.resize(width, height);
         m
@@ -32,14 +32,14 @@ impl EdgeMask {
     /// Sizes the mask for `width × height`, keeping its allocation (a
     /// steady frame reuses it). The contents are unspecified: every
     /// writer sets whole rows.
-    pub fn resize(&mut self, width: usize, height: usize) {
+    pub(crate) fn resize(&mut self, width: usize, height: usize) {
         self.width = width;
         self.height = height;
         self.words = width.div_ceil(64);
         self.bits.resize(self.words * height, 0);
     }
 
-    pub fn from_bools(mask: &[bool], width: usize, height: usize) -> EdgeMask {
+    pub(crate) fn from_bools(mask: &[bool], width: usize, height: usize) -> EdgeMask {
         let mut m = EdgeMask::new(width, height);
         for (y, row) in m.rows_mut().enumerate() {
             row.fill(0);
@@ -52,38 +52,38 @@ impl EdgeMask {
         m
     }
 
-    pub fn to_bools(&self) -> Vec<bool> {
+    pub(crate) fn to_bools(&self) -> Vec<bool> {
         (0..self.width * self.height)
             .map(|i| self.get(i % self.width, i / self.width))
             .collect()
     }
 
     #[inline]
-    pub fn get(&self, x: usize, y: usize) -> bool {
+    pub(crate) fn get(&self, x: usize, y: usize) -> bool {
         self.row(y)[x / 64] >> (x % 64) & 1 != 0
     }
 
-    pub fn width(&self) -> usize {
+    pub(crate) fn width(&self) -> usize {
         self.width
     }
 
-    pub fn height(&self) -> usize {
+    pub(crate) fn height(&self) -> usize {
         self.height
     }
 
     /// Words a row.
-    pub fn words(&self) -> usize {
+    pub(crate) fn words(&self) -> usize {
         self.words
     }
 
     #[inline]
-    pub fn row(&self, y: usize) -> &[u64] {
+    pub(crate) fn row(&self, y: usize) -> &[u64] {
         &self.bits[y * self.words..(y + 1) * self.words]
     }
 
     /// The words of all rows, row after row (for writers that split them
     /// into bands of whole rows).
-    pub fn bits_mut(&mut self) -> &mut [u64] {
+    pub(crate) fn bits_mut(&mut self) -> &mut [u64] {
         &mut self.bits
     }
 
@@ -92,7 +92,7 @@ impl EdgeMask {
     }
 
     /// Whether each row holds a mark, into `out` (reused).
-    pub fn rows_marked(&self, out: &mut Vec<bool>) {
+    pub(crate) fn rows_marked(&self, out: &mut Vec<bool>) {
         out.clear();
         out.extend((0..self.height).map(|y| self.row(y).iter().any(|&b| b != 0)));
     }
@@ -103,10 +103,10 @@ impl EdgeMask {
 /// puts it back. Nothing is carried from one use to the next: every user
 /// writes what it reads.
 #[derive(Debug, Default)]
-pub struct Pool<T>(Mutex<Vec<T>>);
+pub(crate) struct Pool<T>(Mutex<Vec<T>>);
 
 impl<T: Default> Pool<T> {
-    pub fn with<R>(&self, f: impl FnOnce(&mut T) -> R) -> R {
+    pub(crate) fn with<R>(&self, f: impl FnOnce(&mut T) -> R) -> R {
         // A panic elsewhere while the lock was held cannot leave the list
         // in a state that matters (its values are scratch).
         let take = || self.0.lock().unwrap_or_else(|e| e.into_inner()).pop();
@@ -170,7 +170,7 @@ const FAR2: f32 = 1e20;
 
 /// Euclidean distance from every sample to the nearest marked one
 /// (`FAR2.sqrt()` when there is none): columns, then rows.
-pub fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
+pub(crate) fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
     // Columns: the mask is binary, so its 1-D transform is the squared
     // distance to the nearest mark above or below (two sweeps).
     let mut cols = vec![0.0f32; w * h]; // column-major
@@ -214,13 +214,13 @@ pub fn distance(mask: &[bool], w: usize, h: usize) -> Vec<f32> {
 /// `width` samples wide (module docs of [`crate::sobel`]): clamp(W/2 − d,
 /// 0, 1) anti-aliased, else 1 where d ≤ W/2 − ½.
 #[derive(Clone, Copy, Debug)]
-pub struct Cover {
+pub(crate) struct Cover {
     half: f32,
     antialias: bool,
 }
 
 impl Cover {
-    pub fn new(width: f32, antialias: bool) -> Cover {
+    pub(crate) fn new(width: f32, antialias: bool) -> Cover {
         Cover {
             half: width * 0.5,
             antialias,
@@ -228,7 +228,7 @@ impl Cover {
     }
 
     #[inline]
-    pub fn at(self, d: f32) -> f32 {
+    pub(crate) fn at(self, d: f32) -> f32 {
         if self.antialias {
             (self.half - d).clamp(0.0, 1.0)
         } else if d <= (self.half - 0.5).max(0.0) {
@@ -241,7 +241,7 @@ impl Cover {
     /// [`Cover::at`] on 8 lanes, bit for bit (the same comparisons and
     /// the one subtraction; clamp as its two selects).
     #[inline(always)]
-    pub fn at8(self, d: f32x8) -> f32x8 {
+    pub(crate) fn at8(self, d: f32x8) -> f32x8 {
         let (zero, one) = (f32x8::ZERO, f32x8::ONE);
         if self.antialias {
             let v = f32x8::splat(self.half) - d;
@@ -257,12 +257,12 @@ impl Cover {
     /// sample is at distance ≥ 1 from a mark, where the coverage (never
     /// increasing with d) is 0 if it is 0 at d = 1. True for lines up to 2
     /// samples wide anti-aliased, under 3 aliased.
-    pub fn marks_only(self) -> bool {
+    pub(crate) fn marks_only(self) -> bool {
         self.at(1.0) == 0.0
     }
 
     /// The search radius r = ⌈W/2⌉: a mark farther than r gives no ink.
-    pub fn radius(self) -> usize {
+    pub(crate) fn radius(self) -> usize {
         self.half.ceil().max(0.0) as usize
     }
 }
@@ -270,7 +270,7 @@ impl Cover {
 /// Coverage of a line `width` samples wide around the marked band (module
 /// docs of [`crate::sobel`]), for the whole image: [`dilate_row`] on every
 /// row up to [`BOUNDED_RADIUS`], the distance transform past it.
-pub fn dilate(mask: &[bool], w: usize, h: usize, width: f32, antialias: bool) -> Vec<f32> {
+pub(crate) fn dilate(mask: &[bool], w: usize, h: usize, width: f32, antialias: bool) -> Vec<f32> {
     let cover = Cover::new(width, antialias);
     if cover.radius() > BOUNDED_RADIUS {
         return distance(mask, w, h)
@@ -293,11 +293,11 @@ pub fn dilate(mask: &[bool], w: usize, h: usize, width: f32, antialias: bool) ->
 
 /// Widest half line (samples) [`dilate_row`] searches for marks around
 /// each sample directly; wider lines use the distance transform.
-pub const BOUNDED_RADIUS: usize = 16;
+pub(crate) const BOUNDED_RADIUS: usize = 16;
 
 /// A task's scratch for [`dilate_row`] (kept across rows and frames).
 #[derive(Debug, Default)]
-pub struct RowScratch {
+pub(crate) struct RowScratch {
     /// within[k]: the row's samples with a mark within k rows (bit mask).
     within: Vec<u64>,
     /// Words with a mark within r columns of one of their samples.
@@ -322,7 +322,7 @@ pub struct RowScratch {
 /// the coverage is the transform's bit for bit (tested). Work is skipped
 /// where the mask is empty: rows with no mark within r rows, and 64-sample
 /// words with no mark within r columns.
-pub fn dilate_row(
+pub(crate) fn dilate_row(
     mask: &EdgeMask,
     marked: &[bool],
     y: usize,
@@ -345,7 +345,7 @@ pub fn dilate_row(
 
 /// What [`dilate_row_lanes`] inks at x.
 #[derive(Clone, Copy, Debug)]
-pub enum Ink {
+pub(crate) enum Ink {
     /// Samples x..x+8 (x + 8 ≤ width), at least one with ink: the lane
     /// mask of those with ink, and the coverage of each lane.
     Eight(f32x8, f32x8),
@@ -359,7 +359,7 @@ pub enum Ink {
 /// for, with the same coverage bit for bit; a word's last n % 8 samples
 /// (the row's last word, when width % 8 ≠ 0) one by one, `Ink::One`.
 /// Calls in increasing x.
-pub fn dilate_row_lanes(
+pub(crate) fn dilate_row_lanes(
     mask: &EdgeMask,
     marked: &[bool],
     y: usize,

@@ -11,9 +11,9 @@
 //!   all fixed; **silhouette** (one face toward the eye, the other away)
 //!   per view. An edge that is several kinds is drawn once, as the first
 //!   of silhouette, boundary, material, crease that is asked for.
-//! - Visibility ([`visible_pieces`]): points every sample along the
+//! - Visibility (`visible_pieces`): points every sample along the
 //!   projected edge are compared with the depth buffer; a point is seen
-//!   when its view depth is at most (1 + [`DEPTH_BIAS`]) times the largest
+//!   when its view depth is at most (1 + `DEPTH_BIAS`) times the largest
 //!   depth of the samples within one output pixel (ssaa samples) around it
 //!   (3×3 without supersampling). The largest of the neighbourhood,
 //!   not the sample's own, is what keeps a silhouette (whose neighbours
@@ -44,14 +44,14 @@ pub enum EdgeKind {
 }
 
 impl EdgeKind {
-    pub const ALL: [EdgeKind; 4] = [
+    pub(crate) const ALL: [EdgeKind; 4] = [
         EdgeKind::Silhouette,
         EdgeKind::Boundary,
         EdgeKind::Material,
         EdgeKind::Crease,
     ];
 
-    pub fn name(self) -> &'static str {
+    pub(crate) fn name(self) -> &'static str {
         match self {
             EdgeKind::Silhouette => "silhouette",
             EdgeKind::Boundary => "boundary",
@@ -62,7 +62,7 @@ impl EdgeKind {
 }
 
 /// Relative depth tolerance of the visibility test (module docs).
-pub const DEPTH_BIAS: f32 = 0.01;
+pub(crate) const DEPTH_BIAS: f32 = 0.01;
 
 const NO_FACE: u32 = u32::MAX;
 
@@ -264,11 +264,11 @@ pub struct Piece {
 /// Depth-buffer view for [`visible_pieces`]: view depth per sample, +inf
 /// where nothing is hit, at `width × height` samples; `ssaa` samples per
 /// output pixel side.
-pub struct DepthView<'a> {
-    pub depth: &'a [f32],
-    pub width: usize,
-    pub height: usize,
-    pub ssaa: usize,
+pub(crate) struct DepthView<'a> {
+    pub(crate) depth: &'a [f32],
+    pub(crate) width: usize,
+    pub(crate) height: usize,
+    pub(crate) ssaa: usize,
 }
 
 impl DepthView<'_> {
@@ -312,7 +312,7 @@ impl DepthView<'_> {
 }
 
 /// The visible pieces of `edges` (module docs), in edge order.
-pub fn visible_pieces(
+pub(crate) fn visible_pieces(
     mesh: &MeshEdges,
     edges: &[(u32, u32, EdgeKind)],
     view: &View,

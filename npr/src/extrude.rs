@@ -27,7 +27,7 @@
 //! by the **miter** of their outward screen normals n₁, n₂:
 //! m = (n₁ + n₂)/(1 + n₁·n₂), which has m·n₁ = m·n₂ = 1, so both pushed
 //! edges lie exactly `width` pixels out and the corner is mitred. The
-//! miter is used up to [`MITER_LIMIT`] (corners of 60° and wider); a
+//! miter is used up to `MITER_LIMIT` (corners of 60° and wider); a
 //! sharper turn, or a vertex on one or on three and more outline edges,
 //! keeps the smoothed normal. Edges are found once per scene between
 //! vertices welded by position (to 1e-6 of the scene's extent, as the
@@ -48,7 +48,7 @@
 //! `width` wide outside its boundary. A moved vertex keeps its depth on
 //! the plane of its edges' faces (z/w is affine in screen space on a
 //! plane, so the copy of a flat sheet lies in the sheet however slanted),
-//! and every vertex of the copy is pushed back by [`OPEN_DEPTH_PUSH`] so
+//! and every vertex of the copy is pushed back by `OPEN_DEPTH_PUSH` so
 //! the sheet itself wins the depth test.
 //!
 //! A copy that cannot show is not drawn: a flat open piece (a ground
@@ -75,18 +75,18 @@ use std::sync::Arc;
 
 /// Longest miter, in widths: |m| = 1/cos(φ/2) for outward normals φ
 /// apart, 2 at φ = 120° (a corner of 60° on screen).
-pub const MITER_LIMIT: f32 = 2.0;
+pub(crate) const MITER_LIMIT: f32 = 2.0;
 
 /// Relative depth by which the copy of an open piece of mesh lies behind
 /// it: z/w × (1 − push), about that fraction of the view distance (far
 /// above f32 rounding of the interpolated depth, ~1e-6).
-pub const OPEN_DEPTH_PUSH: f32 = 1e-3;
+pub(crate) const OPEN_DEPTH_PUSH: f32 = 1e-3;
 
 /// The vertex stage of an extrusion pass.
 #[derive(Debug)]
 pub struct Extrude {
     /// Ring width in output pixels.
-    pub width: f32,
+    pub(crate) width: f32,
     /// What the stage derives from the scene's mesh when it is built,
     /// shared by its instances.
     mesh: Arc<ExtrudeMesh>,
@@ -421,7 +421,7 @@ impl Extrude {
 
     /// Whether triangle `t`'s connected piece of mesh is open (module
     /// docs): its copy is drawn front side out, not back faces.
-    pub fn is_open(&self, t: usize) -> bool {
+    pub(crate) fn is_open(&self, t: usize) -> bool {
         self.mesh.topo.tri_open.get(t).copied().unwrap_or(false)
     }
 }

@@ -49,7 +49,7 @@ pub fn builtin_tam() -> Result<Arc<TamTexture>, String> {
 }
 
 /// Maps tile and filter trilinearly.
-pub const TAM_SAMPLER: Sampler = Sampler {
+pub(crate) const TAM_SAMPLER: Sampler = Sampler {
     wrap_u: Wrap::Repeat,
     wrap_v: Wrap::Repeat,
     filter: Filter::Trilinear,
@@ -58,7 +58,7 @@ pub const TAM_SAMPLER: Sampler = Sampler {
 impl Hatching {
     /// Luminance of a white Lambertian surface at the packet's lanes.
     #[inline(always)]
-    pub fn luminance<R: Real>(input: &ShadeInput<R>, env: &ShadeEnv) -> R {
+    pub(crate) fn luminance<R: Real>(input: &ShadeInput<R>, env: &ShadeEnv) -> R {
         let frag = input.frag;
         let mut e_sum = Rgb::zero();
         for_each_light(frag.p, env, |wi, e| {
@@ -74,7 +74,7 @@ impl Hatching {
     /// Lower channel i (integral) and the weight w of channel i + 1 for
     /// darkness `d` (module docs, step 2).
     #[inline(always)]
-    pub fn tone_pair<R: Real>(&self, d: R) -> (R, R) {
+    pub(crate) fn tone_pair<R: Real>(&self, d: R) -> (R, R) {
         let dk = &self.tam.darkness;
         let top = dk.len() - 1; // the darkest tone's channel
         let mut i = R::ZERO;
@@ -90,7 +90,13 @@ impl Hatching {
     /// Paper brightness of the blended tones at darkness `d` (1 paper, 0
     /// ink) at uv, for tests and the shader.
     #[inline(always)]
-    pub fn brightness<R: Real>(&self, d: R, uv: [R; 2], duv_dx: [R; 2], duv_dy: [R; 2]) -> R {
+    pub(crate) fn brightness<R: Real>(
+        &self,
+        d: R,
+        uv: [R; 2],
+        duv_dx: [R; 2],
+        duv_dy: [R; 2],
+    ) -> R {
         let k = R::splat(self.scale as f64);
         let t = &self.tam.texture;
         let uv = [uv[0] * k, uv[1] * k];

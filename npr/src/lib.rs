@@ -12,7 +12,9 @@
 //! their visibility and chaining) and `overlay` (drawing them with
 //! tiny-skia, and SVG).
 
-pub mod dilate;
+#![warn(unreachable_pub)]
+
+mod dilate;
 pub mod edges;
 pub mod extrude;
 pub mod hatching;

@@ -69,14 +69,14 @@ impl Selection {
     }
 
     /// Whether the stage needs the id buffer to decide.
-    pub fn needs_ids(&self) -> bool {
+    pub(crate) fn needs_ids(&self) -> bool {
         self.ids.is_some()
     }
 
     /// Whether a pixel of id `id` (MISS: nothing) is drawn on. With a
     /// material set the frame must hold the id buffer.
     #[inline]
-    pub fn contains(&self, id: u32) -> bool {
+    pub(crate) fn contains(&self, id: u32) -> bool {
         match &self.ids {
             None => id != MISS,
             Some(v) => v.get(id as usize).copied().unwrap_or(false),
@@ -86,13 +86,18 @@ impl Selection {
 
 /// The supersampling factor between the frame buffers and the image a
 /// post stage sees (1 when the stage runs before the resolve).
-pub fn ssaa_of(img: &HdrImage, frame: &FrameBuffers) -> usize {
+pub(crate) fn ssaa_of(img: &HdrImage, frame: &FrameBuffers) -> usize {
     (frame.width / img.width.max(1)).max(1) as usize
 }
 
 /// Blends `color` over `img` with the per-sample `coverage` (frame size,
 /// values in [0, 1]) box-averaged over each pixel's ssaa² samples.
-pub fn composite(img: &mut HdrImage, frame: &FrameBuffers, coverage: &[f32], color: [f32; 3]) {
+pub(crate) fn composite(
+    img: &mut HdrImage,
+    frame: &FrameBuffers,
+    coverage: &[f32],
+    color: [f32; 3],
+) {
     let ssaa = ssaa_of(img, frame);
     let (w, sw) = (img.width as usize, frame.width as usize);
     let inv = 1.0 / (ssaa * ssaa) as f32;
@@ -164,13 +169,13 @@ pub(crate) fn blend(rgb: [&mut f32; 3], a: f32, color: [f32; 3]) {
 /// where n·v ≥ t + s/2, linear between (s = [`ShadingOutline::softness`]).
 #[derive(Clone, Debug)]
 pub struct ShadingOutline {
-    pub camera: Camera,
+    pub(crate) camera: Camera,
     /// n·v threshold in (0, 1): where the coverage is ½.
-    pub threshold: f32,
+    pub(crate) threshold: f32,
     /// Width of the soft edge in n·v.
     pub softness: f32,
-    pub color: [f32; 3],
-    pub selection: Selection,
+    pub(crate) color: [f32; 3],
+    pub(crate) selection: Selection,
 }
 
 impl ShadingOutline {
@@ -188,7 +193,7 @@ impl ShadingOutline {
 
     /// Coverage of one sample from its n·v.
     #[inline]
-    pub fn coverage(&self, n_dot_v: f32) -> f32 {
+    pub(crate) fn coverage(&self, n_dot_v: f32) -> f32 {
         ((self.threshold - n_dot_v) / self.softness + 0.5).clamp(0.0, 1.0)
     }
 

@@ -70,7 +70,7 @@ pub struct Plot {
 }
 
 /// Text height of ticks, labels and legend, in pixels.
-pub const TEXT_SIZE: f32 = 16.0;
+pub(crate) const TEXT_SIZE: f32 = 16.0;
 /// Margins around the data area: tick values and the y label on the left,
 /// tick values and the x label below, the legend on the right.
 const LEFT: f32 = 64.0;

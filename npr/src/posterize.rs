@@ -28,8 +28,8 @@ pub enum PosterizeMode {
 /// The stage; see the module docs.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Posterize {
-    pub levels: u32,
-    pub mode: PosterizeMode,
+    pub(crate) levels: u32,
+    pub(crate) mode: PosterizeMode,
     /// Linear cut points between consecutive levels (L − 1 of them).
     cuts: Vec<f32>,
     /// Linear value of each level.

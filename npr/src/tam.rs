@@ -10,13 +10,13 @@
 //!   each tone the levels are filled coarsest first; a stroke added while a
 //!   level is being filled is drawn on it and on every finer level, at the
 //!   same place in texture space and the same width in *pixels*
-//!   ([`STROKE_WIDTH_PX`]). A coarse level therefore gets fewer, relatively
+//!   (`STROKE_WIDTH_PX`). A coarse level therefore gets fewer, relatively
 //!   thicker strokes and is exactly as dark as a fine one, not denser — the
 //!   point of a TAM over mip-mapping one drawing.
-//! - A level is done when its darkness is within [`TOLERANCE`] below the
-//!   target; a stroke that would take it more than [`TOLERANCE`] past the
+//! - A level is done when its darkness is within `TOLERANCE` below the
+//!   target; a stroke that would take it more than `TOLERANCE` past the
 //!   target is halved in length until it fits (or is one pixel long).
-//! - Light tones hatch along u (within ±[`ANGLE_JITTER`]); tones in the
+//! - Light tones hatch along u (within ±`ANGLE_JITTER`); tones in the
 //!   darker half add strokes along v (cross-hatching). Strokes wrap around
 //!   the texture edges, so the maps tile.
 //! - Seeded (ChaCha8): the same parameters give the same bytes.
@@ -35,16 +35,16 @@ use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Stroke, Transform};
 /// Darkness of the darkest tone.
 pub const MAX_DARKNESS: f64 = 0.8;
 /// Width of every stroke, in pixels of the level it is drawn on.
-pub const STROKE_WIDTH_PX: f32 = 1.25;
+pub(crate) const STROKE_WIDTH_PX: f32 = 1.25;
 /// How close to its target a level's darkness is brought (both ways).
-pub const TOLERANCE: f64 = 0.005;
+pub(crate) const TOLERANCE: f64 = 0.005;
 /// Largest deviation of a stroke from its tone's direction, radians.
-pub const ANGLE_JITTER: f64 = 0.12;
+pub(crate) const ANGLE_JITTER: f64 = 0.12;
 /// Stroke lengths are drawn from this range, in texture units.
 const LENGTH: (f64, f64) = (0.2, 0.5);
 /// Smallest level size: at 16 × 16 a one-pixel stroke moves the darkness
 /// by well under the tolerance of the tests (0.02).
-pub const MIN_LEVEL_SIZE: u32 = 16;
+pub(crate) const MIN_LEVEL_SIZE: u32 = 16;
 /// Strokes tried per tone and level before giving up (never reached for
 /// valid parameters; a guard against looping forever).
 const MAX_STROKES: usize = 200_000;
@@ -61,7 +61,7 @@ pub struct TamParams {
 
 impl TamParams {
     /// `tones` tones of `size` with as many levels as fit down to
-    /// [`MIN_LEVEL_SIZE`].
+    /// `MIN_LEVEL_SIZE`.
     pub fn new(tones: usize, size: u32, seed: u64) -> TamParams {
         TamParams {
             tones,
@@ -72,7 +72,7 @@ impl TamParams {
     }
 
     /// Levels from `size` down to [`MIN_LEVEL_SIZE`] (at least 1).
-    pub fn max_levels(size: u32) -> usize {
+    pub(crate) fn max_levels(size: u32) -> usize {
         let mut n = 1;
         let mut s = size;
         while s / 2 >= MIN_LEVEL_SIZE {
@@ -83,7 +83,7 @@ impl TamParams {
     }
 
     /// Checks the ranges; the error names the option.
-    pub fn validate(&self) -> Result<(), String> {
+    pub(crate) fn validate(&self) -> Result<(), String> {
         if !(1..=16).contains(&self.tones) {
             return Err(format!("tones: must be in 1..=16, got {}", self.tones));
         }
@@ -104,12 +104,12 @@ impl TamParams {
     }
 
     /// Target darkness of tone `t`.
-    pub fn target(&self, t: usize) -> f64 {
+    pub(crate) fn target(&self, t: usize) -> f64 {
         MAX_DARKNESS * (t + 1) as f64 / self.tones as f64
     }
 
     /// Width (= height) of level `l`.
-    pub fn level_size(&self, l: usize) -> u32 {
+    pub(crate) fn level_size(&self, l: usize) -> u32 {
         self.size >> l
     }
 }
@@ -255,20 +255,20 @@ pub fn generate(params: TamParams) -> Result<Tam, String> {
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct Manifest {
-    pub tones: usize,
-    pub levels: usize,
+    pub(crate) tones: usize,
+    pub(crate) levels: usize,
     /// Level sizes, level 0 first.
     pub sizes: Vec<u32>,
     /// Target darkness per tone, light to dark.
     pub darkness: Vec<f64>,
     /// Measured mean darkness, `[tone][level]`.
     pub measured: Vec<Vec<f64>>,
-    pub seed: u64,
-    pub stroke_width_px: f32,
+    pub(crate) seed: u64,
+    pub(crate) stroke_width_px: f32,
 }
 
 /// File name of tone t, level l.
-pub fn file_name(t: usize, l: usize) -> String {
+pub(crate) fn file_name(t: usize, l: usize) -> String {
     format!("tam_t{t}_l{l}.png")
 }
 
@@ -312,15 +312,19 @@ impl Tam {
 /// 1 paper, 0 ink), with the tones' darkness (channel 0's is 0).
 #[derive(Clone, Debug, PartialEq)]
 pub struct TamTexture {
-    pub texture: Texture,
+    pub(crate) texture: Texture,
     /// Darkness of each channel: 0 for paper, then the tones' (increasing).
-    pub darkness: Vec<f32>,
+    pub(crate) darkness: Vec<f32>,
 }
 
 impl TamTexture {
     /// From tones × levels of grey images (`images[t][l]`, 255 paper) with
     /// level 0 `size` wide, and each tone's darkness.
-    pub fn new(images: &[Vec<Vec<u8>>], size: u32, darkness: &[f64]) -> Result<TamTexture, String> {
+    pub(crate) fn new(
+        images: &[Vec<Vec<u8>>],
+        size: u32,
+        darkness: &[f64],
+    ) -> Result<TamTexture, String> {
         let tones = images.len();
         if tones == 0 || darkness.len() != tones {
             return Err(format!(

@@ -12,7 +12,7 @@
 //! n·l ≤ 0; an explicit ramp gives colour c_i from edge e_i up to the next
 //! edge, black below the first. base is `base_color`, times the
 //! base-colour texture where there is one: the shader's lane parameters
-//! ([`ToonParams`]) are filled by its maps the way a physically based
+//! (`ToonParams`) are filled by its maps the way a physically based
 //! model's are (raster's maps.rs).
 
 use crate::lights::for_each_light;
@@ -72,7 +72,7 @@ impl Ramp {
 
     /// The step value at `cos` per lane.
     #[inline(always)]
-    pub fn eval<R: Real>(&self, cos: R) -> Rgb<R> {
+    pub(crate) fn eval<R: Real>(&self, cos: R) -> Rgb<R> {
         let mut v = Rgb::zero();
         for (edge, c) in &self.steps {
             v = Rgb::select(cos.ge(R::splat(*edge as f64)), Rgb::from_f32(*c), v);
@@ -93,8 +93,8 @@ pub struct Hard {
 
 /// The toon shader's parameters per lane.
 #[derive(Clone, Copy, Debug)]
-pub struct ToonParams<R: Real> {
-    pub base_color: Rgb<R>,
+pub(crate) struct ToonParams<R: Real> {
+    pub(crate) base_color: Rgb<R>,
 }
 
 impl<R: Real> LaneParams<R> for ToonParams<R> {

@@ -1,4 +1,4 @@
-//! Detection: the edge marks of a frame, row by row ([`detect_row`]) in
+//! Detection: the edge marks of a frame, row by row (`detect_row`) in
 //! bands of [`BAND_ROWS`] rows whose inputs each band computes itself
 //! (`Sobel::detect`). A row's interior goes 8 samples at a time through
 //! every source at once (`detect_lanes`), 64 at a time where the block
@@ -9,6 +9,7 @@ use super::block::{detect_block, BLOCK};
 use super::inputs::{inverse_depth_into, label_of_id, labels_into, luma_into, EdgeInput};
 use super::measure::{measure_at, W};
 use super::{prefetch, Buffers, Sobel, Source, BAND_ROWS};
+#[cfg(test)]
 use crate::dilate::EdgeMask;
 use rayon::prelude::*;
 use specula_core::{Mask, Real};
@@ -18,7 +19,8 @@ use wide::f32x8;
 /// Marks edge samples (1) in a `width × height` mask; see [`crate::sobel`].
 /// `keep(i)` says whether sample i may carry a line (material selection).
 /// [`detect_row`] on every row of the whole-frame `input`.
-pub fn detect_edges(
+#[cfg(test)]
+pub(crate) fn detect_edges(
     input: &EdgeInput,
     sources: &[(Source, f32)],
     keep: &(dyn Fn(usize) -> bool + Sync),
@@ -48,7 +50,8 @@ pub fn detect_edges(
 /// source at once (`detect_lanes`); its first and last sample (and every
 /// sample of a row under `FUSED_MIN_WIDTH`) through the clamped scalar
 /// `measure_at` (`mark_clamped`).
-pub fn detect_row(
+#[cfg(test)]
+pub(crate) fn detect_row(
     input: &EdgeInput,
     sources: &[(Source, f32)],
     rows: [usize; 3],
@@ -58,7 +61,7 @@ pub fn detect_row(
     detect_row_ahead(input, sources, rows, None, keep, out);
 }
 
-/// [`detect_row`], prefetching the normals of the row starting at
+/// `detect_row`, prefetching the normals of the row starting at
 /// `ahead` (an offset in `input`'s slices) as it goes.
 fn detect_row_ahead(
     input: &EdgeInput,
@@ -148,7 +151,7 @@ fn detect_row_ahead(
 /// neighbours) are measured sample by sample (`mark_clamped`).
 const FUSED_MIN_WIDTH: usize = 10;
 
-/// Marks sample x of a row (`rows` as in [`detect_row`]) if any source's
+/// Marks sample x of a row (`rows` as in `detect_row`) if any source's
 /// clamped scalar `measure_at` exceeds its threshold.
 fn mark_clamped(
     input: &EdgeInput,
@@ -245,7 +248,7 @@ pub(super) fn load8(s: &[f32]) -> f32x8 {
 }
 
 /// The 3×3 neighbourhoods of field `f` at the 8 samples x..x+8 of a row
-/// (`rows` as in [`detect_row`]; 1 ≤ x, x + 9 ≤ width): `[r][c]` holds
+/// (`rows` as in `detect_row`; 1 ≤ x, x + 9 ≤ width): `[r][c]` holds
 /// the row r (0 above), column offset c − 1. One bounds check a row.
 #[inline(always)]
 fn around8(f: &[f32], rows: [usize; 3], x: usize) -> [[f32x8; 3]; 3] {
@@ -334,7 +337,7 @@ pub(super) fn detect_lanes(t: &Thresholds, around: impl Fn(Field) -> [[f32x8; 3]
 }
 
 impl Sobel {
-    /// Marks the frame's edge samples into `mask`: [`detect_row`] on
+    /// Marks the frame's edge samples into `mask`: `detect_row` on
     /// bands of [`BAND_ROWS`] rows, each band computing its own 1/w,
     /// labels and luminance (rows of the band and one each side).
     pub(super) fn detect(&self, frame: &FrameBuffers, b: &mut Buffers) {

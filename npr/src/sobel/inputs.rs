@@ -10,22 +10,25 @@ use wide::{f32x8, i32x8, u32x8};
 
 /// Read-only views of the buffers a detection reads, at frame size (or a
 /// band's rows of them: the detection only reads the rows it is given).
-pub struct EdgeInput<'a> {
-    pub width: usize,
-    pub height: usize,
-    /// 1/w of the view depth w, 0 where nothing is hit ([`inverse_depth`];
+pub(crate) struct EdgeInput<'a> {
+    pub(crate) width: usize,
+    /// Read by the scalar reference the tests use.
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(crate) height: usize,
+    /// 1/w of the view depth w, 0 where nothing is hit (`inverse_depth`;
     /// empty if depth is not a source).
-    pub inv_depth: &'a [f32],
-    pub normal: [&'a [f32]; 3],
+    pub(crate) inv_depth: &'a [f32],
+    pub(crate) normal: [&'a [f32]; 3],
     /// Material index per sample as a number (exact: indices are below
-    /// 2²⁴), −1 where nothing is hit ([`material_labels`]).
-    pub material: &'a [f32],
+    /// 2²⁴), −1 where nothing is hit (`material_labels`).
+    pub(crate) material: &'a [f32],
     /// Luminance per sample.
-    pub luma: &'a [f32],
+    pub(crate) luma: &'a [f32],
 }
 
 /// q = 1/w per sample, 0 where nothing is hit (w infinite, NaN or ≤ 0).
-pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
+#[cfg(test)]
+pub(crate) fn inverse_depth(depth: &[f32]) -> Vec<f32> {
     let mut q = vec![0.0f32; depth.len()];
     q.par_chunks_mut(4096)
         .zip(depth.par_chunks(4096))
@@ -33,8 +36,8 @@ pub fn inverse_depth(depth: &[f32]) -> Vec<f32> {
     q
 }
 
-/// [`inverse_depth`] into `q` (same length).
-pub fn inverse_depth_into(depth: &[f32], q: &mut [f32]) {
+/// `inverse_depth` into `q` (same length).
+pub(crate) fn inverse_depth_into(depth: &[f32], q: &mut [f32]) {
     // A plain loop (a select per sample) vectorizes.
     for (q, &d) in q.iter_mut().zip(depth) {
         *q = if d.is_finite() && d > 0.0 {
@@ -48,7 +51,8 @@ pub fn inverse_depth_into(depth: &[f32], q: &mut [f32]) {
 /// The id source's labels: the material index of each sample's id as a
 /// number (exact below 2²⁴ materials), −1 where nothing is hit or the id
 /// has no material.
-pub fn material_labels(ids: &[u32], id_material: &[u32]) -> Vec<f32> {
+#[cfg(test)]
+pub(crate) fn material_labels(ids: &[u32], id_material: &[u32]) -> Vec<f32> {
     let mut of_id = Vec::new();
     label_of_id(id_material, &mut of_id);
     let mut labels = vec![-1.0f32; ids.len()];
@@ -76,7 +80,7 @@ pub(super) fn label_of_id(id_material: &[u32], out: &mut Vec<f32>) {
     out.push(-1.0);
 }
 
-/// [`material_labels`] with the per-id labels `of_id` ([`label_of_id`]),
+/// `material_labels` with the per-id labels `of_id` ([`label_of_id`]),
 /// into `labels`: a table read a sample, ids past the table clamped to
 /// its last entry (−1), so the loop has no branch and no bounds check.
 pub(super) fn labels_into(ids: &[u32], of_id: &[f32], labels: &mut [f32]) {

@@ -1,5 +1,5 @@
 //! The scalar reference of each source's measure (see the module docs of
-//! [`crate::sobel`]): [`measure`] at one sample, clamped at the image's
+//! [`crate::sobel`]): `measure` at one sample, clamped at the image's
 //! edges, which the detection's 8-lane kernels match bit for bit; and,
 //! for the tests, its lane form.
 
@@ -90,6 +90,7 @@ pub(super) fn measure_lanes<R: Real>(
 
 /// Sample indices of the 3×3 neighbourhood of (x, y), `[dy + 1][dx + 1]`,
 /// clamped to the image.
+#[cfg(test)]
 #[inline]
 fn neighbours(input: &EdgeInput, x: usize, y: usize) -> [[usize; 3]; 3] {
     let w = input.width;
@@ -113,7 +114,8 @@ fn gradient(f: &[f32], nb: &[[usize; 3]; 3]) -> (f32, f32) {
 /// The measure of one source at (x, y); see [`crate::sobel`]. The scalar
 /// reference of the detection's row kernels (and of the lane form the
 /// tests keep).
-pub fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
+#[cfg(test)]
+pub(crate) fn measure(input: &EdgeInput, s: Source, x: usize, y: usize) -> f32 {
     measure_at(input, s, &neighbours(input, x, y))
 }
 

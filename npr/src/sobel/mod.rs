@@ -1,6 +1,6 @@
 //! Outline by image: edges in the frame buffers (`detect_edges`), widened
 //! to the line width by a Euclidean distance transform (`dilate`), and
-//! blended over the image (as [`crate::outline::composite`] does).
+//! blended over the image (as `crate::outline::composite` does).
 //!
 //! Each source has its own measure and threshold; a sample is on an edge
 //! when any source's measure exceeds its threshold. With the Sobel weights
@@ -33,15 +33,15 @@
 //! The stage allocates nothing in a steady frame (whole-frame buffers
 //! would cost a kernel page fault on each of their pages):
 //! - 1/w, the material labels and the luminance are computed per band of
-//!   [`BAND_ROWS`] rows (and the row above and below it) inside the
+//!   `BAND_ROWS` rows (and the row above and below it) inside the
 //!   detection, not as whole-frame buffers;
-//! - the marks are bits ([`EdgeMask`]), kept in the stage with the other
+//! - the marks are bits (`EdgeMask`), kept in the stage with the other
 //!   scratch ([`Scratch`]) from frame to frame;
-//! - the line is widened row by row ([`dilate_row`]) straight into the
+//! - the line is widened row by row (`dilate_row`) straight into the
 //!   blend, and only near marks: rows with no mark within the line's
 //!   reach and 64-sample words with none are skipped, so there is no
 //!   frame-size coverage map either; a line at most 2 samples wide inks
-//!   only the marks ([`Cover::marks_only`]) and skips the dilation.
+//!   only the marks (`Cover::marks_only`) and skips the dilation.
 //!
 //! Memory bounds it as much as arithmetic (the frame's depth, normals
 //! and ids are far larger than the caches; profiles put most of the time
@@ -55,14 +55,14 @@
 //! flat ground and the insides of large faces are not measured.
 //!
 //! The files, in the order of the data flow:
-//! - `inputs`: the per-sample values the detection reads ([`EdgeInput`]):
+//! - `inputs`: the per-sample values the detection reads (`EdgeInput`):
 //!   1/w, material labels, luminance;
-//! - `measure`: the scalar reference of each source's measure ([`measure`]);
+//! - `measure`: the scalar reference of each source's measure (`measure`);
 //! - `detect`: the edge marks, row by row and band by band, 8 samples at a
-//!   time through every source at once ([`detect_row`], [`detect_edges`]);
+//!   time through every source at once (`detect_row`, `detect_edges`);
 //! - `block`: the per-block bounds that skip sources which cannot mark;
 //! - `blend`: the line's coverage and its blend over the image, in bands
-//!   of rows (the dilation itself is [`crate::dilate`]);
+//!   of rows (the dilation itself is `crate::dilate`);
 //! - this file: the stage, its [`PostStage`] impl and its scratch buffers.
 
 mod blend;
@@ -77,13 +77,7 @@ use crate::outline::{ssaa_of, Selection};
 use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::{BufferSet, FrameBuffers};
 
-pub use crate::dilate::{
-    dilate, dilate_row, dilate_row_lanes, distance, Cover, EdgeMask, Ink, Pool, RowScratch,
-    BOUNDED_RADIUS,
-};
-pub use detect::{detect_edges, detect_row};
-pub use inputs::{inverse_depth, inverse_depth_into, material_labels, EdgeInput};
-pub use measure::measure;
+use crate::dilate::{EdgeMask, Pool, RowScratch};
 
 /// What a Sobel outline looks at.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -121,7 +115,7 @@ pub struct Scratch(Buffers);
 struct Buffers {
     mask: EdgeMask,
     marked: Vec<bool>,
-    /// The id source's label of each id ([`material_labels`]).
+    /// The id source's label of each id (`material_labels`).
     label_of_id: Vec<f32>,
     bands: Pool<BandScratch>,
     rows: Pool<RowsScratch>,
@@ -161,7 +155,7 @@ struct RowsScratch {
 /// read and recomputed by both neighbouring bands: 2/32 more of that
 /// work) stay in the core's cache (250 KB each at 1920 wide) while the
 /// band's three-row windows read them; 34 tasks at 1080p.
-pub const BAND_ROWS: usize = 32;
+pub(crate) const BAND_ROWS: usize = 32;
 
 impl Sobel {
     fn has(&self, s: Source) -> bool {
@@ -183,7 +177,7 @@ impl PostStage for Sobel {
     }
 
     /// Detection, then the dilation row by row straight into the blend.
-    /// The blend is [`composite`](crate::outline::composite)'s: the same
+    /// The blend is `outline::composite`'s: the same
     /// coverage per sample, summed in the same order, the same products.
     /// It is skipped where the coverage is 0 (no mark within the line's
     /// reach), where composite's

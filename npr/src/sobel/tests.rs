@@ -2,9 +2,13 @@
 //! and of the whole stage against its parts composited.
 
 use super::block::{block_sources, BlockRows, BLOCK};
+use super::detect::detect_edges;
 use super::detect::{below_sqrt, Field, Thresholds};
+use super::inputs::{inverse_depth, material_labels, EdgeInput};
+use super::measure::measure;
 use super::measure::measure_lanes;
 use super::*;
+use crate::dilate::dilate;
 use crate::outline::{composite, Selection};
 use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::target::MISS;
