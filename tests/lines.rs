@@ -1281,6 +1281,53 @@ materials = ["a"]
     }
 }
 
+/// A vertex stage with its shortcuts off, to compare a frame with and
+/// without them: no front-face mask (setup decides every face), and, with
+/// `keep_hidden` false, no pass reported hidden (every pass drawn).
+#[derive(Debug)]
+struct Shortcuts {
+    inner: Box<dyn specula_raster::VertexStage>,
+    keep_hidden: bool,
+}
+
+impl Shortcuts {
+    fn without_hidden(inner: Box<dyn specula_raster::VertexStage>) -> Shortcuts {
+        Shortcuts {
+            inner,
+            keep_hidden: false,
+        }
+    }
+
+    fn without_mask(inner: Box<dyn specula_raster::VertexStage>) -> Shortcuts {
+        Shortcuts {
+            inner,
+            keep_hidden: true,
+        }
+    }
+}
+
+impl specula_raster::VertexStage for Shortcuts {
+    fn instance(&self) -> Box<dyn specula_raster::VertexStage> {
+        Box::new(Shortcuts {
+            inner: self.inner.instance(),
+            keep_hidden: self.keep_hidden,
+        })
+    }
+
+    fn clip_positions(
+        &mut self,
+        frame: &FrameContext,
+        scene: &specula_raster::SceneData,
+        out: &mut Vec<[f32; 4]>,
+    ) {
+        self.inner.clip_positions(frame, scene, out)
+    }
+
+    fn hidden(&self, triangles: std::ops::Range<u32>) -> bool {
+        self.keep_hidden && self.inner.hidden(triangles)
+    }
+}
+
 /// A flat open piece's copy (the ground under a sphere) whose boundary is
 /// off screen cannot show: the stage reports its pass hidden and the frame
 /// skips it, with the same visibility buffer bit for bit as drawing it
@@ -1289,26 +1336,10 @@ materials = ["a"]
 #[test]
 fn an_open_plane_copy_is_skipped_only_when_its_boundary_is_off_screen() {
     use specula_raster::frame::{visibility, FrameStats};
-    use specula_raster::geometry::{Cull, GeometryPass, VertexStage};
-    use specula_raster::{SceneData, Target};
+    use specula_raster::geometry::{Cull, GeometryPass};
+    use specula_raster::Target;
     use std::sync::Arc;
 
-    /// The extrusion stage, never skipping: every pass drawn.
-    #[derive(Debug)]
-    struct NeverHidden(Box<dyn VertexStage>);
-    impl VertexStage for NeverHidden {
-        fn instance(&self) -> Box<dyn VertexStage> {
-            Box::new(NeverHidden(self.0.instance()))
-        }
-        fn clip_positions(
-            &mut self,
-            frame: &FrameContext,
-            scene: &SceneData,
-            out: &mut Vec<[f32; 4]>,
-        ) {
-            self.0.clip_positions(frame, scene, out)
-        }
-    }
     let scene = |size: f32| {
         format!(
             r#"
@@ -1372,7 +1403,7 @@ width = 1.5
         );
         let mut drawn = data.clone();
         for p in drawn.geometry.iter_mut().skip(1) {
-            p.vertex = Arc::new(NeverHidden(p.vertex.instance()));
+            p.vertex = Arc::new(Shortcuts::without_hidden(p.vertex.instance()));
         }
         let (mut st_a, mut st_b) = (FrameStats::default(), FrameStats::default());
         let a = visibility(data, &target, &mut st_a);
@@ -1403,30 +1434,10 @@ width = 1.5
 #[test]
 fn extrusion_front_faces_skipped_before_setup_change_nothing() {
     use specula_raster::frame::{visibility, FrameStats};
-    use specula_raster::geometry::{Cull, VertexStage};
-    use specula_raster::{SceneData, Target};
-    use std::ops::Range;
+    use specula_raster::geometry::Cull;
+    use specula_raster::Target;
     use std::sync::Arc;
 
-    /// The stage without its front-face mask: setup decides every face.
-    #[derive(Debug)]
-    struct NoMask(Box<dyn VertexStage>);
-    impl VertexStage for NoMask {
-        fn instance(&self) -> Box<dyn VertexStage> {
-            Box::new(NoMask(self.0.instance()))
-        }
-        fn clip_positions(
-            &mut self,
-            frame: &FrameContext,
-            scene: &SceneData,
-            out: &mut Vec<[f32; 4]>,
-        ) {
-            self.0.clip_positions(frame, scene, out)
-        }
-        fn hidden(&self, triangles: Range<u32>) -> bool {
-            self.0.hidden(triangles)
-        }
-    }
     let scene = |eye: [f32; 3], ssaa: u32| {
         format!(
             r#"
@@ -1484,7 +1495,7 @@ width = 2.0
         let target = Target::new(80 * ssaa, 60 * ssaa).unwrap().with_ssaa(ssaa);
         let mut plain = data.clone();
         for p in plain.geometry.iter_mut().skip(1) {
-            p.vertex = Arc::new(NoMask(p.vertex.instance()));
+            p.vertex = Arc::new(Shortcuts::without_mask(p.vertex.instance()));
         }
         let (mut st_a, mut st_b) = (FrameStats::default(), FrameStats::default());
         let a = visibility(data, &target, &mut st_a);
