@@ -21,7 +21,6 @@
 //! pixel each way, 62k that way with 8×8 blocks; the rest lie within a
 //! few pixels of a silhouette, where the ring is, and must be drawn).
 
-use crate::setup_x4::Vertices4;
 use crate::target::{Target, TILE, TILE_PIXELS};
 use rayon::prelude::*;
 use wide::f64x4;
@@ -37,8 +36,8 @@ const PER_TILE: usize = TILE / BLOCK;
 pub(crate) const PIXEL_MARGIN: f64 = 1.0 / 64.0;
 /// Covered pixel x satisfies min − `LO_OFFSET` ≤ x ≤ max − `HI_OFFSET`
 /// (x + ½ within the box grown by `PIXEL_MARGIN`).
-const LO_OFFSET: f64 = 0.5 + PIXEL_MARGIN;
-const HI_OFFSET: f64 = 0.5 - PIXEL_MARGIN;
+pub(crate) const LO_OFFSET: f64 = 0.5 + PIXEL_MARGIN;
+pub(crate) const HI_OFFSET: f64 = 0.5 - PIXEL_MARGIN;
 
 /// Least depth per `BLOCK`² block of a visibility buffer's depth, row-major
 /// over the tile grid's padded extent (`tiles_x · 8` blocks a row), and 3
@@ -47,8 +46,9 @@ const HI_OFFSET: f64 = 0.5 - PIXEL_MARGIN;
 pub struct DepthBounds {
     min: Vec<f32>,
     row: usize,
-    width: u32,
-    height: u32,
+    /// The image's size (read by `hides_x4` in setup_x4.rs too).
+    pub(crate) width: u32,
+    pub(crate) height: u32,
 }
 
 impl DepthBounds {
@@ -169,79 +169,6 @@ impl DepthBounds {
         self.behind_blocks([x_lo, x_hi, y_lo, y_hi], z)
     }
 
-    /// [`DepthBounds::hides`] of the 4 triangles `v` whose bits are set in
-    /// `lanes`, given `inv_w[j] = 1 / v.w[j]`: bit t of the result is
-    /// `hides` of triangle t (0 outside `lanes`). The same IEEE operations
-    /// in the same order, lane by lane, so the same answers (tested); the
-    /// block loop runs per lane.
-    pub fn hides_x4(&self, v: &Vertices4, inv_w: &[f64x4; 3], lanes: u32) -> u32 {
-        if lanes == 0 {
-            return 0;
-        }
-        let (zero, one) = (f64x4::ZERO, f64x4::ONE);
-        let ahead = v.w[0].simd_gt(zero) & v.w[1].simd_gt(zero) & v.w[2].simd_gt(zero);
-        let (w, h) = (self.width as f64, self.height as f64);
-        let (hw, hh) = (f64x4::splat(0.5 * w), f64x4::splat(0.5 * h));
-        let project = |j: usize| {
-            (
-                (v.x[j] * inv_w[j] + one) * hw,
-                (one - v.y[j] * inv_w[j]) * hh,
-                v.z[j] * inv_w[j],
-            )
-        };
-        let (x0, y0, z0) = project(0);
-        let (x1, y1, z1) = project(1);
-        let (x2, y2, z2) = project(2);
-        let (ux, uy, uz) = (x1 - x0, y1 - y0, z1 - z0);
-        let (vx, vy, vz) = (x2 - x0, y2 - y0, z2 - z0);
-        let inv_d = one / (ux * vy - vx * uy);
-        let gx = (uz * vy - vz * uy) * inv_d;
-        let gy = (ux * vz - vx * uz) * inv_d;
-        // `hides`' min3 and max3, NaN cases included.
-        let min3 = |a: f64x4, b: f64x4, c: f64x4| {
-            let m = b.simd_lt(a).select(b, a);
-            c.simd_lt(m).select(c, m)
-        };
-        let max3 = |a: f64x4, b: f64x4, c: f64x4| -min3(-a, -b, -c);
-        let (x_min, x_max) = (min3(x0, x1, x2), max3(x0, x1, x2));
-        let (y_min, y_max) = (min3(y0, y1, y2), max3(y0, y1, y2));
-        let (lo, hi) = (f64x4::splat(LO_OFFSET), f64x4::splat(HI_OFFSET));
-        let (x_lo, x_hi) = (x_min - lo, x_max - hi);
-        let (y_lo, y_hi) = (y_min - lo, y_max - hi);
-        let (wm, hm) = (f64x4::splat(w - 1.0), f64x4::splat(h - 1.0));
-        let on_image =
-            x_hi.simd_ge(zero) & y_hi.simd_ge(zero) & x_lo.simd_le(wm) & y_lo.simd_le(hm);
-        let z_hi = max3(z0, z1, z2);
-        let (ax, ay) = (gx.abs(), gy.abs());
-        let two = f64x4::splat(2.0);
-        let z = z_hi
-            + (ax + ay) * f64x4::splat(1.0 / 256.0)
-            + f64x4::splat(1e-6)
-                * (z_hi.abs() + ax * (x_max - x_min + two) + ay * (y_max - y_min + two));
-        let judged = (ahead & on_image & z.is_finite()).to_bitmask() & lanes;
-        if judged == 0 {
-            return 0;
-        }
-        // `behind_blocks`' block range, 4 lanes at once (the same
-        // operations: on judged lanes the range is not NaN and meets the
-        // image, so every value converted lies in [0, w − 1] or [0, h − 1]).
-        let bx0 = block_index(x_lo.ceil().fast_max(zero));
-        let bx1 = block_index(x_hi.floor().fast_min(wm));
-        let by0 = block_index(y_lo.ceil().fast_max(zero));
-        let by1 = block_index(y_hi.floor().fast_min(hm));
-        let z = z.to_array();
-        let mut hidden = 0;
-        let mut left = judged;
-        while left != 0 {
-            let t = left.trailing_zeros() as usize;
-            left &= left - 1;
-            if self.behind_block_range([bx0[t], bx1[t], by0[t], by1[t]], z[t]) {
-                hidden |= 1 << t;
-            }
-        }
-        hidden
-    }
-
     /// The end of [`DepthBounds::hides`]: whether depth bound `z` (finite)
     /// is at most the least depth of every block holding a pixel of
     /// columns ⌈x_lo⌉..=⌊x_hi⌋ and rows ⌈y_lo⌉..=⌊y_hi⌋ (a range that
@@ -268,7 +195,7 @@ impl DepthBounds {
     /// at a time (the vector past the row's end reads the next row or the
     /// padding, masked off).
     #[inline(always)]
-    fn behind_block_range(&self, [bx0, bx1, by0, by1]: [usize; 4], z: f64) -> bool {
+    pub(crate) fn behind_block_range(&self, [bx0, bx1, by0, by1]: [usize; 4], z: f64) -> bool {
         if bx0 > bx1 || by0 > by1 {
             return false;
         }
@@ -329,7 +256,7 @@ pub(crate) fn tile_minima(tile: &[f32]) -> TileMinima {
 
 /// Block index of a pixel coordinate in [0, 2³¹): truncated, over `BLOCK`.
 #[inline(always)]
-fn block_index(x: f64x4) -> [usize; 4] {
+pub(crate) fn block_index(x: f64x4) -> [usize; 4] {
     #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
     let n: [i32; 4] = {
         use core::arch::x86_64::_mm256_cvttpd_epi32;
@@ -358,7 +285,7 @@ fn widen(m: &[f32]) -> f64x4 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::setup_x4::LANES;
+    use crate::setup_x4::{Vertices4, LANES};
 
     /// A 130×70 target whose depth is 0.5 everywhere but one pixel.
     fn bounds_with_hole(hole: (u32, u32), hole_depth: f32) -> DepthBounds {

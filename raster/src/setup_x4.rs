@@ -22,7 +22,7 @@
 
 use crate::fixed::{GUARD_BAND_PX, SUBPIXEL_HALF, SUBPIXEL_ONE};
 use crate::geometry::Cull;
-use crate::occlusion::DepthBounds;
+use crate::occlusion::{block_index, DepthBounds, HI_OFFSET, LO_OFFSET};
 use crate::setup::{
     Edge, RasterTri, SetupContext, SetupCounts, SmallEdges, TriPlanes, MAX_CLIP_COORD,
     MAX_PLANE_VALUE, SMALL_PX,
@@ -651,6 +651,83 @@ fn edges_x4(width: u32, height: u32, p: &[[f64x4; 2]; 3]) -> EdgesX4 {
 #[inline(always)]
 fn valid_all() -> f64x4 {
     f64x4::splat(f64::from_bits(u64::MAX))
+}
+
+/// The occlusion test of 4 triangles at once, beside the 4-lane setup that
+/// calls it (occlusion.rs has the one-triangle form it follows).
+impl DepthBounds {
+    /// [`DepthBounds::hides`] of the 4 triangles `v` whose bits are set in
+    /// `lanes`, given `inv_w[j] = 1 / v.w[j]`: bit t of the result is
+    /// `hides` of triangle t (0 outside `lanes`). The same IEEE operations
+    /// in the same order, lane by lane, so the same answers (tested); the
+    /// block loop runs per lane.
+    pub(crate) fn hides_x4(&self, v: &Vertices4, inv_w: &[f64x4; 3], lanes: u32) -> u32 {
+        if lanes == 0 {
+            return 0;
+        }
+        let (zero, one) = (f64x4::ZERO, f64x4::ONE);
+        let ahead = v.w[0].simd_gt(zero) & v.w[1].simd_gt(zero) & v.w[2].simd_gt(zero);
+        let (w, h) = (self.width as f64, self.height as f64);
+        let (hw, hh) = (f64x4::splat(0.5 * w), f64x4::splat(0.5 * h));
+        let project = |j: usize| {
+            (
+                (v.x[j] * inv_w[j] + one) * hw,
+                (one - v.y[j] * inv_w[j]) * hh,
+                v.z[j] * inv_w[j],
+            )
+        };
+        let (x0, y0, z0) = project(0);
+        let (x1, y1, z1) = project(1);
+        let (x2, y2, z2) = project(2);
+        let (ux, uy, uz) = (x1 - x0, y1 - y0, z1 - z0);
+        let (vx, vy, vz) = (x2 - x0, y2 - y0, z2 - z0);
+        let inv_d = one / (ux * vy - vx * uy);
+        let gx = (uz * vy - vz * uy) * inv_d;
+        let gy = (ux * vz - vx * uz) * inv_d;
+        // `hides`' min3 and max3, NaN cases included.
+        let min3 = |a: f64x4, b: f64x4, c: f64x4| {
+            let m = b.simd_lt(a).select(b, a);
+            c.simd_lt(m).select(c, m)
+        };
+        let max3 = |a: f64x4, b: f64x4, c: f64x4| -min3(-a, -b, -c);
+        let (x_min, x_max) = (min3(x0, x1, x2), max3(x0, x1, x2));
+        let (y_min, y_max) = (min3(y0, y1, y2), max3(y0, y1, y2));
+        let (lo, hi) = (f64x4::splat(LO_OFFSET), f64x4::splat(HI_OFFSET));
+        let (x_lo, x_hi) = (x_min - lo, x_max - hi);
+        let (y_lo, y_hi) = (y_min - lo, y_max - hi);
+        let (wm, hm) = (f64x4::splat(w - 1.0), f64x4::splat(h - 1.0));
+        let on_image =
+            x_hi.simd_ge(zero) & y_hi.simd_ge(zero) & x_lo.simd_le(wm) & y_lo.simd_le(hm);
+        let z_hi = max3(z0, z1, z2);
+        let (ax, ay) = (gx.abs(), gy.abs());
+        let two = f64x4::splat(2.0);
+        let z = z_hi
+            + (ax + ay) * f64x4::splat(1.0 / 256.0)
+            + f64x4::splat(1e-6)
+                * (z_hi.abs() + ax * (x_max - x_min + two) + ay * (y_max - y_min + two));
+        let judged = (ahead & on_image & z.is_finite()).to_bitmask() & lanes;
+        if judged == 0 {
+            return 0;
+        }
+        // `behind_blocks`' block range, 4 lanes at once (the same
+        // operations: on judged lanes the range is not NaN and meets the
+        // image, so every value converted lies in [0, w − 1] or [0, h − 1]).
+        let bx0 = block_index(x_lo.ceil().fast_max(zero));
+        let bx1 = block_index(x_hi.floor().fast_min(wm));
+        let by0 = block_index(y_lo.ceil().fast_max(zero));
+        let by1 = block_index(y_hi.floor().fast_min(hm));
+        let z = z.to_array();
+        let mut hidden = 0;
+        let mut left = judged;
+        while left != 0 {
+            let t = left.trailing_zeros() as usize;
+            left &= left - 1;
+            if self.behind_block_range([bx0[t], bx1[t], by0[t], by1[t]], z[t]) {
+                hidden |= 1 << t;
+            }
+        }
+        hidden
+    }
 }
 
 #[cfg(test)]
