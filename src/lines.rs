@@ -340,9 +340,7 @@ impl StrokesDesc {
         }
         check_width(&format!("{f}.width"), self.width)?;
         crate::checks::display_color(&format!("{f}.color"), self.color)?;
-        if !(0.0..=1.0).contains(&self.taper) {
-            return Err(format!("{f}.taper: must be in [0, 1], got {}", self.taper));
-        }
+        crate::checks::unit(&format!("{f}.taper"), self.taper)?;
         Ok(StrokesSpec {
             edges,
             crease_angle: self.crease_angle,

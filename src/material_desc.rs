@@ -492,10 +492,7 @@ impl MaterialDesc {
                     let maps = ParamMaps {
                         base_color: Some(map),
                     };
-                    let name_ = model.name();
-                    let shader = Lit::with_maps(model, maps).map_err(|_| {
-                        format!("base_color_texture: the \"{name_}\" model takes no texture")
-                    })?;
+                    let shader = Lit::with_maps(model, maps)?;
                     Material::new(name, shader, double_sided)
                 }
                 None => Material::new(name, Lit::new(model), double_sided),

@@ -44,7 +44,7 @@ impl Lit {
         }
         match model.visit(Check(&maps)) {
             Some(map) => Err(format!(
-                "{map}: the \"{}\" model has no parameter it can map",
+                "{map}: the \"{}\" model takes no texture",
                 model.name()
             )),
             None => Ok(Lit { model, maps }),
@@ -69,9 +69,7 @@ fn pixel_at<B: Brdf, R: Real>(
     input: &ShadeInput<R>,
 ) -> (B::Params<R>, B::Pixel<R>) {
     let mut params = brdf.params();
-    if !maps.is_empty() {
-        maps.fill(input, &mut params);
-    }
+    maps.fill(input, &mut params);
     (params, brdf.pixel(&params))
 }
 
@@ -257,6 +255,8 @@ impl PacketShader for Lit {
             frags: &'a [Fragment<R>],
             lanes: &'a [u32],
             env: &'a ShadeEnv<'a>,
+            /// The material's maps: none (checked above).
+            maps: &'a ParamMaps,
             out: &'a mut [Rgb<R>],
         }
         impl<R: Real> BrdfVisitor for Packets<'_, R> {
@@ -264,12 +264,11 @@ impl PacketShader for Lit {
             #[inline(always)]
             fn visit<B: Brdf>(self, brdf: &B) {
                 let pixel = brdf.pixel(&brdf.params());
-                let maps = &ParamMaps::default();
                 for (input, out) in ShadeInput::batch(self.frags, self.lanes).zip(self.out) {
                     *out = LightLoop {
                         input: &input,
                         env: self.env,
-                        maps,
+                        maps: self.maps,
                     }
                     .shade(brdf, &pixel);
                 }
@@ -279,6 +278,7 @@ impl PacketShader for Lit {
             frags,
             lanes,
             env,
+            maps: &self.maps,
             out,
         })
     }

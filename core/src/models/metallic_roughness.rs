@@ -40,13 +40,6 @@ impl MetallicRoughness {
         (self.roughness * self.roughness).max(ALPHA_MIN)
     }
 
-    /// F0 = mix(0.04, base_color, metallic).
-    #[inline]
-    pub fn f0(&self) -> [f32; 3] {
-        self.base_color
-            .map(|c| F0_DIELECTRIC + (c - F0_DIELECTRIC) * self.metallic)
-    }
-
     /// Albedo of the diffuse lobe: (1 − metallic) base_color.
     #[inline]
     pub fn diffuse_color(&self) -> [f32; 3] {
@@ -184,7 +177,8 @@ impl Brdf for MetallicRoughness {
     fn pixel<R: Real>(&self, params: &MetallicRoughnessLaneParams<R>) -> MetallicRoughnessPixel<R> {
         let m = params.metallic;
         let f0_d = R::splat(F0_DIELECTRIC as f64);
-        // Unfused, as [`MetallicRoughness::f0`] rounds it.
+        // Unfused: the rounding of F0 the model has always had, so
+        // rendered images keep their bytes.
         let mix = |c: R| f0_d + (c - f0_d) * m;
         let b = params.base_color;
         let f0 = Rgb::new(mix(b.x), mix(b.y), mix(b.z));
