@@ -9,17 +9,43 @@ use std::path::Path;
 pub const ID_MAGIC: &[u8; 8] = b"SPCLID01";
 
 /// Encodes 8-bit sRGB in `format` (PNG, or whatever the name asked for).
+///
+/// Two formats leave the `image` crate's defaults for what common readers
+/// open: PNM is written as a binary PPM (`P6`), not PAM (`P7`), and TGA
+/// without run-length packets (its encoder lets a packet run across
+/// scanlines, which the TGA specification advises against and decoders
+/// such as Pillow refuse).
 pub fn encode_ldr(
     width: u32,
     height: u32,
     rgb8: Vec<u8>,
     format: ImageFormat,
 ) -> Result<Vec<u8>, String> {
-    let img = RgbImage::from_raw(width, height, rgb8).ok_or("image buffer has the wrong size")?;
-    let mut bytes = std::io::Cursor::new(Vec::new());
-    img.write_to(&mut bytes, format)
-        .map_err(|e| format!("cannot encode {format:?}: {e}"))?;
-    Ok(bytes.into_inner())
+    use image::codecs::{pnm, tga};
+    use image::{ExtendedColorType, ImageEncoder};
+    let expected = width as u64 * height as u64 * 3;
+    if rgb8.len() as u64 != expected {
+        return Err("image buffer has the wrong size".into());
+    }
+    let fail = |e: image::ImageError| format!("cannot encode {format:?}: {e}");
+    let mut bytes = Vec::new();
+    match format {
+        ImageFormat::Pnm => pnm::PnmEncoder::new(&mut bytes)
+            .with_subtype(pnm::PnmSubtype::Pixmap(pnm::SampleEncoding::Binary))
+            .write_image(&rgb8, width, height, ExtendedColorType::Rgb8)
+            .map_err(fail)?,
+        ImageFormat::Tga => tga::TgaEncoder::new(&mut bytes)
+            .disable_rle()
+            .write_image(&rgb8, width, height, ExtendedColorType::Rgb8)
+            .map_err(fail)?,
+        _ => {
+            let img =
+                RgbImage::from_raw(width, height, rgb8).ok_or("image buffer has the wrong size")?;
+            img.write_to(&mut std::io::Cursor::new(&mut bytes), format)
+                .map_err(fail)?;
+        }
+    }
+    Ok(bytes)
 }
 
 /// Encodes linear RGB in an HDR `format` (OpenEXR, Radiance HDR).
@@ -96,4 +122,72 @@ pub fn read_ids(path: &Path) -> Result<(u32, u32, Vec<u32>), String> {
         .map(|c| u32::from_le_bytes(c.try_into().expect("4 bytes")))
         .collect();
     Ok((w, h, ids))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A 5 × 3 image whose every pixel differs, with runs of equal pixels
+    /// that cross the end of a row (what a run-length encoder would merge).
+    fn picture() -> (u32, u32, Vec<u8>) {
+        let (w, h) = (5u32, 3u32);
+        let mut px = Vec::new();
+        for y in 0..h {
+            for x in 0..w {
+                let run = x >= 3 || (y > 0 && x < 2);
+                let v = if run {
+                    [9, 99, 199]
+                } else {
+                    [x as u8 * 40, y as u8 * 70, 7]
+                };
+                px.extend_from_slice(&v);
+            }
+        }
+        (w, h, px)
+    }
+
+    /// Binary PPM as Netpbm defines it: `P6`, width, height, maxval 255,
+    /// one whitespace byte, then RGB rows top first.
+    #[test]
+    fn ppm_is_a_binary_p6_pixmap() {
+        let (w, h, px) = picture();
+        let bytes = encode_ldr(w, h, px.clone(), ImageFormat::Pnm).unwrap();
+        let header = format!("P6\n{w} {h}\n255\n");
+        let text = String::from_utf8_lossy(&bytes[..header.len()]);
+        let fields: Vec<&str> = text.split_ascii_whitespace().collect();
+        assert_eq!(fields, ["P6", "5", "3", "255"], "header {text:?}");
+        assert_eq!(&bytes[bytes.len() - px.len()..], &px[..]);
+        assert_eq!(bytes.len(), header.len() + px.len());
+    }
+
+    /// TGA as its specification defines it: an 18-byte header, image type 2
+    /// (uncompressed true colour, so no packet can cross a scanline), 24
+    /// bits per pixel stored B, G, R, rows bottom first unless bit 5 of the
+    /// descriptor says top first.
+    #[test]
+    fn tga_is_uncompressed_true_colour() {
+        let (w, h, px) = picture();
+        let b = encode_ldr(w, h, px.clone(), ImageFormat::Tga).unwrap();
+        let id_len = b[0] as usize;
+        assert_eq!(b[1], 0, "no colour map");
+        assert_eq!(b[2], 2, "uncompressed true colour");
+        assert_eq!(u16::from_le_bytes([b[12], b[13]]) as u32, w);
+        assert_eq!(u16::from_le_bytes([b[14], b[15]]) as u32, h);
+        assert_eq!(b[16], 24);
+        let top_first = b[17] & 0x20 != 0;
+        let data = &b[18 + id_len..18 + id_len + px.len()];
+        for y in 0..h as usize {
+            let row = if top_first { y } else { h as usize - 1 - y };
+            for x in 0..w as usize {
+                let s = (row * w as usize + x) * 3;
+                let d = (y * w as usize + x) * 3;
+                assert_eq!(
+                    [data[s + 2], data[s + 1], data[s]],
+                    px[d..d + 3],
+                    "pixel {x},{y}"
+                );
+            }
+        }
+    }
 }

@@ -55,7 +55,15 @@ impl Output {
                 _ => Ok(default),
             };
         };
+        let lower = ext.to_string_lossy().to_ascii_lowercase();
         match ImageFormat::from_extension(ext) {
+            // The PNM family is written as a colour PPM (`P6`): a name that
+            // promises a bitmap, a grey map or PAM would be a lie.
+            Some(ImageFormat::Pnm) if lower != "ppm" && lower != "pnm" => Err(format!(
+                "{} {}: .{lower} is not written (colour PNM images are .ppm)",
+                self.flag,
+                self.path.display()
+            )),
             Some(f) if f.writing_enabled() => Ok(f),
             _ => Err(format!(
                 "{} {}: cannot write {:?} images (writable: {})",
@@ -72,7 +80,10 @@ impl Output {
 pub fn writable_extensions() -> Vec<&'static str> {
     ImageFormat::all()
         .filter(|f| f.writing_enabled())
-        .filter_map(|f| f.extensions_str().first().copied())
+        .filter_map(|f| match f {
+            ImageFormat::Pnm => Some("ppm"),
+            _ => f.extensions_str().first().copied(),
+        })
         .collect()
 }
 
