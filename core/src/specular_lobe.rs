@@ -109,20 +109,29 @@ impl MicrofacetParams {
     ///
     /// over the φ where o·h > 0 and wi is above the horizon; for fixed θh
     /// both read cos φ > c, so the φ range is [−φmax, φmax] in closed form and
-    /// the ring integrand is smooth: Simpson in φ. ring(u) has kinks where
-    /// that range opens, so u is integrated by adaptive Simpson (tolerance
-    /// 1e-5). Sampling h ∝ D(h)(n·h) instead was off by up to 6e-3 at grazing
-    /// μo, where the weight (o·h)/(μo cos θh) swings with φ.
+    /// the ring integrand is smooth: Simpson in φ. ring(u) is not smooth
+    /// where that range starts to close or vanishes (a kink, or at μo = 1 a
+    /// step), so u is integrated by adaptive Simpson (tolerance 1e-5) on
+    /// pieces that end there ([`MicrofacetParams::albedo_breaks`]).
+    /// Sampling h ∝ D(h)(n·h) instead was off by up to 6e-3 at grazing μo,
+    /// where the weight (o·h)/(μo cos θh) swings with φ.
     pub fn specular_albedo(&self, mu_o: f64) -> [f64; 3] {
         let mu_o = mu_o.clamp(1e-6, 1.0);
         let ring = |u: f64| self.albedo_ring(mu_o, u);
         // Adaptive Simpson can stop early on a panel whose five samples miss
-        // a kink; starting from 16 panels makes that unlikely.
+        // a kink; 16 panels, cut at the known kinks, make that unlikely.
         const PANELS: usize = 16;
+        let mut ends: Vec<f64> = (0..=PANELS).map(|p| p as f64 / PANELS as f64).collect();
+        ends.extend(self.albedo_breaks(mu_o));
+        ends.sort_by(f64::total_cmp);
+        ends.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
         let mut s = [0.0f64; 3];
-        for p in 0..PANELS {
-            let a = (p as f64 / PANELS as f64).max(1e-9);
-            let b = ((p + 1) as f64 / PANELS as f64).min(1.0 - 1e-9);
+        for w in ends.windows(2) {
+            let a = w[0].max(1e-9);
+            let b = w[1].min(1.0 - 1e-9);
+            if b <= a {
+                continue;
+            }
             let m = 0.5 * (a + b);
             let (fa, fm, fb) = (ring(a), ring(m), ring(b));
             let whole = simpson(a, b, fa, fm, fb);
@@ -132,6 +141,41 @@ impl MicrofacetParams {
             }
         }
         s.map(|v| v / std::f64::consts::TAU)
+    }
+
+    /// The u of [`MicrofacetParams::albedo_ring`] where its φ range changes
+    /// form, with θo = acos μo: wi, the mirror of o about h, is above the
+    /// horizon for every φ while θh < (90° − θo)/2 (h tilted away from o)
+    /// and for no φ once θh > (90° + θo)/2 (h tilted toward o); o·h > 0 for
+    /// every φ while θh < 90° − θo. At μo = 1 the first two meet and the
+    /// ring steps from whole to empty.
+    fn albedo_breaks(&self, mu_o: f64) -> Vec<f64> {
+        let theta_o = mu_o.clamp(-1.0, 1.0).acos();
+        let quarter = std::f64::consts::FRAC_PI_4;
+        [
+            quarter - 0.5 * theta_o,
+            quarter + 0.5 * theta_o,
+            2.0 * quarter - theta_o,
+        ]
+        .into_iter()
+        .filter(|t| *t > 0.0 && *t < 2.0 * quarter)
+        .map(|t| self.u_of_cos_h(t.cos()))
+        .collect()
+    }
+
+    /// Inverts [`MicrofacetParams::sample_cos_h`] (decreasing in u) by
+    /// bisection: the u whose cos θh is `cos_h`.
+    fn u_of_cos_h(&self, cos_h: f64) -> f64 {
+        let (mut lo, mut hi) = (0.0f64, 1.0f64);
+        for _ in 0..64 {
+            let mid = 0.5 * (lo + hi);
+            if self.sample_cos_h(mid) > cos_h {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        0.5 * (lo + hi)
     }
 
     /// ring(u) of [`MicrofacetParams::specular_albedo`], per channel.

@@ -108,6 +108,41 @@ fn e_table_matches_quadrature_between_nodes() {
     eprintln!("worst E table error: {worst:.2e}");
 }
 
+/// At α = 1 GGX's D is 1/π everywhere and, height-correlated, G2 =
+/// 2 μi μo / (μi + μo), so with F = 1 the albedo has a closed form:
+/// E(μo) = ∫₀¹ μi / (μi + μo) dμi = 1 − μo ln((1 + μo)/μo); at μo = 1,
+/// 1 − ln 2. Both the quadrature behind the tables and the committed table
+/// (whose α = 1 row and μ = 1 column are nodes) must meet it, the normal
+/// included, where the integrand in half-vector space has a step; and so
+/// must a material's own albedo table (what `specula furnace` prints).
+#[test]
+fn ggx_albedo_at_alpha_one_has_its_closed_form() {
+    let p = params(Ndf::Ggx, Smith::HeightCorrelated, 1.0, 1.0);
+    let material = Microfacet::new(p.clone(), None);
+    for mu in [0.2f64, 0.5, 0.8, 0.975, 0.999, 1.0] {
+        let want = 1.0 - mu * ((1.0 + mu) / mu).ln();
+        let got = material.albedo_at(mu as f32)[0] as f64;
+        assert!(
+            (got - want).abs() < 3e-4,
+            "μo={mu}: material table {got} vs {want}"
+        );
+    }
+    let slice = KcTable::get(Ndf::Ggx, Smith::HeightCorrelated).slice(1.0);
+    for mu in [0.05f64, 0.2, 0.5, 0.8, 0.975, 0.999, 1.0] {
+        let want = 1.0 - mu * ((1.0 + mu) / mu).ln();
+        let got = p.specular_albedo(mu)[0];
+        assert!(
+            (got - want).abs() < 2e-5,
+            "μo={mu}: quadrature {got} vs closed form {want}"
+        );
+        let table = slice.e_at(mu);
+        assert!(
+            (table - want).abs() < 2e-4,
+            "μo={mu}: table {table} vs closed form {want}"
+        );
+    }
+}
+
 #[test]
 fn white_furnace_with_compensation() {
     let mut worst = 0.0f64;

@@ -31,15 +31,16 @@ use crate::real::Real;
 use crate::table::{Axis, Nodes, Table1, Warp};
 use crate::vec3::{Rgb, V3};
 
-/// Directional albedo E(μo) per channel at `N_MU` texel centres
-/// μ_j = (j + ½)/N_MU, linear interpolation clamped at the ends.
+/// Directional albedo E(μo) per channel at `N_MU` nodes from μ = 0 to
+/// μ = 1 inclusive, linear between them: the normal view (μ = 1) reads its
+/// own quadrature value, not the nearest texel centre's.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct AlbedoTable {
     e: Table1<3>,
 }
 
 const N_MU: usize = 64;
-const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Linear, Nodes::Centres);
+const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Linear, Nodes::Ends);
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Microfacet {
