@@ -300,7 +300,7 @@ pub fn load_obj(
         match read(&p) {
             // tobj panics on some malformed MTL lines: check first.
             Ok(b) => match crate::objcheck::check_mtl(&p, &b) {
-                Ok(()) => tobj::load_mtl_buf(&mut std::io::Cursor::new(b)),
+                Ok(()) => tobj::load_mtl_buf(&mut crate::objcheck::strip_bom(&b)),
                 Err(e) => {
                     mtl_errors.borrow_mut().push(e);
                     Err(tobj::LoadError::MaterialParseError)
@@ -335,6 +335,14 @@ pub fn load_obj(
         }
     };
 
+    for (name, line) in &scan.usemtl {
+        if !materials.iter().any(|mt| &mt.name == name) {
+            warnings.push(format!(
+                "{}: line {line}: usemtl {name:?} names no material of the mesh's MTL files; its faces get the mesh entry's material or the default one",
+                path.display()
+            ));
+        }
+    }
     let mut m = MeshData {
         material_names: materials.iter().map(|mt| Some(mt.name.clone())).collect(),
         mtl: materials,
@@ -501,6 +509,41 @@ mod tests {
         assert!(
             m.warnings.iter().any(|w| w.contains("p.obj")
                 && w.contains("2 faces with fewer than 3 corners (first at line 4)")),
+            "{:?}",
+            m.warnings
+        );
+    }
+
+    /// A byte order mark before the first line of an OBJ or an MTL is not
+    /// part of the line: `mtllib` and the first `newmtl` still count.
+    #[test]
+    fn byte_order_marks_are_skipped() {
+        let obj = b"\xEF\xBB\xBFmtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl red\nf 1 2 3\n";
+        let m = load_obj(Path::new("b.obj"), obj, &|_| {
+            Ok(b"\xEF\xBB\xBFnewmtl red\nKd 1 0 0\n".to_vec())
+        })
+        .unwrap();
+        assert_eq!(m.mtl.len(), 1, "{:?}", m.warnings);
+        assert_eq!(m.mtl[0].name, "red");
+        assert_eq!(m.mtl[0].diffuse, Some([1.0, 0.0, 0.0]));
+        assert_eq!(
+            m.material_names[m.tri_material[0] as usize].as_deref(),
+            Some("red")
+        );
+        assert!(m.warnings.is_empty(), "{:?}", m.warnings);
+    }
+
+    #[test]
+    fn usemtl_of_a_missing_material_is_a_warning_with_its_line() {
+        let obj = b"mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl blue\nf 1 2 3\n";
+        let m = load_obj(Path::new("u.obj"), obj, &|_| {
+            Ok(b"newmtl red\nKd 1 0 0\n".to_vec())
+        })
+        .unwrap();
+        assert!(
+            m.warnings
+                .iter()
+                .any(|w| w.contains("u.obj: line 5") && w.contains("\"blue\"")),
             "{:?}",
             m.warnings
         );

@@ -16,8 +16,15 @@ fn quote(line: &str) -> String {
     crate::validate::truncate_echo(line.trim(), QUOTE_MAX)
 }
 
+/// `bytes` without a leading UTF-8 byte order mark, which some editors
+/// write and which tobj would read as part of the first line's keyword.
+pub fn strip_bom(bytes: &[u8]) -> &[u8] {
+    bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
+}
+
 fn utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str, String> {
-    std::str::from_utf8(bytes).map_err(|e| format!("{}: not UTF-8 text: {e}", path.display()))
+    std::str::from_utf8(strip_bom(bytes))
+        .map_err(|e| format!("{}: not UTF-8 text: {e}", path.display()))
 }
 
 /// Whether the first `n` words after the keyword are numbers (tobj ignores
@@ -75,6 +82,8 @@ pub struct ObjScan {
     /// `l` lines (polylines): tobj would read one with three or more points
     /// as a face.
     pub polylines: usize,
+    /// Each name `usemtl` gives, with the first line giving it.
+    pub usemtl: Vec<(String, usize)>,
 }
 
 /// Counts of `v`, `vt`, `vn` seen so far, for checking face indices.
@@ -126,6 +135,7 @@ pub fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, String> {
         dropped_faces: 0,
         first_dropped: None,
         polylines: 0,
+        usemtl: Vec::new(),
     };
     let mut counts = Counts::default();
     // First `v` line with and without a colour: tobj needs all or none.
@@ -193,6 +203,12 @@ pub fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, String> {
                 "usemtl" | "mtllib" => {
                     // tobj takes the name after the first space.
                     let name = line.split_once(' ').map(|(_, r)| r.trim()).unwrap_or("");
+                    if key == "usemtl"
+                        && !name.is_empty()
+                        && !scan.usemtl.iter().any(|(u, _)| u == name)
+                    {
+                        scan.usemtl.push((name.to_string(), n));
+                    }
                     name.is_empty()
                         .then(|| format!("{key} needs a name after a space"))
                 }
