@@ -32,14 +32,21 @@ pub(crate) fn radiometric(field: &str, v: [f32; 3]) -> Result<(), String> {
     }
 }
 
+/// Largest accepted component of a linear colour a material multiplies
+/// light by. Colours above 1 reflect more than they receive and are
+/// allowed (some models warn), but bounded: with lights up to
+/// [`MAX_RADIOMETRIC`], BRDF peaks of ~3e5 and 256 supersamples, 1e6 keeps a
+/// pixel's sum (~8e33) inside f32.
+pub(crate) const MAX_LINEAR_COLOR: f32 = 1e6;
+
 /// A linear colour a material multiplies light by (albedo, ink, ramp
-/// steps): finite and ≥ 0.
+/// steps, emission colours): finite, in [0, `MAX_LINEAR_COLOR`].
 pub(crate) fn linear_color(field: &str, c: [f32; 3]) -> Result<(), String> {
-    if c.iter().all(|v| v.is_finite() && *v >= 0.0) {
+    if c.iter().all(|v| (0.0..=MAX_LINEAR_COLOR).contains(v)) {
         Ok(())
     } else {
         Err(format!(
-            "{field}: colour components must be finite and ≥ 0, got {c:?}"
+            "{field}: colour components must be finite and in [0, {MAX_LINEAR_COLOR:e}], got {c:?}"
         ))
     }
 }

@@ -65,14 +65,19 @@ pub struct Cache {
 /// Most materials kept; the cache is cleared when full.
 const CACHE_MAX: usize = 4096;
 
+/// `v` normalized. Scaled by its largest component first, so any finite
+/// non-zero vector qualifies: the squares of 1e-170 or 1e160 would leave
+/// f64's range.
 fn unit(field: &str, v: [f64; 3]) -> Result<V3<f64>, String> {
-    let len = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
-    if !(len.is_finite() && len > 0.0) {
+    let big = v.iter().fold(0.0f64, |m, c| m.max(c.abs()));
+    if !(big.is_finite() && big > 0.0) {
         return Err(format!(
             "{field}: must be a finite non-zero vector, got {v:?}"
         ));
     }
-    Ok(V3::new(v[0] / len, v[1] / len, v[2] / len))
+    let [x, y, z] = v.map(|c| c / big);
+    let len = (x * x + y * y + z * z).sqrt();
+    Ok(V3::new(x / len, y / len, z / len))
 }
 
 /// One answer: the BRDF value, and for `unlit` the emitted radiance.
@@ -141,16 +146,25 @@ fn eval_light(
     method: Method,
 ) -> Result<LightAnswer, String> {
     crate::polygon_light::check_polygon("light.polygon", &light.polygon)?;
-    if !light.radiance.iter().all(|c| c.is_finite() && *c >= 0.0) {
+    let max = crate::checks::MAX_RADIOMETRIC as f64;
+    if !light.radiance.iter().all(|c| (0.0..=max).contains(c)) {
         return Err(format!(
-            "light.radiance: must be finite and ≥ 0, got {:?}",
+            "light.radiance: every component must be in [0, {max:e}] (as in scene files), got {:?}",
             light.radiance
         ));
     }
+    // What a polygon light reflects depends on the directions to its
+    // points, not on its distance: scaled so its largest coordinate is 1,
+    // a polygon of 1e-15 is integrated as well as one of 1.
+    let big = light
+        .polygon
+        .iter()
+        .flatten()
+        .fold(0.0f64, |m, c| m.max((*c as f64).abs()));
     let verts: Vec<V3<f64>> = light
         .polygon
         .iter()
-        .map(|p| V3::new(p[0] as f64, p[1] as f64, p[2] as f64))
+        .map(|p| V3::new(p[0] as f64 / big, p[1] as f64 / big, p[2] as f64 / big))
         .collect();
     let l = light.radiance;
     match method {

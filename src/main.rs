@@ -165,6 +165,22 @@ enum Aov {
     Id(PathBuf),
 }
 
+impl Aov {
+    fn name(&self) -> &'static str {
+        match self {
+            Aov::Depth(_) => "depth",
+            Aov::Normal(_) => "normal",
+            Aov::Id(_) => "id",
+        }
+    }
+
+    fn path(&self) -> &Path {
+        match self {
+            Aov::Depth(p) | Aov::Normal(p) | Aov::Id(p) => p,
+        }
+    }
+}
+
 fn parse_aov(s: &str) -> Result<Aov, String> {
     let (name, path) = s
         .split_once('=')
@@ -192,6 +208,16 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
         .iter()
         .map(|s| parse_aov(s))
         .collect::<Result<_, _>>()?;
+    for (i, a) in aovs.iter().enumerate() {
+        if let Some(b) = aovs[..i].iter().find(|b| b.name() == a.name()) {
+            return Err(format!(
+                "--aov {}: asked twice ({} and {}); one file per AOV",
+                a.name(),
+                b.path().display(),
+                a.path().display()
+            ));
+        }
+    }
     memory::set_limit(a.max_memory.unwrap_or_else(memory::default_limit));
     let t = Instant::now();
     let scene = load_scene(&a.scene).map_err(|e| e.to_string())?;

@@ -548,9 +548,10 @@ impl MaterialDesc {
             }
             MaterialDesc::Unlit(d) => {
                 checks::linear_color("color", d.color)?;
-                if !(d.intensity.is_finite() && d.intensity >= 0.0) {
+                if !(0.0..=checks::MAX_RADIOMETRIC).contains(&d.intensity) {
                     return Err(format!(
-                        "intensity: must be finite and ≥ 0, got {}",
+                        "intensity: must be finite and in [0, {:e}], got {}",
+                        checks::MAX_RADIOMETRIC,
                         d.intensity
                     ));
                 }
@@ -616,9 +617,18 @@ impl MaterialDesc {
 impl ToonDesc {
     fn shader(&self, read: ReadFile) -> Result<Toon, String> {
         checks::linear_color("base_color", self.base_color)?;
+        // Checked whether or not their threshold is set: a colour in the
+        // file is a colour, used or not.
+        checks::linear_color("specular_color", self.specular_color)?;
+        checks::linear_color("rim_color", self.rim_color)?;
         let ramp = match (&self.bands, &self.ramp) {
             (Some(_), Some(_)) => return Err("bands / ramp: give one of them, not both".into()),
-            (_, Some(r)) => Ramp::explicit(r.clone())?,
+            (_, Some(r)) => {
+                for (i, (_, color)) in r.iter().enumerate() {
+                    checks::linear_color(&format!("ramp[{i}]"), *color)?;
+                }
+                Ramp::explicit(r.clone())?
+            }
             (b, None) => Ramp::bands(b.unwrap_or(3))?,
         };
         let hard = |field: &str, t: Option<f32>, color: [f32; 3], cfield: &str| {

@@ -183,12 +183,19 @@ pub fn render_scene(
         if n == 0 {
             return Err("--threads must be at least 1".into());
         }
-        pool = pool.num_threads(n);
+        // The frame's parallel work comes in tiles: threads beyond their
+        // count (or the machine's cores, if more) would only be started
+        // and left idle. The pixels do not depend on the count.
+        let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+        pool = pool.num_threads(n.min(target.tile_count().max(cores)));
     }
     let pool = pool
         .build()
         .map_err(|e| format!("cannot start worker threads: {e}"))?;
-    let repeat = settings.repeat.max(1);
+    if settings.repeat == 0 {
+        return Err("--repeat must be at least 1".into());
+    }
+    let repeat = settings.repeat;
     let mut post = settings.post();
     post.validate(target.width, target.height)?;
     let buffers = settings.buffers.union(post.buffers());

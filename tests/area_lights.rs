@@ -102,6 +102,49 @@ fn lambert_under_a_quad_matches_the_reference_render_and_the_form_factor() {
     }
 }
 
+/// World points are bounded (±1e9) for polygon lights as for every other
+/// point; up to that bound a light far away and huge is integrated like a
+/// near one: a square of half-size 1e9 at height 1e8 over the floor gives
+/// ρ L F with F = 4 × corner(1e9, 1e9, 1e8).
+#[test]
+fn polygon_lights_up_to_the_world_bound_are_integrated_and_beyond_it_refused() {
+    let huge = |s: f64, h: f64| {
+        FLOOR.replace(
+            "vertices = [[-0.5, 1.5, -0.5], [0.5, 1.5, -0.5], [0.5, 1.5, 0.5], [-0.5, 1.5, 0.5]]\nradiance = [2.0, 2.0, 2.0]",
+            &format!(
+                "vertices = [[-{s:e}, {h:e}, -{s:e}], [{s:e}, {h:e}, -{s:e}], [{s:e}, {h:e}, {s:e}], [-{s:e}, {h:e}, {s:e}]]\nradiance = [2.0, 2.0, 2.0]\nvisible = false"
+            ),
+        )
+    };
+    let text = huge(1e9, 1e8);
+    assert_ne!(text, FLOOR);
+    let (img, _) = render(&text, ShadePath::Simd);
+    let centre = 60 * 120 + 60;
+    let f = 4.0 * corner(1e9, 1e9, 1e8);
+    for (c, rho) in [0.5, 0.25, 1.0].iter().enumerate() {
+        let want = rho * 2.0 * f;
+        let got = img[centre][c] as f64;
+        assert!(
+            (got / want - 1.0).abs() < 1e-3,
+            "channel {c}: {got} vs {want}"
+        );
+    }
+    let read = |_: &std::path::Path| -> std::io::Result<Vec<u8>> {
+        Err(std::io::ErrorKind::NotFound.into())
+    };
+    for s in [2e9, 1e20] {
+        let e =
+            specula::scene::load_scene_str(std::path::Path::new("s.toml"), &huge(s, 1e8), &read)
+                .err()
+                .unwrap_or_else(|| panic!("corners at ±{s:e} accepted"))
+                .to_string();
+        assert!(
+            e.contains("light[0].vertices[0]") && e.contains("1e9"),
+            "{e}"
+        );
+    }
+}
+
 #[test]
 fn a_visible_light_is_drawn_with_its_radiance_from_its_front_only() {
     let below = FLOOR
@@ -261,6 +304,24 @@ fn eval_answers_light_lines_by_ltc_and_by_reference() {
         format!(
             r#"{{"material": {lam}, "wo": [0, 0, 1], "light": {{"polygon": [[0, 0, 2], [0, 1, 2], [3, 1, 2], [3, 0, 5]], "radiance": [1, 1, 1]}}}}"#
         ),
+        // Radiance capped as in scene files.
+        format!(
+            r#"{{"material": {lam}, "wo": [0, 0, 1], "light": {{"polygon": {quad}, "radiance": [1e308, 1, 1]}}}}"#
+        ),
+        // Lines 8-11: the quad of line 0 scaled by 1e-8 and 1e-15, by both
+        // methods: the same directions, the same answer.
+        format!(
+            r#"{{"material": {lam}, "wo": [0.2, 0.1, 1], "light": {{"polygon": [[0, 0, 2e-8], [0, 1e-8, 2e-8], [3e-8, 1e-8, 2e-8], [3e-8, 0, 2e-8]], "radiance": [2, 2, 2]}}}}"#
+        ),
+        format!(
+            r#"{{"material": {lam}, "wo": [0.2, 0.1, 1], "light": {{"polygon": [[0, 0, 2e-15], [0, 1e-15, 2e-15], [3e-15, 1e-15, 2e-15], [3e-15, 0, 2e-15]], "radiance": [2, 2, 2]}}}}"#
+        ),
+        format!(
+            r#"{{"material": {lam}, "wo": [0.2, 0.1, 1], "light": {{"polygon": [[0, 0, 2e-8], [0, 1e-8, 2e-8], [3e-8, 1e-8, 2e-8], [3e-8, 0, 2e-8]], "radiance": [2, 2, 2]}}, "method": "reference"}}"#
+        ),
+        format!(
+            r#"{{"material": {lam}, "wo": [0.2, 0.1, 1], "light": {{"polygon": [[0, 0, 2e-15], [0, 1e-15, 2e-15], [3e-15, 1e-15, 2e-15], [3e-15, 0, 2e-15]], "radiance": [2, 2, 2]}}, "method": "reference"}}"#
+        ),
     ];
     let out = eval(&(lines.join("\n") + "\n"));
     assert_eq!(out.len(), lines.len());
@@ -298,6 +359,20 @@ fn eval_answers_light_lines_by_ltc_and_by_reference() {
         "{}",
         out[6]
     );
+    assert!(
+        out[7]["error"].as_str().unwrap().contains("light.radiance"),
+        "{}",
+        out[7]
+    );
+    for (k, base) in [(8, &ltc), (9, &ltc), (10, &reference), (11, &reference)] {
+        let got = rgb(&out[k], "radiance");
+        for c in 0..3 {
+            assert!(
+                (got[c] / base[c] - 1.0).abs() < 1e-6,
+                "line {k}: {got:?} vs scale 1: {base:?}"
+            );
+        }
+    }
 }
 
 #[test]

@@ -200,6 +200,171 @@ fn bad_resolutions_fail_before_allocating() {
 }
 
 #[test]
+fn counts_and_repeated_outputs_are_checked() {
+    let small = ["--width", "16", "--height", "16"];
+    fails(
+        "cli-repeat-zero",
+        GOOD,
+        &[&small[..], &["--repeat", "0"]].concat(),
+        &["--repeat"],
+    );
+    fails(
+        "cli-threads-zero",
+        GOOD,
+        &[&small[..], &["--threads", "0"]].concat(),
+        &["--threads"],
+    );
+    fails(
+        "cli-aov-twice",
+        GOOD,
+        &[
+            &small[..],
+            &["--aov", "depth=a.exr", "--aov", "depth=b.exr"],
+        ]
+        .concat(),
+        &["--aov depth", "a.exr", "b.exr"],
+    );
+}
+
+/// More threads than a 16 × 16 frame has tiles are not started: the run
+/// succeeds (what it would cost to start them is not asserted here).
+#[test]
+fn many_threads_on_a_small_frame_render() {
+    let dir = temp_dir("cli-many-threads");
+    std::fs::write(dir.join("scene.toml"), GOOD).unwrap();
+    let args = [
+        "render",
+        "scene.toml",
+        "-o",
+        "out.png",
+        "--width",
+        "16",
+        "--height",
+        "16",
+    ];
+    let out = specula(
+        &[&args[..], &["--threads", "10000", "--stats"]].concat(),
+        &dir,
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
+    assert!(
+        text.contains(&format!("{cores} thread(s)")),
+        "expected {cores} threads: {text}"
+    );
+}
+
+#[test]
+fn a_scene_without_light_says_so() {
+    let dir = temp_dir("cli-no-light");
+    let dark = GOOD.split("[[light]]").next().unwrap();
+    std::fs::write(dir.join("scene.toml"), dark).unwrap();
+    let args = [
+        "render",
+        "scene.toml",
+        "-o",
+        "out.png",
+        "--width",
+        "16",
+        "--height",
+        "16",
+    ];
+    let out = specula(&args, &dir);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(
+        err.contains("warning: the scene has no [[light]] and no [environment]"),
+        "{err}"
+    );
+    std::fs::write(dir.join("scene.toml"), GOOD).unwrap();
+    let out = specula(&args, &dir);
+    assert!(!String::from_utf8_lossy(&out.stderr).contains("no [[light]]"));
+}
+
+/// Colours are bounded so that no sum of lights × BRDF × supersamples
+/// overflows f32: a huge component is refused by name, in every model and
+/// in the stylized shaders' colours, used or not.
+#[test]
+fn huge_or_invalid_colours_are_refused_by_name() {
+    let material = |body: &str| {
+        let head = GOOD.split("[materials.m]").next().unwrap();
+        let light = GOOD.split("[[light]]").nth(1).unwrap();
+        format!("{head}[materials.m]\n{body}\n[[light]]{light}")
+    };
+    for (name, body, field) in [
+        (
+            "mr",
+            "model = \"metallic_roughness\"\nroughness = 0.5\nbase_color = [3e38, 1, 1]",
+            "base_color",
+        ),
+        (
+            "lambert",
+            "model = \"lambert\"\nbase_color = [1, 2e6, 1]",
+            "base_color",
+        ),
+        (
+            "disney",
+            "model = \"disney\"\nbase_color = [1e19, 1, 1]",
+            "base_color",
+        ),
+        (
+            "toon-spec",
+            "model = \"toon\"\nbase_color = [0.5, 0.5, 0.5]\nspecular_color = [nan, -1, inf]",
+            "specular_color",
+        ),
+        (
+            "toon-rim",
+            "model = \"toon\"\nbase_color = [0.5, 0.5, 0.5]\nrim_color = [1e30, 0, 0]",
+            "rim_color",
+        ),
+        (
+            "toon-ramp",
+            "model = \"toon\"\nbase_color = [0.5, 0.5, 0.5]\nramp = [[-1.0, [0.1, 0.1, 0.1]], [0.5, [1e7, 1, 1]]]",
+            "ramp[1]",
+        ),
+        (
+            "hatching",
+            "model = \"hatching\"\npaper = [1e9, 1, 1]",
+            "paper",
+        ),
+        (
+            "unlit",
+            "model = \"unlit\"\ncolor = [1, 1, 1]\nintensity = 1e30",
+            "intensity",
+        ),
+    ] {
+        fails(
+            &format!("cli-colour-{name}"),
+            &material(body),
+            &["--width", "8", "--height", "8"],
+            &[field],
+        );
+    }
+}
+
+#[test]
+fn pnm_names_other_than_ppm_are_refused() {
+    for ext in ["pgm", "pbm", "pam"] {
+        let dir = temp_dir(&format!("cli-pnm-{ext}"));
+        std::fs::write(dir.join("scene.toml"), GOOD).unwrap();
+        let out_name = format!("out.{ext}");
+        let out = specula(&["render", "scene.toml", "-o", &out_name], &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{ext}: {err}");
+        assert!(
+            err.contains(&out_name) && err.contains(".ppm"),
+            "{ext}: {err}"
+        );
+        assert!(!dir.join(&out_name).exists());
+    }
+}
+
+#[test]
 fn unwritable_output_leaves_nothing() {
     let dir = temp_dir("cli-unwritable");
     std::fs::write(dir.join("scene.toml"), GOOD).unwrap();
@@ -223,6 +388,46 @@ fn unwritable_output_leaves_nothing() {
         "{err}"
     );
     assert!(!err.contains("panicked"));
+}
+
+/// A texture named only by an MTL (not by the scene) is an input too: no
+/// output may replace it.
+#[test]
+fn refuses_to_overwrite_a_texture_named_by_an_mtl() {
+    let dir = temp_dir("cli-overwrite-mtl-texture");
+    let obj = "mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvt 1 0\nvt 0 1\nusemtl t\nf 1/1 2/2 3/3\n";
+    std::fs::write(dir.join("m.obj"), obj).unwrap();
+    std::fs::write(dir.join("m.mtl"), "newmtl t\nKd 1 1 1\nmap_Kd tex.png\n").unwrap();
+    image::RgbImage::from_pixel(2, 2, image::Rgb([200, 100, 50]))
+        .save(dir.join("tex.png"))
+        .unwrap();
+    let texture = std::fs::read(dir.join("tex.png")).unwrap();
+    let scene = GOOD.replace(
+        "sphere = { radius = 1.0, segments = 16, rings = 8 }\nmaterial = \"m\"",
+        "obj = \"m.obj\"",
+    );
+    assert_ne!(scene, GOOD);
+    std::fs::write(dir.join("scene.toml"), &scene).unwrap();
+    for args in [
+        &["-o", "tex.png"][..],
+        &["-o", "out.png", "--exr", "tex.png"],
+        &["-o", "out.png", "--aov", "id=tex.png"],
+    ] {
+        let mut all = vec!["render", "scene.toml", "--width", "8", "--height", "8"];
+        all.extend_from_slice(args);
+        let out = specula(&all, &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}: {err}");
+        assert!(
+            err.contains("refusing to overwrite") && err.contains("tex.png"),
+            "{args:?}: {err}"
+        );
+        assert_eq!(
+            std::fs::read(dir.join("tex.png")).unwrap(),
+            texture,
+            "{args:?}"
+        );
+    }
 }
 
 #[test]

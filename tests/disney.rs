@@ -57,6 +57,7 @@ fn load(material: &str) -> Result<specula::scene::LoadedScene, String> {
     let toml = format!(
         "[camera]\neye = [0, 0, 5]\ntarget = [0, 0, 0]\nfov_y = 30\nnear = 1\nfar = 10\n\
          [[mesh]]\nsphere = {{ radius = 1 }}\nmaterial = \"d\"\n\
+         [[light]]\ntype = \"directional\"\ndirection = [0, 0, -1]\nirradiance = [1, 1, 1]\n\
          [materials.d]\nmodel = \"disney\"\n{material}\n"
     );
     let read = |_: &Path| -> std::io::Result<Vec<u8>> { Err(std::io::ErrorKind::NotFound.into()) };

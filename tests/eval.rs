@@ -104,6 +104,33 @@ fn values_errors_and_order() {
     }
 }
 
+/// Directions need not be normalized: any finite non-zero scale gives
+/// the answer of the unit vector, even where the squared length would
+/// leave f64's range.
+#[test]
+fn directions_of_any_finite_scale_are_normalized() {
+    let line = |s: f64| {
+        format!(
+            r#"{{"material":{{"model":"microfacet","ndf":"ggx","alpha":0.3,"fresnel":{{"type":"schlick","f0":[1,1,1]}}}},"wi":[{:e},0,{:e}],"wo":[-0.3,0,1]}}"#,
+            0.3 * s,
+            s
+        )
+    };
+    let input: Vec<String> = [1.0, 1e-170, 1e160, 1e300].map(line).to_vec();
+    let out = eval(&input.join("\n"));
+    let unit = f(&out[0]);
+    assert!(unit[0] > 0.0);
+    for (v, s) in out.iter().skip(1).zip(["1e-170", "1e160", "1e300"]) {
+        let got = f(v);
+        for c in 0..3 {
+            assert!(
+                (got[c] - unit[c]).abs() <= 1e-12 * unit[c],
+                "scale {s}: {got:?} vs {unit:?}"
+            );
+        }
+    }
+}
+
 #[test]
 fn unlit_reflects_nothing_and_emits_its_radiance_above_the_horizon() {
     let m = r#"{"model": "unlit", "color": [0.25, 0.5, 1.0], "intensity": 3.0}"#;

@@ -571,6 +571,9 @@ impl<'a> SceneBuilder<'a> {
             } => {
                 use crate::polygon_light::{add_visible, check_polygon};
                 use specula_core::light::AreaMethod;
+                for (k, v) in vertices.iter().enumerate() {
+                    check_point(&format!("{field}.vertices[{k}]"), *v)?;
+                }
                 check_polygon(&format!("{field}.vertices"), vertices)?;
                 checks::radiometric(&format!("{field}.radiance"), *radiance)?;
                 if *visible {

@@ -25,9 +25,10 @@ pub struct SceneError {
 pub struct LoadedScene {
     pub data: SceneData,
     pub output: OutputDesc,
-    /// Files the scene was read from (the scene file, OBJs, MTLs; relative
-    /// ones against the scene's folder): outputs
-    /// must never overwrite them.
+    /// Files the scene was read from (the scene file, OBJs, MTLs,
+    /// textures, tonal art maps; relative ones against the scene's
+    /// folder; by [`load_scene`], every file it read): outputs must never
+    /// overwrite them.
     pub inputs: Vec<PathBuf>,
     /// Things worth telling the user that did not stop the load.
     pub warnings: Vec<String>,
@@ -50,11 +51,22 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
     };
     let text = std::fs::read_to_string(path).map_err(|e| err(format!("cannot read: {e}")))?;
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
-    let read = move |p: &Path| std::fs::read(dir.join(p));
+    // Every file the load reads is an input (textures named by an MTL,
+    // tonal art map tones, …), recorded where it is read.
+    let read_paths = std::cell::RefCell::new(Vec::new());
+    let read = |p: &Path| {
+        let full = dir.join(p);
+        read_paths.borrow_mut().push(full.clone());
+        std::fs::read(full)
+    };
     let mut scene = load_scene_str(path, &text, &read)?;
-    let base = path.parent().unwrap_or(Path::new(""));
     for p in scene.inputs.iter_mut().skip(1) {
-        *p = base.join(&p);
+        *p = dir.join(&p);
+    }
+    for p in read_paths.into_inner() {
+        if !scene.inputs.contains(&p) {
+            scene.inputs.push(p);
+        }
     }
     Ok(scene)
 }
@@ -109,6 +121,11 @@ fn build_scene(
     scene.add_lights(&desc.lights, desc.render.area_lights)?;
     if let Some(e) = &desc.environment {
         scene.data.environment = Some(build_environment(e)?);
+    }
+    if scene.data.lights.is_empty() && scene.data.environment.is_none() {
+        scene.warnings.push(
+            "the scene has no [[light]] and no [environment]: lit materials render black (unlit ones and the background still show)".into(),
+        );
     }
     scene.warm_tables();
     let outlines = check_outlines(&desc.outlines, &scene.materials.by_name)?;
