@@ -1,5 +1,5 @@
 //! specula's FLIP against the authors' implementation: the mean FLIP of
-//! each pair in fixtures/flip/ must agree within 1e-3 with the value the
+//! each pair in fixtures/flip/ must agree within 1e-5 with the value the
 //! `flip-evaluator` package gave (fixtures/flip/reference.json, written by
 //! fixtures/flip/flip_reference.py; provenance in the file).
 
@@ -10,7 +10,7 @@ use specula::diff::{compare, FlipSettings};
 use std::path::{Path, PathBuf};
 
 const DIR: &str = "fixtures/flip";
-const TOLERANCE: f64 = 1e-3;
+const TOLERANCE: f64 = 1e-5;
 
 /// Reads a little-endian PFM (rows bottom to top) as top-first RGB.
 fn read_pfm(path: &Path) -> DiffImage {
