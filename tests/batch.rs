@@ -130,6 +130,19 @@ fn diff_dir_compares_two_batches_with_one_exit_status() {
         text.contains("furnace") && text.contains("sphere-grid"),
         "{text}"
     );
+    // Another renderer's images, no manifest: paired by the reference's names.
+    let c = dir.join("c");
+    std::fs::create_dir_all(&c).unwrap();
+    for f in ["furnace.png", "sphere-grid.png"] {
+        std::fs::copy(b.join(f), c.join(f)).unwrap();
+    }
+    let out = specula(&["diff", "--dir", "a", "c"], &dir);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
     // A scene missing from one side is an error (status 2) named in the table.
     std::fs::remove_file(b.join("manifest.jsonl")).unwrap();
     run(

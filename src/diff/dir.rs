@@ -1,11 +1,24 @@
 //! `specula diff --dir REFDIR TESTDIR`: every scene of two `specula
 //! batch` folders, paired by scene name through their manifests
 //! (`manifest.jsonl`, or the shards' `manifest-I-of-N.jsonl` together), a
-//! table worst first (by mean FLIP), one exit status.
+//! table worst first (by mean FLIP), one exit status. A test folder with
+//! no manifest (images another renderer wrote) is read by the reference's
+//! file names: REFDIR's `SCENE.png` against TESTDIR's `SCENE.png`.
 
 use super::{apply_bounds, compare, heatmap_png, load, Bound, DiffArgs, FlipSettings, Verdict};
 use crate::batch::{read_manifest, Record};
 use std::path::{Path, PathBuf};
+
+/// Whether a folder holds a batch manifest.
+fn has_manifest(dir: &Path) -> bool {
+    std::fs::read_dir(dir).is_ok_and(|rd| {
+        rd.filter_map(|e| e.ok()).any(|e| {
+            e.file_name().to_str().is_some_and(|n| {
+                n == "manifest.jsonl" || (n.starts_with("manifest-") && n.ends_with(".jsonl"))
+            })
+        })
+    })
+}
 
 /// The records of a batch folder: `manifest.jsonl` when present, else every
 /// shard manifest; a scene listed twice is an error.
@@ -58,7 +71,12 @@ struct Row {
 
 pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Verdict, String> {
     let refs = folder_records(&a.reference)?;
-    let tests = folder_records(&a.test)?;
+    let tests = if a.test.is_dir() && !has_manifest(&a.test) {
+        // Images from another renderer: the reference's names.
+        refs.clone()
+    } else {
+        folder_records(&a.test)?
+    };
     if let Some(h) = &a.heatmap {
         std::fs::create_dir_all(h)
             .map_err(|e| format!("--heatmap {}: cannot create the folder: {e}", h.display()))?;
