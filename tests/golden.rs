@@ -7,8 +7,8 @@
 //! golden PNGs after an intended change: fixtures/golden/SCENE.png (the
 //! SIMD path's image) and SCENE.scalar.png only where the scalar path's
 //! pixels differ from it.
-//! A failing check writes the new image and a FLIP heat map against the
-//! golden one into the target folder and prints their paths.
+//! A failing check writes the new image, a copy of the golden one and a
+//! FLIP heat map of the two into the target folder and prints their paths.
 
 mod common;
 
@@ -143,6 +143,10 @@ fn every_fixture_scene_renders_its_golden_pixels() {
                 want.map_or("none", |s| s.as_str()),
                 new_png.display()
             );
+            let old_copy = out.join(format!("{name}.{label}.old.png"));
+            if std::fs::copy(&golden_png, &old_copy).is_ok() {
+                msg += &format!(", golden image {}", old_copy.display());
+            }
             if let Ok(old) = specula::diff::load::load(&golden_png) {
                 let new = as_diff_image(new_png.clone(), w, h, &rgb);
                 let settings = FlipSettings {

@@ -57,20 +57,29 @@ pub struct DiffArgs {
     pub tonemap: String,
 }
 
+/// Which side of a bound fails.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Fails {
+    /// The value exceeds the bound (`--fail-above`).
+    Above,
+    /// The value falls under the bound (`--fail-below`).
+    Below,
+}
+
 /// A bound on one metric.
 #[derive(Clone, Debug, Serialize)]
 pub struct Bound {
     pub metric: String,
-    /// "above" fails when the value exceeds `value`, "below" when it falls under.
-    pub fails: &'static str,
+    pub fails: Fails,
     pub value: f64,
 }
 
 fn parse_bounds(a: &DiffArgs) -> Result<Vec<Bound>, String> {
     let mut out = Vec::new();
     for (flag, list, fails) in [
-        ("--fail-above", &a.fail_above, "above"),
-        ("--fail-below", &a.fail_below, "below"),
+        ("--fail-above", &a.fail_above, Fails::Above),
+        ("--fail-below", &a.fail_below, Fails::Below),
     ] {
         for s in list {
             let (m, v) = s
@@ -257,16 +266,15 @@ pub fn apply_bounds(report: &mut Report, bounds: &[Bound]) {
             .metrics
             .get(&b.metric)
             .expect("bound names are checked");
-        let fails = match b.fails {
-            "above" => v > b.value,
-            _ => v < b.value,
+        let (fails, side) = match b.fails {
+            Fails::Above => (v > b.value, "above"),
+            Fails::Below => (v < b.value, "below"),
         };
         if fails {
             report.failed.push(format!(
-                "{} = {} is {} {}",
+                "{} = {} is {side} {}",
                 b.metric,
                 fmt_num(v),
-                b.fails,
                 b.value
             ));
         }
