@@ -6,8 +6,10 @@
 //! (`label`). The built-in demo lives in `demo`; `fuzzing` holds the fuzz
 //! targets' entry points.
 
+pub mod batch;
 pub mod checks;
 pub mod demo;
+pub mod diff;
 pub mod eval;
 pub mod fit_ltc;
 pub mod fit_ltc_coat;

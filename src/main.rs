@@ -50,6 +50,12 @@ enum Command {
     /// Build the committed Kulla-Conty E tables (core/data/kc_tables.bin;
     /// format in core/src/kc_tables.rs).
     KcTables(KcTablesArgs),
+    /// Compare a test image with a reference: PSNR, errors, FLIP, a heat map;
+    /// exit status 0 pass, 1 a --fail-above/--fail-below bound crossed, 2 error.
+    Diff(specula::diff::DiffArgs),
+    /// Render scenes into a folder with a manifest (input and output hashes),
+    /// resumably, optionally one shard of the set.
+    Batch(specula::batch::BatchArgs),
 }
 
 #[derive(clap::Args)]
@@ -406,10 +412,40 @@ fn run_demo() -> Result<(), String> {
     Ok(())
 }
 
+fn run_batch(a: specula::batch::BatchArgs) -> Result<(), String> {
+    let o = specula::batch::run(&a, true)?;
+    println!(
+        "{} rendered, {} up to date, {} failed; manifest {}",
+        o.rendered.len(),
+        o.skipped.len(),
+        o.failed.len(),
+        o.manifest.display()
+    );
+    for (scene, e) in &o.failed {
+        eprintln!("error: {scene}: {}", truncate_lines(e, MESSAGE_LINE_MAX));
+    }
+    if o.failed.is_empty() {
+        Ok(())
+    } else {
+        Err(format!("{} scene(s) failed", o.failed.len()))
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     specula::table_cache::install();
     let result = match cli.command {
+        Some(Command::Diff(a)) => {
+            return match specula::diff::run(&a) {
+                Ok(specula::diff::Verdict::Pass) => ExitCode::SUCCESS,
+                Ok(specula::diff::Verdict::Fail) => ExitCode::from(1),
+                Err(e) => {
+                    eprintln!("error: {}", truncate_lines(&e, MESSAGE_LINE_MAX));
+                    ExitCode::from(2)
+                }
+            }
+        }
+        Some(Command::Batch(a)) => run_batch(a),
         None => run_demo(),
         Some(Command::Render(a)) => run_render(a),
         Some(Command::Furnace(a)) => run_furnace(a),
