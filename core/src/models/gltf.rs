@@ -33,8 +33,8 @@
 //! which is the extension's min(1 − max3 E(VdotN), 1 − max3 E(LdotN)),
 //! with E the sheen lobe's directional albedo (sheen.rs). The extension's
 //! lobe reflects more than it receives at grazing views of smooth sheens
-//! (E up to 6 at sheen_roughness 0, above 1 below about 0.3 at views past
-//! 80°: core/tests/gltf.rs), where the scaling would turn negative; it is
+//! (E up to 6 at sheen_roughness 0, above 1 at sheen_roughness below
+//! about 0.25 for views within about 3° of the horizon: core/tests/gltf.rs), where the scaling would turn negative; it is
 //! clamped at 0, so f stays ≥ 0 (the white furnace then exceeds 1 there,
 //! as the extension's lobe does).
 //!
