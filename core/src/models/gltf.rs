@@ -33,10 +33,10 @@
 //! which is the extension's min(1 − max3 E(VdotN), 1 − max3 E(LdotN)),
 //! with E the sheen lobe's directional albedo (sheen.rs). The extension's
 //! lobe reflects more than it receives at grazing views of smooth sheens
-//! (E up to 6 at sheen_roughness 0, above 1 at sheen_roughness below
-//! about 0.25 for views within about 3° of the horizon: core/tests/gltf.rs), where the scaling would turn negative; it is
-//! clamped at 0, so f stays ≥ 0 (the white furnace then exceeds 1 there,
-//! as the extension's lobe does).
+//! (E above 1: core/tests/gltf.rs, figures in docs/accuracy.md), where
+//! the scaling would turn negative; it is clamped at 0, so f stays ≥ 0
+//! (the white furnace then exceeds 1 there, as the extension's lobe
+//! does).
 //!
 //! **Clearcoat** (KHR_materials_clearcoat) over all of that:
 //! f = (1 − c F_c) f_under + c F_c specular_brdf(α_c), with c = clearcoat,
@@ -62,10 +62,9 @@
 //! the base by its view-only form 1 − max3 E(μo) less what the larger
 //! E(μi) takes: for a Lambertian lobe exactly max3 K(μo) times its albedo,
 //! K = 2 ∫ (E(μ) − E(μo))⁺ μ dμ (tabulated with E), and for the specular
-//! lobe K times α (no spread at a mirror, about Lambertian at α = 1). The
-//! albedo is within 0.03 absolute of numeric integration of f at sheen
-//! roughness ≥ 0.3 (the view-only form alone: 0.1), and within 4e-3
-//! without sheen (core/tests/gltf.rs). Polygon lights: the GGX LTC
+//! lobe K times α (no spread at a mirror, about Lambertian at α = 1);
+//! `directional_albedo_against_numeric_integration` (core/tests/gltf.rs)
+//! bounds the error, docs/accuracy.md gives it. Polygon lights: the GGX LTC
 //! (ltc/ggx.rs) per lobe at its α (specular; clearcoat times c F_c(μo)),
 //! the diffuse lobe as its albedo at μo times the form factor (as
 //! `metallic_roughness`); sheen has no LTC here, and materials with sheen
