@@ -724,9 +724,11 @@ fn options_agree_at_metallic_0_and_1_and_simplified_is_metallic_roughness() {
             if metallic == 0.0 || metallic == 1.0 {
                 assert!((a[c] - b[c]).abs() <= 1e-14 * a[c].abs().max(1.0));
             }
-            // metallic_roughness's 0.04 is an f32 constant.
+            // metallic_roughness forms α = roughness² in f32 and its 0.04
+            // is an f32 constant: a few f32 roundings apart, which D's
+            // steepness multiplies.
             assert!(
-                rel(b[c], c_mr[c]) < 1e-7,
+                rel(b[c], c_mr[c]) < 1e-6,
                 "simplified {} vs metallic_roughness {}",
                 b[c],
                 c_mr[c]
