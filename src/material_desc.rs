@@ -7,8 +7,8 @@ use serde::Deserialize;
 use specula_core::kulla_conty::KcColor;
 use specula_core::models::microfacet::clamp_alpha;
 use specula_core::models::{
-    Disney, DisneyParams, Fresnel, GtrLambda, Lambert, MetallicRoughness, Microfacet,
-    MicrofacetParams, Ndf, Smith,
+    Disney, DisneyParams, Fresnel, Gltf, GltfFresnel, GltfParams, GtrLambda, Lambert,
+    MetallicRoughness, Microfacet, MicrofacetParams, Ndf, Smith,
 };
 use specula_core::Model;
 use specula_npr::hatching::{builtin_tam, Hatching};
@@ -29,6 +29,7 @@ pub enum MaterialDesc {
     MetallicRoughness(MetallicRoughnessDesc),
     Microfacet(MicrofacetDesc),
     Disney(DisneyDesc),
+    Gltf(GltfDesc),
     Unlit(UnlitDesc),
     Toon(ToonDesc),
     Hatching(HatchingDesc),
@@ -242,6 +243,115 @@ impl Default for DisneyDesc {
             energy_compensation: false,
             double_sided: false,
         }
+    }
+}
+
+/// The glTF 2.0 material with KHR_materials_ior, _specular, _clearcoat and
+/// _sheen (core::models::gltf): the glTF names in snake_case, the glTF
+/// defaults.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields, default)]
+pub struct GltfDesc {
+    pub base_color_factor: [f32; 3],
+    pub metallic_factor: f32,
+    pub roughness_factor: f32,
+    pub ior: f32,
+    pub specular_factor: f32,
+    pub specular_color_factor: [f32; 3],
+    pub clearcoat_factor: f32,
+    pub clearcoat_roughness_factor: f32,
+    pub sheen_color_factor: [f32; 3],
+    pub sheen_roughness_factor: f32,
+    /// `"normative"` (Appendix B's fresnel_mix) or `"simplified"` (the
+    /// diffuse lobe weighted by 1 − F with F0 = mix(dielectric F0, base,
+    /// metallic)); read as text so that an unknown value names the field.
+    pub fresnel: String,
+    /// An sRGB image multiplying base_color_factor at the surface's uv.
+    pub base_color_texture: Option<PathBuf>,
+    pub double_sided: bool,
+}
+
+impl Default for GltfDesc {
+    fn default() -> GltfDesc {
+        let p = GltfParams::default();
+        GltfDesc {
+            base_color_factor: p.base_color,
+            metallic_factor: p.metallic,
+            roughness_factor: p.roughness,
+            ior: p.ior,
+            specular_factor: p.specular,
+            specular_color_factor: p.specular_color,
+            clearcoat_factor: p.clearcoat,
+            clearcoat_roughness_factor: p.clearcoat_roughness,
+            sheen_color_factor: p.sheen_color,
+            sheen_roughness_factor: p.sheen_roughness,
+            fresnel: "normative".into(),
+            base_color_texture: None,
+            double_sided: false,
+        }
+    }
+}
+
+impl GltfDesc {
+    /// Every field checked, each against the range its glTF schema gives:
+    /// factors in [0, 1] (NaN refused), `specular_color_factor` components
+    /// finite and ≥ 0 (KHR_materials_specular allows values above 1; F0 is
+    /// clamped to 1 after the IOR's r0 multiplies it), `ior` ≥ 1 and at
+    /// most 1e4, or exactly 0 (KHR_materials_ior's infinite IOR).
+    fn params(&self) -> Result<GltfParams, String> {
+        let unit3 = |field: &str, c: [f32; 3]| -> Result<(), String> {
+            if c.iter().all(|v| (0.0..=1.0).contains(v)) {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{field}: every component must be in [0, 1], got {c:?}"
+                ))
+            }
+        };
+        unit3("base_color_factor", self.base_color_factor)?;
+        unit3("sheen_color_factor", self.sheen_color_factor)?;
+        checks::linear_color("specular_color_factor", self.specular_color_factor)?;
+        for (field, v) in [
+            ("metallic_factor", self.metallic_factor),
+            ("roughness_factor", self.roughness_factor),
+            ("specular_factor", self.specular_factor),
+            ("clearcoat_factor", self.clearcoat_factor),
+            (
+                "clearcoat_roughness_factor",
+                self.clearcoat_roughness_factor,
+            ),
+            ("sheen_roughness_factor", self.sheen_roughness_factor),
+        ] {
+            checks::unit(field, v)?;
+        }
+        if !(self.ior == 0.0 || (1.0..=MAX_IOR).contains(&self.ior)) {
+            return Err(format!(
+                "ior: must be in [1, 1e4], or 0 for an infinite IOR, got {}",
+                self.ior
+            ));
+        }
+        Ok(GltfParams {
+            base_color: self.base_color_factor,
+            metallic: self.metallic_factor,
+            roughness: self.roughness_factor,
+            ior: self.ior,
+            specular: self.specular_factor,
+            specular_color: self.specular_color_factor,
+            clearcoat: self.clearcoat_factor,
+            clearcoat_roughness: self.clearcoat_roughness_factor,
+            sheen_color: self.sheen_color_factor,
+            sheen_roughness: self.sheen_roughness_factor,
+            fresnel: match self.fresnel.as_str() {
+                "normative" => GltfFresnel::Normative,
+                "simplified" => GltfFresnel::Simplified,
+                other => {
+                    return Err(format!(
+                        "fresnel: must be \"normative\" or \"simplified\", got {:?}",
+                        crate::validate::truncate_echo(other, 100)
+                    ))
+                }
+            },
+        })
     }
 }
 
@@ -506,6 +616,7 @@ impl MaterialDesc {
         match self {
             MaterialDesc::Lambert(d) => d.base_color_texture.as_deref(),
             MaterialDesc::MetallicRoughness(d) => d.base_color_texture.as_deref(),
+            MaterialDesc::Gltf(d) => d.base_color_texture.as_deref(),
             MaterialDesc::Toon(d) => d.base_color_texture.as_deref(),
             _ => None,
         }
@@ -609,6 +720,7 @@ impl MaterialDesc {
                 };
                 (Model::Disney(m), d.double_sided)
             }
+            MaterialDesc::Gltf(d) => (Model::Gltf(Gltf::new(d.params()?)), d.double_sided),
         };
         Ok((Shading::Lit(model), double_sided))
     }

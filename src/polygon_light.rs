@@ -103,13 +103,17 @@ pub fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), String> {
 
 /// Why `model` cannot take polygon lights by LTC, if it cannot: the
 /// table is fitted to GGX, and Beckmann or GTR lobes through it err by up
-/// to 30 % of the albedo (core/tests/ltc_ggx.rs).
+/// to 30 % of the albedo (core/tests/ltc_ggx.rs); the glTF sheen lobe has
+/// no LTC.
 pub fn ltc_refusal(model: &Model) -> Option<String> {
     match model {
         Model::Microfacet(m) if m.params.ndf != Ndf::Ggx => Some(format!(
             "polygon lights need ndf = \"ggx\" on microfacet materials (the LTC table is fitted to GGX; {:?} through it errs by up to 30 %)",
             m.params.ndf
         )),
+        Model::Gltf(m) if m.has_sheen() => Some(
+            "polygon lights cannot light a gltf material with sheen (sheen_color_factor above 0): the sheen lobe has no LTC integral here".to_string(),
+        ),
         _ => None,
     }
 }

@@ -31,7 +31,7 @@
 //!    polygon ([`Brdf::polygon_local`], where the model has one).
 
 use crate::light::PolygonLocal;
-use crate::models::{Disney, Lambert, MetallicRoughness, Microfacet};
+use crate::models::{Disney, Gltf, Lambert, MetallicRoughness, Microfacet};
 use crate::real::{Mask, Real};
 use crate::vec3::{Rgb, V3};
 
@@ -353,6 +353,7 @@ pub enum Model {
     MetallicRoughness(MetallicRoughness),
     Microfacet(Microfacet),
     Disney(Disney),
+    Gltf(Gltf),
 }
 
 /// Code generic over the model: `Model::visit` calls `visit` with the concrete
@@ -371,6 +372,7 @@ impl Model {
             Model::MetallicRoughness(m) => v.visit(m),
             Model::Microfacet(m) => v.visit(m),
             Model::Disney(m) => v.visit(m),
+            Model::Gltf(m) => v.visit(m),
         }
     }
 
@@ -411,6 +413,7 @@ impl Model {
             Model::MetallicRoughness(_) => "metallic_roughness",
             Model::Microfacet(_) => "microfacet",
             Model::Disney(_) => "disney",
+            Model::Gltf(_) => "gltf",
         }
     }
 }

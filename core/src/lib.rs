@@ -19,6 +19,7 @@ pub mod models;
 pub mod ndf;
 pub mod quadrature;
 pub mod real;
+pub mod sheen;
 mod specular_lobe;
 pub mod table;
 mod vec3;

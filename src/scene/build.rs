@@ -618,9 +618,12 @@ impl<'a> SceneBuilder<'a> {
             specula_core::ltc::ggx::table();
         }
         if (polygon_lights || self.data.environment.is_some())
-            && self.materials.list.iter().any(is_metallic_roughness)
+            && self.materials.list.iter().any(is_split_sum_model)
         {
             specula_core::albedo_tables::AlbedoTables::get();
+        }
+        if self.materials.list.iter().any(has_sheen) {
+            specula_core::sheen::SheenTable::get();
         }
     }
 }
@@ -700,11 +703,21 @@ pub(super) fn place_mesh(
     })
 }
 
-/// Whether a material is `metallic_roughness`, whose polygon-light and
-/// environment terms read the process-wide split-sum tables.
-pub(super) fn is_metallic_roughness(m: &Material) -> bool {
+/// Whether a material is `metallic_roughness` or `gltf`, whose
+/// polygon-light and environment terms read the process-wide split-sum
+/// tables.
+pub(super) fn is_split_sum_model(m: &Material) -> bool {
     m.shader
         .as_any()
         .downcast_ref::<Lit>()
-        .is_some_and(|l| matches!(l.model(), Model::MetallicRoughness(_)))
+        .is_some_and(|l| matches!(l.model(), Model::MetallicRoughness(_) | Model::Gltf(_)))
+}
+
+/// Whether a material is `gltf` with sheen, whose every light reads the
+/// sheen albedo table.
+fn has_sheen(m: &Material) -> bool {
+    m.shader
+        .as_any()
+        .downcast_ref::<Lit>()
+        .is_some_and(|l| matches!(l.model(), Model::Gltf(g) if g.has_sheen()))
 }
