@@ -81,14 +81,17 @@ pub fn text_width(text: &str, size: f32) -> f32 {
 
 /// Draws `labels` onto the row-major RGB8 image `rgb8` (width × height),
 /// with positions and sizes multiplied by `scale` (output size over the
-/// scene's). Pixels outside the image are skipped; labels are validated.
+/// scene's). Labels are validated. A line is never taller than the
+/// image's shorter side (a glyph's coverage buffer then stays smaller than
+/// the image), and glyphs wholly outside the image are not rasterized.
 pub fn draw_labels(rgb8: &mut [u8], width: u32, height: u32, labels: &[LabelDesc], scale: f32) {
     if labels.is_empty() || rgb8.len() != width as usize * height as usize * 3 {
         return;
     }
     let font = FontRef::try_from_slice(FONT).expect("the bundled font parses");
+    let tallest = width.min(height) as f32;
     for label in labels {
-        let px = PxScale::from(label.size * scale);
+        let px = PxScale::from((label.size * scale).min(tallest));
         let scaled = font.as_scaled(px);
         let color = label.color.map(|c| c * 255.0);
         let mut x = label.at[0] * scale;
@@ -106,6 +109,10 @@ pub fn draw_labels(rgb8: &mut [u8], width: u32, height: u32, labels: &[LabelDesc
                 continue; // spaces have no outline
             };
             let b = outlined.px_bounds();
+            if b.max.x < 0.0 || b.max.y < 0.0 || b.min.x >= width as f32 || b.min.y >= height as f32
+            {
+                continue;
+            }
             outlined.draw(|gx, gy, coverage| {
                 let (ix, iy) = (b.min.x as i64 + gx as i64, b.min.y as i64 + gy as i64);
                 if ix < 0 || iy < 0 || ix >= width as i64 || iy >= height as i64 {
@@ -185,5 +192,27 @@ mod tests {
         .validate()
         .unwrap_err();
         assert!(e.starts_with("color"), "{e}");
+    }
+
+    /// A label scaled far beyond the image (a 16 × 16 scene's size 1000 at
+    /// 2048 × 2048, or 16384 × 16) is drawn at the image's shorter side at
+    /// most, so it costs what the image does, not terabytes; one far off
+    /// the image draws nothing.
+    #[test]
+    fn huge_and_distant_labels_stay_within_the_image() {
+        let label = |at: [f32; 2]| LabelDesc {
+            text: "WWWW".into(),
+            at,
+            size: 1000.0,
+            color: [1.0; 3],
+        };
+        for (w, h, scale) in [(256u32, 256u32, 128.0f32), (1024, 16, 64.0)] {
+            let mut img = vec![0u8; (w * h * 3) as usize];
+            draw_labels(&mut img, w, h, &[label([0.0, 0.0])], scale);
+            assert!(img.iter().any(|&v| v > 0), "{w}×{h}: nothing drawn");
+            let mut far = vec![0u8; (w * h * 3) as usize];
+            draw_labels(&mut far, w, h, &[label([1e6, 1e6])], scale);
+            assert!(far.iter().all(|&v| v == 0), "{w}×{h}: a distant label drew");
+        }
     }
 }
