@@ -357,6 +357,7 @@ pub(crate) fn error_summary(errs: &[Vec<f64>]) -> String {
 /// Fits the table and writes it to `out` (atomically), with the command,
 /// the axes and the error summary in its header.
 pub fn run(out: &std::path::Path) -> Result<(), String> {
+    crate::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
     let (cells, errs) = fit_table(true);
     let summary = error_summary(&errs);

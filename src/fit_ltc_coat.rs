@@ -286,6 +286,7 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
 /// Fits the table and writes it to `out` (atomically), with the command,
 /// the axes and the error summary in its header.
 pub fn run(out: &std::path::Path) -> Result<(), String> {
+    crate::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
     let (cells, errs) = fit_table(true);
     let summary = crate::fit_ltc::error_summary(&errs);

@@ -379,8 +379,61 @@ fn run_tam(a: TamArgs) -> Result<(), String> {
     if let Some(l) = a.levels {
         p.levels = l;
     }
+    let out = &a.output;
+    let shown = out.display();
+    // The folder is checked, and a new one made beside it, before the map
+    // is generated; the map is written there whole and then takes the
+    // folder's place, so a failure never leaves a mix of two maps.
+    let replacing = match std::fs::metadata(out) {
+        Ok(m) if !m.is_dir() => return Err(format!("-o {shown}: exists and is not a folder")),
+        Ok(_) => {
+            let foreign = std::fs::read_dir(out)
+                .map_err(|e| format!("-o {shown}: {e}"))?
+                .filter_map(|e| e.ok())
+                .any(|e| {
+                    let name = e.file_name().to_string_lossy().into_owned();
+                    !(name == "tam.json" || name.starts_with("tam_t") && name.ends_with(".png"))
+                });
+            if foreign {
+                return Err(format!(
+                    "-o {shown}: the folder holds files that are not a tonal art map's; refusing to replace it"
+                ));
+            }
+            true
+        }
+        Err(_) => false,
+    };
+    let parent = match out.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    let staging = tempfile::Builder::new()
+        .prefix(".specula-tam-")
+        .tempdir_in(parent)
+        .map_err(|e| format!("-o {shown}: cannot write into {}: {e}", parent.display()))?;
     let tam = specula_npr::tam::generate(p).map_err(|e| format!("tam: {e}"))?;
-    tam.write_dir(&a.output)?;
+    tam.write_dir(staging.path())?;
+    if replacing {
+        let old = tempfile::Builder::new()
+            .prefix(".specula-tam-old-")
+            .tempdir_in(parent)
+            .map_err(|e| format!("-o {shown}: {e}"))?;
+        let old_path = old.path().join("map");
+        std::fs::rename(out, &old_path).map_err(|e| format!("-o {shown}: {e}"))?;
+        if let Err(e) = std::fs::rename(staging.path(), out) {
+            let _ = std::fs::rename(&old_path, out);
+            return Err(format!("-o {shown}: {e}"));
+        }
+    } else {
+        std::fs::rename(staging.path(), out).map_err(|e| format!("-o {shown}: {e}"))?;
+    }
+    // The staging folder was private (0700); a map folder is an ordinary one.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        std::fs::set_permissions(out, std::fs::Permissions::from_mode(0o755))
+            .map_err(|e| format!("-o {shown}: {e}"))?;
+    }
     let m = tam.manifest();
     for (t, d) in m.darkness.iter().enumerate() {
         let levels: Vec<String> = m.measured[t].iter().map(|v| format!("{v:.3}")).collect();

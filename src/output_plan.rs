@@ -35,6 +35,24 @@ pub struct Output {
     pub sink: Sink,
 }
 
+/// Checks, before a long computation, that `path` can take its output:
+/// it resolves (a file in an existing folder, a device, a link to either)
+/// and its folder takes a new file (a temporary one, removed at once).
+pub fn check_early(flag: &str, path: &Path) -> Result<(), String> {
+    let fail = |e: String| format!("{flag} {}: {e}", path.display());
+    match resolve(path, false).map_err(fail)? {
+        Sink::Atomic(p) => tempfile::NamedTempFile::new_in(folder(&p))
+            .map(drop)
+            .map_err(|e| fail(format!("cannot write into its folder: {e}"))),
+        Sink::Direct(p) => OpenOptions::new()
+            .write(true)
+            .open(&p)
+            .map(drop)
+            .map_err(|e| fail(format!("cannot write: {e}"))),
+        Sink::Stdout => Ok(()),
+    }
+}
+
 impl Output {
     /// Writes `bytes` to the output.
     pub fn write(&self, bytes: &[u8]) -> Result<(), String> {

@@ -61,6 +61,7 @@ impl TableStore for DirStore {
 /// `specula kc-tables`: builds the tables core commits
 /// (core/src/kc_tables.rs) and writes the file to `out`.
 pub fn write_committed(out: &std::path::Path) -> Result<(), String> {
+    crate::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
     let tables = specula_core::kc_tables::build_all();
     let comments = vec![

@@ -430,6 +430,72 @@ fn refuses_to_overwrite_a_texture_named_by_an_mtl() {
     }
 }
 
+/// `tam` checks its folder before generating, refuses a file or a folder
+/// of other files, and replaces an earlier map whole.
+#[test]
+fn tam_checks_its_folder_first_and_replaces_a_map_whole() {
+    let dir = temp_dir("cli-tam-folder");
+    let small = ["--tones", "2", "--size", "32"];
+    let tam = |out: &str| {
+        let mut args = vec!["tam", "-o", out];
+        args.extend_from_slice(&small);
+        specula(&args, &dir)
+    };
+    std::fs::write(dir.join("grid.png"), b"not a map").unwrap();
+    let out = tam("grid.png");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("not a folder"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(dir.join("grid.png")).unwrap(), b"not a map");
+
+    std::fs::create_dir(dir.join("mine")).unwrap();
+    std::fs::write(dir.join("mine/notes.txt"), b"keep").unwrap();
+    let out = tam("mine");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("refusing to replace"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(dir.join("mine/notes.txt")).unwrap(), b"keep");
+
+    let out = tam("no/such/folder/map");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        !out.status.success() && err.contains("cannot write into"),
+        "{err}"
+    );
+
+    // A map, then another over it: the second's files, nothing left over.
+    assert!(tam("map").status.success());
+    std::fs::write(dir.join("map/tam_t9_l0.png"), b"stale").unwrap();
+    assert!(tam("map").status.success());
+    assert!(!dir.join("map/tam_t9_l0.png").exists());
+    assert!(dir.join("map/tam.json").exists());
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .filter(|n| n.starts_with(".specula"))
+        .collect();
+    assert!(left.is_empty(), "left behind: {left:?}");
+}
+
+/// The table generators check their output before computing for minutes.
+#[test]
+fn table_generators_refuse_an_unwritable_output_at_once() {
+    let dir = temp_dir("cli-generators-output");
+    for cmd in ["kc-tables", "fit-ltc", "fit-ltc-coat"] {
+        let out = specula(&[cmd, "--output", "no/such/folder/t.bin"], &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{cmd}: {err}");
+        assert!(
+            err.contains("--output no/such/folder/t.bin"),
+            "{cmd}: {err}"
+        );
+    }
+}
+
 #[test]
 fn refuses_to_overwrite_the_scene_file() {
     let dir = temp_dir("cli-overwrite");
