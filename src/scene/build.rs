@@ -544,12 +544,42 @@ impl<'a> SceneBuilder<'a> {
             LightDesc::Point {
                 position,
                 intensity,
+                range,
             } => {
                 check_point(&format!("{field}.position"), *position)?;
                 checks::radiometric(&format!("{field}.intensity"), *intensity)?;
+                checks::light_range(&format!("{field}.range"), *range)?;
                 Light::Point {
                     position: *position,
                     intensity: *intensity,
+                    range: *range,
+                }
+            }
+            LightDesc::Spot {
+                position,
+                direction,
+                intensity,
+                inner_cone,
+                outer_cone,
+                range,
+            } => {
+                check_point(&format!("{field}.position"), *position)?;
+                let d = crate::validate::direction(&format!("{field}.direction"), *direction)?;
+                checks::radiometric(&format!("{field}.intensity"), *intensity)?;
+                let (inner, outer) = (inner_cone.to_radians(), outer_cone.to_radians());
+                checks::cone_angles(
+                    (&format!("{field}.inner_cone"), inner),
+                    (&format!("{field}.outer_cone"), outer),
+                    &|r| format!("{}°", r.to_degrees()),
+                )?;
+                checks::light_range(&format!("{field}.range"), *range)?;
+                Light::Spot {
+                    position: *position,
+                    direction: d.to_array(),
+                    intensity: *intensity,
+                    cos_inner: inner.cos(),
+                    cos_outer: outer.cos(),
+                    range: *range,
                 }
             }
             LightDesc::Directional {
