@@ -54,7 +54,7 @@ pub fn for_each_light<R: Real>(p: V3<R>, env: &ShadeEnv, mut f: impl FnMut(V3<R>
                 let inv_d = d2.rsqrt();
                 let mut k = inv_d * inv_d;
                 if range.is_finite() {
-                    k = k * range_window(d2, *range);
+                    k *= range_window(d2, *range);
                 }
                 f(to * inv_d, V3::from_f32(*intensity) * k);
             }
@@ -74,7 +74,7 @@ pub fn for_each_light<R: Real>(p: V3<R>, env: &ShadeEnv, mut f: impl FnMut(V3<R>
                 let cd = -V3::from_f32(*direction).dot(wi);
                 let mut k = inv_d * inv_d * spot_attenuation(cd, scale, offset);
                 if range.is_finite() {
-                    k = k * range_window(d2, *range);
+                    k *= range_window(d2, *range);
                 }
                 f(wi, V3::from_f32(*intensity) * k);
             }

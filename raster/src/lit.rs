@@ -151,7 +151,7 @@ fn add_delta_light<B: Brdf, R: Real>(
             let v = frame.to_local(to_light);
             let mut k = (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d);
             if range.is_finite() {
-                k = k * range_window(d2, *range);
+                k *= range_window(d2, *range);
             }
             let radiance = V3::from_f32(*intensity) * k;
             brdf.f_local_scaled(prepared, v, inv_d)
@@ -172,11 +172,10 @@ fn add_delta_light<B: Brdf, R: Real>(
             let cd = -V3::from_f32(*direction).dot(to_light) * inv_d;
             let (scale, offset) = spot_scale_offset(*cos_inner, *cos_outer);
             let v = frame.to_local(to_light);
-            let mut k = (v.z * inv_d).max(R::ZERO)
-                * (inv_d * inv_d)
-                * spot_attenuation(cd, scale, offset);
+            let mut k =
+                (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d) * spot_attenuation(cd, scale, offset);
             if range.is_finite() {
-                k = k * range_window(d2, *range);
+                k *= range_window(d2, *range);
             }
             let radiance = V3::from_f32(*intensity) * k;
             brdf.f_local_scaled(prepared, v, inv_d)
