@@ -94,8 +94,8 @@ fn expected(spots: &[Spot], p: [f64; 3]) -> f64 {
         ];
         let d = (to[0] * to[0] + to[1] * to[1] + to[2] * to[2]).sqrt();
         let n = (l.direction.iter().map(|v| v * v).sum::<f64>()).sqrt();
-        let cd = -(to[0] * l.direction[0] + to[1] * l.direction[1] + to[2] * l.direction[2])
-            / (d * n);
+        let cd =
+            -(to[0] * l.direction[0] + to[1] * l.direction[1] + to[2] * l.direction[2]) / (d * n);
         let cos_theta = (to[1] / d).max(0.0);
         e += l.intensity * cone(cd, l.inner, l.outer) * window(d, l.range) * cos_theta / (d * d);
     }
@@ -164,7 +164,10 @@ fn a_floor_under_spot_lights_matches_the_extensions_formula() {
             }
         }
         eprintln!("{path:?}: worst relative error {worst:e}; {lit} lit, {dark} dark, {ramp} on the first falloff");
-        assert!(lit > 3000 && dark > 1000 && ramp > 500, "{lit} {dark} {ramp}");
+        assert!(
+            lit > 3000 && dark > 1000 && ramp > 500,
+            "{lit} {dark} {ramp}"
+        );
         assert!(worst < 5e-5, "{path:?}: worst relative error {worst:e}");
     }
 }
@@ -176,10 +179,17 @@ fn bad_spot_fields_are_refused_naming_the_field() {
             "[camera]\neye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 40.0\nnear = 0.1\nfar = 10.0\n[[light]]\ntype = \"spot\"\n{fields}\n"
         )
     };
-    let ok = "position = [0.0, 1.0, 0.0]\ndirection = [0.0, -1.0, 0.0]\nintensity = [1.0, 1.0, 1.0]\n";
+    let ok =
+        "position = [0.0, 1.0, 0.0]\ndirection = [0.0, -1.0, 0.0]\nintensity = [1.0, 1.0, 1.0]\n";
     for (extra, field) in [
-        ("inner_cone = 30.0\nouter_cone = 20.0", "light[0].outer_cone"),
-        ("inner_cone = -1.0\nouter_cone = 20.0", "light[0].inner_cone"),
+        (
+            "inner_cone = 30.0\nouter_cone = 20.0",
+            "light[0].outer_cone",
+        ),
+        (
+            "inner_cone = -1.0\nouter_cone = 20.0",
+            "light[0].inner_cone",
+        ),
         ("outer_cone = 91.0", "light[0].outer_cone"),
         ("outer_cone = nan", "light[0].outer_cone"),
         ("outer_cone = 45.0\nrange = 0.0", "light[0].range"),

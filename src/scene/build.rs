@@ -337,6 +337,12 @@ impl<'a> SceneBuilder<'a> {
         for (i, md) in descs.iter().enumerate() {
             self.add_mesh(&format!("mesh[{i}]"), md)?;
         }
+        self.finish_meshes();
+        Ok(())
+    }
+
+    /// After the last mesh: the scene-wide uvs and tangents.
+    pub(super) fn finish_meshes(&mut self) {
         let data = &mut self.data;
         if !self.any_uvs {
             data.uvs.clear();
@@ -350,11 +356,14 @@ impl<'a> SceneBuilder<'a> {
         if data.triangles.is_empty() {
             self.warnings.push("the scene has no triangles".into());
         }
-        Ok(())
     }
 
     /// One `[[mesh]]`: its shape, its materials, its placement.
     pub(super) fn add_mesh(&mut self, field: &str, md: &MeshDesc) -> Result<(), String> {
+        if let Some(p) = &md.gltf {
+            check_one_shape(field, md)?;
+            return self.add_gltf_mesh(field, md, p);
+        }
         let mesh = self.build_shape(field, md)?;
         let local = self.mesh_materials(field, md, &mesh)?;
         self.check_uvs(field, md, &mesh, &local)?;
@@ -365,17 +374,7 @@ impl<'a> SceneBuilder<'a> {
 
     /// The mesh's geometry: exactly one of obj, sphere, plane, cube.
     pub(super) fn build_shape(&mut self, field: &str, md: &MeshDesc) -> Result<MeshData, String> {
-        let shapes = [
-            md.obj.is_some(),
-            md.sphere.is_some(),
-            md.plane.is_some(),
-            md.cube.is_some(),
-        ];
-        if shapes.iter().filter(|s| **s).count() != 1 {
-            return Err(format!(
-                "{field}: give exactly one of obj, sphere, plane, cube"
-            ));
-        }
+        check_one_shape(field, md)?;
         if let Some(p) = &md.obj {
             self.load_obj(field, p)
         } else if let Some(s) = &md.sphere {
@@ -650,6 +649,23 @@ impl<'a> SceneBuilder<'a> {
             specula_core::albedo_tables::AlbedoTables::get();
         }
     }
+}
+
+/// A mesh gives exactly one of obj, gltf, sphere, plane, cube.
+pub(super) fn check_one_shape(field: &str, md: &MeshDesc) -> Result<(), String> {
+    let shapes = [
+        md.obj.is_some(),
+        md.gltf.is_some(),
+        md.sphere.is_some(),
+        md.plane.is_some(),
+        md.cube.is_some(),
+    ];
+    if shapes.iter().filter(|s| **s).count() != 1 {
+        return Err(format!(
+            "{field}: give exactly one of obj, gltf, sphere, plane, cube"
+        ));
+    }
+    Ok(())
 }
 
 /// `sphere`: segment and ring counts, radius, and the memory it takes.

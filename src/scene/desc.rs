@@ -214,6 +214,9 @@ impl Default for Scale {
 #[serde(deny_unknown_fields)]
 pub(super) struct MeshDesc {
     pub(super) obj: Option<PathBuf>,
+    /// A glTF 2.0 file (.gltf or .glb): its default scene's meshes with
+    /// their materials (scene/gltf.rs).
+    pub(super) gltf: Option<PathBuf>,
     pub(super) sphere: Option<SphereDesc>,
     pub(super) plane: Option<PlaneDesc>,
     pub(super) cube: Option<CubeDesc>,
