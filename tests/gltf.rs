@@ -732,3 +732,30 @@ irradiance = [2.0, 2.0, 2.0]
         }
     }
 }
+
+#[test]
+fn absurd_counts_are_refused_by_the_memory_budget_before_allocating() {
+    let mut b = Buf::default();
+    let pos = b.floats(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0], "VEC3");
+    let mut doc = b.doc(json!({
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos}}]}],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}]
+    }));
+    // 400 million positions (9.6 GB as f64 triples) in a 36-byte view.
+    doc["accessors"][0]["count"] = json!(400_000_000u64);
+    let dir = common::temp_dir("gltf_memory");
+    std::fs::write(dir.join("huge.gltf"), doc.to_string()).unwrap();
+    let run = common::specula(
+        &["render", "huge.gltf", "-o", "out.png", "--max-memory", "256M"],
+        &dir,
+    );
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(!run.status.success());
+    assert!(
+        stderr.contains("huge.gltf: accessors[0] (400000000 elements of Vec3) needs about")
+            && stderr.contains("--max-memory"),
+        "{stderr}"
+    );
+    assert!(!dir.join("out.png").exists());
+}
