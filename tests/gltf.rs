@@ -747,7 +747,14 @@ fn absurd_counts_are_refused_by_the_memory_budget_before_allocating() {
     let dir = common::temp_dir("gltf_memory");
     std::fs::write(dir.join("huge.gltf"), doc.to_string()).unwrap();
     let run = common::specula(
-        &["render", "huge.gltf", "-o", "out.png", "--max-memory", "256M"],
+        &[
+            "render",
+            "huge.gltf",
+            "-o",
+            "out.png",
+            "--max-memory",
+            "256M",
+        ],
         &dir,
     );
     let stderr = String::from_utf8_lossy(&run.stderr);

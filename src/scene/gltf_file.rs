@@ -223,8 +223,9 @@ fn scene_camera(c: &crate::gltf::GltfCamera) -> Result<(Camera, Option<String>),
     Ok((cam, note))
 }
 
-/// The camera framing a bounding sphere from +Z with +Y up.
-fn framing_camera(positions: &[Vec3]) -> (Camera, String) {
+/// The camera framing a bounding sphere from +Z with +Y up; an error when
+/// the sphere is too large for its eye to stay inside the world.
+fn framing_camera(positions: &[Vec3]) -> Result<(Camera, String), String> {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for p in positions {
         lo = lo.min(*p);
@@ -242,6 +243,9 @@ fn framing_camera(positions: &[Vec3]) -> (Camera, String) {
         .max(1e-3);
     let d = radius / (DEFAULT_FOV_Y.to_radians() / 2.0).sin();
     let eye = centre + Vec3::Z * d;
+    crate::validate::check_point("the default camera's eye", eye.to_array()).map_err(|e| {
+        format!("no camera in the file, and its bounding sphere (radius {radius:e}) is too large to frame: {e}")
+    })?;
     let cam = Camera {
         eye,
         target: centre,
@@ -253,7 +257,7 @@ fn framing_camera(positions: &[Vec3]) -> (Camera, String) {
     let note = format!(
         "no camera in the file: framing its bounding sphere (centre {centre}, radius {radius}) from +Z, +Y up: eye {eye}, fov_y {DEFAULT_FOV_Y}°"
     );
-    (cam, note)
+    Ok((cam, note))
 }
 
 /// A glTF file rendered on its own (`specula render model.glb`): its
@@ -284,7 +288,7 @@ pub fn load_gltf_str(
     opts: &GltfOptions,
 ) -> Result<LoadedScene, String> {
     let output = OutputDesc::default();
-    let placeholder = framing_camera(&[]).0;
+    let placeholder = framing_camera(&[])?.0;
     let mut scene = SceneBuilder::new(name, read, placeholder, output.background);
     // The glTF is the scene's first input (read_gltf records it).
     scene.inputs.clear();
@@ -325,7 +329,7 @@ pub fn load_gltf_str(
             ))
         }
         (None, true) => {
-            let (c, note) = framing_camera(&scene.data.positions);
+            let (c, note) = framing_camera(&scene.data.positions)?;
             scene.warnings.push(note);
             c
         }
