@@ -22,7 +22,7 @@ struct Buf {
 
 impl Buf {
     fn view(&mut self, data: &[u8], stride: Option<usize>) -> usize {
-        while self.bytes.len() % 4 != 0 {
+        while !self.bytes.len().is_multiple_of(4) {
             self.bytes.push(0);
         }
         let mut v = json!({"buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len()});
@@ -470,7 +470,7 @@ fn unknown_used_extensions_are_warnings() {
 fn glb(json: &[u8], bin: &[u8]) -> Vec<u8> {
     let pad = |v: &[u8], fill: u8| {
         let mut v = v.to_vec();
-        while v.len() % 4 != 0 {
+        while !v.len().is_multiple_of(4) {
             v.push(fill);
         }
         v

@@ -93,7 +93,7 @@ mod tests {
     fn glb(json: &[u8], bin: Option<&[u8]>) -> Vec<u8> {
         let pad = |v: &[u8], fill: u8| {
             let mut v = v.to_vec();
-            while v.len() % 4 != 0 {
+            while !v.len().is_multiple_of(4) {
                 v.push(fill);
             }
             v
