@@ -766,3 +766,36 @@ fn absurd_counts_are_refused_by_the_memory_budget_before_allocating() {
     );
     assert!(!dir.join("out.png").exists());
 }
+
+#[test]
+fn missing_images_and_uv_sets_are_errors_naming_the_file_and_path() {
+    let toml = "[camera]\neye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 40.0\nnear = 0.1\nfar = 10.0\n[[mesh]]\ngltf = \"q.gltf\"\n";
+    let try_load = |doc: &Value| -> String {
+        let text = doc.to_string();
+        let read = move |p: &Path| -> std::io::Result<Vec<u8>> {
+            if p == Path::new("q.gltf") {
+                Ok(text.clone().into_bytes())
+            } else {
+                Err(std::io::ErrorKind::NotFound.into())
+            }
+        };
+        specula::scene::load_scene_str(Path::new("s.toml"), toml, &read)
+            .err()
+            .expect("refused")
+            .to_string()
+    };
+    let mut doc = textured_quad_doc();
+    doc["images"][0] = json!({"uri": "textures/missing.png"});
+    let e = try_load(&doc);
+    assert!(
+        e.contains("mesh[0].gltf: q.gltf: images[0].uri: cannot read textures/missing.png"),
+        "{e}"
+    );
+    let mut doc = textured_quad_doc();
+    doc["materials"][0]["pbrMetallicRoughness"]["baseColorTexture"]["texCoord"] = json!(1);
+    let e = try_load(&doc);
+    assert!(
+        e.contains("meshes[0].primitives[0]") && e.contains("TEXCOORD_1"),
+        "{e}"
+    );
+}

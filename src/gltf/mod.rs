@@ -7,7 +7,7 @@
 //! What comes out ([`GltfScene`]) is still glTF's: positions in the
 //! scene's space (node transforms applied, +Y up, metres), uvs with
 //! (0, 0) at the top-left of the image, materials as the file describes
-//! them ([`material::GltfMaterial`]). `scene/gltf.rs` places it in a
+//! them ([`material::GltfMaterial`]). `scene/gltf_file.rs` places it in a
 //! specula scene; [`material::scene_material`] makes its materials.
 
 mod buffers;

@@ -215,7 +215,7 @@ impl Default for Scale {
 pub(super) struct MeshDesc {
     pub(super) obj: Option<PathBuf>,
     /// A glTF 2.0 file (.gltf or .glb): its default scene's meshes with
-    /// their materials (scene/gltf.rs).
+    /// their materials (scene/gltf_file.rs).
     pub(super) gltf: Option<PathBuf>,
     pub(super) sphere: Option<SphereDesc>,
     pub(super) plane: Option<PlaneDesc>,
