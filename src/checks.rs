@@ -71,3 +71,45 @@ pub(crate) fn unit(field: &str, v: f32) -> Result<(), String> {
         Err(format!("{field}: must be in [0, 1], got {v}"))
     }
 }
+
+/// A punctual light's `range`: a positive distance, or infinite (no
+/// cutoff); NaN refused.
+pub(crate) fn light_range(field: &str, range: f32) -> Result<(), String> {
+    if range > 0.0 {
+        Ok(())
+    } else {
+        Err(format!(
+            "{field}: must be a distance > 0 (or inf for no cutoff), got {range}"
+        ))
+    }
+}
+
+/// A spot light's half-angles in radians, as KHR_lights_punctual bounds
+/// them: 0 ≤ inner < outer ≤ π/2. `inner_field` and `outer_field` name
+/// the fields; `unit` turns a radian value back into the user's unit for
+/// the message.
+pub(crate) fn cone_angles(
+    (inner_field, inner): (&str, f32),
+    (outer_field, outer): (&str, f32),
+    unit: &dyn Fn(f32) -> String,
+) -> Result<(), String> {
+    let quarter = std::f32::consts::FRAC_PI_2;
+    if !(0.0..quarter).contains(&inner) {
+        return Err(format!(
+            "{inner_field}: must be ≥ {} and < {}, got {}",
+            unit(0.0),
+            unit(quarter),
+            unit(inner)
+        ));
+    }
+    // The slack admits 90° converted to radians in f32, a hair above π/2.
+    if !(outer > inner && outer <= quarter * (1.0 + 1e-6)) {
+        return Err(format!(
+            "{outer_field}: must be > {inner_field} ({}) and ≤ {}, got {}",
+            unit(inner),
+            unit(quarter),
+            unit(outer)
+        ));
+    }
+    Ok(())
+}

@@ -96,6 +96,30 @@ pub fn scene_toml(data: &[u8]) -> Result<(), String> {
     render_checked(&scene)
 }
 
+/// Target `gltf`: `data` as a glTF file (a GLB container when it starts
+/// with the GLB magic, glTF JSON otherwise; any other file it names is
+/// missing, data URIs are read), loaded as `specula render model.glb`
+/// loads it (its camera and lights, or the defaults), then rendered as in
+/// [`scene_toml`].
+pub fn gltf(data: &[u8]) -> Result<(), String> {
+    fresh_budget();
+    let name = Path::new(if crate::gltf::is_glb(data) {
+        "f.glb"
+    } else {
+        "f.gltf"
+    });
+    let read = |p: &Path| -> std::io::Result<Vec<u8>> {
+        if p == name {
+            Ok(data.to_vec())
+        } else {
+            Err(std::io::ErrorKind::NotFound.into())
+        }
+    };
+    let opts = crate::scene::GltfOptions::default();
+    let scene = crate::scene::load_gltf_str(name, &read, &opts)?;
+    render_checked(&scene)
+}
+
 /// The scene an [`obj_mtl`] input is loaded into: the OBJ in view, its
 /// own materials, a light and an environment so every material shades.
 const OBJ_SCENE: &str = r#"

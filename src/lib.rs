@@ -15,6 +15,7 @@ pub mod fit_ltc;
 pub mod fit_ltc_coat;
 pub mod furnace;
 pub mod fuzzing;
+pub mod gltf;
 pub mod image_file;
 pub mod label;
 pub mod lines;

@@ -5,7 +5,7 @@ mod cpu_check;
 use clap::{Parser, Subcommand};
 use image::ImageFormat;
 use specula::render::{depth_aov, id_aov, normal_aov, render_scene, RenderSettings};
-use specula::scene::load_scene;
+use specula::scene::{is_gltf_path, load_gltf_scene, load_scene, GltfOptions};
 use specula::validate::truncate_lines;
 use specula::{demo, image_file, memory, output_plan};
 use specula_raster::frame::ShadePath;
@@ -117,8 +117,13 @@ struct FurnaceArgs {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// Scene file (TOML).
+    /// Scene file (TOML), or a glTF 2.0 file (.gltf, .glb) rendered with
+    /// its own camera and lights.
     scene: PathBuf,
+    /// Which of a glTF file's cameras to look through (in the order the
+    /// default scene's nodes are met, from 0; default 0).
+    #[arg(long, value_name = "N")]
+    camera: Option<usize>,
     /// Output image, its format from the extension: .png, .exr (linear HDR)
     /// or another format the image crate writes; `-` writes PNG to stdout.
     #[arg(short, long)]
@@ -226,7 +231,18 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     }
     memory::set_limit(a.max_memory.unwrap_or_else(memory::default_limit));
     let t = Instant::now();
-    let scene = load_scene(&a.scene).map_err(|e| e.to_string())?;
+    let scene = if is_gltf_path(&a.scene) {
+        let opts = GltfOptions { camera: a.camera };
+        load_gltf_scene(&a.scene, &opts)
+    } else if a.camera.is_some() {
+        return Err(format!(
+            "--camera: {} is a TOML scene, whose camera is its [camera]; --camera picks one of a glTF file's",
+            a.scene.display()
+        ));
+    } else {
+        load_scene(&a.scene)
+    }
+    .map_err(|e| e.to_string())?;
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     for w in &scene.warnings {
         eprintln!("warning: {}", truncate_lines(w, MESSAGE_LINE_MAX));

@@ -15,17 +15,26 @@ pub type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
 /// with repeat wrapping and trilinear filtering.
 pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, String> {
     let bytes = read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    let img = image::load_from_memory(&bytes)
-        .map_err(|e| format!("{}: {e}", path.display()))?
+    decode_color_map(&path.display().to_string(), &bytes)
+}
+
+/// [`load_color_map`] from an image file's bytes; `name` says where they
+/// came from in messages.
+pub fn decode_color_map(name: &str, bytes: &[u8]) -> Result<ColorMap, String> {
+    let img = image::load_from_memory(bytes)
+        .map_err(|e| format!("{name}: {e}"))?
         .to_rgb8();
     let (w, h) = (img.width() as usize, img.height() as usize);
+    if w == 0 || h == 0 {
+        return Err(format!("{name}: the image is empty ({w}×{h})"));
+    }
     let raw = img.into_raw();
     let mut flipped = Vec::with_capacity(raw.len());
     for row in raw.chunks_exact(w * 3).rev() {
         flipped.extend_from_slice(row);
     }
-    let texture = Texture::from_u8(w, h, 3, &flipped, Encoding::Srgb)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
+    let texture =
+        Texture::from_u8(w, h, 3, &flipped, Encoding::Srgb).map_err(|e| format!("{name}: {e}"))?;
     Ok(ColorMap {
         texture: Arc::new(texture),
         sampler: Sampler::new(Wrap::Repeat, Filter::Trilinear),

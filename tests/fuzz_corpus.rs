@@ -61,6 +61,12 @@ fn obj_mtl_corpus() {
 }
 
 #[test]
+fn gltf_corpus() {
+    let _one = BUDGET.lock().unwrap_or_else(|e| e.into_inner());
+    replay("gltf", specula::fuzzing::gltf);
+}
+
+#[test]
 fn eval_line_corpus() {
     replay("eval_line", specula::fuzzing::eval_line);
 }

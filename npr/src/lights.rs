@@ -12,7 +12,9 @@
 //! one toward the polygon's "centre of light". (Parts of a polygon below
 //! the horizon are not clipped away.)
 
-use specula_core::light::{Light, MAX_POLYGON_VERTICES};
+use specula_core::light::{
+    range_window, spot_attenuation, spot_scale_offset, Light, MAX_POLYGON_VERTICES,
+};
 use specula_core::{Real, Rgb, V3};
 use specula_raster::ShadeEnv;
 
@@ -45,11 +47,36 @@ pub fn for_each_light<R: Real>(p: V3<R>, env: &ShadeEnv, mut f: impl FnMut(V3<R>
             Light::Point {
                 position,
                 intensity,
+                range,
             } => {
                 let to = V3::from_f32(*position) - p;
                 let d2 = to.length_squared().max(R::splat(MIN_DIST2));
                 let inv_d = d2.rsqrt();
-                f(to * inv_d, V3::from_f32(*intensity) * (inv_d * inv_d));
+                let mut k = inv_d * inv_d;
+                if range.is_finite() {
+                    k *= range_window(d2, *range);
+                }
+                f(to * inv_d, V3::from_f32(*intensity) * k);
+            }
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cos_inner,
+                cos_outer,
+                range,
+            } => {
+                let to = V3::from_f32(*position) - p;
+                let d2 = to.length_squared().max(R::splat(MIN_DIST2));
+                let inv_d = d2.rsqrt();
+                let wi = to * inv_d;
+                let (scale, offset) = spot_scale_offset(*cos_inner, *cos_outer);
+                let cd = -V3::from_f32(*direction).dot(wi);
+                let mut k = inv_d * inv_d * spot_attenuation(cd, scale, offset);
+                if range.is_finite() {
+                    k *= range_window(d2, *range);
+                }
+                f(wi, V3::from_f32(*intensity) * k);
             }
             Light::Directional {
                 to_light,

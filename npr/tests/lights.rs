@@ -172,3 +172,53 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
     }
     assert!(checked >= 5, "{checked} cases");
 }
+
+/// A spot light as the stylized shaders see it: the unit direction toward
+/// it and I · a / d² · window, against KHR_lights_punctual's formulas
+/// written here in f64.
+#[test]
+fn spot_lights_give_the_extensions_falloff() {
+    let (inner, outer, range) = (0.2f64, 0.7f64, 6.0f64);
+    let axis: [f64; 3] = [0.0, -0.6, -0.8];
+    let light = Light::Spot {
+        position: [0.0, 3.0, 4.0],
+        direction: axis.map(|v| v as f32),
+        intensity: [5.0, 2.5, 1.0],
+        cos_inner: inner.cos() as f32,
+        cos_outer: outer.cos() as f32,
+        range: range as f32,
+    };
+    let lights = [light];
+    let env = ShadeEnv {
+        lights: &lights,
+        environment: None,
+    };
+    let scale = 1.0 / (inner.cos() - outer.cos()).max(0.001);
+    for p in [
+        [0.0, 0.0, 0.0],
+        [0.8, 0.0, 0.3],
+        [-1.5, 0.2, -0.5],
+        [2.5, 0.0, 0.0],
+        [0.3, 1.0, 1.0],
+    ] {
+        let to: [f64; 3] = [-p[0], 3.0 - p[1], 4.0 - p[2]];
+        let d = (to[0] * to[0] + to[1] * to[1] + to[2] * to[2]).sqrt();
+        let cd = -(axis[0] * to[0] + axis[1] * to[1] + axis[2] * to[2]) / d;
+        let a = ((cd - outer.cos()) * scale).clamp(0.0, 1.0).powi(2);
+        let w = (1.0 - (d / range).powi(4)).clamp(0.0, 1.0);
+        let mut seen = 0;
+        for_each_light(V3::new(p[0], p[1], p[2]), &env, |wi, e| {
+            seen += 1;
+            let dir = [wi.x - to[0] / d, wi.y - to[1] / d, wi.z - to[2] / d];
+            assert!(dir.iter().all(|v| v.abs() < 1e-6), "at {p:?}: {dir:?}");
+            let want = [5.0, 2.5, 1.0].map(|i| i * a * w / (d * d));
+            for (got, want) in [e.x, e.y, e.z].into_iter().zip(want) {
+                assert!(
+                    (got - want).abs() <= 1e-6 * want.max(1e-3),
+                    "at {p:?}: {got} vs {want}"
+                );
+            }
+        });
+        assert_eq!(seen, 1);
+    }
+}

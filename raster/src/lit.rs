@@ -4,14 +4,17 @@
 //! texture maps where it has any: maps.rs); the model then prepares what
 //! depends on the pixel alone ([`Brdf::prepare_with`] with wo in the local
 //! frame); then each light adds its
-//! part in the local frame: delta lights (point, directional) through one
+//! part in the local frame: delta lights (point, spot, directional) through one
 //! direction, polygon lights through the model's integral over the polygon,
 //! the uniform environment through the directional albedo.
 
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
-use specula_core::light::{AreaMethod, Light, PolygonLocal, MAX_POLYGON_VERTICES};
+use specula_core::light::{
+    range_window, spot_attenuation, spot_scale_offset, AreaMethod, Light, PolygonLocal,
+    MAX_POLYGON_VERTICES,
+};
 use specula_core::ltc::reference::polygon_reference_lanes;
 use specula_core::{Brdf, BrdfVisitor, Model, Real, Rgb, ShadingFrame, V3};
 
@@ -132,6 +135,7 @@ fn add_delta_light<B: Brdf, R: Real>(
         Light::Point {
             position,
             intensity,
+            range,
         } => {
             let to_light = V3::from_f32(*position) - frag.p;
             let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
@@ -145,7 +149,34 @@ fn add_delta_light<B: Brdf, R: Real>(
             // into I / d² · cos θi before f is ready, so f reaches the sum
             // in one step.
             let v = frame.to_local(to_light);
-            let k = (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d);
+            let mut k = (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d);
+            if range.is_finite() {
+                k *= range_window(d2, *range);
+            }
+            let radiance = V3::from_f32(*intensity) * k;
+            brdf.f_local_scaled(prepared, v, inv_d)
+                .mul_elem_add(radiance, acc)
+        }
+        Light::Spot {
+            position,
+            direction,
+            intensity,
+            cos_inner,
+            cos_outer,
+            range,
+        } => {
+            let to_light = V3::from_f32(*position) - frag.p;
+            let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
+            let inv_d = d2.rsqrt();
+            // cd: the axis against the direction from the light to the point.
+            let cd = -V3::from_f32(*direction).dot(to_light) * inv_d;
+            let (scale, offset) = spot_scale_offset(*cos_inner, *cos_outer);
+            let v = frame.to_local(to_light);
+            let mut k =
+                (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d) * spot_attenuation(cd, scale, offset);
+            if range.is_finite() {
+                k *= range_window(d2, *range);
+            }
             let radiance = V3::from_f32(*intensity) * k;
             brdf.f_local_scaled(prepared, v, inv_d)
                 .mul_elem_add(radiance, acc)

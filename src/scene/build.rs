@@ -337,6 +337,12 @@ impl<'a> SceneBuilder<'a> {
         for (i, md) in descs.iter().enumerate() {
             self.add_mesh(&format!("mesh[{i}]"), md)?;
         }
+        self.finish_meshes();
+        Ok(())
+    }
+
+    /// After the last mesh: the scene-wide uvs and tangents.
+    pub(super) fn finish_meshes(&mut self) {
         let data = &mut self.data;
         if !self.any_uvs {
             data.uvs.clear();
@@ -350,11 +356,14 @@ impl<'a> SceneBuilder<'a> {
         if data.triangles.is_empty() {
             self.warnings.push("the scene has no triangles".into());
         }
-        Ok(())
     }
 
     /// One `[[mesh]]`: its shape, its materials, its placement.
     pub(super) fn add_mesh(&mut self, field: &str, md: &MeshDesc) -> Result<(), String> {
+        if let Some(p) = &md.gltf {
+            check_one_shape(field, md)?;
+            return self.add_gltf_mesh(field, md, p);
+        }
         let mesh = self.build_shape(field, md)?;
         let local = self.mesh_materials(field, md, &mesh)?;
         self.check_uvs(field, md, &mesh, &local)?;
@@ -365,17 +374,7 @@ impl<'a> SceneBuilder<'a> {
 
     /// The mesh's geometry: exactly one of obj, sphere, plane, cube.
     pub(super) fn build_shape(&mut self, field: &str, md: &MeshDesc) -> Result<MeshData, String> {
-        let shapes = [
-            md.obj.is_some(),
-            md.sphere.is_some(),
-            md.plane.is_some(),
-            md.cube.is_some(),
-        ];
-        if shapes.iter().filter(|s| **s).count() != 1 {
-            return Err(format!(
-                "{field}: give exactly one of obj, sphere, plane, cube"
-            ));
-        }
+        check_one_shape(field, md)?;
         if let Some(p) = &md.obj {
             self.load_obj(field, p)
         } else if let Some(s) = &md.sphere {
@@ -544,12 +543,42 @@ impl<'a> SceneBuilder<'a> {
             LightDesc::Point {
                 position,
                 intensity,
+                range,
             } => {
                 check_point(&format!("{field}.position"), *position)?;
                 checks::radiometric(&format!("{field}.intensity"), *intensity)?;
+                checks::light_range(&format!("{field}.range"), *range)?;
                 Light::Point {
                     position: *position,
                     intensity: *intensity,
+                    range: *range,
+                }
+            }
+            LightDesc::Spot {
+                position,
+                direction,
+                intensity,
+                inner_cone,
+                outer_cone,
+                range,
+            } => {
+                check_point(&format!("{field}.position"), *position)?;
+                let d = crate::validate::direction(&format!("{field}.direction"), *direction)?;
+                checks::radiometric(&format!("{field}.intensity"), *intensity)?;
+                let (inner, outer) = (inner_cone.to_radians(), outer_cone.to_radians());
+                checks::cone_angles(
+                    (&format!("{field}.inner_cone"), inner),
+                    (&format!("{field}.outer_cone"), outer),
+                    &|r| format!("{}°", r.to_degrees()),
+                )?;
+                checks::light_range(&format!("{field}.range"), *range)?;
+                Light::Spot {
+                    position: *position,
+                    direction: d.to_array(),
+                    intensity: *intensity,
+                    cos_inner: inner.cos(),
+                    cos_outer: outer.cos(),
+                    range: *range,
                 }
             }
             LightDesc::Directional {
@@ -626,6 +655,23 @@ impl<'a> SceneBuilder<'a> {
             specula_core::sheen::SheenTable::get();
         }
     }
+}
+
+/// A mesh gives exactly one of obj, gltf, sphere, plane, cube.
+pub(super) fn check_one_shape(field: &str, md: &MeshDesc) -> Result<(), String> {
+    let shapes = [
+        md.obj.is_some(),
+        md.gltf.is_some(),
+        md.sphere.is_some(),
+        md.plane.is_some(),
+        md.cube.is_some(),
+    ];
+    if shapes.iter().filter(|s| **s).count() != 1 {
+        return Err(format!(
+            "{field}: give exactly one of obj, gltf, sphere, plane, cube"
+        ));
+    }
+    Ok(())
 }
 
 /// `sphere`: segment and ring counts, radius, and the memory it takes.

@@ -65,6 +65,10 @@ pub(super) enum AreaLightsDesc {
     Reference,
 }
 
+pub(super) fn infinite() -> f32 {
+    f32::INFINITY
+}
+
 pub(super) fn yes() -> bool {
     true
 }
@@ -210,6 +214,9 @@ impl Default for Scale {
 #[serde(deny_unknown_fields)]
 pub(super) struct MeshDesc {
     pub(super) obj: Option<PathBuf>,
+    /// A glTF 2.0 file (.gltf or .glb): its default scene's meshes with
+    /// their materials (scene/gltf_file.rs).
+    pub(super) gltf: Option<PathBuf>,
     pub(super) sphere: Option<SphereDesc>,
     pub(super) plane: Option<PlaneDesc>,
     pub(super) cube: Option<CubeDesc>,
@@ -231,6 +238,24 @@ pub(super) enum LightDesc {
         position: [f32; 3],
         /// Radiant intensity (W/sr), RGB.
         intensity: [f32; 3],
+        /// Distance at which the light's smooth cutoff reaches zero.
+        #[serde(default = "infinite")]
+        range: f32,
+    },
+    Spot {
+        position: [f32; 3],
+        /// Direction the cone points (from the light toward the scene).
+        direction: [f32; 3],
+        /// Radiant intensity (W/sr) inside the inner cone, RGB.
+        intensity: [f32; 3],
+        /// Half-angle (degrees) of the cone of full intensity.
+        #[serde(default)]
+        inner_cone: f32,
+        /// Half-angle (degrees) where the falloff reaches zero.
+        outer_cone: f32,
+        /// Distance at which the light's smooth cutoff reaches zero.
+        #[serde(default = "infinite")]
+        range: f32,
     },
     Directional {
         /// Direction the light travels (from the light toward the scene).

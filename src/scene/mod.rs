@@ -5,10 +5,12 @@
 
 mod build;
 mod desc;
+mod gltf_file;
 
 use build::*;
 use desc::*;
 pub use desc::{OutputDesc, TonemapDesc};
+pub use gltf_file::{load_gltf_scene, load_gltf_str, GltfOptions};
 use specula_raster::GeometryPass;
 use specula_raster::SceneData;
 use std::path::{Path, PathBuf};
@@ -41,6 +43,14 @@ pub struct LoadedScene {
     /// The extrusion outlines' vertex stages and the stroke overlay
     /// (lines.rs), for the renderer and `--svg-lines`.
     pub lines: crate::lines::LineStages,
+}
+
+/// Whether `path` names a glTF file (`.gltf`, `.glb`), which
+/// [`load_gltf_scene`] reads, rather than a TOML scene.
+pub fn is_gltf_path(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| e.eq_ignore_ascii_case("gltf") || e.eq_ignore_ascii_case("glb"))
 }
 
 /// Reads a scene file from disk; relative paths resolve against its folder.

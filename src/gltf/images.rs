@@ -1,0 +1,87 @@
+//! glTF images, decoded on first use: from a buffer view (GLB), a base64
+//! data URI or an external file; each decoded once however many textures
+//! share it, its size counted against the memory budget before decoding.
+
+use super::buffers::{data_uri, uri_path, Buffers};
+use crate::memory;
+use gltf::json;
+use specula_raster::maps::ColorMap;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+
+/// Bytes per texel of a decoded colour map with its mip chain (3 f32
+/// channels, 4/3 for the chain) plus the 8-bit decode.
+const TEXEL_BYTES: u64 = 20;
+
+pub struct Images<'a> {
+    pub(super) root: &'a json::Root,
+    pub(super) buffers: &'a Buffers,
+    pub(super) dir: PathBuf,
+    pub(super) read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    /// Files read (external images), for the scene's inputs.
+    pub inputs: Vec<PathBuf>,
+    cache: HashMap<usize, ColorMap>,
+}
+
+impl<'a> Images<'a> {
+    pub(super) fn new(
+        root: &'a json::Root,
+        buffers: &'a Buffers,
+        dir: PathBuf,
+        read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    ) -> Images<'a> {
+        Images {
+            root,
+            buffers,
+            dir,
+            read,
+            inputs: Vec::new(),
+            cache: HashMap::new(),
+        }
+    }
+
+    /// `images[i]` as an sRGB colour map (v = 0 at the bottom row, like
+    /// every texture here; glTF's uvs are flipped to match where meshes
+    /// are read).
+    pub fn color_map(&mut self, i: usize) -> Result<ColorMap, String> {
+        if let Some(m) = self.cache.get(&i) {
+            return Ok(m.clone());
+        }
+        let at = format!("images[{i}]");
+        let img = self
+            .root
+            .images
+            .get(i)
+            .ok_or_else(|| format!("{at}: no such image"))?;
+        let bytes: Vec<u8> = match (&img.uri, img.buffer_view) {
+            (Some(uri), _) => match data_uri(uri) {
+                Some(r) => r.map_err(|e| format!("{at}.uri: {e}"))?,
+                None => {
+                    let p = self.dir.join(uri_path(uri));
+                    let b = (self.read)(&p)
+                        .map_err(|e| format!("{at}.uri: cannot read {}: {e}", p.display()))?;
+                    self.inputs.push(p);
+                    b
+                }
+            },
+            (None, Some(v)) => self
+                .buffers
+                .view(self.root, v.value(), &format!("{at}.bufferView"))?
+                .0
+                .to_vec(),
+            (None, None) => return Err(format!("{at}: neither uri nor bufferView")),
+        };
+        let dims = image::ImageReader::new(std::io::Cursor::new(&bytes))
+            .with_guessed_format()
+            .ok()
+            .and_then(|r| r.into_dimensions().ok());
+        let (w, h) = dims.ok_or_else(|| format!("{at}: not an image this build can decode"))?;
+        memory::reserve(
+            &format!("{at} ({w}×{h})"),
+            (w as u64 * h as u64).saturating_mul(TEXEL_BYTES),
+        )?;
+        let map = crate::textures::decode_color_map(&at, &bytes)?;
+        self.cache.insert(i, map.clone());
+        Ok(map)
+    }
+}

@@ -1,0 +1,510 @@
+//! glTF materials: read completely into [`GltfMaterial`] (every factor,
+//! every texture reference with its sampler, texCoord set and
+//! KHR_texture_transform, the alpha mode, doubleSided, the values of every
+//! KHR material extension), then turned into a scene material by ONE
+//! function, [`scene_material`], which says in a warning what it does not
+//! render yet. A renderer that gains a model or a map changes that
+//! function alone.
+
+use super::images::Images;
+use gltf::json;
+use json::validation::Checked;
+use specula_core::models::MetallicRoughness;
+use specula_core::Model;
+use specula_raster::maps::ParamMaps;
+use specula_raster::texture::{Filter, Sampler, Wrap};
+use specula_raster::{Lit, Material};
+use std::collections::BTreeMap;
+
+/// KHR_texture_transform: uv' = T(offset) · R(rotation) · S(scale) · uv.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureTransform {
+    pub offset: [f32; 2],
+    /// Radians, counter-clockwise in uv.
+    pub rotation: f32,
+    pub scale: [f32; 2],
+    /// Overrides the reference's texCoord set.
+    pub tex_coord: Option<u32>,
+}
+
+/// A texture as a material refers to it: the image, how it is sampled,
+/// which uv set reads it and how that set is transformed.
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureRef {
+    /// Where the reference is (`materials[0].pbrMetallicRoughness.baseColorTexture`).
+    pub at: String,
+    pub texture: usize,
+    /// `images[i]`.
+    pub image: usize,
+    pub sampler: Sampler,
+    pub tex_coord: u32,
+    pub transform: Option<TextureTransform>,
+    /// normalTexture.scale, occlusionTexture.strength (1 for the others).
+    pub scale: f32,
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum AlphaMode {
+    Opaque,
+    Mask { cutoff: f32 },
+    Blend,
+}
+
+/// KHR_materials_pbrSpecularGlossiness.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpecularGlossiness {
+    pub diffuse_factor: [f32; 4],
+    pub diffuse_texture: Option<TextureRef>,
+    pub specular_factor: [f32; 3],
+    pub glossiness_factor: f32,
+    pub specular_glossiness_texture: Option<TextureRef>,
+}
+
+/// KHR_materials_specular.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Specular {
+    pub factor: f32,
+    pub texture: Option<TextureRef>,
+    pub color_factor: [f32; 3],
+    pub color_texture: Option<TextureRef>,
+}
+
+/// KHR_materials_transmission.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Transmission {
+    pub factor: f32,
+    pub texture: Option<TextureRef>,
+}
+
+/// KHR_materials_volume.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Volume {
+    pub thickness_factor: f32,
+    pub thickness_texture: Option<TextureRef>,
+    pub attenuation_distance: f32,
+    pub attenuation_color: [f32; 3],
+}
+
+/// One glTF material, as the file gives it (defaults filled in).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GltfMaterial {
+    /// Its name, or `materials[i]`, or "default" for the spec's default
+    /// material (primitives without one).
+    pub name: String,
+    /// `materials[i]`, or `None` for the default material.
+    pub index: Option<usize>,
+    pub base_color_factor: [f32; 4],
+    pub base_color_texture: Option<TextureRef>,
+    pub metallic_factor: f32,
+    pub roughness_factor: f32,
+    pub metallic_roughness_texture: Option<TextureRef>,
+    pub normal_texture: Option<TextureRef>,
+    pub occlusion_texture: Option<TextureRef>,
+    pub emissive_factor: [f32; 3],
+    pub emissive_texture: Option<TextureRef>,
+    pub alpha_mode: AlphaMode,
+    pub double_sided: bool,
+    /// KHR_materials_unlit.
+    pub unlit: bool,
+    /// KHR_materials_emissive_strength.
+    pub emissive_strength: Option<f32>,
+    /// KHR_materials_ior.
+    pub ior: Option<f32>,
+    pub specular: Option<Specular>,
+    pub transmission: Option<Transmission>,
+    pub volume: Option<Volume>,
+    pub specular_glossiness: Option<SpecularGlossiness>,
+    /// Every other material extension (KHR_materials_clearcoat, _sheen,
+    /// _iridescence, _anisotropy, …), by name, as its JSON object.
+    pub other_extensions: BTreeMap<String, serde_json::Value>,
+}
+
+impl GltfMaterial {
+    /// The spec's default material: white, metallic 1, roughness 1.
+    pub fn default_material() -> GltfMaterial {
+        GltfMaterial {
+            name: "default".into(),
+            index: None,
+            base_color_factor: [1.0; 4],
+            base_color_texture: None,
+            metallic_factor: 1.0,
+            roughness_factor: 1.0,
+            metallic_roughness_texture: None,
+            normal_texture: None,
+            occlusion_texture: None,
+            emissive_factor: [0.0; 3],
+            emissive_texture: None,
+            alpha_mode: AlphaMode::Opaque,
+            double_sided: false,
+            unlit: false,
+            emissive_strength: None,
+            ior: None,
+            specular: None,
+            transmission: None,
+            volume: None,
+            specular_glossiness: None,
+            other_extensions: BTreeMap::new(),
+        }
+    }
+
+    /// Every texture the material refers to.
+    pub fn textures(&self) -> Vec<&TextureRef> {
+        let mut t: Vec<&TextureRef> = [
+            &self.base_color_texture,
+            &self.metallic_roughness_texture,
+            &self.normal_texture,
+            &self.occlusion_texture,
+            &self.emissive_texture,
+        ]
+        .into_iter()
+        .flatten()
+        .collect();
+        if let Some(s) = &self.specular {
+            t.extend(s.texture.iter().chain(&s.color_texture));
+        }
+        if let Some(s) = &self.transmission {
+            t.extend(&s.texture);
+        }
+        if let Some(v) = &self.volume {
+            t.extend(&v.thickness_texture);
+        }
+        if let Some(s) = &self.specular_glossiness {
+            t.extend(
+                s.diffuse_texture
+                    .iter()
+                    .chain(&s.specular_glossiness_texture),
+            );
+        }
+        t
+    }
+}
+
+fn wrap(w: Checked<json::texture::WrappingMode>) -> Wrap {
+    use json::texture::WrappingMode as W;
+    match w {
+        Checked::Valid(W::ClampToEdge) => Wrap::Clamp,
+        Checked::Valid(W::MirroredRepeat) => Wrap::Mirror,
+        _ => Wrap::Repeat,
+    }
+}
+
+/// A glTF sampler as ours: wrap modes per axis; a min filter without
+/// mipmaps reads level 0 (nearest or bilinear), one with mipmaps, or none
+/// given, is trilinear.
+fn sampler(root: &json::Root, s: Option<json::Index<json::texture::Sampler>>) -> Sampler {
+    use json::texture::MinFilter as M;
+    let Some(s) = s.and_then(|s| root.samplers.get(s.value())) else {
+        return Sampler::new(Wrap::Repeat, Filter::Trilinear);
+    };
+    let filter = match s.min_filter {
+        Some(Checked::Valid(M::Nearest)) => Filter::Nearest,
+        Some(Checked::Valid(M::Linear)) => Filter::Bilinear,
+        _ => Filter::Trilinear,
+    };
+    Sampler {
+        wrap_u: wrap(s.wrap_s),
+        wrap_v: wrap(s.wrap_t),
+        filter,
+    }
+}
+
+/// Resolves a texture reference (`at` is its JSON path).
+fn texture_ref(
+    root: &json::Root,
+    at: String,
+    index: json::Index<json::Texture>,
+    tex_coord: u32,
+    ext: Option<&json::extensions::texture::Info>,
+    scale: f32,
+) -> Result<TextureRef, String> {
+    let t = root
+        .textures
+        .get(index.value())
+        .ok_or_else(|| format!("{at}.index: no texture {index}"))?;
+    let image = t.source.value();
+    if image >= root.images.len() {
+        return Err(format!("textures[{index}].source: no image {image}"));
+    }
+    let transform = ext
+        .and_then(|e| e.texture_transform.as_ref())
+        .map(|t| TextureTransform {
+            offset: t.offset.0,
+            rotation: t.rotation.0,
+            scale: t.scale.0,
+            tex_coord: t.tex_coord,
+        });
+    Ok(TextureRef {
+        at,
+        texture: index.value(),
+        image,
+        sampler: sampler(root, t.sampler),
+        tex_coord,
+        transform,
+        scale,
+    })
+}
+
+fn info(
+    root: &json::Root,
+    at: String,
+    i: &Option<json::texture::Info>,
+) -> Result<Option<TextureRef>, String> {
+    i.as_ref()
+        .map(|i| texture_ref(root, at, i.index, i.tex_coord, i.extensions.as_ref(), 1.0))
+        .transpose()
+}
+
+/// Reads `materials[i]` completely.
+pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial, String> {
+    let m = &root.materials[i];
+    let at = format!("materials[{i}]");
+    let pbr = &m.pbr_metallic_roughness;
+    let mut out = GltfMaterial::default_material();
+    out.name = m.name.clone().unwrap_or_else(|| at.clone());
+    out.index = Some(i);
+    out.base_color_factor = pbr.base_color_factor.0;
+    out.base_color_texture = info(
+        root,
+        format!("{at}.pbrMetallicRoughness.baseColorTexture"),
+        &pbr.base_color_texture,
+    )?;
+    out.metallic_factor = pbr.metallic_factor.0;
+    out.roughness_factor = pbr.roughness_factor.0;
+    out.metallic_roughness_texture = info(
+        root,
+        format!("{at}.pbrMetallicRoughness.metallicRoughnessTexture"),
+        &pbr.metallic_roughness_texture,
+    )?;
+    out.normal_texture = m
+        .normal_texture
+        .as_ref()
+        .map(|n| {
+            texture_ref(
+                root,
+                format!("{at}.normalTexture"),
+                n.index,
+                n.tex_coord,
+                None,
+                n.scale,
+            )
+        })
+        .transpose()?;
+    out.occlusion_texture = m
+        .occlusion_texture
+        .as_ref()
+        .map(|n| {
+            texture_ref(
+                root,
+                format!("{at}.occlusionTexture"),
+                n.index,
+                n.tex_coord,
+                None,
+                n.strength.0,
+            )
+        })
+        .transpose()?;
+    out.emissive_factor = m.emissive_factor.0;
+    out.emissive_texture = info(root, format!("{at}.emissiveTexture"), &m.emissive_texture)?;
+    out.alpha_mode = match m.alpha_mode {
+        Checked::Valid(json::material::AlphaMode::Mask) => AlphaMode::Mask {
+            cutoff: m.alpha_cutoff.map_or(0.5, |c| c.0),
+        },
+        Checked::Valid(json::material::AlphaMode::Blend) => AlphaMode::Blend,
+        _ => AlphaMode::Opaque,
+    };
+    out.double_sided = m.double_sided;
+    if let Some(e) = &m.extensions {
+        let ext = format!("{at}.extensions");
+        out.unlit = e.unlit.is_some();
+        out.emissive_strength = e.emissive_strength.as_ref().map(|s| s.emissive_strength.0);
+        out.ior = e.ior.as_ref().map(|s| s.ior.0);
+        out.specular = e
+            .specular
+            .as_ref()
+            .map(|s| -> Result<Specular, String> {
+                let p = format!("{ext}.KHR_materials_specular");
+                Ok(Specular {
+                    factor: s.specular_factor.0,
+                    texture: info(root, format!("{p}.specularTexture"), &s.specular_texture)?,
+                    color_factor: s.specular_color_factor.0,
+                    color_texture: info(
+                        root,
+                        format!("{p}.specularColorTexture"),
+                        &s.specular_color_texture,
+                    )?,
+                })
+            })
+            .transpose()?;
+        out.transmission = e
+            .transmission
+            .as_ref()
+            .map(|s| -> Result<Transmission, String> {
+                Ok(Transmission {
+                    factor: s.transmission_factor.0,
+                    texture: info(
+                        root,
+                        format!("{ext}.KHR_materials_transmission.transmissionTexture"),
+                        &s.transmission_texture,
+                    )?,
+                })
+            })
+            .transpose()?;
+        out.volume = e
+            .volume
+            .as_ref()
+            .map(|s| -> Result<Volume, String> {
+                Ok(Volume {
+                    thickness_factor: s.thickness_factor.0,
+                    thickness_texture: info(
+                        root,
+                        format!("{ext}.KHR_materials_volume.thicknessTexture"),
+                        &s.thickness_texture,
+                    )?,
+                    attenuation_distance: s.attenuation_distance.0,
+                    attenuation_color: s.attenuation_color.0,
+                })
+            })
+            .transpose()?;
+        out.specular_glossiness = e
+            .pbr_specular_glossiness
+            .as_ref()
+            .map(|s| -> Result<SpecularGlossiness, String> {
+                let p = format!("{ext}.KHR_materials_pbrSpecularGlossiness");
+                Ok(SpecularGlossiness {
+                    diffuse_factor: s.diffuse_factor.0,
+                    diffuse_texture: info(root, format!("{p}.diffuseTexture"), &s.diffuse_texture)?,
+                    specular_factor: s.specular_factor.0,
+                    glossiness_factor: s.glossiness_factor.0,
+                    specular_glossiness_texture: info(
+                        root,
+                        format!("{p}.specularGlossinessTexture"),
+                        &s.specular_glossiness_texture,
+                    )?,
+                })
+            })
+            .transpose()?;
+        out.other_extensions = e
+            .others
+            .iter()
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+    }
+    check_factors(&at, &out)?;
+    Ok(out)
+}
+
+/// Factors the spec bounds, checked so the scene material gets finite,
+/// in-range values.
+fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
+    let unit = |f: &str, v: f32| {
+        if (0.0..=1.0).contains(&v) {
+            Ok(())
+        } else {
+            Err(format!("{at}.{f}: must be in [0, 1], got {v}"))
+        }
+    };
+    for (k, v) in m.base_color_factor.iter().enumerate() {
+        unit(&format!("pbrMetallicRoughness.baseColorFactor[{k}]"), *v)?;
+    }
+    unit("pbrMetallicRoughness.metallicFactor", m.metallic_factor)?;
+    unit("pbrMetallicRoughness.roughnessFactor", m.roughness_factor)?;
+    for (k, v) in m.emissive_factor.iter().enumerate() {
+        unit(&format!("emissiveFactor[{k}]"), *v)?;
+    }
+    if let AlphaMode::Mask { cutoff } = m.alpha_mode {
+        if !(cutoff >= 0.0 && cutoff.is_finite()) {
+            return Err(format!("{at}.alphaCutoff: must be ≥ 0, got {cutoff}"));
+        }
+    }
+    Ok(())
+}
+
+/// The scene material for a glTF material, and what of it is not
+/// rendered (one warning, or none).
+///
+/// Today: the `metallic_roughness` model with the base colour factor's
+/// RGB (its alpha is not used), the metallic and roughness factors, and
+/// the base colour texture through [`ParamMaps::base_color`] (its sampler
+/// kept; uvs from the set it names, chosen where the mesh is built);
+/// `doubleSided` as the material's. Everything else is listed in the
+/// warning.
+pub fn scene_material(
+    m: &GltfMaterial,
+    images: &mut Images,
+) -> Result<(Material, Option<String>), String> {
+    let mut missing: Vec<String> = Vec::new();
+    let mut note = |what: &str, present: bool| {
+        if present {
+            missing.push(what.to_string());
+        }
+    };
+    note(
+        "metallicRoughnessTexture",
+        m.metallic_roughness_texture.is_some(),
+    );
+    note("normalTexture", m.normal_texture.is_some());
+    note("occlusionTexture", m.occlusion_texture.is_some());
+    note(
+        "emissive (emissiveFactor / emissiveTexture)",
+        m.emissive_factor != [0.0; 3] || m.emissive_texture.is_some(),
+    );
+    note(
+        "baseColorFactor alpha",
+        m.base_color_factor[3] != 1.0 && m.alpha_mode != AlphaMode::Opaque,
+    );
+    note(
+        match m.alpha_mode {
+            AlphaMode::Mask { .. } => "alphaMode MASK",
+            _ => "alphaMode BLEND",
+        },
+        m.alpha_mode != AlphaMode::Opaque,
+    );
+    note(
+        "KHR_texture_transform",
+        m.textures().iter().any(|t| t.transform.is_some()),
+    );
+    note("KHR_materials_unlit", m.unlit);
+    note(
+        "KHR_materials_emissive_strength",
+        m.emissive_strength.is_some(),
+    );
+    note("KHR_materials_ior", m.ior.is_some());
+    note("KHR_materials_specular", m.specular.is_some());
+    note("KHR_materials_transmission", m.transmission.is_some());
+    note("KHR_materials_volume", m.volume.is_some());
+    note(
+        "KHR_materials_pbrSpecularGlossiness",
+        m.specular_glossiness.is_some(),
+    );
+    for k in m.other_extensions.keys() {
+        missing.push(k.clone());
+    }
+    let [r, g, b, _] = m.base_color_factor;
+    let model = Model::MetallicRoughness(MetallicRoughness {
+        base_color: [r, g, b],
+        roughness: m.roughness_factor,
+        metallic: m.metallic_factor,
+    });
+    let shader = match &m.base_color_texture {
+        Some(t) => {
+            let mut map = images.color_map(t.image)?;
+            map.sampler = t.sampler;
+            Lit::with_maps(
+                model,
+                ParamMaps {
+                    base_color: Some(map),
+                },
+            )
+            .map_err(|e| format!("{}: {e}", t.at))?
+        }
+        None => Lit::new(model),
+    };
+    let warning = (!missing.is_empty()).then(|| {
+        format!(
+            "material {:?}: rendered as metallic_roughness without {}",
+            m.name,
+            missing.join(", ")
+        )
+    });
+    Ok((Material::new(&m.name, shader, m.double_sided), warning))
+}
