@@ -298,7 +298,7 @@ impl GltfDesc {
     /// finite and ≥ 0 (KHR_materials_specular allows values above 1; F0 is
     /// clamped to 1 after the IOR's r0 multiplies it), `ior` ≥ 1 and at
     /// most 1e4, or exactly 0 (KHR_materials_ior's infinite IOR).
-    fn params(&self) -> Result<GltfParams, String> {
+    pub(crate) fn params(&self) -> Result<GltfParams, String> {
         let unit3 = |field: &str, c: [f32; 3]| -> Result<(), String> {
             if c.iter().all(|v| (0.0..=1.0).contains(v)) {
                 Ok(())

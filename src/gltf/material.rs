@@ -7,9 +7,10 @@
 //! function alone.
 
 use super::images::Images;
+use crate::material_desc::GltfDesc;
 use gltf::json;
 use json::validation::Checked;
-use specula_core::models::MetallicRoughness;
+use specula_core::models::Gltf;
 use specula_core::Model;
 use specula_raster::maps::ParamMaps;
 use specula_raster::texture::{Filter, Sampler, Wrap};
@@ -422,12 +423,14 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// The scene material for a glTF material, and what of it is not
 /// rendered (one warning, or none).
 ///
-/// Today: the `metallic_roughness` model with the base colour factor's
-/// RGB (its alpha is not used), the metallic and roughness factors, and
-/// the base colour texture through [`ParamMaps::base_color`] (its sampler
-/// kept; uvs from the set it names, chosen where the mesh is built);
-/// `doubleSided` as the material's. Everything else is listed in the
-/// warning.
+/// Today: the `gltf` model (the specification's normative BRDF) with the
+/// base colour factor's RGB (its alpha is not used), the metallic and
+/// roughness factors, KHR_materials_ior, the factors of
+/// KHR_materials_specular, _clearcoat and _sheen, each checked as the
+/// scene field of the same snake_case name is; the base colour texture
+/// through [`ParamMaps::base_color`] (its sampler kept; uvs from the set it
+/// names, chosen where the mesh is built); `doubleSided` as the
+/// material's. Everything else is listed in the warning.
 pub fn scene_material(
     m: &GltfMaterial,
     images: &mut Images,
@@ -468,23 +471,85 @@ pub fn scene_material(
         "KHR_materials_emissive_strength",
         m.emissive_strength.is_some(),
     );
-    note("KHR_materials_ior", m.ior.is_some());
-    note("KHR_materials_specular", m.specular.is_some());
+    note(
+        "specularTexture / specularColorTexture",
+        m.specular
+            .as_ref()
+            .is_some_and(|s| s.texture.is_some() || s.color_texture.is_some()),
+    );
     note("KHR_materials_transmission", m.transmission.is_some());
     note("KHR_materials_volume", m.volume.is_some());
     note(
         "KHR_materials_pbrSpecularGlossiness",
         m.specular_glossiness.is_some(),
     );
-    for k in m.other_extensions.keys() {
-        missing.push(k.clone());
+    // Clearcoat and sheen factors are rendered by the gltf model; their
+    // textures (and the clearcoat's normal map) are not yet.
+    let ext = |name: &str| m.other_extensions.get(name);
+    let number = |v: Option<&serde_json::Value>, key: &str, default: f32| {
+        v.and_then(|o| o.get(key))
+            .and_then(|x| x.as_f64())
+            .map_or(default, |x| x as f32)
+    };
+    let color = |v: Option<&serde_json::Value>, key: &str| -> [f32; 3] {
+        let mut c = [0.0; 3];
+        if let Some(a) = v.and_then(|o| o.get(key)).and_then(|x| x.as_array()) {
+            for (k, x) in a.iter().take(3).enumerate() {
+                c[k] = x.as_f64().map_or(f32::NAN, |x| x as f32);
+            }
+        }
+        c
+    };
+    for (name, keys) in [
+        (
+            "KHR_materials_clearcoat",
+            &["clearcoatFactor", "clearcoatRoughnessFactor"][..],
+        ),
+        (
+            "KHR_materials_sheen",
+            &["sheenColorFactor", "sheenRoughnessFactor"][..],
+        ),
+    ] {
+        if let Some(serde_json::Value::Object(o)) = ext(name) {
+            for k in o.keys().filter(|k| !keys.contains(&k.as_str())) {
+                missing.push(format!("{name}.{k}"));
+            }
+        }
     }
+    for k in m.other_extensions.keys() {
+        if k != "KHR_materials_clearcoat" && k != "KHR_materials_sheen" {
+            missing.push(k.clone());
+        }
+    }
+    let clearcoat = ext("KHR_materials_clearcoat");
+    let sheen = ext("KHR_materials_sheen");
     let [r, g, b, _] = m.base_color_factor;
-    let model = Model::MetallicRoughness(MetallicRoughness {
-        base_color: [r, g, b],
-        roughness: m.roughness_factor,
-        metallic: m.metallic_factor,
-    });
+    let defaults = GltfDesc::default();
+    let desc = GltfDesc {
+        base_color_factor: [r, g, b],
+        metallic_factor: m.metallic_factor,
+        roughness_factor: m.roughness_factor,
+        ior: m.ior.unwrap_or(defaults.ior),
+        specular_factor: m
+            .specular
+            .as_ref()
+            .map_or(defaults.specular_factor, |s| s.factor),
+        specular_color_factor: m
+            .specular
+            .as_ref()
+            .map_or(defaults.specular_color_factor, |s| s.color_factor),
+        clearcoat_factor: number(clearcoat, "clearcoatFactor", 0.0),
+        clearcoat_roughness_factor: number(clearcoat, "clearcoatRoughnessFactor", 0.0),
+        sheen_color_factor: color(sheen, "sheenColorFactor"),
+        sheen_roughness_factor: number(sheen, "sheenRoughnessFactor", 0.0),
+        ..defaults
+    };
+    let at = m.index.map_or_else(
+        || "the default material".to_string(),
+        |i| format!("materials[{i}]"),
+    );
+    let params = desc.params().map_err(|e| format!("{at}: {e}"))?;
+    let model = Model::Gltf(Gltf::new(params));
     let shader = match &m.base_color_texture {
         Some(t) => {
             let mut map = images.color_map(t.image)?;
@@ -501,7 +566,7 @@ pub fn scene_material(
     };
     let warning = (!missing.is_empty()).then(|| {
         format!(
-            "material {:?}: rendered as metallic_roughness without {}",
+            "material {:?}: rendered without {}",
             m.name,
             missing.join(", ")
         )
