@@ -6,11 +6,16 @@
 //! frame); then each light adds its
 //! part in the local frame: delta lights (point, directional) through one
 //! direction, polygon lights through the model's integral over the polygon,
-//! the uniform environment through the directional albedo.
+//! the uniform environment through the directional albedo (times the
+//! occlusion map's factor where the material has one). The material's
+//! emission (its emissive colour times its emissive map) is added last.
+//! A normal map bends the local frame all of this is computed in
+//! ([`ParamMaps::frame`]).
 
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
+use crate::texture::Filter;
 use specula_core::light::{AreaMethod, Light, PolygonLocal, MAX_POLYGON_VERTICES};
 use specula_core::ltc::reference::polygon_reference_lanes;
 use specula_core::{Brdf, BrdfVisitor, Model, Real, Rgb, ShadingFrame, V3};
@@ -21,6 +26,9 @@ use specula_core::{Brdf, BrdfVisitor, Model, Real, Rgb, ShadingFrame, V3};
 pub struct Lit {
     model: Model,
     maps: ParamMaps,
+    /// Emitted radiance (linear RGB; the emissive map multiplies it), or
+    /// `None` for none.
+    emissive: Option<[f32; 3]>,
 }
 
 impl Lit {
@@ -29,6 +37,7 @@ impl Lit {
         Lit {
             model,
             maps: ParamMaps::default(),
+            emissive: None,
         }
     }
 
@@ -47,8 +56,23 @@ impl Lit {
                 "{map}: the \"{}\" model takes no texture",
                 model.name()
             )),
-            None => Ok(Lit { model, maps }),
+            None => Ok(Lit {
+                model,
+                maps,
+                emissive: None,
+            }),
         }
+    }
+
+    /// The material also emits `emissive` (linear RGB radiance, times the
+    /// emissive map where it has one); zero emits nothing.
+    pub fn with_emission(mut self, emissive: [f32; 3]) -> Lit {
+        self.emissive = (emissive != [0.0; 3]).then_some(emissive);
+        self
+    }
+
+    pub fn maps(&self) -> &ParamMaps {
+        &self.maps
     }
 
     pub fn model(&self) -> &Model {
@@ -77,13 +101,14 @@ struct LightLoop<'a, 'b, R: Real> {
     input: &'a ShadeInput<'b, R>,
     env: &'a ShadeEnv<'a>,
     maps: &'a ParamMaps,
+    emissive: Option<[f32; 3]>,
 }
 
 impl<R: Real> LightLoop<'_, '_, R> {
     /// Every light on one packet whose parameters determined `pixel`.
     #[inline(always)]
     fn shade<B: Brdf>(self, brdf: &B, pixel: &B::Pixel<R>) -> Rgb<R> {
-        let (frag, frame) = (self.input.frag, &self.input.frame());
+        let (frag, frame) = (self.input.frag, &self.maps.frame(self.input));
         let prepared = brdf.prepare_with(pixel, frame.to_local(frag.wo));
         let mut acc = Rgb::zero();
         let mut rest = self.env.lights;
@@ -101,7 +126,18 @@ impl<R: Real> LightLoop<'_, '_, R> {
             rest = tail;
         }
         if let Some(env) = self.env.environment {
-            acc += brdf.albedo_local(&prepared).mul_elem(V3::from_f32(env));
+            let env = brdf.albedo_local(&prepared).mul_elem(V3::from_f32(env));
+            acc += match self.maps.occlusion(self.input) {
+                Some(k) => env * k,
+                None => env,
+            };
+        }
+        if let Some(e) = self.emissive {
+            let e = Rgb::from_f32(e);
+            acc += match &self.maps.emissive {
+                Some(map) => e.mul_elem(map.sample(self.input)),
+                None => e,
+            };
         }
         acc
     }
@@ -183,7 +219,7 @@ fn lights_from_polygon<B: Brdf, R: Real>(
     input: &ShadeInput<R>,
     lights: &[Light],
 ) -> Rgb<R> {
-    let (frag, frame) = (input.frag, &input.frame());
+    let (frag, frame) = (input.frag, &maps.frame(input));
     let (params, pixel) = pixel_at(brdf, maps, input);
     let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
     let mut poly = PolygonLocal {
@@ -230,6 +266,7 @@ impl PacketShader for Lit {
             input,
             env,
             maps: &self.maps,
+            emissive: self.emissive,
         })
     }
 
@@ -257,6 +294,7 @@ impl PacketShader for Lit {
             env: &'a ShadeEnv<'a>,
             /// The material's maps: none (checked above).
             maps: &'a ParamMaps,
+            emissive: Option<[f32; 3]>,
             out: &'a mut [Rgb<R>],
         }
         impl<R: Real> BrdfVisitor for Packets<'_, R> {
@@ -269,6 +307,7 @@ impl PacketShader for Lit {
                         input: &input,
                         env: self.env,
                         maps: self.maps,
+                        emissive: self.emissive,
                     }
                     .shade(brdf, &pixel);
                 }
@@ -279,6 +318,7 @@ impl PacketShader for Lit {
             lanes,
             env,
             maps: &self.maps,
+            emissive: self.emissive,
             out,
         })
     }
@@ -292,6 +332,15 @@ impl PacketShader for Lit {
             }
         }
         self.model.visit(Aniso) || !self.maps.is_empty()
+    }
+
+    fn with_texture_filter(&self, filter: Filter) -> Option<Lit> {
+        if self.maps.is_empty() {
+            return None;
+        }
+        let mut lit = self.clone();
+        lit.maps.force_filter(filter);
+        Some(lit)
     }
 
     fn check_lights(&self, lights: &[Light]) -> Result<(), String> {
