@@ -14,6 +14,24 @@ pub type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
 /// Reads an sRGB colour image (alpha dropped) with its mip chain, sampled
 /// with repeat wrapping and trilinear filtering.
 pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, String> {
+    load_map(
+        path,
+        read,
+        Encoding::Srgb,
+        Sampler::new(Wrap::Repeat, Filter::Trilinear),
+    )
+}
+
+/// Reads an image's RGB (alpha dropped) with its mip chain: colour
+/// (`Encoding::Srgb`: base colour, emission) or data (`Encoding::Linear`:
+/// metallic-roughness, normal and occlusion maps, whose texels are not
+/// colours).
+pub fn load_map(
+    path: &Path,
+    read: ReadFile,
+    encoding: Encoding,
+    sampler: Sampler,
+) -> Result<ColorMap, String> {
     let bytes = read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     let img = image::load_from_memory(&bytes)
         .map_err(|e| format!("{}: {e}", path.display()))?
@@ -24,10 +42,10 @@ pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, String> {
     for row in raw.chunks_exact(w * 3).rev() {
         flipped.extend_from_slice(row);
     }
-    let texture = Texture::from_u8(w, h, 3, &flipped, Encoding::Srgb)
+    let texture = Texture::from_u8(w, h, 3, &flipped, encoding)
         .map_err(|e| format!("{}: {e}", path.display()))?;
     Ok(ColorMap {
         texture: Arc::new(texture),
-        sampler: Sampler::new(Wrap::Repeat, Filter::Trilinear),
+        sampler,
     })
 }
