@@ -571,10 +571,9 @@ impl Texture {
         // ⌈ratio⌉ as −⌊−ratio⌋; NaN (NaN derivatives) becomes one tap.
         let n = (-(-ratio).floor()).clamp(R::ONE, max);
         let n = R::select(n.is_finite(), n, R::ONE);
-        // λ = ½ log₂(P_max² / n²); ρ² = 0 or NaN give −inf or NaN, which
-        // `trilinear` clamps to level 0.
+        // λ = ½ log₂(P_max² / n²); P_max² = 0 or NaN give −inf or NaN,
+        // which `trilinear` clamps to level 0 (and +inf to the last).
         let lambda = (pmax2 / (n * n)).ln() * R::splat(0.5 / core::f64::consts::LN_2);
-        let lambda = R::select(lambda.is_finite(), lambda, R::ZERO);
         let axis = [
             R::select(x_major, duv_dx[0], duv_dy[0]),
             R::select(x_major, duv_dx[1], duv_dy[1]),
