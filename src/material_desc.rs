@@ -282,7 +282,7 @@ struct SurfaceMaps<'a> {
     emissive: [f32; 3],
     emissive_texture: Option<&'a Path>,
     texture_filter: Option<&'a str>,
-    texture_wrap: Option<WrapsDesc>,
+    texture_wrap: Option<&'a WrapsDesc>,
 }
 
 /// Borrows the `SurfaceMaps` fields of a description that has them.
@@ -296,36 +296,31 @@ macro_rules! surface_maps {
             emissive: $d.emissive,
             emissive_texture: $d.emissive_texture.as_deref(),
             texture_filter: $d.texture_filter.as_deref(),
-            texture_wrap: $d.texture_wrap,
+            texture_wrap: $d.texture_wrap.as_ref(),
         }
     };
 }
 
-/// glTF's wrap modes, by their glTF names in snake case.
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
-#[serde(rename_all = "snake_case")]
-pub enum WrapDesc {
-    Repeat,
-    ClampToEdge,
-    MirroredRepeat,
-}
-
-impl From<WrapDesc> for Wrap {
-    fn from(w: WrapDesc) -> Wrap {
-        match w {
-            WrapDesc::Repeat => Wrap::Repeat,
-            WrapDesc::ClampToEdge => Wrap::Clamp,
-            WrapDesc::MirroredRepeat => Wrap::Mirror,
-        }
-    }
-}
-
-/// One wrap mode for both axes, or [u, v].
-#[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
+/// `texture_wrap`: one wrap mode for both axes, or [u, v]; names are
+/// checked when the material is built (`wrap_mode`), so a wrong one is an
+/// error naming the field.
+#[derive(Clone, Debug, Deserialize, PartialEq, Eq)]
 #[serde(untagged)]
 pub enum WrapsDesc {
-    Both(WrapDesc),
-    Axes([WrapDesc; 2]),
+    Both(String),
+    Axes([String; 2]),
+}
+
+/// glTF's wrap modes by their glTF names in snake case.
+fn wrap_mode(name: &str) -> Result<Wrap, String> {
+    match name {
+        "repeat" => Ok(Wrap::Repeat),
+        "clamp_to_edge" => Ok(Wrap::Clamp),
+        "mirrored_repeat" => Ok(Wrap::Mirror),
+        _ => Err(format!(
+            "texture_wrap: expected \"repeat\", \"clamp_to_edge\" or \"mirrored_repeat\", got {name:?}"
+        )),
+    }
 }
 
 impl<'a> SurfaceMaps<'a> {
@@ -336,13 +331,13 @@ impl<'a> SurfaceMaps<'a> {
             None => Filter::Trilinear,
         };
         let [u, v] = match self.texture_wrap {
-            None => [WrapDesc::Repeat; 2],
-            Some(WrapsDesc::Both(w)) => [w; 2],
-            Some(WrapsDesc::Axes(a)) => a,
+            None => [Wrap::Repeat; 2],
+            Some(WrapsDesc::Both(w)) => [wrap_mode(w)?; 2],
+            Some(WrapsDesc::Axes([u, v])) => [wrap_mode(u)?, wrap_mode(v)?],
         };
         Ok(Sampler {
-            wrap_u: u.into(),
-            wrap_v: v.into(),
+            wrap_u: u,
+            wrap_v: v,
             filter,
         })
     }
