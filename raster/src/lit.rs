@@ -53,7 +53,7 @@ impl Lit {
         }
         match model.visit(Check(&maps)) {
             Some(map) => Err(format!(
-                "{map}: the \"{}\" model takes no texture",
+                "{map}: the \"{}\" model has no parameter this map fills",
                 model.name()
             )),
             None => Ok(Lit {
