@@ -412,3 +412,52 @@ fn bad_map_fields_are_named() {
         assert!(err.contains(field), "{field}: {err}");
     }
 }
+
+#[test]
+fn texture_maps_fixture_renders_and_shading_paths_agree() {
+    let path = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("fixtures/scenes/texture-maps.toml");
+    let s = specula::scene::load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let mut settings = RenderSettings::from_scene(&s);
+    (settings.width, settings.height) = (320, 180);
+    let a = render_scene(&s, &settings, 0.0).unwrap().hdr();
+    settings.path = specula_raster::frame::ShadePath::Scalar;
+    let b = render_scene(&s, &settings, 0.0).unwrap().hdr();
+    assert!(a.iter().flatten().all(|v| v.is_finite()));
+    // The same kernels one lane at a time: equal up to f32 rounding (and
+    // the rare anisotropic tap count or mip level that rounds the other
+    // way at an integer).
+    let off = a
+        .iter()
+        .zip(&b)
+        .filter(|(p, q)| (0..3).any(|c| (p[c] - q[c]).abs() > 1e-3 * q[c].abs().max(0.05)))
+        .count();
+    assert!(off * 1000 < a.len(), "{off} pixels differ");
+}
+
+#[test]
+fn a_forced_filter_replaces_every_material_s_own() {
+    // A material asking for nearest, forced to trilinear, renders as the
+    // same material asking for trilinear.
+    let checker = png(16, 16, |x, y| {
+        if (x / 2 + y / 2) % 2 == 0 {
+            [250, 250, 250]
+        } else {
+            [10, 10, 10]
+        }
+    });
+    let read = files(vec![("c.png".into(), checker)]);
+    let light = "[[light]]\ntype = \"directional\"\ndirection = [0.0, -0.3, -1.0]\nirradiance = [2.0, 2.0, 2.0]\n";
+    let scene = |filter: &str| {
+        format!("{SPHERE}{light}[materials.m]\nmodel = \"lambert\"\nbase_color = [1, 1, 1]\nbase_color_texture = \"c.png\"\ntexture_filter = \"{filter}\"\n")
+    };
+    let mut forced = load(&scene("nearest"), &read).unwrap();
+    let nearest = hdr(&forced);
+    forced
+        .data
+        .force_texture_filter(specula_raster::texture::Filter::Trilinear);
+    let trilinear = hdr(&load(&scene("trilinear"), &read).unwrap());
+    assert_eq!(hdr(&forced), trilinear);
+    assert_ne!(nearest, trilinear);
+}
