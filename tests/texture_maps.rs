@@ -461,3 +461,115 @@ fn a_forced_filter_replaces_every_material_s_own() {
     assert_eq!(hdr(&forced), trilinear);
     assert_ne!(nearest, trilinear);
 }
+
+/// The ray from `o` along `d` against the triangle (a, b, c): the
+/// barycentrics (b0, b1, b2) of the hit, if any (Möller–Trumbore).
+fn hit_triangle(o: [f64; 3], d: [f64; 3], p: [[f64; 3]; 3]) -> Option<[f64; 3]> {
+    let sub = |a: [f64; 3], b: [f64; 3]| [a[0] - b[0], a[1] - b[1], a[2] - b[2]];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let dot = |a: [f64; 3], b: [f64; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    let (e1, e2) = (sub(p[1], p[0]), sub(p[2], p[0]));
+    let h = cross(d, e2);
+    let det = dot(e1, h);
+    if det.abs() < 1e-12 {
+        return None;
+    }
+    let s = sub(o, p[0]);
+    let u = dot(s, h) / det;
+    let q = cross(s, e1);
+    let v = dot(d, q) / det;
+    (u >= 0.0 && v >= 0.0 && u + v <= 1.0 && dot(e2, q) / det > 0.0).then_some([1.0 - u - v, u, v])
+}
+
+#[test]
+fn mikktspace_tangents_reach_the_shading_frame_through_the_raster() {
+    // The mirrored-uv patch under a uniform normal map that tilts the
+    // normal toward the tangent, seen from above: each pixel's radiance
+    // is the Lambertian one of the normal bent in the frame interpolated
+    // (as the raster does, at the ray's hit) from the corner tangents the
+    // mikktspace crate gives directly. The mirrored half tilts the other
+    // way; a lost handedness or tangent would show there.
+    let dir = std::path::PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("fixtures/models");
+    let text = std::fs::read_to_string(dir.join("mirrored-uv.obj")).unwrap();
+    let corners = obj_corners(&text);
+    let mut direct = Direct {
+        tangents: vec![[0.0; 4]; corners.len() * 3],
+        corners,
+    };
+    assert!(mikktspace::generate_tangents(&mut direct));
+    let texel = [191u8, 128, 238];
+    let read = files(vec![
+        ("m.obj".into(), text.into_bytes()),
+        ("n.png".into(), png(1, 1, move |_, _| texel)),
+    ]);
+    let size = 64u32;
+    let toml = format!("[camera]\neye = [0.0, 0.0, 4.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\nfov_y = 40.0\nnear = 0.1\nfar = 10.0\n\n[output]\nwidth = {size}\nheight = {size}\n\n[[mesh]]\nobj = \"m.obj\"\nmaterial = \"m\"\n\n[materials.m]\nmodel = \"lambert\"\nbase_color = [0.5, 0.5, 0.5]\nnormal_texture = \"n.png\"\n\n[[light]]\ntype = \"directional\"\ndirection = [-1.0, 0.0, -1.0]\nirradiance = [1.0, 1.0, 1.0]\n");
+    let img = hdr(&load(&toml, &read).unwrap());
+    let m: [f64; 3] = texel.map(|b| 2.0 * b as f64 / 255.0 - 1.0);
+    let l = [0.5f64.sqrt(), 0.0, 0.5f64.sqrt()];
+    let norm = |a: [f64; 3]| {
+        let k = (a[0] * a[0] + a[1] * a[1] + a[2] * a[2]).sqrt();
+        a.map(|c| c / k)
+    };
+    let (mut checked, mut mirrored) = (0, 0);
+    let ty = (20.0f64).to_radians().tan();
+    for y in 0..size {
+        for x in 0..size {
+            let nx = (x as f64 + 0.5) * 2.0 / size as f64 - 1.0;
+            let ny = 1.0 - (y as f64 + 0.5) * 2.0 / size as f64;
+            let d = norm([nx * ty, ny * ty, -1.0]);
+            let o = [0.0, 0.0, 4.0];
+            let hit = direct.corners.iter().enumerate().find_map(|(t, c)| {
+                let p = c.map(|k| [k[0] as f64, k[1] as f64, k[2] as f64]);
+                hit_triangle(o, d, p).map(|b| (t, b))
+            });
+            let Some((t, b)) = hit else { continue };
+            let c = direct.corners[t];
+            let at = |k: usize| -> [f64; 3] {
+                core::array::from_fn(|i| (0..3).map(|j| b[j] * c[j][k + i] as f64).sum())
+            };
+            let hx = at(0)[0];
+            // Away from the seam (where the frame jumps between pixels)
+            // and the border.
+            if hx.abs() < 0.1 || hx.abs() > 0.9 || at(0)[1].abs() > 0.9 {
+                continue;
+            }
+            let n = norm(at(3));
+            let tan: [f64; 3] = core::array::from_fn(|i| {
+                (0..3)
+                    .map(|j| b[j] * direct.tangents[3 * t + j][i] as f64)
+                    .sum()
+            });
+            let k = tan[0] * n[0] + tan[1] * n[1] + tan[2] * n[2];
+            let tan = norm([tan[0] - n[0] * k, tan[1] - n[1] * k, tan[2] - n[2] * k]);
+            let sign = direct.tangents[3 * t][3] as f64;
+            let bit = [
+                sign * (n[1] * tan[2] - n[2] * tan[1]),
+                sign * (n[2] * tan[0] - n[0] * tan[2]),
+                sign * (n[0] * tan[1] - n[1] * tan[0]),
+            ];
+            let bent = norm(core::array::from_fn(|i| {
+                tan[i] * m[0] + bit[i] * m[1] + n[i] * m[2]
+            }));
+            let cos = (bent[0] * l[0] + bent[1] * l[1] + bent[2] * l[2]).max(0.0);
+            let want = 0.5 / PI * cos;
+            let got = img[(y * size + x) as usize][0] as f64;
+            assert!(
+                (got - want).abs() < 1e-3 * want.max(0.01),
+                "pixel ({x}, {y}) at x = {hx:.3}: {got} vs {want}"
+            );
+            checked += 1;
+            mirrored += (sign < 0.0) as usize;
+        }
+    }
+    assert!(
+        checked > 1000 && mirrored > 400,
+        "{checked} pixels, {mirrored} mirrored"
+    );
+}

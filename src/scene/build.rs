@@ -361,8 +361,11 @@ impl<'a> SceneBuilder<'a> {
         // Meshes that brought (or were given MikkTSpace) tangents keep
         // them: the tangents above depend only on each vertex's own
         // triangles, so the other meshes' are what they were alone.
+        // (A scene where no mesh has uvs has no tangents at all.)
         for (start, tangents) in std::mem::take(&mut self.given_tangents) {
-            data.tangents[start..start + tangents.len()].copy_from_slice(&tangents);
+            if let Some(dst) = data.tangents.get_mut(start..start + tangents.len()) {
+                dst.copy_from_slice(&tangents);
+            }
         }
         if data.triangles.is_empty() {
             self.warnings.push("the scene has no triangles".into());
