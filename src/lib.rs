@@ -28,6 +28,7 @@ pub mod polygon_light;
 pub mod render;
 pub mod scene;
 pub mod table_cache;
+pub mod tangents;
 pub mod textures;
 pub mod validate;
 

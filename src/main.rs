@@ -9,6 +9,7 @@ use specula::scene::{is_gltf_path, load_gltf_scene, load_scene, GltfOptions};
 use specula::validate::truncate_lines;
 use specula::{demo, image_file, memory, output_plan};
 use specula_raster::frame::ShadePath;
+use specula_raster::texture::Filter;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::time::Instant;
@@ -161,6 +162,11 @@ struct RenderArgs {
     /// Shade one pixel at a time in f32 instead of 8 at a time in f32x8.
     #[arg(long)]
     scalar: bool,
+    /// Sample every texture map with this filter, whatever the scene says:
+    /// nearest, bilinear, trilinear, anisotropic (16 taps) or
+    /// anisotropic:N (N in 1..=16).
+    #[arg(long, value_name = "FILTER", value_parser = parse_texture_filter)]
+    texture_filter: Option<Filter>,
     /// Render the loaded scene N times, timing each frame (load and encode excluded).
     #[arg(long, default_value_t = 1)]
     repeat: u32,
@@ -190,6 +196,10 @@ impl Aov {
             Aov::Depth(p) | Aov::Normal(p) | Aov::Id(p) => p,
         }
     }
+}
+
+fn parse_texture_filter(s: &str) -> Result<Filter, String> {
+    s.parse()
 }
 
 fn parse_aov(s: &str) -> Result<Aov, String> {
@@ -231,7 +241,7 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     }
     memory::set_limit(a.max_memory.unwrap_or_else(memory::default_limit));
     let t = Instant::now();
-    let scene = if is_gltf_path(&a.scene) {
+    let mut scene = if is_gltf_path(&a.scene) {
         let opts = GltfOptions { camera: a.camera };
         load_gltf_scene(&a.scene, &opts)
     } else if a.camera.is_some() {
@@ -243,6 +253,9 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
         load_scene(&a.scene)
     }
     .map_err(|e| e.to_string())?;
+    if let Some(f) = a.texture_filter {
+        scene.data.force_texture_filter(f);
+    }
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     for w in &scene.warnings {
         eprintln!("warning: {}", truncate_lines(w, MESSAGE_LINE_MAX));

@@ -14,7 +14,8 @@ use specula_core::Model;
 use specula_npr::hatching::{builtin_tam, Hatching};
 use specula_npr::tam::TamTexture;
 use specula_npr::toon::{Hard, Ramp, Toon};
-use specula_raster::maps::ParamMaps;
+use specula_raster::maps::{NormalMap, OcclusionMap, ParamMaps};
+use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
 use specula_raster::{Lit, Material, Unlit};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -187,6 +188,38 @@ pub struct LambertDesc {
     /// An sRGB image multiplying base_color at the surface's uv.
     #[serde(default)]
     pub base_color_texture: Option<PathBuf>,
+    /// Refused (lambert has no metallic or roughness); accepted here so
+    /// the message says why rather than "unknown field".
+    #[serde(default)]
+    pub metallic_roughness_texture: Option<PathBuf>,
+    // The maps every lit model takes (`SurfaceMaps`):
+    /// A linear tangent-space normal map (glTF's normalTexture).
+    #[serde(default)]
+    pub normal_texture: Option<PathBuf>,
+    /// Scales the normal map's x and y.
+    #[serde(default = "one")]
+    pub normal_scale: f32,
+    /// A linear image whose red channel darkens the environment term.
+    #[serde(default)]
+    pub occlusion_texture: Option<PathBuf>,
+    /// 1 + strength · (occlusion − 1); in [0, 1].
+    #[serde(default = "one")]
+    pub occlusion_strength: f32,
+    /// Emitted radiance, linear RGB (the emissive texture multiplies it).
+    #[serde(default)]
+    pub emissive: [f32; 3],
+    /// An sRGB image multiplying `emissive`.
+    #[serde(default)]
+    pub emissive_texture: Option<PathBuf>,
+    /// "nearest", "bilinear", "trilinear" (default), "anisotropic" (16
+    /// taps) or "anisotropic:N" (N in 1..=16), for every texture of the
+    /// material.
+    #[serde(default)]
+    pub texture_filter: Option<String>,
+    /// "repeat" (default), "clamp_to_edge" or "mirrored_repeat", or a pair
+    /// [u, v] of them.
+    #[serde(default)]
+    pub texture_wrap: Option<WrapsDesc>,
     #[serde(default)]
     pub double_sided: bool,
 }
@@ -201,8 +234,123 @@ pub struct MetallicRoughnessDesc {
     /// An sRGB image multiplying base_color at the surface's uv.
     #[serde(default)]
     pub base_color_texture: Option<PathBuf>,
+    /// A linear image whose blue channel multiplies metallic and green
+    /// channel roughness (glTF's metallicRoughnessTexture).
+    #[serde(default)]
+    pub metallic_roughness_texture: Option<PathBuf>,
+    // The maps every lit model takes (`SurfaceMaps`):
+    /// A linear tangent-space normal map (glTF's normalTexture).
+    #[serde(default)]
+    pub normal_texture: Option<PathBuf>,
+    /// Scales the normal map's x and y.
+    #[serde(default = "one")]
+    pub normal_scale: f32,
+    /// A linear image whose red channel darkens the environment term.
+    #[serde(default)]
+    pub occlusion_texture: Option<PathBuf>,
+    /// 1 + strength · (occlusion − 1); in [0, 1].
+    #[serde(default = "one")]
+    pub occlusion_strength: f32,
+    /// Emitted radiance, linear RGB (the emissive texture multiplies it).
+    #[serde(default)]
+    pub emissive: [f32; 3],
+    /// An sRGB image multiplying `emissive`.
+    #[serde(default)]
+    pub emissive_texture: Option<PathBuf>,
+    /// "nearest", "bilinear", "trilinear" (default), "anisotropic" (16
+    /// taps) or "anisotropic:N" (N in 1..=16), for every texture of the
+    /// material.
+    #[serde(default)]
+    pub texture_filter: Option<String>,
+    /// "repeat" (default), "clamp_to_edge" or "mirrored_repeat", or a pair
+    /// [u, v] of them.
+    #[serde(default)]
+    pub texture_wrap: Option<WrapsDesc>,
     #[serde(default)]
     pub double_sided: bool,
+}
+
+/// The fields of a lit material (`lambert`, `metallic_roughness`) for
+/// the maps that belong to the material whatever its model (normal,
+/// occlusion, emission; raster's maps.rs) and the sampler all of its
+/// textures use, borrowed from its table.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct SurfaceMaps<'a> {
+    normal_texture: Option<&'a Path>,
+    normal_scale: f32,
+    occlusion_texture: Option<&'a Path>,
+    occlusion_strength: f32,
+    emissive: [f32; 3],
+    emissive_texture: Option<&'a Path>,
+    texture_filter: Option<&'a str>,
+    texture_wrap: Option<&'a WrapsDesc>,
+}
+
+/// Borrows the `SurfaceMaps` fields of a description that has them.
+macro_rules! surface_maps {
+    ($d:expr) => {
+        SurfaceMaps {
+            normal_texture: $d.normal_texture.as_deref(),
+            normal_scale: $d.normal_scale,
+            occlusion_texture: $d.occlusion_texture.as_deref(),
+            occlusion_strength: $d.occlusion_strength,
+            emissive: $d.emissive,
+            emissive_texture: $d.emissive_texture.as_deref(),
+            texture_filter: $d.texture_filter.as_deref(),
+            texture_wrap: $d.texture_wrap.as_ref(),
+        }
+    };
+}
+
+/// `texture_wrap`: one wrap mode for both axes, or [u, v]; names are
+/// checked when the material is built (`wrap_mode`), so a wrong one is an
+/// error naming the field.
+#[derive(Clone, Debug, Deserialize, PartialEq, Eq)]
+#[serde(untagged)]
+pub enum WrapsDesc {
+    Both(String),
+    Axes([String; 2]),
+}
+
+/// glTF's wrap modes by their glTF names in snake case.
+fn wrap_mode(name: &str) -> Result<Wrap, String> {
+    match name {
+        "repeat" => Ok(Wrap::Repeat),
+        "clamp_to_edge" => Ok(Wrap::Clamp),
+        "mirrored_repeat" => Ok(Wrap::Mirror),
+        _ => Err(format!(
+            "texture_wrap: expected \"repeat\", \"clamp_to_edge\" or \"mirrored_repeat\", got {name:?}"
+        )),
+    }
+}
+
+impl<'a> SurfaceMaps<'a> {
+    /// The sampler of the material's textures, checked.
+    fn sampler(&self) -> Result<Sampler, String> {
+        let filter = match self.texture_filter {
+            Some(f) => f.parse().map_err(|e| format!("texture_filter: {e}"))?,
+            None => Filter::Trilinear,
+        };
+        let [u, v] = match self.texture_wrap {
+            None => [Wrap::Repeat; 2],
+            Some(WrapsDesc::Both(w)) => [wrap_mode(w)?; 2],
+            Some(WrapsDesc::Axes([u, v])) => [wrap_mode(u)?, wrap_mode(v)?],
+        };
+        Ok(Sampler {
+            wrap_u: u,
+            wrap_v: v,
+            filter,
+        })
+    }
+
+    /// The files these fields name, with their field names.
+    fn files(&self) -> [(&'static str, Option<&'a Path>); 3] {
+        [
+            ("normal_texture", self.normal_texture),
+            ("occlusion_texture", self.occlusion_texture),
+            ("emissive_texture", self.emissive_texture),
+        ]
+    }
 }
 
 /// Burley's principled BRDF (core::models::disney); field names and
@@ -595,20 +743,125 @@ impl MaterialDesc {
         }
         let (shading, double_sided) = self.build_model(tables, warnings)?;
         Ok(match shading {
-            Shading::Lit(model) => match self.base_color_texture() {
-                Some(path) => {
-                    let map = crate::textures::load_color_map(path, read)
-                        .map_err(|e| format!("base_color_texture: {e}"))?;
-                    let maps = ParamMaps {
-                        base_color: Some(map),
-                    };
-                    let shader = Lit::with_maps(model, maps)?;
-                    Material::new(name, shader, double_sided)
-                }
-                None => Material::new(name, Lit::new(model), double_sided),
-            },
+            Shading::Lit(model) => {
+                let (maps, emissive) = self.param_maps(warnings, read)?;
+                let lit = if maps.is_empty() {
+                    Lit::new(model)
+                } else {
+                    Lit::with_maps(model, maps)?
+                };
+                Material::new(name, lit.with_emission(emissive), double_sided)
+            }
             Shading::Unlit(u) => Material::new(name, u, double_sided),
         })
+    }
+
+    /// The `SurfaceMaps` fields of a lit material, if it has them.
+    fn surface_maps(&self) -> Option<SurfaceMaps<'_>> {
+        match self {
+            MaterialDesc::Lambert(d) => Some(surface_maps!(d)),
+            MaterialDesc::MetallicRoughness(d) => Some(surface_maps!(d)),
+            _ => None,
+        }
+    }
+
+    /// The metallic-roughness image the material names, if any.
+    fn metallic_roughness_texture(&self) -> Option<&Path> {
+        match self {
+            MaterialDesc::Lambert(d) => d.metallic_roughness_texture.as_deref(),
+            MaterialDesc::MetallicRoughness(d) => d.metallic_roughness_texture.as_deref(),
+            _ => None,
+        }
+    }
+
+    /// Every texture file the material names, with its field.
+    fn texture_fields(&self) -> Vec<(&'static str, &Path)> {
+        let mut out = vec![
+            ("base_color_texture", self.base_color_texture()),
+            (
+                "metallic_roughness_texture",
+                self.metallic_roughness_texture(),
+            ),
+        ];
+        if let Some(m) = self.surface_maps() {
+            out.extend(m.files());
+        }
+        out.into_iter()
+            .filter_map(|(f, p)| p.map(|p| (f, p)))
+            .collect()
+    }
+
+    /// The texture files the material names (inputs outputs must not
+    /// overwrite).
+    pub fn texture_files(&self) -> Vec<&Path> {
+        self.texture_fields().into_iter().map(|(_, p)| p).collect()
+    }
+
+    /// The material has a normal map: its meshes need tangents
+    /// (tangents.rs).
+    pub fn has_normal_map(&self) -> bool {
+        self.surface_maps()
+            .is_some_and(|m| m.normal_texture.is_some())
+    }
+
+    /// A lit material's maps, every field checked and every image read
+    /// through `read`, and its emissive colour.
+    fn param_maps(
+        &self,
+        warnings: &mut Vec<String>,
+        read: ReadFile,
+    ) -> Result<(ParamMaps, [f32; 3]), String> {
+        let Some(m) = self.surface_maps() else {
+            return Ok((ParamMaps::default(), [0.0; 3]));
+        };
+        let sampler = m.sampler()?;
+        if !m.normal_scale.is_finite() {
+            return Err(format!(
+                "normal_scale: must be a finite number, got {}",
+                m.normal_scale
+            ));
+        }
+        checks::unit("occlusion_strength", m.occlusion_strength)?;
+        checks::linear_color("emissive", m.emissive)?;
+        if m.emissive_texture.is_some() && m.emissive == [0.0; 3] {
+            warnings.push(
+                "emissive_texture: multiplies `emissive`, which is [0, 0, 0] (glTF's default): the material emits nothing"
+                    .into(),
+            );
+        }
+        let load = |field: &str, path: Option<&Path>, encoding: Encoding| {
+            path.map(|p| {
+                crate::textures::load_map(p, read, encoding, sampler)
+                    .map_err(|e| format!("{field}: {e}"))
+            })
+            .transpose()
+        };
+        let maps = ParamMaps {
+            base_color: load(
+                "base_color_texture",
+                self.base_color_texture(),
+                Encoding::Srgb,
+            )?,
+            metallic_roughness: load(
+                "metallic_roughness_texture",
+                self.metallic_roughness_texture(),
+                Encoding::Linear,
+            )?,
+            normal: load("normal_texture", m.normal_texture, Encoding::Linear)?.map(|map| {
+                NormalMap {
+                    map,
+                    scale: m.normal_scale,
+                }
+            }),
+            occlusion: load("occlusion_texture", m.occlusion_texture, Encoding::Linear)?.map(
+                |map| OcclusionMap {
+                    map,
+                    strength: m.occlusion_strength,
+                },
+            ),
+            emissive: load("emissive_texture", m.emissive_texture, Encoding::Srgb)?,
+        };
+        Ok((maps, m.emissive))
     }
 
     /// The base-colour image the material names, if any.
@@ -625,7 +878,7 @@ impl MaterialDesc {
     /// The material reads uvs (a texture or a tonal art map): meshes
     /// without them cannot use it.
     pub fn needs_uvs(&self) -> bool {
-        self.base_color_texture().is_some() || matches!(self, MaterialDesc::Hatching(_))
+        !self.texture_fields().is_empty() || matches!(self, MaterialDesc::Hatching(_))
     }
 
     /// [`MaterialDesc::build`] before it becomes a shader (what `specula
@@ -637,8 +890,11 @@ impl MaterialDesc {
         tables: Tables,
         warnings: &mut Vec<String>,
     ) -> Result<(Shading, bool), String> {
-        if self.base_color_texture().is_some() {
-            return Err("base_color_texture: a textured material has no single BRDF value (it depends on uv); leave the texture out".into());
+        if let Some((field, _)) = self.texture_fields().first() {
+            return Err(format!("{field}: a textured material has no single BRDF value (it depends on uv); leave the texture out"));
+        }
+        if self.surface_maps().is_some_and(|m| m.emissive != [0.0; 3]) {
+            return Err("emissive: emission is radiance the surface adds, not part of its BRDF value; leave it out".into());
         }
         if let MaterialDesc::Toon(_) | MaterialDesc::Hatching(_) = self {
             return Err(
@@ -767,6 +1023,7 @@ impl ToonDesc {
             base_color: self.base_color,
             maps: ParamMaps {
                 base_color: base_color_map,
+                ..Default::default()
             },
             ramp,
             specular: hard(

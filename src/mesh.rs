@@ -11,6 +11,10 @@ pub struct MeshData {
     pub normals: Vec<Vec3>,
     /// One per position, or empty.
     pub uvs: Vec<Vec2>,
+    /// Unit tangents (xyz) and the bitangent's sign (w = ±1), one per
+    /// position, or empty (then made when the scene is built: tangents.rs
+    /// for normal-mapped materials, `compute_tangents` otherwise).
+    pub tangents: Vec<glam::Vec4>,
     pub triangles: Vec<[u32; 3]>,
     pub tri_material: Vec<u32>,
     /// Names of the materials the triangles use (`None`: none assigned).

@@ -1,6 +1,7 @@
 //! Image files as textures: PNG (or any format the `image` crate reads
-//! here) through `image`, decoded from sRGB to linear, rows flipped so that
-//! v = 0 is the bottom of the picture (the OBJ/MTL convention for `vt`).
+//! here) through `image`, colour decoded from sRGB to linear, rows flipped
+//! so that v = 0 is the bottom of the picture (the OBJ/MTL convention for
+//! `vt`).
 
 use specula_raster::maps::ColorMap;
 use specula_raster::texture::{Encoding, Filter, Sampler, Texture, Wrap};
@@ -14,13 +15,47 @@ pub type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
 /// Reads an sRGB colour image (alpha dropped) with its mip chain, sampled
 /// with repeat wrapping and trilinear filtering.
 pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, String> {
+    load_map(
+        path,
+        read,
+        Encoding::Srgb,
+        Sampler::new(Wrap::Repeat, Filter::Trilinear),
+    )
+}
+
+/// Reads an image's RGB (alpha dropped) with its mip chain: colour
+/// (`Encoding::Srgb`: base colour, emission) or data (`Encoding::Linear`:
+/// metallic-roughness, normal and occlusion maps, whose texels are not
+/// colours).
+pub fn load_map(
+    path: &Path,
+    read: ReadFile,
+    encoding: Encoding,
+    sampler: Sampler,
+) -> Result<ColorMap, String> {
     let bytes = read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
-    decode_color_map(&path.display().to_string(), &bytes)
+    decode_map(&path.display().to_string(), &bytes, encoding, sampler)
 }
 
 /// [`load_color_map`] from an image file's bytes; `name` says where they
 /// came from in messages.
 pub fn decode_color_map(name: &str, bytes: &[u8]) -> Result<ColorMap, String> {
+    decode_map(
+        name,
+        bytes,
+        Encoding::Srgb,
+        Sampler::new(Wrap::Repeat, Filter::Trilinear),
+    )
+}
+
+/// [`load_map`] from an image file's bytes; `name` says where they came
+/// from in messages.
+pub fn decode_map(
+    name: &str,
+    bytes: &[u8],
+    encoding: Encoding,
+    sampler: Sampler,
+) -> Result<ColorMap, String> {
     let img = image::load_from_memory(bytes)
         .map_err(|e| format!("{name}: {e}"))?
         .to_rgb8();
@@ -34,9 +69,9 @@ pub fn decode_color_map(name: &str, bytes: &[u8]) -> Result<ColorMap, String> {
         flipped.extend_from_slice(row);
     }
     let texture =
-        Texture::from_u8(w, h, 3, &flipped, Encoding::Srgb).map_err(|e| format!("{name}: {e}"))?;
+        Texture::from_u8(w, h, 3, &flipped, encoding).map_err(|e| format!("{name}: {e}"))?;
     Ok(ColorMap {
         texture: Arc::new(texture),
-        sampler: Sampler::new(Wrap::Repeat, Filter::Trilinear),
+        sampler,
     })
 }

@@ -215,6 +215,22 @@ pub trait LaneParams<R: Real>: Copy {
     fn base_color_mut(&mut self) -> Option<&mut Rgb<R>> {
         None
     }
+
+    /// Metallic, which a metallic-roughness map's blue channel multiplies
+    /// (glTF's metallicRoughnessTexture).
+    #[inline(always)]
+    fn metallic_mut(&mut self) -> Option<&mut R> {
+        None
+    }
+
+    /// Multiplies the perceptual roughness by `g` per lane (a
+    /// metallic-roughness map's green channel), in whatever form the model
+    /// stores it; false, and nothing changed, when the model has no
+    /// roughness slot.
+    #[inline(always)]
+    fn scale_roughness(&mut self, _g: R) -> bool {
+        false
+    }
 }
 
 /// A BRDF in its local shading frame (normal +Z, tangent +X); directions

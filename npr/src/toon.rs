@@ -150,4 +150,13 @@ impl PacketShader for Toon {
     fn needs_surface(&self) -> bool {
         !self.maps.is_empty()
     }
+
+    fn with_texture_filter(&self, filter: specula_raster::texture::Filter) -> Option<Toon> {
+        if self.maps.is_empty() {
+            return None;
+        }
+        let mut toon = self.clone();
+        toon.maps.force_filter(filter);
+        Some(toon)
+    }
 }

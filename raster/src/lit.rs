@@ -6,11 +6,16 @@
 //! frame); then each light adds its
 //! part in the local frame: delta lights (point, spot, directional) through one
 //! direction, polygon lights through the model's integral over the polygon,
-//! the uniform environment through the directional albedo.
+//! the uniform environment through the directional albedo (times the
+//! occlusion map's factor where the material has one). The material's
+//! emission (its emissive colour times its emissive map) is added last.
+//! A normal map bends the local frame all of this is computed in
+//! ([`ParamMaps::frame`]).
 
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
+use crate::texture::Filter;
 use specula_core::light::{
     range_window, spot_attenuation, spot_scale_offset, AreaMethod, Light, PolygonLocal,
     MAX_POLYGON_VERTICES,
@@ -24,6 +29,9 @@ use specula_core::{Brdf, BrdfVisitor, Model, Real, Rgb, ShadingFrame, V3};
 pub struct Lit {
     model: Model,
     maps: ParamMaps,
+    /// Emitted radiance (linear RGB; the emissive map multiplies it), or
+    /// `None` for none.
+    emissive: Option<[f32; 3]>,
 }
 
 impl Lit {
@@ -32,6 +40,7 @@ impl Lit {
         Lit {
             model,
             maps: ParamMaps::default(),
+            emissive: None,
         }
     }
 
@@ -47,11 +56,26 @@ impl Lit {
         }
         match model.visit(Check(&maps)) {
             Some(map) => Err(format!(
-                "{map}: the \"{}\" model takes no texture",
+                "{map}: the \"{}\" model has no parameter this map fills",
                 model.name()
             )),
-            None => Ok(Lit { model, maps }),
+            None => Ok(Lit {
+                model,
+                maps,
+                emissive: None,
+            }),
         }
+    }
+
+    /// The material also emits `emissive` (linear RGB radiance, times the
+    /// emissive map where it has one); zero emits nothing.
+    pub fn with_emission(mut self, emissive: [f32; 3]) -> Lit {
+        self.emissive = (emissive != [0.0; 3]).then_some(emissive);
+        self
+    }
+
+    pub fn maps(&self) -> &ParamMaps {
+        &self.maps
     }
 
     pub fn model(&self) -> &Model {
@@ -80,13 +104,14 @@ struct LightLoop<'a, 'b, R: Real> {
     input: &'a ShadeInput<'b, R>,
     env: &'a ShadeEnv<'a>,
     maps: &'a ParamMaps,
+    emissive: Option<[f32; 3]>,
 }
 
 impl<R: Real> LightLoop<'_, '_, R> {
     /// Every light on one packet whose parameters determined `pixel`.
     #[inline(always)]
     fn shade<B: Brdf>(self, brdf: &B, pixel: &B::Pixel<R>) -> Rgb<R> {
-        let (frag, frame) = (self.input.frag, &self.input.frame());
+        let (frag, frame) = (self.input.frag, &self.maps.frame(self.input));
         let prepared = brdf.prepare_with(pixel, frame.to_local(frag.wo));
         let mut acc = Rgb::zero();
         let mut rest = self.env.lights;
@@ -104,7 +129,18 @@ impl<R: Real> LightLoop<'_, '_, R> {
             rest = tail;
         }
         if let Some(env) = self.env.environment {
-            acc += brdf.albedo_local(&prepared).mul_elem(V3::from_f32(env));
+            let env = brdf.albedo_local(&prepared).mul_elem(V3::from_f32(env));
+            acc += match self.maps.occlusion(self.input) {
+                Some(k) => env * k,
+                None => env,
+            };
+        }
+        if let Some(e) = self.emissive {
+            let e = Rgb::from_f32(e);
+            acc += match &self.maps.emissive {
+                Some(map) => e.mul_elem(map.sample(self.input)),
+                None => e,
+            };
         }
         acc
     }
@@ -214,7 +250,7 @@ fn lights_from_polygon<B: Brdf, R: Real>(
     input: &ShadeInput<R>,
     lights: &[Light],
 ) -> Rgb<R> {
-    let (frag, frame) = (input.frag, &input.frame());
+    let (frag, frame) = (input.frag, &maps.frame(input));
     let (params, pixel) = pixel_at(brdf, maps, input);
     let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
     let mut poly = PolygonLocal {
@@ -261,6 +297,7 @@ impl PacketShader for Lit {
             input,
             env,
             maps: &self.maps,
+            emissive: self.emissive,
         })
     }
 
@@ -288,6 +325,7 @@ impl PacketShader for Lit {
             env: &'a ShadeEnv<'a>,
             /// The material's maps: none (checked above).
             maps: &'a ParamMaps,
+            emissive: Option<[f32; 3]>,
             out: &'a mut [Rgb<R>],
         }
         impl<R: Real> BrdfVisitor for Packets<'_, R> {
@@ -300,6 +338,7 @@ impl PacketShader for Lit {
                         input: &input,
                         env: self.env,
                         maps: self.maps,
+                        emissive: self.emissive,
                     }
                     .shade(brdf, &pixel);
                 }
@@ -310,6 +349,7 @@ impl PacketShader for Lit {
             lanes,
             env,
             maps: &self.maps,
+            emissive: self.emissive,
             out,
         })
     }
@@ -323,6 +363,15 @@ impl PacketShader for Lit {
             }
         }
         self.model.visit(Aniso) || !self.maps.is_empty()
+    }
+
+    fn with_texture_filter(&self, filter: Filter) -> Option<Lit> {
+        if self.maps.is_empty() {
+            return None;
+        }
+        let mut lit = self.clone();
+        lit.maps.force_filter(filter);
+        Some(lit)
     }
 
     fn check_lights(&self, lights: &[Light]) -> Result<(), String> {

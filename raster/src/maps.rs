@@ -1,20 +1,38 @@
-//! Texture maps that fill a material's parameters per pixel.
+//! Texture maps that fill a material's parameters per pixel, and the maps
+//! that belong to the material rather than to its model: the normal map
+//! (which bends the shading frame), occlusion and emission.
 //!
 //! A shader builds its parameters per lane in two steps: the material's
 //! constants, broadcast ([`specula_core::Brdf::params`]), then each map
 //! the material has overwrites its slot lane by lane ([`ParamMaps::fill`]).
 //! A material without maps skips the second step, and the shading pass
 //! then hands it whole runs of packets at once (shading_pass.rs).
+//!
+//! The maps follow glTF 2.0's material textures:
+//! - `base_color`: RGB multiplies the base colour (sRGB texels);
+//! - `metallic_roughness`: B multiplies metallic and G the perceptual
+//!   roughness (linear texels; R is unused);
+//! - `normal`: a tangent-space normal map, n = normalize((2t − 1) ·
+//!   (scale, scale, 1)) in the (tangent, bitangent, normal) frame, where
+//!   the tangent runs along +u and the bitangent along +v (v = 0 at the
+//!   bottom of the picture, so green is "up" in the image, the OpenGL
+//!   convention glTF uses) and a mirrored uv layout flips the bitangent
+//!   (the tangent's w);
+//! - `occlusion`: R, as 1 + strength · (R − 1), darkens the uniform
+//!   environment term only (glTF: it applies to indirect light, not to
+//!   the lights);
+//! - `emissive`: RGB (sRGB texels) multiplies the material's emissive
+//!   colour, added to the reflected radiance.
 
 use crate::shader::ShadeInput;
-use crate::texture::{Sampler, Texture};
-use specula_core::{LaneParams, Real, Rgb, V3};
+use crate::texture::{Filter, Sampler, Texture};
+use specula_core::{LaneParams, Real, Rgb, ShadingFrame, V3};
 use std::sync::Arc;
 
-/// An image multiplying a colour, sampled at the surface's uv.
+/// An image sampled at the surface's uv: what every map holds.
 #[derive(Clone, Debug, PartialEq)]
 pub struct ColorMap {
-    /// At least three channels (RGB, linear).
+    /// At least three channels (linear values).
     pub texture: Arc<Texture>,
     pub sampler: Sampler,
 }
@@ -35,27 +53,84 @@ impl ColorMap {
     }
 }
 
-/// The maps of one material, one optional map per parameter slot of
-/// [`LaneParams`].
+/// A tangent-space normal map and its scale (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct NormalMap {
+    pub map: ColorMap,
+    /// Scales the perturbation's x and y (glTF `normalTexture.scale`).
+    pub scale: f32,
+}
+
+/// An occlusion map and its strength (module docs).
+#[derive(Clone, Debug, PartialEq)]
+pub struct OcclusionMap {
+    pub map: ColorMap,
+    /// 0 = no effect, 1 = the map's full value (glTF
+    /// `occlusionTexture.strength`).
+    pub strength: f32,
+}
+
+/// The maps of one material, each optional (module docs).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ParamMaps {
     /// Multiplies the base colour.
     pub base_color: Option<ColorMap>,
+    /// B multiplies metallic, G the perceptual roughness.
+    pub metallic_roughness: Option<ColorMap>,
+    pub normal: Option<NormalMap>,
+    pub occlusion: Option<OcclusionMap>,
+    /// Multiplies the material's emissive colour.
+    pub emissive: Option<ColorMap>,
 }
+
+/// Smallest n·wo a normal-mapped shading normal is allowed: the same
+/// bend toward the eye as the resolve's (resolve.rs).
+const MIN_COS_VIEW: f64 = 0.02;
 
 impl ParamMaps {
     /// No maps: the material's parameters are its constants.
     pub fn is_empty(&self) -> bool {
         self.base_color.is_none()
+            && self.metallic_roughness.is_none()
+            && self.normal.is_none()
+            && self.occlusion.is_none()
+            && self.emissive.is_none()
+    }
+
+    /// Every map, mutably (to set their samplers at once).
+    pub fn maps_mut(&mut self) -> impl Iterator<Item = &mut ColorMap> {
+        [
+            self.base_color.as_mut(),
+            self.metallic_roughness.as_mut(),
+            self.normal.as_mut().map(|n| &mut n.map),
+            self.occlusion.as_mut().map(|o| &mut o.map),
+            self.emissive.as_mut(),
+        ]
+        .into_iter()
+        .flatten()
+    }
+
+    /// Every map's sampler filter set to `filter` (a render that must
+    /// match a given GPU setting).
+    pub fn force_filter(&mut self, filter: Filter) {
+        for m in self.maps_mut() {
+            m.sampler.filter = filter;
+        }
     }
 
     /// The name of the first map whose slot `params` does not have, as
     /// scene files write it; `None` when every map has its slot. Checked
     /// once when a material is built, so [`ParamMaps::fill`] never drops
-    /// a map.
+    /// a map. (Normal, occlusion and emissive maps belong to the material
+    /// and fit every model.)
     pub(crate) fn unsupported<P: LaneParams<f32>>(&self, mut params: P) -> Option<&'static str> {
         if self.base_color.is_some() && params.base_color_mut().is_none() {
             return Some("base_color_texture");
+        }
+        if self.metallic_roughness.is_some()
+            && (params.metallic_mut().is_none() || !params.scale_roughness(1.0))
+        {
+            return Some("metallic_roughness_texture");
         }
         None
     }
@@ -69,5 +144,55 @@ impl ParamMaps {
                 *c = c.mul_elem(map.sample(input));
             }
         }
+        if let Some(map) = &self.metallic_roughness {
+            let t = map.sample(input);
+            if let Some(m) = params.metallic_mut() {
+                *m *= t.z;
+            }
+            params.scale_roughness(t.y);
+        }
+    }
+
+    /// The factor of the uniform environment term per lane:
+    /// 1 + strength · (occlusion − 1); `None` without an occlusion map.
+    #[inline(always)]
+    pub fn occlusion<R: Real>(&self, input: &ShadeInput<R>) -> Option<R> {
+        self.occlusion.as_ref().map(|o| {
+            let occ = o.map.sample(input).x;
+            R::splat(o.strength as f64).mul_add(occ - R::ONE, R::ONE)
+        })
+    }
+
+    /// The local shading frame: the surface's, bent by the normal map
+    /// where there is one (module docs). The bent normal is kept at
+    /// n·wo ≥ 0.02 like the resolve's; the tangent and bitangent are the
+    /// surface's made orthogonal to it (Gram–Schmidt, which keeps the
+    /// frame's handedness).
+    #[inline(always)]
+    pub fn frame<R: Real>(&self, input: &ShadeInput<R>) -> ShadingFrame<R> {
+        let base = input.frame();
+        let (Some(nm), Some(_)) = (&self.normal, input.surface) else {
+            return base;
+        };
+        let t = nm.map.sample(input);
+        let s = R::splat(nm.scale as f64);
+        let two = R::splat(2.0);
+        let m = V3::new(
+            t.x.mul_add(two, -R::ONE) * s,
+            t.y.mul_add(two, -R::ONE) * s,
+            t.z.mul_add(two, -R::ONE),
+        );
+        // A texel of (½, ½, ½) or a zero scale with blue ½ gives m = 0:
+        // such a lane keeps the surface normal.
+        let n = (base.t * m.x + base.b * m.y + base.n * m.z).normalize_or(base.n);
+        let wo = input.frag.wo;
+        let cos_v = n.dot(wo);
+        let min_cos = R::splat(MIN_COS_VIEW);
+        let away = cos_v.lt(min_cos);
+        let n = V3::select(away, (n - wo * (cos_v - min_cos)).normalize_or(wo), n);
+        let any = ShadingFrame::from_normal(n);
+        let tan = (base.t - n * n.dot(base.t)).normalize_or(any.t);
+        let bit = (base.b - n * n.dot(base.b) - tan * tan.dot(base.b)).normalize_or(n.cross(tan));
+        ShadingFrame { t: tan, b: bit, n }
     }
 }

@@ -79,6 +79,16 @@ impl SceneData {
         }
         Ok(())
     }
+
+    /// Every material's texture maps sampled with `filter` from now on,
+    /// whatever their own samplers say (`--texture-filter`).
+    pub fn force_texture_filter(&mut self, filter: crate::texture::Filter) {
+        for m in &mut self.materials {
+            if let Some(shader) = m.shader.with_texture_filter(filter) {
+                m.shader = shader;
+            }
+        }
+    }
 }
 
 /// Per-vertex tangent frames from uvs \[Lengyel01\]: each triangle's ∂p/∂u

@@ -17,6 +17,7 @@
 //! [`crate::unlit::Unlit`] (a constant radiance).
 
 use crate::fragment::{Fragment, Surface};
+use crate::texture::Filter;
 use specula_core::light::Light;
 use specula_core::{f32x8, Real, Rgb, ShadingFrame};
 use std::any::Any;
@@ -103,6 +104,15 @@ pub trait PacketShader: Debug + Send + Sync + 'static {
     fn check_lights(&self, _lights: &[Light]) -> Result<(), String> {
         Ok(())
     }
+
+    /// This shader with every texture map it has sampled with `filter`
+    /// (`--texture-filter`); `None` when it has no maps to change.
+    fn with_texture_filter(&self, _filter: Filter) -> Option<Self>
+    where
+        Self: Sized,
+    {
+        None
+    }
 }
 
 /// The object-safe form of [`PacketShader`] that materials hold.
@@ -121,6 +131,8 @@ pub trait SurfaceShader: Debug + Send + Sync + 'static {
     );
     fn needs_surface(&self) -> bool;
     fn check_lights(&self, lights: &[Light]) -> Result<(), String>;
+    /// See [`PacketShader::with_texture_filter`].
+    fn with_texture_filter(&self, filter: Filter) -> Option<Arc<dyn SurfaceShader>>;
     /// For callers that need the concrete shader back (benchmarks swapping
     /// a model, tests).
     fn as_any(&self) -> &dyn Any;
@@ -147,6 +159,10 @@ impl<T: PacketShader> SurfaceShader for T {
     }
     fn check_lights(&self, lights: &[Light]) -> Result<(), String> {
         PacketShader::check_lights(self, lights)
+    }
+    fn with_texture_filter(&self, filter: Filter) -> Option<Arc<dyn SurfaceShader>> {
+        PacketShader::with_texture_filter(self, filter)
+            .map(|s| Arc::new(s) as Arc<dyn SurfaceShader>)
     }
     fn as_any(&self) -> &dyn Any {
         self

@@ -20,7 +20,14 @@
 //!   OpenGL's scale factor ρ), clamped to [0, levels − 1];
 //! - filters: [`Filter::Nearest`] and [`Filter::Bilinear`] read level 0,
 //!   [`Filter::Trilinear`] blends the bilinear values of levels ⌊λ⌋ and
-//!   ⌊λ⌋ + 1 by the fraction of λ.
+//!   ⌊λ⌋ + 1 by the fraction of λ;
+//! - [`Filter::Anisotropic`] with at most N taps, as GPUs do
+//!   (EXT_texture_filter_anisotropic): the footprint's axes are the texel
+//!   vectors a = ∂(uw, vh)/∂x and b = ∂(uw, vh)/∂y; with P_max and P_min
+//!   their longer and shorter lengths, the lane takes
+//!   n = min(⌈P_max / P_min⌉, N) trilinear taps at λ = log₂(P_max / n),
+//!   at uv + d·((i + ½)/n − ½), i = 0..n, where d is the longer axis in
+//!   uv units, and averages them. N = 1 is trilinear.
 //!
 //! Every input is safe: a NaN or infinite uv reads texel 0 and a NaN
 //! derivative level 0; the result is always finite for finite texels.
@@ -51,6 +58,70 @@ pub enum Filter {
     /// Bilinear on the two levels around λ, blended linearly.
     #[default]
     Trilinear,
+    /// Up to N trilinear taps (1 ≤ N ≤ [`MAX_ANISOTROPY`]) spread along
+    /// the major axis of the pixel's footprint, averaged; see the module
+    /// docs.
+    Anisotropic(u8),
+}
+
+/// Most taps [`Filter::Anisotropic`] takes (what GPUs offer: 16×).
+pub const MAX_ANISOTROPY: u8 = 16;
+
+impl core::str::FromStr for Filter {
+    type Err = String;
+
+    /// "nearest", "bilinear", "trilinear", "anisotropic" (16 taps) or
+    /// "anisotropic:N" with N in 1..=16.
+    fn from_str(s: &str) -> Result<Filter, String> {
+        let bad = || {
+            format!(
+                "expected nearest, bilinear, trilinear, anisotropic or anisotropic:N (N in 1..={MAX_ANISOTROPY}), got {s:?}"
+            )
+        };
+        Ok(match s {
+            "nearest" => Filter::Nearest,
+            "bilinear" => Filter::Bilinear,
+            "trilinear" => Filter::Trilinear,
+            "anisotropic" => Filter::Anisotropic(MAX_ANISOTROPY),
+            _ => {
+                let n = s.strip_prefix("anisotropic:").ok_or_else(bad)?;
+                match n.parse::<u8>() {
+                    Ok(n) if (1..=MAX_ANISOTROPY).contains(&n) => Filter::Anisotropic(n),
+                    _ => return Err(bad()),
+                }
+            }
+        })
+    }
+}
+
+impl Filter {
+    /// The filter for a glTF sampler's `minFilter` (`None` when absent):
+    /// NEAREST (9728) → [`Filter::Nearest`], LINEAR (9729) →
+    /// [`Filter::Bilinear`] (both read level 0, as glTF's non-mipmapped
+    /// filters do), each *_MIPMAP_* filter (9984–9987) and an absent or
+    /// unknown one → [`Filter::Trilinear`] (there is one mip filter here:
+    /// linear between levels, bilinear within one). `magFilter` has no
+    /// counterpart: each filter magnifies the way it minifies at level 0.
+    pub fn from_gltf_min_filter(min_filter: Option<u32>) -> Filter {
+        match min_filter {
+            Some(9728) => Filter::Nearest,
+            Some(9729) => Filter::Bilinear,
+            _ => Filter::Trilinear,
+        }
+    }
+}
+
+impl Wrap {
+    /// The wrap mode of a glTF sampler's `wrapS` / `wrapT`: REPEAT (10497,
+    /// also glTF's default, and any unknown value), CLAMP_TO_EDGE (33071),
+    /// MIRRORED_REPEAT (33648).
+    pub fn from_gltf(mode: Option<u32>) -> Wrap {
+        match mode {
+            Some(33071) => Wrap::Clamp,
+            Some(33648) => Wrap::Mirror,
+            _ => Wrap::Repeat,
+        }
+    }
 }
 
 /// Wrap modes along u and v, and the filter.
@@ -72,7 +143,7 @@ impl Sampler {
 }
 
 /// How 8-bit texels encode their values.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Encoding {
     /// Colour channels (0–2) are sRGB-encoded (IEC 61966-2-1) and decoded
     /// to linear; a fourth channel (alpha) is linear.
@@ -446,21 +517,112 @@ impl Texture {
         match s.filter {
             Filter::Nearest => fetch(self.nearest(s, u, v)),
             Filter::Bilinear => quad(&self.level0()),
-            Filter::Trilinear => {
-                let last = R::splat((self.levels.len() - 1) as f64);
-                let lod = lod.clamp(R::ZERO, last);
-                let l0 = lod.floor();
-                let l1 = (l0 + R::ONE).min(last);
-                let a = quad(&self.level_lanes(l0));
-                let b = quad(&self.level_lanes(l1));
-                mix(a, b, lod - l0)
+            Filter::Trilinear | Filter::Anisotropic(_) => {
+                self.trilinear(s, u, v, lod, &fetch, &mix)
             }
         }
     }
 
+    /// Bilinear on the two levels around `lod` (clamped to the levels
+    /// there are), blended, at reduced (u, v).
+    #[inline(always)]
+    fn trilinear<R: Real, T: Copy>(
+        &self,
+        s: &Sampler,
+        u: R,
+        v: R,
+        lod: R,
+        fetch: &impl Fn(R) -> T,
+        mix: &impl Fn(T, T, R) -> T,
+    ) -> T {
+        let last = R::splat((self.levels.len() - 1) as f64);
+        let lod = lod.clamp(R::ZERO, last);
+        let l0 = lod.floor();
+        let l1 = (l0 + R::ONE).min(last);
+        let a = self.quad(s, &self.level_lanes(l0), u, v, fetch, mix);
+        let b = self.quad(s, &self.level_lanes(l1), u, v, fetch, mix);
+        mix(a, b, lod - l0)
+    }
+
+    /// The footprint of [`Filter::Anisotropic`] with at most `max_taps`
+    /// taps (module docs): per lane the tap count n, the level of detail
+    /// and the major axis in uv. NaN derivatives give one tap at level 0.
+    #[inline(always)]
+    pub fn anisotropic_footprint<R: Real>(
+        &self,
+        duv_dx: [R; 2],
+        duv_dy: [R; 2],
+        max_taps: u8,
+    ) -> (R, R, [R; 2]) {
+        let (w, h) = (
+            R::splat(self.levels[0].width as f64),
+            R::splat(self.levels[0].height as f64),
+        );
+        let (ax, ay) = (duv_dx[0] * w, duv_dx[1] * h);
+        let (bx, by) = (duv_dy[0] * w, duv_dy[1] * h);
+        let (pa2, pb2) = (ax * ax + ay * ay, bx * bx + by * by);
+        let x_major = pa2.ge(pb2);
+        let pmax2 = pa2.max(pb2);
+        // A footprint degenerate along one axis (P_min = 0) gets the most
+        // taps; the floor keeps the ratio finite.
+        let pmin2 = pa2.min(pb2).max(R::splat(1e-30));
+        let ratio = (pmax2 / pmin2).sqrt();
+        let max = R::splat(max_taps.clamp(1, MAX_ANISOTROPY) as f64);
+        // ⌈ratio⌉ as −⌊−ratio⌋; NaN (NaN derivatives) becomes one tap.
+        let n = (-(-ratio).floor()).clamp(R::ONE, max);
+        let n = R::select(n.is_finite(), n, R::ONE);
+        // λ = ½ log₂(P_max² / n²); P_max² = 0 or NaN give −inf or NaN,
+        // which `trilinear` clamps to level 0 (and +inf to the last).
+        let lambda = (pmax2 / (n * n)).ln() * R::splat(0.5 / core::f64::consts::LN_2);
+        let axis = [
+            R::select(x_major, duv_dx[0], duv_dy[0]),
+            R::select(x_major, duv_dx[1], duv_dy[1]),
+        ];
+        let axis = axis.map(|a| R::select(a.is_finite(), a, R::ZERO));
+        (n, lambda, axis)
+    }
+
+    /// [`Filter::Anisotropic`] at uv: the running mean of the lane's n
+    /// taps (lanes with fewer taps than the packet's most keep their mean:
+    /// a blend weight of 0 leaves it exactly as it was).
+    #[inline(always)]
+    fn anisotropic<R: Real, T: Copy>(
+        &self,
+        s: &Sampler,
+        uv: [R; 2],
+        footprint: (R, R, [R; 2]),
+        fetch: impl Fn(R) -> T,
+        mix: impl Fn(T, T, R) -> T,
+    ) -> T {
+        let (n, lod, axis) = footprint;
+        let taps = (0..R::LANES)
+            .map(|i| n.lane(i))
+            .fold(1.0f64, f64::max)
+            .min(MAX_ANISOTROPY as f64) as usize;
+        let inv_n = R::ONE / n;
+        let mut acc = None;
+        for i in 0..taps {
+            // Offset (i + ½)/n − ½ along the axis, in [−½, ½].
+            let t = (R::splat(i as f64 + 0.5) * inv_n) - R::HALF;
+            let u = reduce(s.wrap_u, axis[0].mul_add(t, uv[0]));
+            let v = reduce(s.wrap_v, axis[1].mul_add(t, uv[1]));
+            let tap = self.trilinear(s, u, v, lod, &fetch, &mix);
+            acc = Some(match acc {
+                None => tap,
+                Some(a) => {
+                    let k = R::splat(i as f64 + 1.0);
+                    let w = R::select(k.le(n), R::ONE / k, R::ZERO);
+                    mix(a, tap, w)
+                }
+            });
+        }
+        acc.expect("at least one tap")
+    }
+
     /// The value of each lane's channel `ch` (integral lane values, clamped
     /// to the channels there are) at uv, level of detail `lod` (used by
-    /// [`Filter::Trilinear`] only; clamp it with [`Texture::lod`]).
+    /// [`Filter::Trilinear`] and [`Filter::Anisotropic`], which takes one
+    /// trilinear tap here; clamp it with [`Texture::lod`]).
     #[inline(always)]
     pub fn sample_channel<R: Real>(&self, s: &Sampler, uv: [R; 2], lod: R, ch: R) -> R {
         let ch = ch.clamp(R::ZERO, R::splat((self.channels - 1) as f64));
@@ -497,17 +659,37 @@ impl Texture {
     ) -> [R; C] {
         let lod = match s.filter {
             Filter::Trilinear => self.lod(duv_dx, duv_dy),
+            Filter::Anisotropic(max) => {
+                let footprint = self.anisotropic_footprint(duv_dx, duv_dy, max);
+                let (fetch, mix) = self.channels_fetch::<R, C>();
+                let uv = [reduce(s.wrap_u, uv[0]), reduce(s.wrap_v, uv[1])];
+                return self.anisotropic(s, uv, footprint, fetch, mix);
+            }
             _ => R::ZERO,
         };
         self.sample_lod(s, uv, lod)
     }
 
-    /// [`Texture::sample`] at a given level of detail.
+    /// What [`Texture::sample_lod`] fetches and blends: channels 0..C.
+    #[inline(always)]
+    #[allow(clippy::type_complexity)]
+    fn channels_fetch<'a, R: Real + 'a, const C: usize>(
+        &'a self,
+    ) -> (
+        impl Fn(R) -> [R; C] + 'a,
+        impl Fn([R; C], [R; C], R) -> [R; C],
+    ) {
+        let ch: [R; C] = core::array::from_fn(|c| R::splat(c.min(self.channels - 1) as f64));
+        let fetch = move |i: R| ch.map(|c| R::gather(&self.data, i + c));
+        let mix = |a: [R; C], b: [R; C], t: R| core::array::from_fn(|c| lerp(a[c], b[c], t));
+        (fetch, mix)
+    }
+
+    /// [`Texture::sample`] at a given level of detail ([`Filter::Anisotropic`]
+    /// then takes one trilinear tap: the footprint needs the derivatives).
     #[inline(always)]
     pub fn sample_lod<R: Real, const C: usize>(&self, s: &Sampler, uv: [R; 2], lod: R) -> [R; C] {
-        let ch: [R; C] = core::array::from_fn(|c| R::splat(c.min(self.channels - 1) as f64));
-        let fetch = |i: R| ch.map(|c| R::gather(&self.data, i + c));
-        let mix = |a: [R; C], b: [R; C], t: R| core::array::from_fn(|c| lerp(a[c], b[c], t));
+        let (fetch, mix) = self.channels_fetch::<R, C>();
         self.filtered(s, uv, lod, fetch, mix)
     }
 }

@@ -6,6 +6,7 @@ use super::buffers::{data_uri, uri_path, Buffers};
 use crate::memory;
 use gltf::json;
 use specula_raster::maps::ColorMap;
+use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
@@ -20,7 +21,7 @@ pub struct Images<'a> {
     pub(super) read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     /// Files read (external images), for the scene's inputs.
     pub inputs: Vec<PathBuf>,
-    cache: HashMap<usize, ColorMap>,
+    cache: HashMap<(usize, Encoding), ColorMap>,
 }
 
 impl<'a> Images<'a> {
@@ -44,7 +45,14 @@ impl<'a> Images<'a> {
     /// every texture here; glTF's uvs are flipped to match where meshes
     /// are read).
     pub fn color_map(&mut self, i: usize) -> Result<ColorMap, String> {
-        if let Some(m) = self.cache.get(&i) {
+        self.map(i, Encoding::Srgb)
+    }
+
+    /// `images[i]` decoded as `encoding`: sRGB for colours (base colour,
+    /// emission), linear for data (metallic-roughness, normal, occlusion).
+    /// Each (image, encoding) is decoded once.
+    pub fn map(&mut self, i: usize, encoding: Encoding) -> Result<ColorMap, String> {
+        if let Some(m) = self.cache.get(&(i, encoding)) {
             return Ok(m.clone());
         }
         let at = format!("images[{i}]");
@@ -80,8 +88,9 @@ impl<'a> Images<'a> {
             &format!("{at} ({w}×{h})"),
             (w as u64 * h as u64).saturating_mul(TEXEL_BYTES),
         )?;
-        let map = crate::textures::decode_color_map(&at, &bytes)?;
-        self.cache.insert(i, map.clone());
+        let sampler = Sampler::new(Wrap::Repeat, Filter::Trilinear);
+        let map = crate::textures::decode_map(&at, &bytes, encoding, sampler)?;
+        self.cache.insert((i, encoding), map.clone());
         Ok(map)
     }
 }

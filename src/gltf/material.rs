@@ -12,8 +12,8 @@ use gltf::json;
 use json::validation::Checked;
 use specula_core::models::Gltf;
 use specula_core::Model;
-use specula_raster::maps::ParamMaps;
-use specula_raster::texture::{Filter, Sampler, Wrap};
+use specula_raster::maps::{ColorMap, NormalMap, OcclusionMap, ParamMaps};
+use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
 use specula_raster::{Lit, Material};
 use std::collections::BTreeMap;
 
@@ -149,6 +149,28 @@ impl GltfMaterial {
     }
 
     /// Every texture the material refers to.
+    /// The uv set the rendered maps read: that of the first of base
+    /// colour, metallic-roughness, normal, occlusion and emissive textures
+    /// the material has (KHR_texture_transform's override included).
+    pub fn uv_set(&self) -> Option<u32> {
+        [
+            &self.base_color_texture,
+            &self.metallic_roughness_texture,
+            &self.normal_texture,
+            &self.occlusion_texture,
+            &self.emissive_texture,
+        ]
+        .into_iter()
+        .flatten()
+        .next()
+        .map(|t| {
+            t.transform
+                .as_ref()
+                .and_then(|x| x.tex_coord)
+                .unwrap_or(t.tex_coord)
+        })
+    }
+
     pub fn textures(&self) -> Vec<&TextureRef> {
         let mut t: Vec<&TextureRef> = [
             &self.base_color_texture,
@@ -429,8 +451,11 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// KHR_materials_specular, _clearcoat and _sheen, each checked as the
 /// scene field of the same snake_case name is; the base colour texture
 /// through [`ParamMaps::base_color`] (its sampler kept; uvs from the set it
-/// names, chosen where the mesh is built); `doubleSided` as the
-/// material's. Everything else is listed in the warning.
+/// names, chosen where the mesh is built), the metallic-roughness,
+/// normal (with its scale), occlusion (with its strength) and emissive
+/// maps, the emissive factor times KHR_materials_emissive_strength;
+/// `doubleSided` as the material's. Everything else is listed in the
+/// warning.
 pub fn scene_material(
     m: &GltfMaterial,
     images: &mut Images,
@@ -441,16 +466,6 @@ pub fn scene_material(
             missing.push(what.to_string());
         }
     };
-    note(
-        "metallicRoughnessTexture",
-        m.metallic_roughness_texture.is_some(),
-    );
-    note("normalTexture", m.normal_texture.is_some());
-    note("occlusionTexture", m.occlusion_texture.is_some());
-    note(
-        "emissive (emissiveFactor / emissiveTexture)",
-        m.emissive_factor != [0.0; 3] || m.emissive_texture.is_some(),
-    );
     note(
         "baseColorFactor alpha",
         m.base_color_factor[3] != 1.0 && m.alpha_mode != AlphaMode::Opaque,
@@ -467,10 +482,6 @@ pub fn scene_material(
         m.textures().iter().any(|t| t.transform.is_some()),
     );
     note("KHR_materials_unlit", m.unlit);
-    note(
-        "KHR_materials_emissive_strength",
-        m.emissive_strength.is_some(),
-    );
     note(
         "specularTexture / specularColorTexture",
         m.specular
@@ -550,20 +561,63 @@ pub fn scene_material(
     );
     let params = desc.params().map_err(|e| format!("{at}: {e}"))?;
     let model = Model::Gltf(Gltf::new(params));
-    let shader = match &m.base_color_texture {
-        Some(t) => {
-            let mut map = images.color_map(t.image)?;
-            map.sampler = t.sampler;
-            Lit::with_maps(
-                model,
-                ParamMaps {
-                    base_color: Some(map),
-                },
-            )
-            .map_err(|e| format!("{}: {e}", t.at))?
-        }
-        None => Lit::new(model),
+    let mut maps = ParamMaps::default();
+    let mut sets = Vec::new();
+    let mut load = |t: &TextureRef, encoding: Encoding| -> Result<ColorMap, String> {
+        let mut map = images
+            .map(t.image, encoding)
+            .map_err(|e| format!("{}: {e}", t.at))?;
+        map.sampler = t.sampler;
+        sets.push(
+            t.transform
+                .as_ref()
+                .and_then(|x| x.tex_coord)
+                .unwrap_or(t.tex_coord),
+        );
+        Ok(map)
     };
+    if let Some(t) = &m.base_color_texture {
+        maps.base_color = Some(load(t, Encoding::Srgb)?);
+    }
+    if let Some(t) = &m.metallic_roughness_texture {
+        maps.metallic_roughness = Some(load(t, Encoding::Linear)?);
+    }
+    if let Some(t) = &m.normal_texture {
+        maps.normal = Some(NormalMap {
+            map: load(t, Encoding::Linear)?,
+            scale: t.scale,
+        });
+    }
+    if let Some(t) = &m.occlusion_texture {
+        maps.occlusion = Some(OcclusionMap {
+            map: load(t, Encoding::Linear)?,
+            strength: t.scale.clamp(0.0, 1.0),
+        });
+    }
+    if let Some(t) = &m.emissive_texture {
+        maps.emissive = Some(load(t, Encoding::Srgb)?);
+    }
+    sets.dedup();
+    if sets.len() > 1 {
+        missing.push(format!(
+            "textures on TEXCOORD sets other than {} (one uv set per material is read)",
+            sets[0]
+        ));
+    }
+    let strength = m.emissive_strength.unwrap_or(1.0);
+    let emissive = m.emissive_factor.map(|c| c * strength);
+    if !emissive
+        .iter()
+        .all(|c| (0.0..=crate::checks::MAX_RADIOMETRIC).contains(c))
+    {
+        return Err(format!(
+            "{at}.emissiveFactor × KHR_materials_emissive_strength: every component must be in [0, {:e}], got {emissive:?}",
+            crate::checks::MAX_RADIOMETRIC
+        ));
+    }
+    let shader = Lit::with_maps(model, maps)
+        .map_err(|e| format!("{at}: {e}"))?
+        .with_emission(emissive);
     let warning = (!missing.is_empty()).then(|| {
         format!(
             "material {:?}: rendered without {}",

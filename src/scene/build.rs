@@ -131,6 +131,7 @@ pub(super) fn mtl_material(
                 .map_err(|e| format!("material {}: map_Kd: {e}", m.name))?;
             let maps = specula_raster::maps::ParamMaps {
                 base_color: Some(map),
+                ..Default::default()
             };
             let shader = Lit::with_maps(model, maps)
                 .map_err(|e| format!("material {}: map_Kd: {e}", m.name))?;
@@ -238,6 +239,8 @@ pub(super) struct Materials {
     pub(super) by_name: HashMap<String, u32>,
     /// Materials that read uvs (textures, tonal art maps).
     pub(super) textured: HashSet<u32>,
+    /// Materials with a normal map: their meshes get MikkTSpace tangents.
+    pub(super) normal_mapped: HashSet<u32>,
     /// The default material's id, once a mesh needed it.
     pub(super) default_id: Option<u32>,
 }
@@ -260,6 +263,9 @@ pub(super) struct SceneBuilder<'a> {
     pub(super) any_uvs: bool,
     pub(super) inputs: Vec<PathBuf>,
     pub(super) warnings: Vec<String>,
+    /// Tangents meshes brought or were given (tangents.rs), by their
+    /// first vertex in `data`.
+    pub(super) given_tangents: Vec<(usize, Vec<glam::Vec4>)>,
 }
 
 impl<'a> SceneBuilder<'a> {
@@ -290,11 +296,13 @@ impl<'a> SceneBuilder<'a> {
                 list: Vec::new(),
                 by_name: HashMap::new(),
                 textured: HashSet::new(),
+                normal_mapped: HashSet::new(),
                 default_id: None,
             },
             any_uvs: false,
             inputs: vec![path.to_path_buf()],
             warnings: Vec::new(),
+            given_tangents: Vec::new(),
         }
     }
 
@@ -318,8 +326,11 @@ impl<'a> SceneBuilder<'a> {
             if m.needs_uvs() {
                 mats.textured.insert(mats.list.len() as u32);
             }
+            if m.has_normal_map() {
+                mats.normal_mapped.insert(mats.list.len() as u32);
+            }
             self.inputs
-                .extend(m.base_color_texture().map(Path::to_path_buf));
+                .extend(m.texture_files().into_iter().map(Path::to_path_buf));
             self.warnings.extend(
                 notes
                     .into_iter()
@@ -353,6 +364,15 @@ impl<'a> SceneBuilder<'a> {
             &data.uvs,
             &data.triangles,
         );
+        // Meshes that brought (or were given MikkTSpace) tangents keep
+        // them: the tangents above depend only on each vertex's own
+        // triangles, so the other meshes' are what they were alone.
+        // (A scene where no mesh has uvs has no tangents at all.)
+        for (start, tangents) in std::mem::take(&mut self.given_tangents) {
+            if let Some(dst) = data.tangents.get_mut(start..start + tangents.len()) {
+                dst.copy_from_slice(&tangents);
+            }
+        }
         if data.triangles.is_empty() {
             self.warnings.push("the scene has no triangles".into());
         }
@@ -364,11 +384,31 @@ impl<'a> SceneBuilder<'a> {
             check_one_shape(field, md)?;
             return self.add_gltf_mesh(field, md, p);
         }
-        let mesh = self.build_shape(field, md)?;
+        let mut mesh = self.build_shape(field, md)?;
         let local = self.mesh_materials(field, md, &mesh)?;
         self.check_uvs(field, md, &mesh, &local)?;
+        self.add_tangents_if_normal_mapped(field, &mut mesh, &local)?;
         let placement = place_mesh(field, md, &mesh.positions)?;
         self.append_mesh(&mesh, &placement, &local);
+        Ok(())
+    }
+
+    /// MikkTSpace tangents for a mesh without its own where any of its
+    /// triangles has a normal-mapped material (`local`: the mesh's
+    /// material slots as scene materials).
+    pub(super) fn add_tangents_if_normal_mapped(
+        &self,
+        field: &str,
+        mesh: &mut MeshData,
+        local: &[u32],
+    ) -> Result<(), String> {
+        let normal_mapped = mesh
+            .tri_material
+            .iter()
+            .any(|m| self.materials.normal_mapped.contains(&local[*m as usize]));
+        if normal_mapped && mesh.tangents.is_empty() {
+            crate::tangents::add_mikktspace_tangents(mesh).map_err(|e| format!("{field}: {e}"))?;
+        }
         Ok(())
     }
 
@@ -505,6 +545,24 @@ impl<'a> SceneBuilder<'a> {
                 .map(|n| (*normal_m * *n).try_normalize().unwrap_or(Vec3::Z)),
         );
         self.any_uvs |= !mesh.uvs.is_empty();
+        if !mesh.tangents.is_empty() {
+            // Tangents are directions on the surface: they go with the
+            // model matrix; a mirroring one flips the bitangent's sign.
+            let m3 = glam::Mat3::from_mat4(*model);
+            let sign = if *flip { -1.0 } else { 1.0 };
+            let placed = mesh
+                .tangents
+                .iter()
+                .zip(&mesh.normals)
+                .map(|(t, n)| {
+                    let v = (m3 * t.truncate())
+                        .try_normalize()
+                        .unwrap_or_else(|| (*normal_m * *n).any_orthonormal_vector());
+                    v.extend(t.w * sign)
+                })
+                .collect();
+            self.given_tangents.push((base as usize, placed));
+        }
         data.uvs.extend(mesh.uvs.iter().copied());
         if mesh.uvs.is_empty() {
             data.uvs

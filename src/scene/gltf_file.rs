@@ -65,7 +65,8 @@ impl SceneBuilder<'_> {
     ) -> Result<(), String> {
         let what = format!("{field}.gltf");
         let g = self.read_gltf(&what, p)?;
-        let (mesh, local) = self.gltf_mesh(&what, p, &g, md.material.as_deref())?;
+        let (mut mesh, local) = self.gltf_mesh(&what, p, &g, md.material.as_deref())?;
+        self.add_tangents_if_normal_mapped(&what, &mut mesh, &local)?;
         let placement = place_mesh(field, md, &mesh.positions)?;
         self.append_mesh(&mesh, &placement, &local);
         Ok(())
@@ -114,10 +115,12 @@ impl SceneBuilder<'_> {
                 self.warnings
                     .extend(warning.map(|w| format!("{file}: {w}")));
                 let id = self.materials.list.len() as u32;
-                if let Some(t) = &desc.base_color_texture {
+                if let Some(set) = desc.uv_set() {
                     self.materials.textured.insert(id);
-                    let set = t.transform.as_ref().and_then(|x| x.tex_coord);
-                    textured[k] = Some(set.unwrap_or(t.tex_coord));
+                    textured[k] = Some(set);
+                }
+                if desc.normal_texture.is_some() {
+                    self.materials.normal_mapped.insert(id);
                 }
                 self.materials.list.push(built);
                 local[k] = id;
@@ -301,7 +304,8 @@ pub fn load_gltf_str(
     let g = crate::gltf::load(name, &bytes, read)?;
     scene.inputs.extend(g.inputs.iter().cloned());
     scene.warnings.extend(g.warnings.iter().cloned());
-    let (mesh, local) = scene.gltf_mesh("mesh", name, &g, None)?;
+    let (mut mesh, local) = scene.gltf_mesh("mesh", name, &g, None)?;
+    scene.add_tangents_if_normal_mapped("mesh", &mut mesh, &local)?;
     let md = MeshDesc {
         obj: None,
         gltf: Some(name.to_path_buf()),

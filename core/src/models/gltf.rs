@@ -203,6 +203,20 @@ impl<R: Real> LaneParams<R> for GltfLaneParams<R> {
     fn base_color_mut(&mut self) -> Option<&mut Rgb<R>> {
         Some(&mut self.base_color)
     }
+
+    #[inline(always)]
+    fn metallic_mut(&mut self) -> Option<&mut R> {
+        Some(&mut self.metallic)
+    }
+
+    /// The lanes hold perceptual roughness, which the map's green channel
+    /// multiplies as glTF defines it (α is derived, and floored, in
+    /// [`Brdf::pixel`]).
+    #[inline(always)]
+    fn scale_roughness(&mut self, g: R) -> bool {
+        self.roughness *= g;
+        true
+    }
 }
 
 /// What a pixel's factors determine before the view is known.

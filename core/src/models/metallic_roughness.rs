@@ -75,6 +75,20 @@ impl<R: Real> LaneParams<R> for MetallicRoughnessLaneParams<R> {
     fn base_color_mut(&mut self) -> Option<&mut Rgb<R>> {
         Some(&mut self.base_color)
     }
+
+    #[inline(always)]
+    fn metallic_mut(&mut self) -> Option<&mut R> {
+        Some(&mut self.metallic)
+    }
+
+    /// roughness → g · roughness, so α = roughness² → max(α g², α_min):
+    /// the same as flooring (g · roughness)² afresh, whether or not the
+    /// material's own α was floored (if r² < α_min then (g r)² < α_min).
+    #[inline(always)]
+    fn scale_roughness(&mut self, g: R) -> bool {
+        self.alpha = (self.alpha * g * g).max(R::splat(ALPHA_MIN as f64));
+        true
+    }
 }
 
 /// What a metallic-roughness pixel's parameters determine before the
