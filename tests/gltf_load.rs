@@ -702,9 +702,11 @@ type = "directional"
 direction = [0.0, 0.0, -1.0]
 irradiance = [2.0, 2.0, 2.0]
 "#;
+    // The occlusion map is rendered (no warning names it) and, with no
+    // environment, leaves the lit pixels as they are.
     let s = common::scene(toml, &[("quad.gltf", &doc)]);
     assert!(
-        s.warnings.iter().any(|w| w.contains("occlusionTexture")),
+        !s.warnings.iter().any(|w| w.contains("occlusionTexture")),
         "{:?}",
         s.warnings
     );
@@ -788,7 +790,7 @@ fn missing_images_and_uv_sets_are_errors_naming_the_file_and_path() {
     doc["images"][0] = json!({"uri": "textures/missing.png"});
     let e = try_load(&doc);
     assert!(
-        e.contains("mesh[0].gltf: q.gltf: images[0].uri: cannot read textures/missing.png"),
+        e.contains("mesh[0].gltf: q.gltf: materials[0].pbrMetallicRoughness.baseColorTexture: images[0].uri: cannot read textures/missing.png"),
         "{e}"
     );
     let mut doc = textured_quad_doc();
@@ -798,4 +800,202 @@ fn missing_images_and_uv_sets_are_errors_naming_the_file_and_path() {
         e.contains("meshes[0].primitives[0]") && e.contains("TEXCOORD_1"),
         "{e}"
     );
+}
+
+/// A 1×1 PNG of one colour (sRGB bytes as given).
+fn png_1x1(rgb: [u8; 3]) -> String {
+    let img = image::RgbImage::from_raw(1, 1, rgb.to_vec()).unwrap();
+    let mut out = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)
+        .unwrap();
+    format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(out)
+    )
+}
+
+/// The unit quad of `textured_quad_doc` with `material` and `images`.
+fn quad_doc(material: Value, images: Value) -> String {
+    quad_doc_with_normal(material, images, [0.0, 0.0, 1.0])
+}
+
+/// [`quad_doc`] with `normal` as every vertex's NORMAL.
+fn quad_doc_with_normal(material: Value, images: Value, normal: [f32; 3]) -> String {
+    let mut b = Buf::default();
+    let pos = b.floats(
+        &[
+            -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0,
+        ],
+        "VEC3",
+    );
+    let nrm = b.floats(&normal.repeat(4), "VEC3");
+    let uv = b.floats(&[0.0, 1.0, 1.0, 1.0, 1.0, 0.0, 0.0, 0.0], "VEC2");
+    let idx = b.u16s(&[0, 1, 2, 0, 2, 3]);
+    let n = images.as_array().map_or(0, |a| a.len());
+    let textures: Vec<Value> = (0..n).map(|i| json!({"source": i, "sampler": 0})).collect();
+    b.doc(json!({
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv}, "indices": idx, "material": 0}]}],
+        "materials": [material],
+        "textures": textures,
+        "samplers": [{"magFilter": 9728, "minFilter": 9728}],
+        "images": images,
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}]
+    }))
+    .to_string()
+}
+
+/// The quad seen head-on under a point light off its axis and a uniform
+/// environment, 32 × 32: every pixel's radiance.
+fn render_quad(doc: &str, environment: bool) -> Vec<[f32; 3]> {
+    let mut toml = r#"
+[camera]
+eye = [0.0, 0.0, 10.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 10.0
+near = 1.0
+far = 100.0
+[output]
+width = 32
+height = 32
+[[mesh]]
+gltf = "quad.gltf"
+[[light]]
+type = "point"
+position = [1.0, 0.5, 3.0]
+intensity = [5.0, 5.0, 5.0]
+"#
+    .to_string();
+    if environment {
+        toml += "[environment]\nuniform = [0.3, 0.3, 0.3]\n";
+    }
+    let s = common::scene(&toml, &[("quad.gltf", doc)]);
+    let set = specula::render::RenderSettings::from_scene(&s);
+    let r = specula::render::render_scene(&s, &set, 0.0).unwrap();
+    (0..32 * 32).map(|i| r.frame.buffers.color.get(i)).collect()
+}
+
+/// glTF's maps reach the pixels as the specification defines them: a
+/// metallicRoughnessTexture texel (B metallic, G roughness, linear) times
+/// the factors gives the pixels of those products as constant factors; a
+/// flat normal map ((128, 128, 255): the unperturbed normal up to 8-bit
+/// rounding) changes a rough surface by less than 1 %; the emissive factor
+/// times KHR_materials_emissive_strength times the emissive texel (sRGB)
+/// is added to every pixel.
+#[test]
+fn gltf_maps_match_their_constant_equivalents() {
+    // B = 255 → metallic 1 × 0.8; G = 51 → roughness 0.2 × 1.0 (linear).
+    let mapped = quad_doc(
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.6, 0.3, 1.0],
+            "metallicFactor": 0.8, "roughnessFactor": 1.0,
+            "metallicRoughnessTexture": {"index": 0}}}),
+        json!([{"uri": png_1x1([0, 51, 255])}]),
+    );
+    let constant = quad_doc(
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.6, 0.3, 1.0],
+            "metallicFactor": 0.8, "roughnessFactor": 0.2}}),
+        json!([]),
+    );
+    let (a, b) = (render_quad(&mapped, true), render_quad(&constant, true));
+    let mut lit = 0;
+    for (i, (p, q)) in a.iter().zip(&b).enumerate() {
+        lit += usize::from(q[0] > 0.0);
+        for c in 0..3 {
+            assert!(
+                (p[c] - q[c]).abs() <= 1e-5 * q[c].max(1e-3),
+                "metallic-roughness map, pixel {i}: {p:?} vs {q:?}"
+            );
+        }
+    }
+    assert!(lit > 200, "{lit} lit pixels");
+
+    // A rough dielectric, so that the ~0.3° tilt of 128/255 (1/255 off
+    // 0.5) moves a pixel by well under 1 %.
+    let rough = json!({"baseColorFactor": [0.9, 0.6, 0.3, 1.0],
+        "metallicFactor": 0.0, "roughnessFactor": 1.0});
+    let plain = render_quad(
+        &quad_doc(json!({"pbrMetallicRoughness": rough}), json!([])),
+        true,
+    );
+    let flat = quad_doc(
+        json!({"pbrMetallicRoughness": rough, "normalTexture": {"index": 0}}),
+        json!([{"uri": png_1x1([128, 128, 255])}]),
+    );
+    let n = render_quad(&flat, true);
+    for (i, (p, q)) in n.iter().zip(&plain).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (p[c] - q[c]).abs() <= 0.01 * q[c].max(1e-3),
+                "flat normal map, pixel {i}: {p:?} vs {q:?}"
+            );
+        }
+    }
+
+    // A constant tilted map: texel (255, 128, 255) is the tangent-space
+    // normal (1, 1/255, 1); the quad's uvs run along +x and +y, so the
+    // shading normal is that vector in world space: the pixels of the
+    // same quad with it as its vertex normal and no map.
+    let t = [1.0f32, 1.0 / 255.0, 1.0];
+    let len = (t[0] * t[0] + t[1] * t[1] + t[2] * t[2]).sqrt();
+    let tilted = render_quad(
+        &quad_doc(
+            json!({"pbrMetallicRoughness": rough, "normalTexture": {"index": 0}}),
+            json!([{"uri": png_1x1([255, 128, 255])}]),
+        ),
+        true,
+    );
+    let by_vertex = render_quad(
+        &quad_doc_with_normal(
+            json!({"pbrMetallicRoughness": rough}),
+            json!([]),
+            t.map(|c| c / len),
+        ),
+        true,
+    );
+    for (i, (p, q)) in tilted.iter().zip(&by_vertex).enumerate() {
+        for c in 0..3 {
+            assert!(
+                (p[c] - q[c]).abs() <= 1e-3 * q[c].max(1e-3),
+                "tilted normal map, pixel {i}: {p:?} vs vertex normal {q:?}"
+            );
+        }
+    }
+    assert!(
+        (tilted[16 * 32 + 16][0] - plain[16 * 32 + 16][0]).abs() > 0.01 * plain[16 * 32 + 16][0],
+        "a 45° tilt shows: {:?} vs {:?}",
+        tilted[16 * 32 + 16],
+        plain[16 * 32 + 16]
+    );
+
+    // Emission: factor (1, 0.5, 0.25) × strength 2 × texel sRGB (255, 188, 255)
+    // = (2, 0.5 × decode(188), 0.5) added to the lit pixels.
+    let emissive = quad_doc(
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [0.9, 0.6, 0.3, 1.0],
+            "metallicFactor": 0.8, "roughnessFactor": 0.2},
+            "emissiveFactor": [1.0, 0.5, 0.25], "emissiveTexture": {"index": 0},
+            "extensions": {"KHR_materials_emissive_strength": {"emissiveStrength": 2.0}}}),
+        json!([{"uri": png_1x1([255, 188, 255])}]),
+    );
+    let decode = |v: f64| {
+        let v = v / 255.0;
+        if v <= 0.04045 {
+            v / 12.92
+        } else {
+            ((v + 0.055) / 1.055).powf(2.4)
+        }
+    };
+    let add = [2.0, 1.0 * decode(188.0), 0.5];
+    let e = render_quad(&emissive, true);
+    for (i, (p, q)) in e.iter().zip(&b).enumerate() {
+        if q[0] == 0.0 {
+            continue; // background
+        }
+        for c in 0..3 {
+            let want = q[c] as f64 + add[c];
+            assert!(
+                (p[c] as f64 - want).abs() <= 1e-4 * want,
+                "emission, pixel {i}: {p:?} vs {q:?} + {add:?}"
+            );
+        }
+    }
 }
