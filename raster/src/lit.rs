@@ -156,6 +156,45 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
     }
 }
 
+/// A point light, or with `cone` = (axis, scale, offset) a spot light, at
+/// `position` with intensity I and `range`: I / d² · cos θi · f, times the
+/// range window and the cone's attenuation.
+#[inline(always)]
+fn add_punctual<B: Brdf, R: Real>(
+    brdf: &B,
+    prepared: &B::Prepared<R>,
+    frag: &Fragment<R>,
+    frame: &ShadingFrame<R>,
+    (position, intensity, range): ([f32; 3], [f32; 3], f32),
+    cone: Option<([f32; 3], f32, f32)>,
+    acc: Rgb<R>,
+) -> Rgb<R> {
+    let to_light = V3::from_f32(position) - frag.p;
+    let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
+    // rsqrt + Newton: √ then ÷ was slower (two long-latency steps
+    // in a row on the chain; docs/PERFORMANCE.md).
+    let inv_d = d2.rsqrt();
+    // The light loop is bound by its dependency chains (it is not
+    // short of multipliers): the unnormalized vector goes to the
+    // local frame while its rsqrt is computed, the model folds the
+    // 1/d into its first step, and the factors of f are multiplied
+    // into I / d² · cos θi before f is ready, so f reaches the sum
+    // in one step.
+    let v = frame.to_local(to_light);
+    let mut k = (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d);
+    if let Some((axis, scale, offset)) = cone {
+        // cd: the axis against the direction from the light to the point.
+        let cd = -V3::from_f32(axis).dot(to_light) * inv_d;
+        k *= spot_attenuation(cd, scale, offset);
+    }
+    if range.is_finite() {
+        k *= range_window(d2, range);
+    }
+    let radiance = V3::from_f32(intensity) * k;
+    brdf.f_local_scaled(prepared, v, inv_d)
+        .mul_elem_add(radiance, acc)
+}
+
 /// `acc` plus a point or directional light's reflected radiance (plus
 /// nothing for a polygon light, which [`lights_from_polygon`] shades).
 #[inline(always)]
@@ -172,27 +211,15 @@ fn add_delta_light<B: Brdf, R: Real>(
             position,
             intensity,
             range,
-        } => {
-            let to_light = V3::from_f32(*position) - frag.p;
-            let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
-            // rsqrt + Newton: √ then ÷ was slower (two long-latency steps
-            // in a row on the chain; docs/PERFORMANCE.md).
-            let inv_d = d2.rsqrt();
-            // The light loop is bound by its dependency chains (it is not
-            // short of multipliers): the unnormalized vector goes to the
-            // local frame while its rsqrt is computed, the model folds the
-            // 1/d into its first step, and the factors of f are multiplied
-            // into I / d² · cos θi before f is ready, so f reaches the sum
-            // in one step.
-            let v = frame.to_local(to_light);
-            let mut k = (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d);
-            if range.is_finite() {
-                k *= range_window(d2, *range);
-            }
-            let radiance = V3::from_f32(*intensity) * k;
-            brdf.f_local_scaled(prepared, v, inv_d)
-                .mul_elem_add(radiance, acc)
-        }
+        } => add_punctual(
+            brdf,
+            prepared,
+            frag,
+            frame,
+            (*position, *intensity, *range),
+            None,
+            acc,
+        ),
         Light::Spot {
             position,
             direction,
@@ -201,21 +228,17 @@ fn add_delta_light<B: Brdf, R: Real>(
             cos_outer,
             range,
         } => {
-            let to_light = V3::from_f32(*position) - frag.p;
-            let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
-            let inv_d = d2.rsqrt();
-            // cd: the axis against the direction from the light to the point.
-            let cd = -V3::from_f32(*direction).dot(to_light) * inv_d;
             let (scale, offset) = spot_scale_offset(*cos_inner, *cos_outer);
-            let v = frame.to_local(to_light);
-            let mut k =
-                (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d) * spot_attenuation(cd, scale, offset);
-            if range.is_finite() {
-                k *= range_window(d2, *range);
-            }
-            let radiance = V3::from_f32(*intensity) * k;
-            brdf.f_local_scaled(prepared, v, inv_d)
-                .mul_elem_add(radiance, acc)
+            let cone = Some((*direction, scale, offset));
+            add_punctual(
+                brdf,
+                prepared,
+                frag,
+                frame,
+                (*position, *intensity, *range),
+                cone,
+                acc,
+            )
         }
         Light::Directional {
             to_light,
