@@ -507,6 +507,19 @@ impl GltfDesc {
 /// exceed 1.
 const DISNEY_SPECULAR_MAX: f32 = 12.5;
 
+/// Largest Disney `roughness`: α = roughness² up to 100, and the diffuse
+/// retro-reflection F_D90 = ½ + 2 cos²θd · roughness up to 20.5, so the
+/// diffuse lobe multiplies light by at most ≈ 400 times `base_color`.
+/// Beyond Burley's [0, 1] the lobe is an extrapolation; far beyond it the
+/// terms overflow f32 (α = roughness² is infinite at 1.9e19).
+const DISNEY_ROUGHNESS_MAX: f32 = 10.0;
+
+/// Largest GTR exponent γ. Past it the lobe at α < 1 is narrower than the
+/// α floor of every other NDF (its width shrinks as α/√γ), and the f32
+/// evaluation of r^(−γ) (module docs of `core::ndf::d_gtr`) loses its
+/// digits: γ · 6e-8 nears 1.
+pub const GTR_GAMMA_MAX: f32 = 1e6;
+
 impl DisneyDesc {
     /// Every field checked. Burley's parameters live in [0, 1]; beyond it:
     /// - accepted with a warning where the formula still means something:
@@ -555,19 +568,19 @@ impl DisneyDesc {
             (
                 "roughness",
                 self.roughness,
-                f32::INFINITY,
+                DISNEY_ROUGHNESS_MAX,
                 "α = roughness² above 1",
             ),
             (
                 "sheen",
                 self.sheen,
-                f32::INFINITY,
+                checks::MAX_LINEAR_COLOR,
                 "a sheen stronger than Burley's range",
             ),
             (
                 "clearcoat",
                 self.clearcoat,
-                f32::INFINITY,
+                checks::MAX_LINEAR_COLOR,
                 "a clearcoat stronger than Burley's range",
             ),
         ] {
@@ -643,7 +656,12 @@ impl MicrofacetDesc {
                 self.alpha
             ));
         }
-        check_positive("gamma", self.gamma)?;
+        if !(self.gamma > 0.0 && self.gamma <= GTR_GAMMA_MAX) {
+            return Err(format!(
+                "gamma: must be in (0, {GTR_GAMMA_MAX:e}], got {}",
+                self.gamma
+            ));
+        }
         let gtr_lambda = match (self.ndf, self.gtr_lambda) {
             (_, GtrLambdaDesc::Ggx) => GtrLambda::Ggx,
             (NdfDesc::Gtr, GtrLambdaDesc::Exact) => GtrLambda::exact(self.gamma, alpha),
@@ -1048,9 +1066,10 @@ impl HatchingDesc {
         checks::linear_color("paper", self.paper)?;
         check_positive("scale", self.scale)?;
         let tam = match &self.tam {
-            Some(dir) => {
-                Arc::new(TamTexture::read_with(dir, read).map_err(|e| format!("tam: {e}"))?)
-            }
+            Some(dir) => Arc::new(
+                TamTexture::read_with_budget(dir, read, &crate::memory::reserve)
+                    .map_err(|e| format!("tam: {e}"))?,
+            ),
             None => builtin_tam().map_err(|e| format!("tam: the built-in map: {e}"))?,
         };
         Ok(Hatching {

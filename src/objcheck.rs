@@ -11,6 +11,12 @@ use std::path::Path;
 /// Longest piece of an offending line quoted back in a message.
 const QUOTE_MAX: usize = 60;
 
+/// Most corners one `f` line may have. Polygons are ear-clipped
+/// (`mesh::triangulate`), whose time grows with the square of the corner
+/// count for awkward (self-intersecting) outlines; a larger face is refused
+/// naming its line. Meshes that need more are given as triangles.
+pub const MAX_FACE_CORNERS: usize = 4096;
+
 /// The line, shortened for a message.
 fn quote(line: &str) -> String {
     crate::validate::truncate_echo(line.trim(), QUOTE_MAX)
@@ -185,6 +191,10 @@ pub fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, String> {
                     counts.vn += 1;
                     (!numbers(rest, 3)).then(|| "vn needs three numbers (x y z)".to_string())
                 }
+                "f" if rest.len() > MAX_FACE_CORNERS => Some(format!(
+                    "a face has {} corners, at most {MAX_FACE_CORNERS} are read (split it into smaller faces or triangles)",
+                    rest.len()
+                )),
                 "f" | "l" => match rest.iter().try_for_each(|c| check_corner(c, &counts)) {
                     Err(e) => Some(e),
                     Ok(()) => {

@@ -685,7 +685,15 @@ impl<'a> SceneBuilder<'a> {
                 }
             }
         };
-        if matches!(light, Light::Polygon { .. }) {
+        // The reference quadrature integrates any model's lobe; only the
+        // LTC tables are fitted to some.
+        if matches!(
+            light,
+            Light::Polygon {
+                method: specula_core::light::AreaMethod::Ltc,
+                ..
+            }
+        ) {
             crate::polygon_light::check_materials(&self.materials.list)
                 .map_err(|e| format!("{field}: {e}"))?;
         }
