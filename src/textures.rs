@@ -3,6 +3,7 @@
 //! so that v = 0 is the bottom of the picture (the OBJ/MTL convention for
 //! `vt`).
 
+use crate::memory;
 use specula_raster::maps::ColorMap;
 use specula_raster::texture::{Encoding, Filter, Sampler, Texture, Wrap};
 use std::path::Path;
@@ -48,14 +49,43 @@ pub fn decode_color_map(name: &str, bytes: &[u8]) -> Result<ColorMap, String> {
     )
 }
 
+/// Peak bytes per texel while an image becomes a texture: the decoded
+/// image (up to 8 bytes for 16-bit RGBA), its 8-bit RGB copy and the
+/// flipped rows (3 + 3), the f32 texels with their mip chain (16) and the
+/// texture they are assembled into (16), rounded up.
+pub const TEXEL_BYTES: u64 = 48;
+
+/// An image's width and height from its header, without decoding it.
+pub fn image_size(name: &str, bytes: &[u8]) -> Result<(u32, u32), String> {
+    image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| format!("{name}: {e}"))?
+        .into_dimensions()
+        .map_err(|e| format!("{name}: {e}"))
+}
+
+/// Counts a `w`×`h` texture against the memory budget (`--max-memory`)
+/// before it is decoded, naming the file.
+pub fn reserve_texture(name: &str, (w, h): (u32, u32)) -> Result<(), String> {
+    memory::reserve(
+        &format!("{name} ({w}×{h})"),
+        (w as u64 * h as u64).saturating_mul(TEXEL_BYTES),
+    )
+}
+
 /// [`load_map`] from an image file's bytes; `name` says where they came
-/// from in messages.
+/// from in messages. The size in the image's header is counted against
+/// the memory budget before anything is decoded.
 pub fn decode_map(
     name: &str,
     bytes: &[u8],
     encoding: Encoding,
     sampler: Sampler,
 ) -> Result<ColorMap, String> {
+    let (w, h) = image_size(name, bytes)?;
+    specula_raster::texture::check_mip_chain_size(w as usize, h as usize, 3)
+        .map_err(|e| format!("{name}: {e}"))?;
+    reserve_texture(name, (w, h))?;
     let img = image::load_from_memory(bytes)
         .map_err(|e| format!("{name}: {e}"))?
         .to_rgb8();

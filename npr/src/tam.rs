@@ -267,6 +267,19 @@ pub struct Manifest {
     pub(crate) stroke_width_px: f32,
 }
 
+/// Peak bytes of reading the map `m` describes: per texel of every level,
+/// each tone's 8-bit image, and the f32 channels (paper and one per tone)
+/// twice (the levels and the texture they are assembled into); plus one
+/// decoded image of level 0 (up to 8 bytes a texel) at a time.
+fn manifest_bytes(m: &Manifest) -> u64 {
+    let texels: u64 = m.sizes.iter().map(|&n| n as u64 * n as u64).sum();
+    let per_texel = m.tones as u64 + (m.tones as u64 + 1) * 8;
+    let first = m.sizes[0] as u64 * m.sizes[0] as u64;
+    texels
+        .saturating_mul(per_texel)
+        .saturating_add(first.saturating_mul(8))
+}
+
 /// File name of tone t, level l.
 pub(crate) fn file_name(t: usize, l: usize) -> String {
     format!("tam_t{t}_l{l}.png")
@@ -385,6 +398,19 @@ impl TamTexture {
         dir: &Path,
         read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     ) -> Result<TamTexture, String> {
+        TamTexture::read_with_budget(dir, read, &|_, _| Ok(()))
+    }
+
+    /// [`TamTexture::read_with`] that first asks `reserve` for the bytes
+    /// the map will need (named by its folder), from `tam.json` alone, and
+    /// checks each image's size in its header before decoding it: a map too
+    /// large for the caller's memory budget is refused before any image is
+    /// decoded.
+    pub fn read_with_budget(
+        dir: &Path,
+        read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+        reserve: &dyn Fn(&str, u64) -> Result<(), String>,
+    ) -> Result<TamTexture, String> {
         let path = dir.join("tam.json");
         let bytes = read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
         let m: Manifest =
@@ -403,12 +429,35 @@ impl TamTexture {
                 path.display()
             ));
         }
+        reserve(
+            &format!(
+                "the tonal art map {} ({} tones of {}×{})",
+                dir.display(),
+                m.tones,
+                m.sizes[0],
+                m.sizes[0]
+            ),
+            manifest_bytes(&m),
+        )?;
         let mut images = Vec::with_capacity(m.tones);
         for t in 0..m.tones {
             let mut tone = Vec::with_capacity(m.levels);
             for (l, &n) in m.sizes.iter().enumerate() {
                 let p = dir.join(file_name(t, l));
                 let bytes = read(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                let header = image::ImageReader::new(std::io::Cursor::new(&bytes))
+                    .with_guessed_format()
+                    .map_err(|e| format!("{}: {e}", p.display()))?
+                    .into_dimensions()
+                    .map_err(|e| format!("{}: {e}", p.display()))?;
+                if header != (n, n) {
+                    return Err(format!(
+                        "{}: is {}×{}, tam.json says {n}×{n}",
+                        p.display(),
+                        header.0,
+                        header.1
+                    ));
+                }
                 let img = image::load_from_memory(&bytes)
                     .map_err(|e| format!("{}: {e}", p.display()))?
                     .to_luma8();

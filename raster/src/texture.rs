@@ -156,6 +156,27 @@ pub enum Encoding {
 /// indexes exactly up to 2²⁴ (the gather's contract).
 pub(crate) const MAX_VALUES: usize = 1 << 24;
 
+/// Checks that a `width` × `height` texture of `channels` channels with its
+/// whole mip chain stays within the 2²⁴ values a texture holds, from its
+/// size alone (an image's header), before its texels are decoded.
+pub fn check_mip_chain_size(width: usize, height: usize, channels: usize) -> Result<(), String> {
+    let (mut w, mut h) = (width.max(1), height.max(1));
+    let mut total = 0usize;
+    loop {
+        total = total.saturating_add(w.saturating_mul(h).saturating_mul(channels));
+        if (w, h) == (1, 1) || total > MAX_VALUES {
+            break;
+        }
+        (w, h) = next_level_size(w, h);
+    }
+    if total > MAX_VALUES {
+        return Err(format!(
+            "texture too large: {width}×{height} with {channels} channels needs more than {MAX_VALUES} values with its mip chain"
+        ));
+    }
+    Ok(())
+}
+
 /// Where a level lives in [`Texture`]'s data.
 #[derive(Clone, Copy, Debug, PartialEq)]
 struct Level {

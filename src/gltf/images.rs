@@ -3,16 +3,11 @@
 //! share it, its size counted against the memory budget before decoding.
 
 use super::buffers::{data_uri, uri_path, Buffers};
-use crate::memory;
 use gltf::json;
 use specula_raster::maps::ColorMap;
 use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
-
-/// Bytes per texel of a decoded colour map with its mip chain (3 f32
-/// channels, 4/3 for the chain) plus the 8-bit decode.
-const TEXEL_BYTES: u64 = 20;
 
 pub struct Images<'a> {
     pub(super) root: &'a json::Root,
@@ -83,11 +78,9 @@ impl<'a> Images<'a> {
             .with_guessed_format()
             .ok()
             .and_then(|r| r.into_dimensions().ok());
-        let (w, h) = dims.ok_or_else(|| format!("{at}: not an image this build can decode"))?;
-        memory::reserve(
-            &format!("{at} ({w}×{h})"),
-            (w as u64 * h as u64).saturating_mul(TEXEL_BYTES),
-        )?;
+        if dims.is_none() {
+            return Err(format!("{at}: not an image this build can decode"));
+        }
         let sampler = Sampler::new(Wrap::Repeat, Filter::Trilinear);
         let map = crate::textures::decode_map(&at, &bytes, encoding, sampler)?;
         self.cache.insert((i, encoding), map.clone());
