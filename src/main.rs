@@ -343,28 +343,39 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     } else {
         image_file::encode_ldr(r.width, r.height, std::mem::take(&mut r.ldr), main_format)?
     };
-    plan[0].write(&main_bytes)?;
+    // Every output is staged before any replaces its file: a failure in a
+    // later one (a full disk, an unwritable --stats-json) leaves the
+    // earlier files as they were.
+    let mut staged = vec![plan[0].stage(&main_bytes)?];
+    drop(main_bytes);
     if a.exr.is_some() {
         let bytes = image_file::encode_hdr(r.width, r.height, &r.hdr(), ImageFormat::OpenExr)?;
-        by_flag("--exr").write(&bytes)?;
+        staged.push(by_flag("--exr").stage(&bytes)?);
     }
     let (tw, th) = (r.frame.target.width, r.frame.target.height);
     let exr = |rgb: &[[f32; 3]]| image_file::encode_hdr(tw, th, rgb, ImageFormat::OpenExr);
     for aov in &aovs {
-        match aov {
-            Aov::Depth(_) => by_flag("--aov depth").write(&exr(&depth_aov(&r.frame)?)?)?,
-            Aov::Normal(_) => by_flag("--aov normal").write(&exr(&normal_aov(&r.frame)?)?)?,
-            Aov::Id(_) => {
-                by_flag("--aov id").write(&image_file::encode_ids(tw, th, id_aov(&r.frame)?))?
-            }
-        }
+        let (flag, bytes) = match aov {
+            Aov::Depth(_) => ("--aov depth", exr(&depth_aov(&r.frame)?)?),
+            Aov::Normal(_) => ("--aov normal", exr(&normal_aov(&r.frame)?)?),
+            Aov::Id(_) => (
+                "--aov id",
+                image_file::encode_ids(tw, th, id_aov(&r.frame)?),
+            ),
+        };
+        staged.push(by_flag(flag).stage(&bytes)?);
     }
     if let (Some(_), Some(st)) = (&a.svg_lines, &scene.lines.strokes) {
         let lines = st.polylines(&r.frame.buffers, r.ssaa as usize);
         let doc = specula_npr::overlay::svg(&lines, &st.style, r.width, r.height);
-        by_flag("--svg-lines").write(doc.as_bytes())?;
+        staged.push(by_flag("--svg-lines").stage(doc.as_bytes())?);
     }
     r.stats.encode_ms = t.elapsed().as_secs_f64() * 1e3;
+    if a.stats_json.is_some() {
+        let json = serde_json::to_string_pretty(&r.stats).map_err(|e| e.to_string())?;
+        staged.push(by_flag("--stats-json").stage(json.as_bytes())?);
+    }
+    output_plan::commit_all(staged)?;
     if a.stats {
         // With the image on standard output, the report goes to stderr.
         if plan[0].sink == output_plan::Sink::Stdout {
@@ -372,10 +383,6 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
         } else {
             print!("{}", r.stats.report());
         }
-    }
-    if a.stats_json.is_some() {
-        let json = serde_json::to_string_pretty(&r.stats).map_err(|e| e.to_string())?;
-        by_flag("--stats-json").write(json.as_bytes())?;
     }
     Ok(())
 }
@@ -513,9 +520,23 @@ fn run_batch(a: specula::batch::BatchArgs) -> Result<(), String> {
     }
 }
 
+/// On SIGINT, SIGTERM or SIGHUP, removes the temporary files of outputs
+/// being written (no destructor runs when a signal ends the process) and
+/// exits with 128 + the signal number the shell reports for SIGINT.
+fn remove_temporaries_on_interrupt() {
+    let installed = ctrlc::set_handler(|| {
+        output_plan::remove_temporaries();
+        std::process::exit(130);
+    });
+    if let Err(e) = installed {
+        eprintln!("warning: no signal handler ({e}): an interrupted run may leave temporary files");
+    }
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     specula::table_cache::install();
+    remove_temporaries_on_interrupt();
     let result = match cli.command {
         Some(Command::Diff(a)) => {
             return match specula::diff::run(&a) {

@@ -14,6 +14,7 @@ use image::ImageFormat;
 use std::fs::OpenOptions;
 use std::io::Write;
 use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// Where one output's bytes go.
 #[derive(Clone, Debug, PartialEq, Eq)]
@@ -58,6 +59,30 @@ impl Output {
     pub fn write(&self, bytes: &[u8]) -> Result<(), String> {
         write_sink(&self.sink, bytes)
             .map_err(|e| format!("{}: cannot write: {e}", self.path.display()))
+    }
+
+    /// Writes `bytes` to a temporary file beside a regular file's
+    /// destination without replacing it yet (see [`Staged`]); a device or
+    /// standard output is written now. A run with several outputs stages
+    /// them all before committing any, so a failure in one (a full disk)
+    /// leaves every previous file as it was.
+    pub fn stage(&self, bytes: &[u8]) -> Result<Staged, String> {
+        let fail = |e: std::io::Error| format!("{}: cannot write: {e}", self.path.display());
+        let file = match &self.sink {
+            Sink::Atomic(p) => {
+                let mut temp = TempFile::create(p).map_err(fail)?;
+                temp.fill(bytes).map_err(fail)?;
+                Some((temp, p.clone()))
+            }
+            sink => {
+                write_sink(sink, bytes).map_err(fail)?;
+                None
+            }
+        };
+        Ok(Staged {
+            file,
+            shown: self.path.clone(),
+        })
     }
 
     /// The image format its name asks for (`-`, devices and FIFOs without an
@@ -144,9 +169,13 @@ pub fn resolve(path: &Path, allow_stdout: bool) -> Result<Sink, String> {
     };
     let ft = meta.file_type();
     if ft.is_symlink() {
-        // Follow the link and write its target; the link itself stays.
-        let target = std::fs::canonicalize(path)
-            .map_err(|e| format!("{shown}: a symbolic link whose target cannot be used: {e}"))?;
+        // Follow the link and write its target; the link itself stays. A
+        // link to a file not made yet (dangling) gets that file.
+        let target = match std::fs::canonicalize(path) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => link_target(path),
+            r => r,
+        }
+        .map_err(|e| format!("{shown}: a symbolic link whose target cannot be used: {e}"))?;
         return resolve(&target, false);
     }
     if ft.is_dir() {
@@ -167,6 +196,25 @@ pub fn resolve(path: &Path, allow_stdout: bool) -> Result<Sink, String> {
     Err(format!(
         "{shown}: not a regular file, device or pipe; refusing to write it"
     ))
+}
+
+/// Where a chain of symbolic links ends when its last target does not
+/// exist (yet): each relative target is taken from its link's folder.
+fn link_target(path: &Path) -> std::io::Result<PathBuf> {
+    let mut p = path.to_path_buf();
+    // Linux's own limit on links followed in one lookup.
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let target = std::fs::read_link(&p)?;
+                p = folder(&p).join(target);
+            }
+            Ok(_) => return Ok(p),
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(p),
+            Err(e) => return Err(e),
+        }
+    }
+    Err(std::io::Error::other("too many levels of symbolic links"))
 }
 
 /// Resolves every `(flag, path)` of a run and checks them together: no two
@@ -215,10 +263,38 @@ pub fn plan(
     Ok(planned)
 }
 
+/// The temporary files that exist right now (created, not yet renamed or
+/// removed), for [`remove_temporaries`].
+static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn temporaries() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Removes every temporary output file that exists right now. For a
+/// signal handler (SIGINT, SIGTERM) that then ends the process, where
+/// destructors do not run; a file being renamed at the same moment is
+/// either removed or already in place.
+pub fn remove_temporaries() {
+    for p in temporaries().drain(..) {
+        let _ = std::fs::remove_file(p);
+    }
+}
+
 /// A temporary file beside its destination (`tempfile`'s `NamedTempFile`),
 /// removed when dropped unless renamed into place: no error path (or panic)
-/// leaves it behind.
-struct TempFile(tempfile::NamedTempFile);
+/// leaves it behind, and while it exists its path is listed for
+/// [`remove_temporaries`].
+struct TempFile(Option<tempfile::NamedTempFile>);
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        let mut list = temporaries();
+        if let Some(f) = &self.0 {
+            list.retain(|p| p != f.path());
+        }
+    }
+}
 
 impl TempFile {
     fn create(dest: &Path) -> std::io::Result<TempFile> {
@@ -237,19 +313,63 @@ impl TempFile {
             use std::os::unix::fs::PermissionsExt;
             builder.permissions(std::fs::Permissions::from_mode(0o666));
         }
-        builder.tempfile_in(folder(dest)).map(TempFile)
+        let mut list = temporaries();
+        let file = builder.tempfile_in(folder(dest))?;
+        list.push(file.path().to_path_buf());
+        Ok(TempFile(Some(file)))
     }
 
-    /// Writes all of `bytes`, makes sure they reached the disk (a full disk
-    /// may only show at sync), and renames the file to `dest`.
-    fn persist(mut self, bytes: &[u8], dest: &Path) -> std::io::Result<()> {
-        let f = self.0.as_file_mut();
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        // On failure the error owns the temporary file and removes it.
-        self.0.persist(dest)?;
-        Ok(())
+    fn file(&mut self) -> &mut tempfile::NamedTempFile {
+        self.0
+            .as_mut()
+            .expect("a TempFile holds its file until placed")
     }
+
+    /// Writes all of `bytes` and makes sure they reached the disk (a full
+    /// disk may only show at sync).
+    fn fill(&mut self, bytes: &[u8]) -> std::io::Result<()> {
+        let f = self.file().as_file_mut();
+        f.write_all(bytes)?;
+        f.sync_all()
+    }
+
+    /// Renames the file to `dest`.
+    fn place(mut self, dest: &Path) -> std::io::Result<()> {
+        let path = self.file().path().to_path_buf();
+        let file = self.0.take().expect("held until placed");
+        // On failure the error owns the temporary file and removes it.
+        let placed = file.persist(dest).map(drop).map_err(|e| e.error);
+        temporaries().retain(|p| *p != path);
+        placed
+    }
+}
+
+/// An output whose bytes are written but not yet in place: a regular
+/// file's temporary file, renamed by [`Staged::commit`] (and removed if
+/// dropped uncommitted); devices and standard output are written by
+/// [`Output::stage`] itself and have nothing left to do.
+pub struct Staged {
+    file: Option<(TempFile, PathBuf)>,
+    shown: PathBuf,
+}
+
+impl Staged {
+    /// Puts the file in place.
+    pub fn commit(self) -> Result<(), String> {
+        match self.file {
+            Some((temp, dest)) => temp
+                .place(&dest)
+                .map_err(|e| format!("{}: cannot write: {e}", self.shown.display())),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Commits every staged output, in order. Each is a rename within its
+/// folder, so after the first the rest fail only if a folder changes
+/// underneath the run.
+pub fn commit_all(staged: Vec<Staged>) -> Result<(), String> {
+    staged.into_iter().try_for_each(Staged::commit)
 }
 
 fn write_sink(sink: &Sink, bytes: &[u8]) -> std::io::Result<()> {
@@ -264,7 +384,11 @@ fn write_sink(sink: &Sink, bytes: &[u8]) -> std::io::Result<()> {
             f.write_all(bytes)?;
             f.flush()
         }
-        Sink::Atomic(p) => TempFile::create(p)?.persist(bytes, p),
+        Sink::Atomic(p) => {
+            let mut temp = TempFile::create(p)?;
+            temp.fill(bytes)?;
+            temp.place(p)
+        }
     }
 }
 
