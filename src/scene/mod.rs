@@ -5,6 +5,7 @@
 
 mod build;
 mod desc;
+mod field_error;
 mod gltf_file;
 
 use build::*;
@@ -104,6 +105,9 @@ fn parse(text: &str) -> Result<SceneFile, String> {
     let toml_message = |e: toml::de::Error| e.to_string().trim_end().to_string();
     let de = toml::Deserializer::parse(text).map_err(toml_message)?;
     serde_path_to_error::deserialize(de).map_err(|e| {
+        if let Some(located) = field_error::locate(text, e.path()) {
+            return located;
+        }
         let at = e.path().to_string();
         let message = toml_message(e.into_inner());
         if at.is_empty() || at == "." {
