@@ -447,6 +447,8 @@ fn run_tam(a: TamArgs) -> Result<(), String> {
         .prefix(".specula-tam-")
         .tempdir_in(parent)
         .map_err(|e| format!("-o {shown}: cannot write into {}: {e}", parent.display()))?;
+    // Renamed into place below; until then an interrupt removes it.
+    let _interrupted = output_plan::TemporaryDir::track(staging.path());
     let tam = specula_npr::tam::generate(p).map_err(|e| format!("tam: {e}"))?;
     tam.write_dir(staging.path())?;
     if replacing {

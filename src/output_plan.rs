@@ -271,13 +271,40 @@ fn temporaries() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
     TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// Removes every temporary output file that exists right now. For a
-/// signal handler (SIGINT, SIGTERM) that then ends the process, where
-/// destructors do not run; a file being renamed at the same moment is
-/// either removed or already in place.
+/// Temporary folders (a tonal art map being written), likewise.
+static TEMPORARY_DIRS: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn temporary_dirs() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
+    TEMPORARY_DIRS.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Removes every temporary output file and folder that exists right now.
+/// For a signal handler (SIGINT, SIGTERM) that then ends the process,
+/// where destructors do not run; a file being renamed at the same moment
+/// is either removed or already in place.
 pub fn remove_temporaries() {
     for p in temporaries().drain(..) {
         let _ = std::fs::remove_file(p);
+    }
+    for p in temporary_dirs().drain(..) {
+        let _ = std::fs::remove_dir_all(p);
+    }
+}
+
+/// Lists a temporary folder for [`remove_temporaries`] while the guard
+/// lives; its owner removes it on every other path (`tempfile::TempDir`).
+pub struct TemporaryDir(PathBuf);
+
+impl TemporaryDir {
+    pub fn track(path: &Path) -> TemporaryDir {
+        temporary_dirs().push(path.to_path_buf());
+        TemporaryDir(path.to_path_buf())
+    }
+}
+
+impl Drop for TemporaryDir {
+    fn drop(&mut self) {
+        temporary_dirs().retain(|p| *p != self.0);
     }
 }
 

@@ -605,3 +605,37 @@ fn reference_area_lights_take_beckmann_and_gtr_which_ltc_refuses() {
         assert_eq!(non_finite_pixels(&reference), 0, "{ndf}");
     }
 }
+
+#[test]
+fn sigint_while_a_tonal_art_map_is_made_leaves_no_staging_folder() {
+    use std::process::{Command, Stdio};
+    let dir = temp_dir("limits-sigint-tam");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_specula"))
+        .args(["tam", "-o", "map", "--tones", "6", "--size", "512"])
+        .current_dir(&dir)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let seen = loop {
+        if !left_behind(&dir, &[]).is_empty() {
+            break true;
+        }
+        if child.try_wait().unwrap().is_some() {
+            break false;
+        }
+        std::thread::sleep(std::time::Duration::from_micros(200));
+    };
+    assert!(seen, "the staging folder never appeared");
+    let _ = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status();
+    let status = child.wait().unwrap();
+    let left = left_behind(&dir, &[]);
+    // Interrupted while generating (130), or done just before: then only
+    // the finished map is there.
+    match status.code() {
+        Some(130) => assert_eq!(left, Vec::<String>::new()),
+        _ => assert_eq!(left, ["map"], "{status:?}"),
+    }
+}
