@@ -27,7 +27,9 @@ use argmin::solver::neldermead::NelderMead;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use specula_core::ltc::ggx::{Cell, N, X_AXIS, Y_AXIS};
+use specula_core::ltc::small_light::{self, Scene};
 use specula_core::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
+use specula_core::table::Table2;
 use specula_core::{Brdf, V3};
 use std::f64::consts::PI;
 
@@ -354,9 +356,66 @@ pub(crate) fn error_summary(errs: &[Vec<f64>]) -> String {
     )
 }
 
+/// What `fit-ltc` does besides fitting the whole table.
+pub struct Options {
+    /// Measure this table file instead of fitting.
+    pub check: Option<std::path::PathBuf>,
+}
+
+/// The per-pixel error under a small light and the view sweep's kinks of
+/// `table` (specula_core::ltc::small_light), one line per roughness.
+pub fn check_lines(table: &Table2<6>) -> Vec<String> {
+    let alphas = [0.2, 0.3, 0.4, 0.5];
+    let y_hi = (1.0 - 85f64.to_radians().cos()).sqrt();
+    alphas
+        .par_iter()
+        .map(|&alpha| {
+            let s = small_light::pixel_error(table, alpha, Scene::Sphere, 32, small_light::LIT);
+            let f = small_light::pixel_error(table, alpha, Scene::Floor, 32, small_light::LIT);
+            let s1 = small_light::pixel_error(table, alpha, Scene::Sphere, 32, 0.01);
+            let f1 = small_light::pixel_error(table, alpha, Scene::Floor, 32, 0.01);
+            let k = small_light::kinks(table, alpha, 0.0, y_hi);
+            let max = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+            format!(
+                "alpha {alpha}: sphere mean {:.2}% worst {:.1}% w {:.2}%, floor mean {:.2}% worst {:.1}% w {:.2}%; \
+                 sweep second difference across rows rms {:.2e} max {:.2e}, within rms {:.2e} max {:.2e}",
+                100.0 * s.mean,
+                100.0 * s.worst,
+                100.0 * s.weighted,
+                100.0 * f.mean,
+                100.0 * f.worst,
+                100.0 * f.weighted,
+                k.across_rms(),
+                max(&k.across),
+                k.within_rms(),
+                max(&k.within)
+            ) + &format!(
+                "\n  pixels >= 1 %: sphere mean {:.2}% weighted {:.2}%, floor mean {:.2}% weighted {:.2}%\n  \
+                 worst pixels [theta_o, theta_l, phi_l, LTC, reference]: sphere {:.3?}, floor {:.3?}",
+                100.0 * s1.mean,
+                100.0 * s1.weighted,
+                100.0 * f1.mean,
+                100.0 * f1.weighted,
+                s.worst_at,
+                f.worst_at
+            )
+        })
+        .collect()
+}
+
 /// Fits the table and writes it to `out` (atomically), with the command,
-/// the axes and the error summary in its header.
-pub fn run(out: &std::path::Path) -> Result<(), String> {
+/// the axes and the error summary in its header; or measures a table file
+/// (`opts.check`).
+pub fn run(out: &std::path::Path, opts: &Options) -> Result<(), String> {
+    if let Some(path) = &opts.check {
+        let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let t = specula_core::ltc::ggx::decode(&bytes)
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+        for line in check_lines(&t) {
+            println!("{line}");
+        }
+        return Ok(());
+    }
     crate::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
     let (cells, errs) = fit_table(true);

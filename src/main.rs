@@ -83,6 +83,10 @@ struct FitLtcArgs {
     /// Where to write the table.
     #[arg(short, long, default_value = "core/data/ltc_ggx.bin")]
     output: PathBuf,
+    /// Measure a table file (per-pixel error under a small light, the view
+    /// sweep's kinks) instead of fitting.
+    #[arg(long, value_name = "PATH")]
+    check: Option<PathBuf>,
 }
 
 #[derive(clap::Args)]
@@ -555,7 +559,9 @@ fn main() -> ExitCode {
         Some(Command::Render(a)) => run_render(a),
         Some(Command::Furnace(a)) => run_furnace(a),
         Some(Command::Tam(a)) => run_tam(a),
-        Some(Command::FitLtc(a)) => specula::fit_ltc::run(&a.output),
+        Some(Command::FitLtc(a)) => {
+            specula::fit_ltc::run(&a.output, &specula::fit_ltc::Options { check: a.check })
+        }
         Some(Command::FitLtcCoat(a)) => specula::fit_ltc_coat::run(&a.output),
         Some(Command::KcTables(a)) => specula::table_cache::write_committed(&a.output),
         Some(Command::Eval) => {

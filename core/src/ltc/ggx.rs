@@ -19,13 +19,10 @@
 //! tried: its L1 error was larger at every cell probed, 0.048 against
 //! 0.012 at α = 0.1, μo = 0.9, and 0.29 against 0.26 at μo = 0.2.)
 //!
-//! **Measured error** (core/tests/ltc_ggx.rs, against the reference, as a
-//! fraction of n, over α 0.05–1, views 0–85°, quads and triangles
-//! overhead, in the mirror direction, tilted, straddling, at and below the
-//! horizon, one- and two-sided; 1008 cases): median 0.13 %, p90 1.1 %,
-//! max 7.5 %; by view, p90 ≤ 0.31 % and max ≤ 0.8 % up to 45°, p90 2.5 % /
-//! max 6.1 % at 80°, p90 3.1 % / max 7.5 % at 85° (worst: α 0.1, 85°, a
-//! quad in the mirror direction).
+//! **Measured error**: core/tests/ltc_ggx.rs measures the table against
+//! the reference as a fraction of n over many polygons and views, and per
+//! pixel under a small light (ltc/small_light.rs); the figures are in
+//! docs/accuracy.md.
 //!
 //! **Magnitude and Fresnel.** n(α, μo) = ∫ f cos θi dωi with F = 1 and
 //! n_w = ∫ f cos θi (1 − wi·h)⁵ dωi, so that with Schlick's F
