@@ -3,6 +3,8 @@
 //! never a NaN pixel), the background, and the two lighting methods on
 //! rendered frames.
 
+mod common;
+
 use specula::envmap_file::{decode_equirect, load_env_map, EnvSettings};
 use specula::render::{render_scene, RenderSettings};
 use specula::scene::{load_scene_str, LoadedScene};
@@ -257,4 +259,51 @@ fn uniform_map_renders_like_the_uniform_environment() {
             assert!(rel < tol, "{m} {ibl}: mean relative difference {rel}");
         }
     }
+}
+
+/// `--env` lights a glTF file rendered on its own; a TOML scene refuses
+/// it (its map is `[environment] map`).
+#[test]
+fn env_flag_lights_a_gltf_file() {
+    let dir = common::temp_dir("env-flag");
+    std::fs::write(
+        dir.join("sky.hdr"),
+        hdr_bytes(32, 16, |_, j| [1.0, 1.0, 0.5 + j as f32]),
+    )
+    .unwrap();
+    let glb = common::fixtures().join("models/gltf/BoxTextured-plain.glb");
+    let out = common::specula(
+        &[
+            "render",
+            glb.to_str().unwrap(),
+            "--env",
+            "sky.hdr",
+            "-o",
+            "box.png",
+            "--width",
+            "64",
+            "--height",
+            "48",
+        ],
+        &dir,
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let toml = common::fixtures().join("scenes/furnace.toml");
+    let out = common::specula(
+        &[
+            "render",
+            toml.to_str().unwrap(),
+            "--env",
+            "sky.hdr",
+            "-o",
+            "f.png",
+        ],
+        &dir,
+    );
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--env"));
 }

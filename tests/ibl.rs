@@ -434,10 +434,16 @@ fn the_fixture_sky_is_the_generated_sky() {
     if std::env::var_os("SPECULA_BLESS").is_some() {
         std::fs::write(&path, &made).unwrap();
     }
-    assert!(std::fs::read(&path).unwrap() == made, "fixtures/env/sky.hdr differs from `specula sky`");
+    assert!(
+        std::fs::read(&path).unwrap() == made,
+        "fixtures/env/sky.hdr differs from `specula sky`"
+    );
     let analytic = std::f64::consts::TAU * (1.0 - specula::sky::SUN_RADIUS_DEG.to_radians().cos());
     let drawn = specula::sky::sun_solid_angle(512, 256);
-    assert!((drawn / analytic - 1.0).abs() < 0.15, "{drawn} vs {analytic}");
+    assert!(
+        (drawn / analytic - 1.0).abs() < 0.15,
+        "{drawn} vs {analytic}"
+    );
     // The decoded file holds the sun's radiance exactly.
     let eq = specula::envmap_file::decode_equirect("sky.hdr", &made).unwrap();
     let max = eq.texels.iter().map(|t| t[0]).fold(0.0f32, f32::max);
