@@ -57,6 +57,19 @@ enum Command {
     /// Render scenes into a folder with a manifest (input and output hashes),
     /// resumably, optionally one shard of the set.
     Batch(specula::batch::BatchArgs),
+    /// Write the generated HDR sky (a sky dome, ground and a sun disk of
+    /// known size and radiance; src/sky.rs) as a Radiance .hdr file.
+    Sky(SkyArgs),
+}
+
+#[derive(clap::Args)]
+struct SkyArgs {
+    /// Output .hdr file.
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Width in texels (the height is half of it).
+    #[arg(long, default_value_t = 512)]
+    width: usize,
 }
 
 #[derive(clap::Args)]
@@ -129,6 +142,11 @@ struct RenderArgs {
     /// default scene's nodes are met, from 0; default 0).
     #[arg(long, value_name = "N")]
     camera: Option<usize>,
+    /// An environment map (Radiance .hdr or OpenEXR, equirectangular)
+    /// lighting a glTF file rendered directly, seen behind it, in place of
+    /// the default uniform environment.
+    #[arg(long, value_name = "PATH")]
+    env: Option<PathBuf>,
     /// Output image, its format from the extension: .png, .exr (linear HDR)
     /// or another format the image crate writes; `-` writes PNG to stdout.
     #[arg(short, long)]
@@ -246,8 +264,16 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     memory::set_limit(a.max_memory.unwrap_or_else(memory::default_limit));
     let t = Instant::now();
     let mut scene = if is_gltf_path(&a.scene) {
-        let opts = GltfOptions { camera: a.camera };
+        let opts = GltfOptions {
+            camera: a.camera,
+            env: a.env.clone(),
+        };
         load_gltf_scene(&a.scene, &opts)
+    } else if a.env.is_some() {
+        return Err(format!(
+            "--env: {} is a TOML scene, whose environment is its [environment] (map = \"file.hdr\")",
+            a.scene.display()
+        ));
     } else if a.camera.is_some() {
         return Err(format!(
             "--camera: {} is a TOML scene, whose camera is its [camera]; --camera picks one of a glTF file's",
@@ -555,6 +581,16 @@ fn main() -> ExitCode {
             }
         }
         Some(Command::Batch(a)) => run_batch(a),
+        Some(Command::Sky(a)) => {
+            if (4..=16384).contains(&a.width) && a.width % 2 == 0 {
+                specula::sky::write_sky(&a.output, a.width, a.width / 2)
+            } else {
+                Err(format!(
+                    "--width must be even, in 4..=16384, got {}",
+                    a.width
+                ))
+            }
+        }
         None => run_demo(),
         Some(Command::Render(a)) => run_render(a),
         Some(Command::Furnace(a)) => run_furnace(a),

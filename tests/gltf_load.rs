@@ -612,11 +612,26 @@ fn punctual_lights_and_cameras_are_placed_by_their_nodes() {
     assert!((s.data.camera.fov_y_deg as f64 - 0.5f64.to_degrees()).abs() < 1e-4);
     assert_eq!(s.data.camera.far, f32::INFINITY);
     assert_eq!(s.data.lights, g.lights);
-    let s1 = load_gltf_str(Path::new("t.gltf"), &read, &GltfOptions { camera: Some(1) }).unwrap();
+    let s1 = load_gltf_str(
+        Path::new("t.gltf"),
+        &read,
+        &GltfOptions {
+            camera: Some(1),
+            ..Default::default()
+        },
+    )
+    .unwrap();
     assert!(s1.warnings.iter().any(|w| w.contains("orthographic")));
-    let e = load_gltf_str(Path::new("t.gltf"), &read, &GltfOptions { camera: Some(2) })
-        .err()
-        .unwrap();
+    let e = load_gltf_str(
+        Path::new("t.gltf"),
+        &read,
+        &GltfOptions {
+            camera: Some(2),
+            ..Default::default()
+        },
+    )
+    .err()
+    .unwrap();
     assert!(e.contains("--camera 2: the file has 2 cameras"), "{e}");
     // Bad light fields name their path.
     for (edit, needle) in [

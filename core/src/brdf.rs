@@ -35,6 +35,19 @@ use crate::models::{Disney, Gltf, Lambert, MetallicRoughness, Microfacet};
 use crate::real::{Mask, Real};
 use crate::vec3::{Rgb, V3};
 
+/// A directional albedo in two parts for environment maps
+/// ([`Brdf::env_lobes`]).
+#[derive(Clone, Copy, Debug)]
+pub struct EnvLobes<R: Real> {
+    /// Albedo of the part lit by the irradiance E(n)/π.
+    pub diffuse: Rgb<R>,
+    /// Albedo of the glossy part, lit by the GGX-prefiltered radiance
+    /// around the mirror direction at `roughness`.
+    pub specular: Rgb<R>,
+    /// Perceptual roughness of the glossy part (α = roughness²).
+    pub roughness: R,
+}
+
 /// Smallest α any model passes to an NDF: below it D(m) is a spike narrower
 /// than f32 can resolve at the peak. (Microfacet inputs are clamped to it
 /// with a warning where the scene is read.)
@@ -300,6 +313,21 @@ pub trait Brdf: Send + Sync {
     /// hemisphere: the reflected radiance under a uniform white environment
     /// of radiance 1.
     fn albedo_local<R: Real>(&self, p: &Self::Prepared<R>) -> Rgb<R>;
+
+    /// [`Brdf::albedo_local`] split for light from an environment map:
+    /// the part lit by the irradiance around the normal and the part lit
+    /// by the radiance around the mirror direction (split sum). The two
+    /// albedos add up to [`Brdf::albedo_local`], so a uniform map gives
+    /// the uniform environment's value. By default all of it is the
+    /// diffuse part; models with a glossy lobe say how they split.
+    #[inline(always)]
+    fn env_lobes<R: Real>(&self, p: &Self::Prepared<R>) -> EnvLobes<R> {
+        EnvLobes {
+            diffuse: self.albedo_local(p),
+            specular: Rgb::zero(),
+            roughness: R::ONE,
+        }
+    }
 
     /// ∫ over the polygon of f(wi, wo) cos θi dωi: the reflected radiance
     /// per unit radiance of a polygon light (vertices in the local frame,

@@ -24,7 +24,7 @@ mod specular_lobe;
 pub mod table;
 mod vec3;
 
-pub use brdf::{Brdf, BrdfVisitor, LaneParams, Model, Outgoing, ShadingFrame};
+pub use brdf::{Brdf, BrdfVisitor, EnvLobes, LaneParams, Model, Outgoing, ShadingFrame};
 pub use real::{Mask, Real};
 pub use vec3::{Rgb, V3};
 pub use wide::f32x8;

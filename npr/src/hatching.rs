@@ -1,7 +1,8 @@
 //! `hatching`: the surface drawn with a tonal art map \[Praun01\].
 //!
 //! 1. The shaded luminance: Y of Σ E max(n·l, 0)/π over the lights plus
-//!    the uniform environment (a white Lambertian surface), clamped to
+//!    the uniform environment or an environment map's E(n)/π (a white
+//!    Lambertian surface), clamped to
 //!    [0, 1]; the tone to draw is darkness D = 1 − Y.
 //! 2. Tone blend: channel 0 of the map is paper (darkness 0) and channel
 //!    t + 1 tone t (darkness d_t, increasing). D falls between two
@@ -67,6 +68,9 @@ impl Hatching {
         let mut l = e_sum * R::FRAC_1_PI;
         if let Some(env) = env.environment {
             l += Rgb::from_f32(env);
+        }
+        if let Some(map) = env.env_map {
+            l += map.irradiance_over_pi(frag.n);
         }
         l.x * R::splat(LUMA[0]) + l.y * R::splat(LUMA[1]) + l.z * R::splat(LUMA[2])
     }

@@ -5,7 +5,8 @@
 //!
 //! L = base/π ⊙ E ⊙ ramp(n·l)  +  [n·h ≥ specular_threshold ∧ n·l > 0] specular/π ⊙ E
 //!
-//! plus base ⊙ L_env under a uniform environment (the Lambert albedo) and
+//! plus base ⊙ L_env under a uniform environment (the Lambert albedo), or
+//! base ⊙ E(n)/π under an environment map (its SH irradiance), and
 //! a rim term: rim_color (radiance) where 1 − n·v ≥ rim_threshold.
 //! `ramp` is a step function of n·l: [`Ramp::bands`] gives n bands of
 //! equal width in n·l, value (k + 1)/n on [k/n, (k + 1)/n) and 0 where
@@ -139,6 +140,9 @@ impl PacketShader for Toon {
         });
         if let Some(l) = env.environment {
             acc += base.mul_elem(Rgb::from_f32(l));
+        }
+        if let Some(map) = env.env_map {
+            acc += base.mul_elem(map.irradiance_over_pi(n));
         }
         if let Some(r) = &self.rim {
             let edge = (R::ONE - n.dot(frag.wo)).ge(R::splat(r.threshold as f64));

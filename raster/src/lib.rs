@@ -20,6 +20,8 @@ mod bin;
 pub mod buffers;
 pub mod camera;
 pub mod clip;
+pub mod envmap;
+pub mod envmap_sample;
 mod fixed;
 mod fragment;
 pub mod frame;
@@ -47,7 +49,7 @@ pub use frame::{
     visibility_into, Frame, FrameStats, PassTimes, ShadePath, Visibility,
 };
 pub use geometry::{Cull, FrameContext, GeometryPass, Project, VertexStage};
-pub use lit::Lit;
+pub use lit::{env_split_sum, Lit};
 pub use scene::SceneData;
 pub use shader::{Material, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};

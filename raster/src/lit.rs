@@ -12,6 +12,8 @@
 //! A normal map bends the local frame all of this is computed in
 //! ([`ParamMaps::frame`]).
 
+use crate::envmap::{EnvMap, IblMethod};
+use crate::envmap_sample::{reference_radiance, seed_of};
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
@@ -21,7 +23,7 @@ use specula_core::light::{
     MAX_POLYGON_VERTICES,
 };
 use specula_core::ltc::reference::polygon_reference_lanes;
-use specula_core::{Brdf, BrdfVisitor, Model, Real, Rgb, ShadingFrame, V3};
+use specula_core::{Brdf, BrdfVisitor, Mask, Model, Real, Rgb, ShadingFrame, V3};
 
 /// A model under the scene's lights, its parameters filled per pixel by
 /// its maps.
@@ -135,6 +137,18 @@ impl<R: Real> LightLoop<'_, '_, R> {
                 None => env,
             };
         }
+        if let Some(map) = self.env.env_map {
+            let env = match map.method {
+                IblMethod::SplitSum => env_split_sum(brdf, &prepared, frame.n, frag.wo, map),
+                IblMethod::Reference { samples } => {
+                    env_reference(brdf, self.maps, self.input, map, samples)
+                }
+            };
+            acc += match self.maps.occlusion(self.input) {
+                Some(k) => env * k,
+                None => env,
+            };
+        }
         if let Some(e) = self.emissive {
             let e = Rgb::from_f32(e);
             acc += match &self.maps.emissive {
@@ -154,6 +168,74 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
         let (_, pixel) = pixel_at(brdf, self.maps, self.input);
         self.shade(brdf, &pixel)
     }
+}
+
+/// The environment map's light by the split sum: the model's diffuse
+/// albedo times E(n)/π, its glossy albedo times the prefiltered radiance
+/// around the mirror direction at its roughness. `n` is the unit shading
+/// normal and `wo` the unit view direction, in world space.
+#[inline(always)]
+pub fn env_split_sum<B: Brdf, R: Real>(
+    brdf: &B,
+    prepared: &B::Prepared<R>,
+    n: V3<R>,
+    wo: V3<R>,
+    map: &EnvMap,
+) -> Rgb<R> {
+    let lobes = brdf.env_lobes(prepared);
+    let e = map.irradiance_over_pi(n);
+    let mut out = lobes.diffuse.mul_elem(e);
+    let s = lobes.specular;
+    if (s.x.gt(R::ZERO) | s.y.gt(R::ZERO) | s.z.gt(R::ZERO)).any() {
+        // The mirror of wo about the shading normal, in world space.
+        let r = n * (R::splat(2.0) * n.dot(wo)) - wo;
+        out = lobes
+            .specular
+            .mul_elem_add(map.prefiltered(r, lobes.roughness), out);
+    }
+    out
+}
+
+/// The environment map's light by the Monte Carlo reference
+/// (envmap_sample.rs), lane by lane in f64. Out of line: it is the slow
+/// path by design.
+#[inline(never)]
+#[cold]
+fn env_reference<B: Brdf, R: Real>(
+    brdf: &B,
+    maps: &ParamMaps,
+    input: &ShadeInput<R>,
+    map: &EnvMap,
+    samples: u32,
+) -> Rgb<R> {
+    let (frag, frame) = (input.frag, &maps.frame(input));
+    let (params, _) = pixel_at(brdf, maps, input);
+    let wo = frame.to_local(frag.wo);
+    let mut out = [[0.0f32; 8]; 3];
+    for i in 0..R::LANES {
+        if input.lanes & (1 << i) == 0 {
+            continue;
+        }
+        let pixel = brdf.pixel(&B::params_lane(&params, i));
+        let wo_i = wo.lane(i).normalize_or(V3::new(0.0, 0.0, 1.0));
+        let prepared = brdf.prepare_with(&pixel, wo_i);
+        let lobes = brdf.env_lobes(&prepared);
+        let frame_i = ShadingFrame {
+            t: frame.t.lane(i),
+            b: frame.b.lane(i),
+            n: frame.n.lane(i),
+        };
+        let seed = seed_of(frag.p.lane(i));
+        let c = reference_radiance(brdf, &prepared, &lobes, wo_i, &frame_i, map, samples, seed);
+        for (plane, v) in out.iter_mut().zip(c) {
+            plane[i] = v as f32;
+        }
+    }
+    Rgb::new(
+        R::load(&out[0][..R::LANES]),
+        R::load(&out[1][..R::LANES]),
+        R::load(&out[2][..R::LANES]),
+    )
 }
 
 /// A point light, or with `cone` = (axis, scale, offset) a spot light, at

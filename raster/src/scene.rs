@@ -29,6 +29,9 @@ pub struct SceneData {
     /// Uniform environment radiance, lighting every surface and seen where
     /// no surface is.
     pub environment: Option<[f32; 3]>,
+    /// An environment map lighting every surface (and seen where no
+    /// surface is when it is visible); `environment` is then `None`.
+    pub env_map: Option<std::sync::Arc<crate::envmap::EnvMap>>,
     /// Radiance of pixels no triangle covers when there is no environment.
     pub background: [f32; 3],
     pub camera: Camera,

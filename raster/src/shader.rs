@@ -69,6 +69,9 @@ pub struct ShadeEnv<'a> {
     pub lights: &'a [Light],
     /// Uniform environment radiance, if the scene has one.
     pub environment: Option<[f32; 3]>,
+    /// The environment map, if the scene has one (then `environment` is
+    /// `None`).
+    pub env_map: Option<&'a crate::envmap::EnvMap>,
 }
 
 /// A shader written once over the lane type; see the module docs.

@@ -131,6 +131,31 @@ impl<R: ShadeLanes> Batch<R> {
     }
 }
 
+/// The map's radiance along the primary ray of every pixel of a tile row
+/// that no triangle covers (`ids` the row's, from pixel `x0` of image row
+/// `y`).
+#[cold]
+fn env_background(
+    map: &crate::envmap::EnvMap,
+    view: &crate::camera::View,
+    (x0, y): (usize, usize),
+    ids: &[u32],
+    color: &mut [&mut [f32]; 3],
+) {
+    let ny = 1.0 - (y as f32 + 0.5) * 2.0 / view.height;
+    for (i, &id) in ids.iter().enumerate() {
+        if id != crate::target::MISS {
+            continue;
+        }
+        let nx = (x0 as f32 + i as f32 + 0.5) * 2.0 / view.width - 1.0;
+        let d = view.forward + view.right * (nx * view.tan_x) + view.up * (ny * view.tan_y);
+        let l = map.radiance(d.normalize().to_array());
+        for c in 0..3 {
+            color[c][i] = l[c];
+        }
+    }
+}
+
 /// Shades tile `t` with lane type R: `ids` is the tile's slice of the
 /// visibility buffer. Returns the number of covered pixels.
 ///
@@ -147,6 +172,7 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
     let env = ShadeEnv {
         lights: &scene.lights,
         environment: scene.environment,
+        env_map: scene.env_map.as_deref(),
     };
     let (tx, ty) = target.tile_origin(t);
     let background = scene.environment.unwrap_or(scene.background);
@@ -290,6 +316,10 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
             store_rgb(rgb, &mut color, px);
         }
         batch.flush(scene, &env, background_rgb, &mut color);
+        if let Some(map) = scene.env_map.as_deref().filter(|m| m.visible) {
+            let row_ids = &ids[row * TILE..row * TILE + tile_w];
+            env_background(map, ctx.view, (x0, y), row_ids, &mut color);
+        }
         if let Some((enc, ldr)) = &out.ldr {
             // SAFETY: as the rows above.
             let bytes = unsafe { ldr.tile_row(x0, y) };

@@ -195,10 +195,68 @@ pub(super) fn check_output(o: &OutputDesc) -> Result<(), String> {
     Ok(())
 }
 
-/// `[environment]`: the uniform radiance.
-pub(super) fn build_environment(e: &EnvironmentDesc) -> Result<[f32; 3], String> {
-    checks::radiometric("environment.uniform", e.uniform)?;
-    Ok(e.uniform)
+/// What `[environment]` gives: a uniform radiance or a map.
+pub(super) enum Environment {
+    Uniform([f32; 3]),
+    Map(std::sync::Arc<specula_raster::envmap::EnvMap>),
+}
+
+/// `[environment]`: exactly one of `uniform` and `map`, the map's fields
+/// checked and its file read through `read`.
+pub(super) fn build_environment(
+    e: &EnvironmentDesc,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<Environment, String> {
+    match (&e.uniform, &e.map) {
+        (Some(u), None) => {
+            checks::radiometric("environment.uniform", *u)?;
+            Ok(Environment::Uniform(*u))
+        }
+        (None, Some(path)) => {
+            let settings = env_settings(e)?;
+            let bytes = read(Path::new(path))
+                .map_err(|err| format!("environment.map: cannot read {path}: {err}"))?;
+            let map = crate::envmap_file::load_env_map(path, &bytes, &settings)
+                .map_err(|err| format!("environment.map: {err}"))?;
+            Ok(Environment::Map(std::sync::Arc::new(map)))
+        }
+        (Some(_), Some(_)) => Err("environment: give either uniform or map, not both".into()),
+        (None, None) => Err("environment: give uniform = [r, g, b] or map = \"file.hdr\"".into()),
+    }
+}
+
+/// The map settings of `[environment]`, checked.
+pub(super) fn env_settings(e: &EnvironmentDesc) -> Result<crate::envmap_file::EnvSettings, String> {
+    use specula_raster::envmap::IblMethod;
+    if !(e.intensity.is_finite() && e.intensity >= 0.0) {
+        return Err(format!(
+            "environment.intensity must be finite and ≥ 0, got {}",
+            e.intensity
+        ));
+    }
+    if !e.rotate.is_finite() {
+        return Err(format!(
+            "environment.rotate must be finite, got {}",
+            e.rotate
+        ));
+    }
+    if !(1..=1 << 20).contains(&e.ibl_samples) {
+        return Err(format!(
+            "environment.ibl_samples must be in 1..=1048576, got {}",
+            e.ibl_samples
+        ));
+    }
+    Ok(crate::envmap_file::EnvSettings {
+        intensity: e.intensity,
+        rotate_deg: e.rotate,
+        visible: e.visible,
+        method: match e.ibl {
+            IblDesc::SplitSum => IblMethod::SplitSum,
+            IblDesc::Reference => IblMethod::Reference {
+                samples: e.ibl_samples,
+            },
+        },
+    })
 }
 
 /// `[[outline]]`s; the materials they name must exist.
@@ -289,6 +347,7 @@ impl<'a> SceneBuilder<'a> {
                 geometry: Vec::new(),
                 lights: Vec::new(),
                 environment: None,
+                env_map: None,
                 background,
                 camera,
             },
@@ -712,7 +771,7 @@ impl<'a> SceneBuilder<'a> {
         if polygon_lights {
             specula_core::ltc::ggx::table();
         }
-        if (polygon_lights || self.data.environment.is_some())
+        if (polygon_lights || self.data.environment.is_some() || self.data.env_map.is_some())
             && self.materials.list.iter().any(is_split_sum_model)
         {
             specula_core::albedo_tables::AlbedoTables::get();

@@ -144,7 +144,37 @@ impl From<TonemapDesc> for Tonemap {
 #[serde(deny_unknown_fields)]
 pub(super) struct EnvironmentDesc {
     /// Radiance arriving equally from every direction.
-    pub(super) uniform: [f32; 3],
+    pub(super) uniform: Option<[f32; 3]>,
+    /// An equirectangular radiance map (Radiance HDR or OpenEXR),
+    /// relative to the scene file.
+    pub(super) map: Option<String>,
+    /// The map's radiance scale.
+    #[serde(default = "one")]
+    pub(super) intensity: f32,
+    /// Degrees about +Y the map is turned by.
+    #[serde(default)]
+    pub(super) rotate: f32,
+    /// The map seen where no surface is.
+    #[serde(default = "yes")]
+    pub(super) visible: bool,
+    #[serde(default)]
+    pub(super) ibl: IblDesc,
+    /// Samples per pixel of `ibl = "reference"`.
+    #[serde(default = "ibl_samples")]
+    pub(super) ibl_samples: u32,
+}
+
+/// How an environment map lights surfaces.
+#[derive(Debug, Deserialize, Default, Clone, Copy, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub(super) enum IblDesc {
+    #[default]
+    SplitSum,
+    Reference,
+}
+
+fn ibl_samples() -> u32 {
+    256
 }
 
 #[derive(Debug, Deserialize)]

@@ -33,6 +33,9 @@ const ORTHO_DISTANCE: f32 = 1000.0;
 pub struct GltfOptions {
     /// Which camera (`--camera N`; 0 when the file has any).
     pub camera: Option<usize>,
+    /// An environment map lighting the file (`--env PATH`, split sum,
+    /// visible): it replaces the default uniform environment.
+    pub env: Option<PathBuf>,
 }
 
 impl SceneBuilder<'_> {
@@ -278,6 +281,22 @@ pub fn load_gltf_scene(path: &Path, opts: &GltfOptions) -> Result<LoadedScene, S
     let base = path.parent().unwrap_or(Path::new(""));
     for p in scene.inputs.iter_mut() {
         *p = base.join(&p);
+    }
+    if let Some(env) = &opts.env {
+        let bytes = std::fs::read(env)
+            .map_err(|e| err(format!("--env: cannot read {}: {e}", env.display())))?;
+        let settings = crate::envmap_file::EnvSettings {
+            intensity: 1.0,
+            rotate_deg: 0.0,
+            visible: true,
+            method: specula_raster::envmap::IblMethod::SplitSum,
+        };
+        let map = crate::envmap_file::load_env_map(&env.display().to_string(), &bytes, &settings)
+            .map_err(|e| err(format!("--env: {e}")))?;
+        scene.data.environment = None;
+        scene.data.env_map = Some(std::sync::Arc::new(map));
+        scene.inputs.push(env.clone());
+        specula_core::albedo_tables::AlbedoTables::get();
     }
     Ok(scene)
 }

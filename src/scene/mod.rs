@@ -134,9 +134,15 @@ fn build_scene(
     scene.add_meshes(&desc.meshes)?;
     scene.add_lights(&desc.lights, desc.render.area_lights)?;
     if let Some(e) = &desc.environment {
-        scene.data.environment = Some(build_environment(e)?);
+        match build_environment(e, read)? {
+            Environment::Uniform(u) => scene.data.environment = Some(u),
+            Environment::Map(m) => scene.data.env_map = Some(m),
+        }
     }
-    if scene.data.lights.is_empty() && scene.data.environment.is_none() {
+    if scene.data.lights.is_empty()
+        && scene.data.environment.is_none()
+        && scene.data.env_map.is_none()
+    {
         scene.warnings.push(
             "the scene has no [[light]] and no [environment]: lit materials render black (unlit ones and the background still show)".into(),
         );

@@ -76,7 +76,7 @@
 //! The IOR and the Fresnel option are the material's.
 
 use crate::albedo_tables::AlbedoTables;
-use crate::brdf::{Brdf, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
+use crate::brdf::{Brdf, EnvLobes, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
 use crate::fresnel::{schlick_weight, schlick_weight_half};
 use crate::light::PolygonLocal;
 use crate::ltc::ggx::LtcGgx;
@@ -469,6 +469,36 @@ impl Brdf for Gltf {
             e = e * (R::ONE - p.coat_weight) + Rgb::splat(p.coat_weight * (tc.a + tc.b));
         }
         Rgb::select(o.above, e, Rgb::zero())
+    }
+
+    /// The diffuse lobe's albedo (1 − G)·ρd on the irradiance (scaled by
+    /// the coat's transmission where there is a coat); the rest of the
+    /// albedo (specular, sheen, coat) on the GGX lobe at the base's α.
+    #[inline(always)]
+    fn env_lobes<R: Real>(&self, p: &GltfPrepared<R>) -> EnvLobes<R> {
+        let px = &p.px;
+        let t = AlbedoTables::get().ggx_schlick(px.alpha, p.o.wo.z.max(R::ZERO));
+        let diff = |g0: R, g90: R| R::ONE - g0.mul_add(R::ONE - t.c, g90 * t.c);
+        let mut diffuse = Rgb::new(
+            px.diffuse.x * diff(px.g0.x, px.g90.x),
+            px.diffuse.y * diff(px.g0.y, px.g90.y),
+            px.diffuse.z * diff(px.g0.z, px.g90.z),
+        );
+        if self.coat {
+            diffuse = diffuse * (R::ONE - p.coat_weight);
+        }
+        let total = self.albedo_local(p);
+        let diffuse = Rgb::select(p.o.above, diffuse, Rgb::zero());
+        let diffuse = Rgb::new(
+            diffuse.x.min(total.x),
+            diffuse.y.min(total.y),
+            diffuse.z.min(total.z),
+        );
+        EnvLobes {
+            diffuse,
+            specular: total - diffuse,
+            roughness: px.alpha.sqrt(),
+        }
     }
 
     /// The LTC lookups and the lobes' albedo factors (zero where the view

@@ -10,7 +10,7 @@
 //! its tables are indexed per lane.
 
 use crate::albedo_tables::AlbedoTables;
-use crate::brdf::{Brdf, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
+use crate::brdf::{Brdf, EnvLobes, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
 use crate::diffuse::f_lambert;
 use crate::fresnel::schlick_weight_half;
 use crate::light::PolygonLocal;
@@ -248,6 +248,26 @@ impl Brdf for MetallicRoughness {
         );
         let diff = p.px.one_minus_f0.mul_elem(p.px.diffuse) * (R::ONE - t.c);
         Rgb::select(o.above, spec + diff, Rgb::zero())
+    }
+
+    /// The split sum's two terms: F0·A + B on the GGX lobe at α, and
+    /// (1 − F0)(1 − C)·ρd on the irradiance.
+    #[inline(always)]
+    fn env_lobes<R: Real>(&self, p: &MetallicRoughnessPrepared<R>) -> EnvLobes<R> {
+        let o = &p.o;
+        let t = AlbedoTables::get().ggx_schlick(p.px.alpha, o.wo.z.max(R::ZERO));
+        let f0 = p.px.f0;
+        let spec = Rgb::new(
+            f0.x.mul_add(t.a, t.b),
+            f0.y.mul_add(t.a, t.b),
+            f0.z.mul_add(t.a, t.b),
+        );
+        let diff = p.px.one_minus_f0.mul_elem(p.px.diffuse) * (R::ONE - t.c);
+        EnvLobes {
+            diffuse: Rgb::select(o.above, diff, Rgb::zero()),
+            specular: Rgb::select(o.above, spec, Rgb::zero()),
+            roughness: p.px.alpha.sqrt(),
+        }
     }
 
     /// The GGX LTC lookup and the split sum's C(μo), with the factors of

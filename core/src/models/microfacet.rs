@@ -23,7 +23,7 @@ pub use crate::masking::Smith;
 pub use crate::ndf::Ndf;
 pub use crate::specular_lobe::MicrofacetParams;
 
-use crate::brdf::{Brdf, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
+use crate::brdf::{Brdf, EnvLobes, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
 use crate::kulla_conty::{color_factor, f_avg, slice_for, KcColor, KcSlice};
 use crate::light::PolygonLocal;
 use crate::ltc::ggx::LtcGgx;
@@ -214,6 +214,30 @@ impl Brdf for Microfacet {
         let [r, g, b] = self.albedo.e.lookup(p.o.wo.z);
         let e = Rgb::new(r, g, b) + (p.diffuse - Rgb::from_f32(self.params.diffuse));
         Rgb::select(p.o.above, e, Rgb::zero())
+    }
+
+    /// ρd and the compensation lobe's albedo F_ms (1 − E(μo)) on the
+    /// irradiance (both spread like a Lambertian lobe); the rest on the
+    /// GGX lobe at the material's α, whatever its NDF (Beckmann and GTR
+    /// are prefiltered as GGX of the same α).
+    #[inline(always)]
+    fn env_lobes<R: Real>(&self, p: &MicrofacetPrepared<R>) -> EnvLobes<R> {
+        let total = self.albedo_local(p);
+        let mut diffuse = p.diffuse;
+        if let Some(k) = &self.kc {
+            diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
+        }
+        let diffuse = Rgb::select(p.o.above, diffuse, Rgb::zero());
+        let diffuse = Rgb::new(
+            diffuse.x.min(total.x),
+            diffuse.y.min(total.y),
+            diffuse.z.min(total.z),
+        );
+        EnvLobes {
+            diffuse,
+            specular: total - diffuse,
+            roughness: R::splat(self.params.alpha as f64).sqrt(),
+        }
     }
 
     /// The GGX LTC lookup at this α and the view, with the factors of

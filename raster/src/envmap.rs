@@ -1,0 +1,609 @@
+//! Environment maps: an equirectangular radiance image lighting the scene
+//! and seen behind it, and what image-based lighting derives from it once
+//! per map.
+//!
+//! Directions: the map's centre column looks down −Z, +Y (the scene's up)
+//! is the top row. A direction d = (sin θ sin φ, cos θ, −sin θ cos φ) is at
+//! u = 1/2 + φ/2π, v = θ/π. `rotate` turns the map about +Y: a world
+//! direction is turned by −rotate before the lookup.
+//!
+//! Derived data ([`EnvMap::prepare`]):
+//! - the source's mip chain (2×2 box), read by the prefiltering;
+//! - the prefiltered radiance chain, one level per perceptual roughness
+//!   0, 1/5, …, 1 (α = roughness²), each the GGX lobe's weighted mean of
+//!   the radiance around the mirror direction with n = v = r \[Karis13\],
+//!   importance sampled, each sample read from the source mip whose texel
+//!   matches the sample's solid angle \[Colbert07\]; stored as octahedral
+//!   maps (planar f32 per channel) so a packet reads them with gathers;
+//! - the irradiance in nine spherical harmonics \[Ramamoorthi01\], as
+//!   E(n)/π: the radiance a white Lambertian surface reflects;
+//! - the luminance distribution for sampling the map in the reference
+//!   ([`crate::envmap_sample`]).
+
+use specula_core::{Mask, Real, Rgb, V3};
+
+/// How a map lights surfaces.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum IblMethod {
+    /// Prefiltered radiance and SH irradiance with the model's albedo
+    /// split ([`specula_core::Brdf::env_lobes`]).
+    SplitSum,
+    /// Per-pixel Monte Carlo with multiple importance sampling, this many
+    /// samples per pixel.
+    Reference { samples: u32 },
+}
+
+/// Perceptual roughness of the prefiltered levels: level k is at k / 5.
+pub const PREFILTER_LEVELS: usize = 6;
+
+/// GGX samples per prefiltered texel.
+const PREFILTER_SAMPLES: u32 = 64;
+
+/// Largest radiance a texel keeps: larger values (and +inf) are clamped
+/// to it, so sums over the map stay finite in f32.
+pub const MAX_TEXEL: f32 = 1e9;
+
+/// An equirectangular image, RGB per texel, row 0 at the top.
+#[derive(Clone, Debug, Default)]
+pub struct Equirect {
+    pub width: usize,
+    pub height: usize,
+    pub texels: Vec<[f32; 3]>,
+}
+
+impl Equirect {
+    /// The texel at column `i` (wrapped) and row `j` (clamped).
+    #[inline]
+    fn at(&self, i: isize, j: isize) -> [f32; 3] {
+        let i = i.rem_euclid(self.width as isize) as usize;
+        let j = j.clamp(0, self.height as isize - 1) as usize;
+        self.texels[j * self.width + i]
+    }
+
+    /// Bilinear radiance at (u, v) ∈ [0, 1]², wrapping in u.
+    pub fn bilinear(&self, u: f32, v: f32) -> [f32; 3] {
+        let x = u * self.width as f32 - 0.5;
+        let y = v * self.height as f32 - 0.5;
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let (i, j) = (x0 as isize, y0 as isize);
+        let t = [
+            self.at(i, j),
+            self.at(i + 1, j),
+            self.at(i, j + 1),
+            self.at(i + 1, j + 1),
+        ];
+        std::array::from_fn(|c| {
+            let a = t[0][c] + (t[1][c] - t[0][c]) * fx;
+            let b = t[2][c] + (t[3][c] - t[2][c]) * fx;
+            a + (b - a) * fy
+        })
+    }
+
+    /// The texel containing (u, v) (the map as a piecewise-constant
+    /// function: what the reference integrates).
+    pub fn nearest(&self, u: f32, v: f32) -> [f32; 3] {
+        let i = ((u * self.width as f32) as isize).min(self.width as isize - 1);
+        let j = (v * self.height as f32) as isize;
+        self.at(i.max(0), j)
+    }
+
+    /// The next mip: 2×2 box (a single column or row is kept as is).
+    fn half(&self) -> Equirect {
+        let (w, h) = ((self.width / 2).max(1), (self.height / 2).max(1));
+        let (sx, sy) = (self.width / w, self.height / h);
+        let mut texels = Vec::with_capacity(w * h);
+        for j in 0..h {
+            for i in 0..w {
+                let mut s = [0.0f32; 3];
+                for dy in 0..sy {
+                    for dx in 0..sx {
+                        let t = self.texels[(j * sy + dy) * self.width + i * sx + dx];
+                        for c in 0..3 {
+                            s[c] += t[c];
+                        }
+                    }
+                }
+                let k = 1.0 / (sx * sy) as f32;
+                texels.push(s.map(|x| x * k));
+            }
+        }
+        Equirect {
+            width: w,
+            height: h,
+            texels,
+        }
+    }
+}
+
+/// Unit map direction → (u, v).
+#[inline]
+pub fn dir_to_uv(d: [f32; 3]) -> (f32, f32) {
+    let u = 0.5 + d[0].atan2(-d[2]) * (0.5 * std::f32::consts::FRAC_1_PI);
+    let v = d[1].clamp(-1.0, 1.0).acos() * std::f32::consts::FRAC_1_PI;
+    (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0))
+}
+
+/// (u, v) → unit map direction.
+#[inline]
+pub fn uv_to_dir(u: f64, v: f64) -> [f64; 3] {
+    let (theta, phi) = (v * std::f64::consts::PI, (u - 0.5) * std::f64::consts::TAU);
+    let s = theta.sin();
+    [s * phi.sin(), theta.cos(), -s * phi.cos()]
+}
+
+/// Octahedral map of a unit direction (y folds): (x, z) / (|x|+|y|+|z|),
+/// the lower half folded over the diagonals, to [0, 1]².
+#[inline(always)]
+fn oct_encode<R: Real>(d: V3<R>) -> (R, R) {
+    let inv = (d.x.abs() + d.y.abs() + d.z.abs())
+        .max(R::splat(1e-30))
+        .rcp();
+    let (px, pz) = (d.x * inv, d.z * inv);
+    let below = d.y.lt(R::ZERO);
+    let sign = |a: R| R::select(a.ge(R::ZERO), R::ONE, -R::ONE);
+    let fx = (R::ONE - pz.abs()) * sign(px);
+    let fz = (R::ONE - px.abs()) * sign(pz);
+    let (x, z) = (R::select(below, fx, px), R::select(below, fz, pz));
+    (x.mul_add(R::HALF, R::HALF), z.mul_add(R::HALF, R::HALF))
+}
+
+/// The inverse of [`oct_encode`] at (s, t) ∈ [0, 1]², unit length.
+fn oct_decode(s: f64, t: f64) -> [f64; 3] {
+    let (x, z) = (2.0 * s - 1.0, 2.0 * t - 1.0);
+    let y = 1.0 - x.abs() - z.abs();
+    let (x, z) = if y < 0.0 {
+        ((1.0 - z.abs()) * x.signum(), (1.0 - x.abs()) * z.signum())
+    } else {
+        (x, z)
+    };
+    let l = (x * x + y * y + z * z).sqrt();
+    [x / l, y / l, z / l]
+}
+
+/// One prefiltered level: a square octahedral map, a plane per channel.
+#[derive(Clone, Debug)]
+struct OctLevel {
+    size: usize,
+    rgb: [Vec<f32>; 3],
+}
+
+impl OctLevel {
+    /// Bilinear radiance at octahedral (s, t), clamped at the edges.
+    #[inline(always)]
+    fn bilinear<R: Real>(&self, s: R, t: R) -> Rgb<R> {
+        let n = self.size as f64;
+        let hi = R::splat(n - 1.0);
+        let x = (s * R::splat(n) - R::HALF).clamp(R::ZERO, hi);
+        let y = (t * R::splat(n) - R::HALF).clamp(R::ZERO, hi);
+        let (x0, y0) = (x.floor(), y.floor());
+        let (fx, fy) = (x - x0, y - y0);
+        let x1 = (x0 + R::ONE).min(hi);
+        let y1 = (y0 + R::ONE).min(hi);
+        let row0 = y0 * R::splat(n);
+        let row1 = y1 * R::splat(n);
+        let (i00, i10, i01, i11) = (row0 + x0, row0 + x1, row1 + x0, row1 + x1);
+        let ch = |p: &[f32]| {
+            let a = R::gather(p, i00);
+            let b = R::gather(p, i10);
+            let c = R::gather(p, i01);
+            let d = R::gather(p, i11);
+            let top = (b - a).mul_add(fx, a);
+            let bot = (d - c).mul_add(fx, c);
+            (bot - top).mul_add(fy, top)
+        };
+        Rgb::new(ch(&self.rgb[0]), ch(&self.rgb[1]), ch(&self.rgb[2]))
+    }
+}
+
+/// The derived data of a map as plain values (the disk cache's form):
+/// the SH coefficients, and each prefiltered level's side and planes.
+pub type Derived = ([[f32; 3]; 9], Vec<(usize, [Vec<f32>; 3])>);
+
+/// A loaded environment map and its derived data.
+#[derive(Clone, Debug)]
+pub struct EnvMap {
+    /// The source, times the intensity, texels clamped.
+    pub source: Equirect,
+    /// cos and sin of the rotation about +Y.
+    rot: [f32; 2],
+    /// Whether the map is seen where no surface is.
+    pub visible: bool,
+    pub method: IblMethod,
+    /// E(n)/π in nine SH coefficients per channel (map frame).
+    sh: [[f32; 3]; 9],
+    levels: Vec<OctLevel>,
+    /// The luminance distribution for the reference (empty until
+    /// prepared, or for an all-black map).
+    pub(crate) sampler: crate::envmap_sample::EnvSampler,
+}
+
+/// Rec. 709 luminance.
+#[inline]
+pub fn luminance(c: [f32; 3]) -> f32 {
+    0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
+}
+
+/// A texel's documented clamping: NaN and negative → 0, above
+/// [`MAX_TEXEL`] (and +inf) → [`MAX_TEXEL`].
+#[inline]
+pub fn clamp_texel(c: f32) -> f32 {
+    if c.is_nan() {
+        0.0
+    } else {
+        c.clamp(0.0, MAX_TEXEL)
+    }
+}
+
+impl EnvMap {
+    /// The map from `source` (texels as decoded: they are clamped here,
+    /// then multiplied by `intensity`); nothing derived yet.
+    pub fn new(
+        mut source: Equirect,
+        intensity: f32,
+        rotate_deg: f32,
+        visible: bool,
+        method: IblMethod,
+    ) -> Result<EnvMap, String> {
+        if source.width < 2 || source.height < 2 {
+            return Err(format!(
+                "the map is {}×{}: an environment map needs at least 2×2 texels",
+                source.width, source.height
+            ));
+        }
+        if source.texels.len() != source.width * source.height {
+            return Err("texel count does not match the size".into());
+        }
+        for t in &mut source.texels {
+            *t = t.map(|c| (clamp_texel(c) * intensity).min(MAX_TEXEL));
+        }
+        let r = rotate_deg.to_radians();
+        Ok(EnvMap {
+            source,
+            rot: [r.cos(), r.sin()],
+            visible,
+            method,
+            sh: [[0.0; 3]; 9],
+            levels: Vec::new(),
+            sampler: Default::default(),
+        })
+    }
+
+    /// A map of one radiance everywhere (tests, furnaces).
+    pub fn uniform(radiance: [f32; 3], method: IblMethod) -> EnvMap {
+        let source = Equirect {
+            width: 64,
+            height: 32,
+            texels: vec![radiance; 64 * 32],
+        };
+        let mut m = EnvMap::new(source, 1.0, 0.0, true, method).expect("64×32 map");
+        m.prepare(&|_, _| {});
+        m
+    }
+
+    /// Builds the derived data; `progress(done, total)` is called as the
+    /// prefiltered levels are made (rows of work).
+    pub fn prepare(&mut self, progress: &(dyn Fn(u64, u64) + Sync)) {
+        self.sh = sh9_irradiance(&self.source);
+        self.levels = prefilter(&self.source, progress);
+        self.sampler = crate::envmap_sample::EnvSampler::new(&self.source);
+    }
+
+    /// The prefiltered levels as (size, rgb planes), for the disk cache.
+    pub fn derived(&self) -> Derived {
+        let levels = self
+            .levels
+            .iter()
+            .map(|l| (l.size, l.rgb.clone()))
+            .collect();
+        (self.sh, levels)
+    }
+
+    /// Installs derived data read back from the cache (as
+    /// [`EnvMap::derived`] gave it); false if its shape is wrong.
+    pub fn set_derived(&mut self, (sh, levels): Derived) -> bool {
+        if levels.len() != PREFILTER_LEVELS
+            || levels
+                .iter()
+                .any(|(n, p)| p.iter().any(|c| c.len() != n * n) || *n == 0)
+        {
+            return false;
+        }
+        self.sh = sh;
+        self.levels = levels
+            .into_iter()
+            .map(|(size, rgb)| OctLevel { size, rgb })
+            .collect();
+        self.sampler = crate::envmap_sample::EnvSampler::new(&self.source);
+        true
+    }
+
+    /// A world direction in the map's frame (turned by −rotate about +Y).
+    #[inline(always)]
+    pub fn to_map<R: Real>(&self, d: V3<R>) -> V3<R> {
+        let (c, s) = (R::splat(self.rot[0] as f64), R::splat(self.rot[1] as f64));
+        V3::new(c.mul_add(d.x, -(s * d.z)), d.y, s.mul_add(d.x, c * d.z))
+    }
+
+    /// A map direction in the world.
+    #[inline]
+    pub fn to_world(&self, d: [f64; 3]) -> [f64; 3] {
+        let (c, s) = (self.rot[0] as f64, self.rot[1] as f64);
+        [c * d[0] + s * d[2], d[1], -s * d[0] + c * d[2]]
+    }
+
+    /// Radiance seen along world direction `d` (bilinear; the background).
+    pub fn radiance(&self, d: [f32; 3]) -> [f32; 3] {
+        let m = self.to_map(V3::new(d[0], d[1], d[2]));
+        let l = (m.x * m.x + m.y * m.y + m.z * m.z).sqrt().max(1e-30);
+        let (u, v) = dir_to_uv([m.x / l, m.y / l, m.z / l]);
+        self.source.bilinear(u, v)
+    }
+
+    /// E(n)/π at world unit normal `n`: the radiance a white Lambertian
+    /// surface reflects. SH ringing below zero is clamped.
+    #[inline(always)]
+    pub fn irradiance_over_pi<R: Real>(&self, n: V3<R>) -> Rgb<R> {
+        let d = self.to_map(n);
+        let y = sh9_basis(d);
+        let ch = |c: usize| {
+            let mut s = R::ZERO;
+            for (k, yk) in y.iter().enumerate() {
+                s = yk.mul_add(R::splat(self.sh[k][c] as f64), s);
+            }
+            s.max(R::ZERO)
+        };
+        Rgb::new(ch(0), ch(1), ch(2))
+    }
+
+    /// The prefiltered radiance around world unit direction `r` at
+    /// perceptual `roughness` (linear between the two nearest levels).
+    #[inline(always)]
+    pub fn prefiltered<R: Real>(&self, r: V3<R>, roughness: R) -> Rgb<R> {
+        let (s, t) = oct_encode(self.to_map(r));
+        let top = (PREFILTER_LEVELS - 1) as f64;
+        let f = (roughness * R::splat(top)).clamp(R::ZERO, R::splat(top));
+        // Each lane's two nearest levels weigh 1 − |f − k|; a level is read
+        // when some lane weighs it (one or two levels per packet, usually).
+        let mut acc = Rgb::zero();
+        for (k, level) in self.levels.iter().enumerate() {
+            let wk = (R::ONE - (f - R::splat(k as f64)).abs()).max(R::ZERO);
+            if wk.gt(R::ZERO).any() {
+                acc = level.bilinear(s, t).mul_add(wk, acc);
+            }
+        }
+        acc
+    }
+}
+
+/// The nine real SH basis functions at unit `d`.
+#[inline(always)]
+fn sh9_basis<R: Real>(d: V3<R>) -> [R; 9] {
+    let (x, y, z) = (d.x, d.y, d.z);
+    let c1 = R::splat(0.488_602_5);
+    let c2 = R::splat(1.092_548_4);
+    [
+        R::splat(0.282_094_8),
+        c1 * y,
+        c1 * z,
+        c1 * x,
+        c2 * x * y,
+        c2 * y * z,
+        R::splat(0.315_391_57) * (R::splat(3.0) * z * z - R::ONE),
+        c2 * x * z,
+        R::splat(0.546_274_2) * (x * x - y * y),
+    ]
+}
+
+/// E(n)/π of `map` in SH9: the radiance projected texel by texel (each
+/// texel's exact solid angle, the basis at its centre), each band times the clamped cosine's factor
+/// Â = π, 2π/3, π/4 \[Ramamoorthi01\], over π.
+fn sh9_irradiance(map: &Equirect) -> [[f32; 3]; 9] {
+    let mut acc = [[0.0f64; 3]; 9];
+    let (w, h) = (map.width, map.height);
+    let dphi = std::f64::consts::TAU / w as f64;
+    let pi = std::f64::consts::PI;
+    for j in 0..h {
+        let v = (j as f64 + 0.5) / h as f64;
+        // A texel's exact solid angle: Δφ (cos θ₀ − cos θ₁).
+        let d_omega =
+            dphi * ((j as f64 / h as f64 * pi).cos() - ((j + 1) as f64 / h as f64 * pi).cos());
+        for i in 0..w {
+            let d = uv_to_dir((i as f64 + 0.5) / w as f64, v);
+            let y = sh9_basis(V3::new(d[0], d[1], d[2]));
+            let t = map.texels[j * w + i];
+            for (k, yk) in y.iter().enumerate() {
+                for c in 0..3 {
+                    acc[k][c] += t[c] as f64 * yk * d_omega;
+                }
+            }
+        }
+    }
+    let band = [
+        1.0,
+        2.0 / 3.0,
+        2.0 / 3.0,
+        2.0 / 3.0,
+        0.25,
+        0.25,
+        0.25,
+        0.25,
+        0.25,
+    ];
+    std::array::from_fn(|k| acc[k].map(|a| (a * band[k]) as f32))
+}
+
+/// Side of the sharpest prefiltered level: half the source's width, a
+/// power of two in 16..=1024.
+fn level0_size(width: usize) -> usize {
+    (width / 2).next_power_of_two().clamp(16, 1024)
+}
+
+/// The prefiltered chain of `map` (module docs).
+fn prefilter(map: &Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLevel> {
+    use rayon::prelude::*;
+    let mut mips = vec![map.clone()];
+    while mips.last().is_some_and(|m| m.width > 1 || m.height > 1) {
+        let next = mips.last().map(Equirect::half).unwrap_or_default();
+        mips.push(next);
+    }
+    let sizes: Vec<usize> = (0..PREFILTER_LEVELS)
+        .map(|k| (level0_size(map.width) >> k).max(16))
+        .collect();
+    let total: u64 = sizes.iter().map(|&n| n as u64).sum();
+    let done = std::sync::atomic::AtomicU64::new(0);
+    // Solid angle of a source texel (its mean over the sphere).
+    let omega_p = 4.0 * std::f64::consts::PI / (map.width * map.height) as f64;
+    sizes
+        .iter()
+        .enumerate()
+        .map(|(k, &n)| {
+            let roughness = k as f64 / (PREFILTER_LEVELS - 1) as f64;
+            // 1e-3: the models' α floor (ALPHA_MIN).
+            let alpha = (roughness * roughness).max(1e-3);
+            let rows: Vec<Vec<[f32; 3]>> = (0..n)
+                .into_par_iter()
+                .map(|j| {
+                    let row = (0..n)
+                        .map(|i| {
+                            let r = oct_decode(
+                                (i as f64 + 0.5) / n as f64,
+                                (j as f64 + 0.5) / n as f64,
+                            );
+                            if k == 0 {
+                                let (u, v) = dir_to_uv(r.map(|x| x as f32));
+                                map.bilinear(u, v)
+                            } else {
+                                ggx_filtered(&mips, r, alpha, omega_p)
+                            }
+                        })
+                        .collect();
+                    let d = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    progress(d + 1, total);
+                    row
+                })
+                .collect();
+            let mut rgb = [vec![0.0; n * n], vec![0.0; n * n], vec![0.0; n * n]];
+            for (j, row) in rows.iter().enumerate() {
+                for (i, t) in row.iter().enumerate() {
+                    for c in 0..3 {
+                        rgb[c][j * n + i] = t[c];
+                    }
+                }
+            }
+            OctLevel { size: n, rgb }
+        })
+        .collect()
+}
+
+/// Radical inverse in base 2 (Hammersley's second coordinate).
+fn radical_inverse(i: u32) -> f64 {
+    i.reverse_bits() as f64 * (1.0 / 4_294_967_296.0)
+}
+
+/// The GGX-weighted radiance around unit `r` with n = v = r: samples h
+/// from D(h) cos θh, l = 2(v·h)h − v, weights n·l \[Karis13\]; each read
+/// trilinearly from the source mip whose texel solid angle matches the
+/// sample's Ωs = 1/(N p(l)), p(l) = D(h)/4.
+fn ggx_filtered(mips: &[Equirect], r: [f64; 3], alpha: f64, omega_p: f64) -> [f32; 3] {
+    let n = V3::new(r[0], r[1], r[2]);
+    let up = if n.y.abs() < 0.999 {
+        V3::new(0.0, 1.0, 0.0)
+    } else {
+        V3::new(1.0, 0.0, 0.0)
+    };
+    let t = up.cross(n).normalize();
+    let b = n.cross(t);
+    let a2 = alpha * alpha;
+    let mut sum = [0.0f64; 3];
+    let mut wsum = 0.0;
+    let top = (mips.len() - 1) as f64;
+    for i in 0..PREFILTER_SAMPLES {
+        let (x1, x2) = (
+            (i as f64 + 0.5) / PREFILTER_SAMPLES as f64,
+            radical_inverse(i),
+        );
+        let cos_h = ((1.0 - x1) / (1.0 + (a2 - 1.0) * x1)).sqrt();
+        let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
+        let phi = std::f64::consts::TAU * x2;
+        let h = t * (sin_h * phi.cos()) + b * (sin_h * phi.sin()) + n * cos_h;
+        let l = h * (2.0 * cos_h) - n;
+        let nl = l.dot(n);
+        if nl <= 0.0 {
+            continue;
+        }
+        let dd = cos_h * cos_h * (a2 - 1.0) + 1.0;
+        let d = a2 / (std::f64::consts::PI * dd * dd);
+        let omega_s = 1.0 / (PREFILTER_SAMPLES as f64 * d * 0.25);
+        let lod = (0.5 * (omega_s / omega_p).log2() + 1.0).clamp(0.0, top);
+        let c = trilinear(mips, [l.x, l.y, l.z], lod);
+        for k in 0..3 {
+            sum[k] += c[k] as f64 * nl;
+        }
+        wsum += nl;
+    }
+    if wsum <= 0.0 {
+        return mips[0].nearest(0.5, 0.5);
+    }
+    sum.map(|s| (s / wsum) as f32)
+}
+
+/// Radiance of unit map direction `d` between mips ⌊lod⌋ and ⌈lod⌉.
+fn trilinear(mips: &[Equirect], d: [f64; 3], lod: f64) -> [f32; 3] {
+    let (u, v) = dir_to_uv(d.map(|x| x as f32));
+    let k0 = lod.floor() as usize;
+    let k1 = (k0 + 1).min(mips.len() - 1);
+    let w = (lod - k0 as f64) as f32;
+    let a = mips[k0].bilinear(u, v);
+    let b = mips[k1].bilinear(u, v);
+    std::array::from_fn(|c| a[c] + (b[c] - a[c]) * w)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn octahedral_round_trip() {
+        for &(s, t) in &[(0.1, 0.2), (0.9, 0.3), (0.5, 0.5), (0.05, 0.95), (0.7, 0.8)] {
+            let d = oct_decode(s, t);
+            let (s2, t2) = oct_encode(V3::new(d[0], d[1], d[2]));
+            assert!(
+                (s - s2).abs() < 1e-9 && (t - t2).abs() < 1e-9,
+                "{s} {t} -> {s2} {t2}"
+            );
+        }
+    }
+
+    #[test]
+    fn equirect_round_trip() {
+        for &(u, v) in &[(0.1, 0.2), (0.9, 0.3), (0.5, 0.5), (0.3, 0.95)] {
+            let d = uv_to_dir(u, v);
+            let (u2, v2) = dir_to_uv(d.map(|x| x as f32));
+            assert!((u - u2 as f64).abs() < 1e-5 && (v - v2 as f64).abs() < 1e-5);
+        }
+        // The centre column looks down −Z, the top row up +Y.
+        let d = uv_to_dir(0.5, 0.5);
+        assert!((d[2] + 1.0).abs() < 1e-12);
+        assert!((uv_to_dir(0.3, 0.0)[1] - 1.0).abs() < 1e-12);
+    }
+
+    /// A uniform map: every level and the irradiance give its radiance.
+    #[test]
+    fn uniform_map_prefilters_to_itself() {
+        let m = EnvMap::uniform([0.5, 1.0, 2.0], IblMethod::SplitSum);
+        for &r in &[0.0, 0.1, 0.5, 0.77, 1.0] {
+            for d in [
+                V3::new(0.0, 1.0, 0.0),
+                V3::new(0.6, -0.8, 0.0),
+                V3::new(0.0, 0.0, -1.0),
+            ] {
+                let p = m.prefiltered(d, r);
+                let e = m.irradiance_over_pi(d);
+                for (got, want) in [(p.x, 0.5), (p.y, 1.0), (p.z, 2.0), (e.x, 0.5), (e.z, 2.0)] {
+                    assert!((got - want).abs() < 2e-3 * want, "{got} vs {want} at r {r}");
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,195 @@
+//! Environment map files: Radiance RGBE (`.hdr`) and OpenEXR, decoded by
+//! `image` into linear RGB, with the checks that keep a bad file from
+//! costing memory or reaching a pixel as NaN:
+//!
+//! - the format is sniffed from the bytes: anything but Radiance HDR or
+//!   OpenEXR is refused;
+//! - the size is read from the header and checked before any texel is
+//!   decoded: at least 2×2, at most [`MAX_SIDE`] per side, and the
+//!   decoded map with its derived data within the memory budget
+//!   (memory.rs);
+//! - a truncated or corrupt file is the decoder's error, with the file
+//!   named;
+//! - texels: NaN and negative values become 0, values above
+//!   [`specula_raster::envmap::MAX_TEXEL`] (and +inf) become that
+//!   (envmap.rs), so every derived sum stays finite.
+//!
+//! The derived data (prefiltered chain and SH irradiance) is kept in the
+//! table cache (table_cache.rs), keyed by a hash of the file's bytes and
+//! the settings it depends on.
+
+use specula_raster::envmap::{EnvMap, Equirect, IblMethod, PREFILTER_LEVELS};
+use std::io::Cursor;
+
+/// Largest side of a map: 32768 texels.
+pub const MAX_SIDE: u32 = 32768;
+
+/// Bytes per source texel from decode to the end of a frame: the decoded
+/// RGBA f32 image, our RGB copy, its mips, the sampling distribution.
+const TEXEL_BYTES: u64 = 16 + 12 + 4 + 12;
+
+/// Bytes of the prefiltered chain at its largest (1024² level 0).
+const PREFILTER_BYTES: u64 = 1024 * 1024 * 12 * 4 / 3 + (1 << 20);
+
+/// What a map of `w`×`h` texels costs in memory.
+pub fn env_map_bytes(w: u64, h: u64) -> u64 {
+    w.saturating_mul(h)
+        .saturating_mul(TEXEL_BYTES)
+        .saturating_add(PREFILTER_BYTES)
+}
+
+/// The settings of a map besides its file.
+pub struct EnvSettings {
+    pub intensity: f32,
+    pub rotate_deg: f32,
+    pub visible: bool,
+    pub method: IblMethod,
+}
+
+/// Decodes an environment map file's bytes (`name` in messages).
+pub fn decode_equirect(name: &str, bytes: &[u8]) -> Result<Equirect, String> {
+    let reader = || {
+        image::ImageReader::new(Cursor::new(bytes))
+            .with_guessed_format()
+            .map_err(|e| format!("{name}: {e}"))
+    };
+    match reader()?.format() {
+        Some(image::ImageFormat::Hdr | image::ImageFormat::OpenExr) => {}
+        Some(f) => {
+            return Err(format!(
+                "{name}: a {f:?} image; an environment map is a Radiance HDR (.hdr) or OpenEXR (.exr) file of linear radiance"
+            ))
+        }
+        None => {
+            return Err(format!(
+                "{name}: not a Radiance HDR (.hdr) or OpenEXR (.exr) file"
+            ))
+        }
+    }
+    let (w, h) = reader()?
+        .into_dimensions()
+        .map_err(|e| format!("{name}: cannot read the header: {e}"))?;
+    if w < 2 || h < 2 {
+        return Err(format!(
+            "{name}: the map is {w}×{h}: an environment map needs at least 2×2 texels"
+        ));
+    }
+    if w > MAX_SIDE || h > MAX_SIDE {
+        return Err(format!(
+            "{name}: the header says {w}×{h}: an environment map is at most {MAX_SIDE} texels on a side"
+        ));
+    }
+    crate::memory::reserve(
+        &format!("environment map {name} ({w}×{h})"),
+        env_map_bytes(w as u64, h as u64),
+    )?;
+    let mut r = reader()?;
+    r.no_limits();
+    let img = r
+        .decode()
+        .map_err(|e| format!("{name}: {e}"))?
+        .into_rgb32f();
+    let (w, h) = (img.width() as usize, img.height() as usize);
+    let texels = img
+        .into_raw()
+        .chunks_exact(3)
+        .map(|c| [c[0], c[1], c[2]])
+        .collect();
+    Ok(Equirect {
+        width: w,
+        height: h,
+        texels,
+    })
+}
+
+/// The map from a file's bytes with its derived data: from the table
+/// cache when it holds them, else built (with a progress bar on stderr
+/// for maps of a million texels and more) and stored there.
+pub fn load_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, String> {
+    let source = decode_equirect(name, bytes)?;
+    let texels = source.width * source.height;
+    let mut map = EnvMap::new(source, s.intensity, s.rotate_deg, s.visible, s.method)
+        .map_err(|e| format!("{name}: {e}"))?;
+    let key = cache_key(bytes, s.intensity);
+    if let Some(derived) = load_cached(&key) {
+        if map.set_derived(derived) {
+            return Ok(map);
+        }
+    }
+    if texels >= 1 << 20 {
+        let bar = indicatif::ProgressBar::new(1);
+        bar.set_style(
+            indicatif::ProgressStyle::with_template("prefiltering {msg} {bar:30} {percent}%")
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+        );
+        bar.set_message(name.to_string());
+        map.prepare(&|done, total| {
+            bar.set_length(total);
+            bar.set_position(done);
+        });
+        bar.finish_and_clear();
+    } else {
+        map.prepare(&|_, _| {});
+    }
+    store_cached(&key, &map);
+    Ok(map)
+}
+
+/// The cache name of a map's derived data: the prefilter format's
+/// version, a hash of the file and the intensity (the rotation and the
+/// rest are applied at lookup).
+fn cache_key(bytes: &[u8], intensity: f32) -> String {
+    use sha2::{Digest, Sha256};
+    let mut h = Sha256::new();
+    h.update(bytes);
+    h.update(intensity.to_le_bytes());
+    let d = h.finalize();
+    let hex: String = d[..12].iter().map(|b| format!("{b:02x}")).collect();
+    format!("envmap-v1-{hex}")
+}
+
+/// Layout of a cached file (f32 little-endian): the 27 SH values, then
+/// per level its side and its three planes.
+fn load_cached(key: &str) -> Option<specula_raster::envmap::Derived> {
+    let dir = crate::table_cache::cache_dir()?;
+    let bytes = std::fs::read(dir.join(format!("{key}.f32"))).ok()?;
+    if bytes.len() % 4 != 0 {
+        return None;
+    }
+    let v: Vec<f32> = bytes
+        .chunks_exact(4)
+        .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+        .collect();
+    if v.iter().any(|x| !x.is_finite()) || v.len() < 27 {
+        return None;
+    }
+    let sh = std::array::from_fn(|k| [v[3 * k], v[3 * k + 1], v[3 * k + 2]]);
+    let mut at = 27;
+    let mut levels = Vec::new();
+    for _ in 0..PREFILTER_LEVELS {
+        let n = *v.get(at)? as usize;
+        at += 1;
+        let len = n.checked_mul(n)?;
+        let plane = |at: usize| v.get(at..at + len).map(<[f32]>::to_vec);
+        let rgb = [plane(at)?, plane(at + len)?, plane(at + 2 * len)?];
+        at += 3 * len;
+        levels.push((n, rgb));
+    }
+    (at == v.len()).then_some((sh, levels))
+}
+
+fn store_cached(key: &str, map: &EnvMap) {
+    let Some(dir) = crate::table_cache::cache_dir() else {
+        return;
+    };
+    let (sh, levels) = map.derived();
+    let mut v: Vec<f32> = sh.iter().flatten().copied().collect();
+    for (n, rgb) in &levels {
+        v.push(*n as f32);
+        for p in rgb {
+            v.extend_from_slice(p);
+        }
+    }
+    use specula_core::kulla_conty::TableStore;
+    crate::table_cache::DirStore { dir }.save(key, &v);
+}
