@@ -121,6 +121,7 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
             let env = ShadeEnv {
                 lights: std::slice::from_ref(&light),
                 environment: None,
+                shadows: None,
             };
             let mut got = 0.0;
             let pv = V3::new(p[0], p[1], p[2]);
@@ -154,6 +155,7 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
             let env2 = ShadeEnv {
                 lights: std::slice::from_ref(&two),
                 environment: None,
+                shadows: None,
             };
             let ln = f64::sqrt(nq.iter().map(|v| v * v).sum::<f64>());
             let nb = nq.map(|v| v / ln);
@@ -192,6 +194,7 @@ fn spot_lights_give_the_extensions_falloff() {
     let env = ShadeEnv {
         lights: &lights,
         environment: None,
+        shadows: None,
     };
     let scale = 1.0 / (inner.cos() - outer.cos()).max(0.001);
     for p in [

@@ -69,6 +69,10 @@ pub struct ShadeEnv<'a> {
     pub lights: &'a [Light],
     /// Uniform environment radiance, if the scene has one.
     pub environment: Option<[f32; 3]>,
+    /// The frame's shadow maps, when some light has shadows: a light's
+    /// contribution is multiplied by its factor
+    /// ([`crate::shadow::LightShadow::visibility_lanes`]).
+    pub shadows: Option<&'a crate::shadow::ShadowMaps>,
 }
 
 /// A shader written once over the lane type; see the module docs.

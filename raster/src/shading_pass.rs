@@ -147,6 +147,7 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
     let env = ShadeEnv {
         lights: &scene.lights,
         environment: scene.environment,
+        shadows: ctx.shadows,
     };
     let (tx, ty) = target.tile_origin(t);
     let background = scene.environment.unwrap_or(scene.background);

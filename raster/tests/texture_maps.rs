@@ -412,6 +412,7 @@ fn a_lambert_material_refuses_a_metallic_roughness_map() {
     let env = ShadeEnv {
         lights: &[] as &[Light],
         environment: None,
+        shadows: None,
     };
     let got: Rgb<f32x8> = lit.shade(&input, &env);
     let em = lit.maps().emissive.as_ref().unwrap();
