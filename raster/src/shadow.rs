@@ -476,20 +476,19 @@ impl Face {
         top * (1.0 - fy) + bottom * fy
     }
 
-    /// Mean of bilinear comparisons over a 5 × 5 grid of half-width
+    /// Mean of bilinear comparisons over a 3 × 3 grid of half-width
     /// `radius` texels around (u, v).
     fn pcf(&self, u: f32, v: f32, d: f32, radius: f32) -> f32 {
         if radius <= 0.0 {
             return self.compare_bilinear(u, v, d);
         }
-        let step = radius / 2.0;
         let mut sum = 0.0;
-        for j in -2..=2 {
-            for i in -2..=2 {
-                sum += self.compare_bilinear(u + i as f32 * step, v + j as f32 * step, d);
+        for j in -1..=1 {
+            for i in -1..=1 {
+                sum += self.compare_bilinear(u + i as f32 * radius, v + j as f32 * radius, d);
             }
         }
-        sum / 25.0
+        sum / 9.0
     }
 
     /// Mean of bilinear comparisons over the taps of a 7 × 7 grid that
