@@ -104,6 +104,8 @@ pub struct FrameTimes {
     pub bin: f64,
     pub raster: f64,
     pub shade: f64,
+    /// The shadow maps' depth passes.
+    pub shadow: f64,
     /// The post stages: supersampling resolve + exposure + tone mapping +
     /// sRGB encode (in memory).
     pub post: f64,
@@ -132,6 +134,8 @@ pub struct RunStats {
     pub no_samples: u64,
     pub raster_triangles: u64,
     pub pixels_shaded: u64,
+    /// Shadow-map depth passes per frame.
+    pub shadow_passes: u32,
     /// One entry per repeat.
     pub frame_ms: Vec<f64>,
     pub frames: Vec<FrameTimes>,
@@ -250,6 +254,7 @@ pub fn render_scene(
                 bin: t.bin,
                 raster: t.raster,
                 shade: t.shade,
+                shadow: t.shadow,
                 post,
                 frame: total,
             });
@@ -318,6 +323,7 @@ fn run_stats(
         no_samples: c.no_samples,
         raster_triangles: s.raster_triangles,
         pixels_shaded: s.pixels_shaded,
+        shadow_passes: s.shadow_passes,
         mpixels_per_s: target.pixel_count() as f64 / (median(&frame_ms) * 1e3),
         frame_ms,
         frames,
@@ -362,10 +368,17 @@ impl RunStats {
             ("clip+setup", col(|t| t.setup)),
             ("bin", col(|t| t.bin)),
             ("raster", col(|t| t.raster)),
+            ("shadow", col(|t| t.shadow)),
             ("shade", col(|t| t.shade)),
             ("post", col(|t| t.post)),
         ] {
+            if name == "shadow" && self.shadow_passes == 0 {
+                continue;
+            }
             s += &format!("  {name:<11}{v:9.2}");
+            if name == "shadow" {
+                s += &format!("   ({} depth passes)", self.shadow_passes);
+            }
             if name == "post" && self.post_in_shading {
                 s += "   (exposure, tone map, sRGB encode ran inside shade)";
             }

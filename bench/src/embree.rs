@@ -140,6 +140,41 @@ impl EmbreeScene {
         hits
     }
 
+    /// Shadow rays (`rtcOccluded1`): for each (origin, unit direction,
+    /// tnear, tfar), whether some triangle lies between tnear and tfar
+    /// along it; in parallel in the calling pool.
+    pub fn occluded(&self, rays: &[([f32; 3], [f32; 3], f32, f32)]) -> Vec<bool> {
+        rays.par_chunks(1024)
+            .flat_map_iter(|chunk| {
+                with_ftz_daz(|| {
+                    let mut ctx = embree::IntersectContext::incoherent();
+                    (chunk.iter())
+                        .map(|&(o, d, tnear, tfar)| {
+                            let mut ray = RTCRay {
+                                org_x: o[0],
+                                org_y: o[1],
+                                org_z: o[2],
+                                tnear,
+                                dir_x: d[0],
+                                dir_y: d[1],
+                                dir_z: d[2],
+                                time: 0.0,
+                                tfar,
+                                mask: u32::MAX,
+                                id: 0,
+                                flags: 0,
+                            };
+                            // SAFETY: valid committed scene, context and ray.
+                            unsafe { rtcOccluded1(self.scene, &mut ctx, &mut ray) };
+                            // Embree sets tfar to −inf when the ray is blocked.
+                            ray.tfar == f32::NEG_INFINITY
+                        })
+                        .collect::<Vec<_>>()
+                })
+            })
+            .collect()
+    }
+
     /// One `rtcIntersect1` per pixel, rows in parallel in the calling pool.
     pub fn trace_single(&self, view: &View, near: f32, far: f32) -> Hits {
         let o = view.eye.to_array();

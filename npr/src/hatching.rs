@@ -17,7 +17,7 @@
 //!    any distance.
 //! 4. Colour: ink + (paper − ink) × brightness (brightness 1 is paper).
 
-use crate::lights::for_each_light;
+use crate::lights::for_each_light_shadowed;
 use crate::tam::TamTexture;
 use specula_core::{Real, Rgb};
 use specula_raster::texture::{Filter, Sampler, Wrap};
@@ -62,7 +62,7 @@ impl Hatching {
     pub(crate) fn luminance<R: Real>(input: &ShadeInput<R>, env: &ShadeEnv) -> R {
         let frag = input.frag;
         let mut e_sum = Rgb::zero();
-        for_each_light(frag.p, env, |wi, e| {
+        for_each_light_shadowed(input, env, |wi, e| {
             e_sum += e * frag.n.dot(wi).max(R::ZERO);
         });
         let mut l = e_sum * R::FRAC_1_PI;

@@ -16,7 +16,7 @@ use specula_core::light::{
     range_window, spot_attenuation, spot_scale_offset, Light, MAX_POLYGON_VERTICES,
 };
 use specula_core::{Real, Rgb, V3};
-use specula_raster::ShadeEnv;
+use specula_raster::{ShadeEnv, ShadeInput};
 
 /// Squared distances below this are treated as this (as lit.rs does).
 const MIN_DIST2: f64 = 1e-8;
@@ -93,6 +93,29 @@ pub fn for_each_light<R: Real>(p: V3<R>, env: &ShadeEnv, mut f: impl FnMut(V3<R>
             }
         }
     }
+}
+
+/// [`for_each_light`] at a packet, each light's irradiance times its
+/// shadow factor at the packet's points where it has a shadow map.
+#[inline(always)]
+pub fn for_each_light_shadowed<R: Real>(
+    input: &ShadeInput<R>,
+    env: &ShadeEnv,
+    mut f: impl FnMut(V3<R>, Rgb<R>),
+) {
+    let frag = input.frag;
+    let Some(shadows) = env.shadows else {
+        return for_each_light(frag.p, env, f);
+    };
+    let mut k = 0;
+    for_each_light(frag.p, env, |wi, e| {
+        let e = match shadows.light(k) {
+            Some(s) => e * s.visibility_lanes(&frag.p, &frag.n, input.lanes),
+            None => e,
+        };
+        k += 1;
+        f(wi, e)
+    });
 }
 
 /// The direction of the vector irradiance of a unit-radiance polygon at

@@ -16,7 +16,7 @@
 //! (`ToonParams`) are filled by its maps the way a physically based
 //! model's are (raster's maps.rs).
 
-use crate::lights::for_each_light;
+use crate::lights::for_each_light_shadowed;
 use specula_core::{LaneParams, Real, Rgb};
 use specula_raster::maps::ParamMaps;
 use specula_raster::{PacketShader, ShadeEnv, ShadeInput};
@@ -128,7 +128,7 @@ impl PacketShader for Toon {
         let base = params.base_color;
         let diffuse = base * R::FRAC_1_PI;
         let mut acc = Rgb::zero();
-        for_each_light(frag.p, env, |wi, e| {
+        for_each_light_shadowed(input, env, |wi, e| {
             let cos = n.dot(wi);
             acc += diffuse.mul_elem(e).mul_elem(self.ramp.eval(cos));
             if let Some(s) = &self.specular {

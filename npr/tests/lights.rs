@@ -122,6 +122,7 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
                 lights: std::slice::from_ref(&light),
                 environment: None,
                 env_map: None,
+                shadows: None,
             };
             let mut got = 0.0;
             let pv = V3::new(p[0], p[1], p[2]);
@@ -156,6 +157,7 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
                 lights: std::slice::from_ref(&two),
                 environment: None,
                 env_map: None,
+                shadows: None,
             };
             let ln = f64::sqrt(nq.iter().map(|v| v * v).sum::<f64>());
             let nb = nq.map(|v| v / ln);
@@ -195,6 +197,7 @@ fn spot_lights_give_the_extensions_falloff() {
         lights: &lights,
         environment: None,
         env_map: None,
+        shadows: None,
     };
     let scale = 1.0 / (inner.cos() - outer.cos()).max(0.001);
     for p in [

@@ -18,6 +18,7 @@ use crate::scene::SceneData;
 use crate::setup::{SetupContext, SetupCounts, TriPlanes};
 use crate::setup_x4::{Vertices4, LANES};
 use crate::shading_pass::{shade_tile, ShadeTargets};
+use crate::shadow::ShadowMaps;
 use crate::target::{Target, VisBuffer, MISS, TILE_PIXELS};
 use rayon::prelude::*;
 use specula_core::f32x8;
@@ -32,6 +33,8 @@ pub struct PassTimes {
     pub bin: f64,
     pub raster: f64,
     pub shade: f64,
+    /// The shadow maps' depth passes (all stages).
+    pub shadow: f64,
 }
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -42,6 +45,8 @@ pub struct FrameStats {
     pub raster_triangles: u64,
     /// Pixels (samples) covered by a triangle and shaded.
     pub pixels_shaded: u64,
+    /// Shadow-map depth passes drawn (a cube map is 6).
+    pub shadow_passes: u32,
 }
 
 /// The visibility pass's output, reusable from frame to frame: passing the
@@ -64,6 +69,8 @@ pub struct Visibility {
     /// The frames' instances of the scene's vertex stages, each beside the
     /// stage it was made from (held, so its address names it).
     stages: Vec<(Arc<dyn VertexStage>, Box<dyn VertexStage>)>,
+    /// The shadowed lights' maps of this frame (shadow.rs).
+    pub shadows: ShadowMaps,
 }
 
 impl Visibility {
@@ -105,8 +112,69 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         occluder: DepthBounds::default(),
         tile_bounds: Vec::new(),
         stages: Vec::new(),
+        shadows: ShadowMaps::default(),
     };
     visibility_into(scene, target, &mut v, stats);
+    v
+}
+
+/// A depth-only pass of the scene's main triangles seen through
+/// `view_proj` (both faces drawn) into `target`, in `out` (made on first
+/// use, reused after); its geometry time goes to `stats.times.shadow`.
+pub(crate) fn depth_pass<'a>(
+    scene: &SceneData,
+    target: &Target,
+    view_proj: glam::Mat4,
+    out: &'a mut Option<Visibility>,
+    stats: &mut FrameStats,
+) -> &'a Visibility {
+    let view = View {
+        view_proj,
+        eye: glam::Vec3::ZERO,
+        right: glam::Vec3::X,
+        up: glam::Vec3::Y,
+        forward: glam::Vec3::NEG_Z,
+        tan_x: 1.0,
+        tan_y: 1.0,
+        width: target.width as f32,
+        height: target.height as f32,
+    };
+    let v = out.get_or_insert_with(|| Visibility {
+        vis: VisBuffer::new(target),
+        planes: Vec::new(),
+        view: view.clone(),
+        clip: Vec::new(),
+        chunks: Vec::new(),
+        occluder: DepthBounds::default(),
+        tile_bounds: Vec::new(),
+        stages: Vec::new(),
+        shadows: ShadowMaps::default(),
+    });
+    if v.vis.id.len() != target.buffer_len() {
+        v.vis = VisBuffer::new(target);
+    }
+    v.view = view;
+    let triangles = scene.geometry.first().map_or(0..0, |p| p.triangles.clone());
+    let stage = match v.stages.first() {
+        Some((s, _)) => s.clone(),
+        None => Arc::new(crate::geometry::Project),
+    };
+    let pass = GeometryPass {
+        name: "shadow".into(),
+        vertex: stage,
+        cull: Cull::None,
+        triangles,
+        id_base: 0,
+        material: None,
+    };
+    v.planes
+        .resize(pass.ids().end as usize, TriPlanes::default());
+    let mut own = FrameStats::default();
+    // The first pass of its buffer: it clears it and tests against nothing.
+    geometry_pass(scene, target, &pass, 0, false, &mut true, v, &mut own);
+    let t = own.times;
+    stats.times.shadow += t.vertex + t.setup + t.bin + t.raster;
+    stats.shadow_passes += 1;
     v
 }
 
@@ -153,6 +221,11 @@ pub fn visibility_into(
     if scene.geometry.is_empty() {
         out.vis.depth.fill(0.0);
         out.vis.id.fill(MISS);
+    }
+    if scene.shadows.iter().any(Option::is_some) {
+        out.shadows.render(scene, &out.view, stats);
+    } else if out.shadows.active().is_some() {
+        out.shadows = ShadowMaps::default();
     }
 }
 
@@ -399,7 +472,8 @@ fn shade_impl(
         "frame buffers are for another target"
     );
     let t = Instant::now();
-    let ctx = ResolveContext::new(scene, &v.planes, &v.view);
+    let mut ctx = ResolveContext::new(scene, &v.planes, &v.view);
+    ctx.shadows = v.shadows.active();
     let FrameBuffers {
         color,
         depth,

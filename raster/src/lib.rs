@@ -37,6 +37,7 @@ pub mod setup;
 mod setup_x4;
 mod shader;
 mod shading_pass;
+pub mod shadow;
 pub mod target;
 pub mod texture;
 mod unlit;

@@ -17,6 +17,7 @@ use crate::envmap_sample::{reference_radiance, seed_of};
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
+use crate::shadow::ShadowMaps;
 use crate::texture::Filter;
 use specula_core::light::{
     range_window, spot_attenuation, spot_scale_offset, AreaMethod, Light, PolygonLocal,
@@ -117,6 +118,10 @@ impl<R: Real> LightLoop<'_, '_, R> {
         let prepared = brdf.prepare_with(pixel, frame.to_local(frag.wo));
         let mut acc = Rgb::zero();
         let mut rest = self.env.lights;
+        if let Some(shadows) = self.env.shadows {
+            acc = shadowed_lights(brdf, self.maps, self.input, rest, shadows);
+            rest = &[];
+        }
         while let [light, tail @ ..] = rest {
             // Only models with B::POLYGON_LIGHTS meet polygon lights
             // (`check_lights`); the constant folds this test away for the
@@ -124,7 +129,7 @@ impl<R: Real> LightLoop<'_, '_, R> {
             // out-of-line loop that makes the polygons' per-pixel state
             // once for all of them.
             if B::POLYGON_LIGHTS && matches!(light, Light::Polygon { .. }) {
-                acc += lights_from_polygon(brdf, self.maps, self.input, rest);
+                acc += lights_from_polygon(brdf, self.maps, self.input, rest, true);
                 break;
             }
             acc = add_delta_light(brdf, &prepared, frag, frame, light, acc);
@@ -347,6 +352,9 @@ fn add_delta_light<B: Brdf, R: Real>(
 /// (the same values, bit for bit) rather than passed by reference: a
 /// reference made the light loop store them to memory in every call,
 /// polygon lights or not.
+///
+/// With `delta` false the delta lights among `lights` are left out (the
+/// shadowed path shades them itself).
 #[inline(never)]
 #[cold]
 fn lights_from_polygon<B: Brdf, R: Real>(
@@ -354,6 +362,7 @@ fn lights_from_polygon<B: Brdf, R: Real>(
     maps: &ParamMaps,
     input: &ShadeInput<R>,
     lights: &[Light],
+    delta: bool,
 ) -> Rgb<R> {
     let (frag, frame) = (input.frag, &maps.frame(input));
     let (params, pixel) = pixel_at(brdf, maps, input);
@@ -373,7 +382,9 @@ fn lights_from_polygon<B: Brdf, R: Real>(
             method,
         } = light
         else {
-            acc = add_delta_light(brdf, prepared, frag, frame, light, acc);
+            if delta {
+                acc = add_delta_light(brdf, prepared, frag, frame, light, acc);
+            }
             continue;
         };
         poly.len = vertices.len();
@@ -391,6 +402,48 @@ fn lights_from_polygon<B: Brdf, R: Real>(
             }
         };
         acc += e.mul_elem(V3::from_f32(*radiance));
+    }
+    acc
+}
+
+/// The reflected radiance of `lights` when some have shadow maps: each
+/// delta light's part times its shadow factor at the packet's points
+/// (polygon lights unshadowed). Out of line, like [`lights_from_polygon`],
+/// so scenes without shadows keep the light loop as it was; the
+/// parameters, the frame and the prepared view are made again here.
+#[inline(never)]
+#[cold]
+fn shadowed_lights<B: Brdf, R: Real>(
+    brdf: &B,
+    maps: &ParamMaps,
+    input: &ShadeInput<R>,
+    lights: &[Light],
+    shadows: &ShadowMaps,
+) -> Rgb<R> {
+    let (frag, frame) = (input.frag, &maps.frame(input));
+    let (_, pixel) = pixel_at(brdf, maps, input);
+    let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
+    let mut acc = Rgb::zero();
+    let mut polygons = false;
+    for (k, light) in lights.iter().enumerate() {
+        if matches!(light, Light::Polygon { .. }) {
+            polygons = true;
+            continue;
+        }
+        acc = match shadows.light(k) {
+            Some(shadow) => {
+                let part = add_delta_light(brdf, prepared, frag, frame, light, Rgb::zero());
+                let n = frag.n;
+                part.mul_elem_add(
+                    V3::splat(shadow.visibility_lanes(&frag.p, &n, input.lanes)),
+                    acc,
+                )
+            }
+            None => add_delta_light(brdf, prepared, frag, frame, light, acc),
+        };
+    }
+    if B::POLYGON_LIGHTS && polygons {
+        acc += lights_from_polygon(brdf, maps, input, lights, false);
     }
     acc
 }

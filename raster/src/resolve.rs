@@ -24,6 +24,8 @@ pub struct ResolveContext<'a> {
     /// 2 / width and 2 / height of the view (pixel → NDC), as `resolve`
     /// rounds them: divided once here instead of in every packet.
     ndc_scale: [f32; 2],
+    /// The frame's shadow maps, when some light has shadows.
+    pub shadows: Option<&'a crate::shadow::ShadowMaps>,
 }
 
 impl<'a> ResolveContext<'a> {
@@ -44,6 +46,7 @@ impl<'a> ResolveContext<'a> {
                 (2.0 / view.width as f64) as f32,
                 (2.0 / view.height as f64) as f32,
             ],
+            shadows: None,
         }
     }
 }

@@ -3,6 +3,7 @@
 use crate::camera::Camera;
 use crate::geometry::{validate_passes, GeometryPass};
 use crate::shader::Material;
+use crate::shadow::ShadowSettings;
 use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
 
@@ -26,6 +27,9 @@ pub struct SceneData {
     /// [`GeometryPass::main`] here.
     pub geometry: Vec<GeometryPass>,
     pub lights: Vec<Light>,
+    /// Shadow settings per light (`lights` order; `None`: no shadow), or
+    /// empty when no light has shadows.
+    pub shadows: Vec<Option<ShadowSettings>>,
     /// Uniform environment radiance, lighting every surface and seen where
     /// no surface is.
     pub environment: Option<[f32; 3]>,
@@ -75,6 +79,18 @@ impl SceneData {
             ));
         }
         validate_passes(&self.geometry, self.triangles.len(), nm)?;
+        if !self.shadows.is_empty() && self.shadows.len() != self.lights.len() {
+            return Err(format!(
+                "{} shadow settings for {} lights",
+                self.shadows.len(),
+                self.lights.len()
+            ));
+        }
+        for (k, s) in self.shadows.iter().enumerate() {
+            if let Some(s) = s {
+                s.check().map_err(|e| format!("light {}: {e}", k + 1))?;
+            }
+        }
         for m in &self.materials {
             m.shader
                 .check_lights(&self.lights)

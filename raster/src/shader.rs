@@ -72,6 +72,10 @@ pub struct ShadeEnv<'a> {
     /// The environment map, if the scene has one (then `environment` is
     /// `None`).
     pub env_map: Option<&'a crate::envmap::EnvMap>,
+    /// The frame's shadow maps, when some light has shadows: a light's
+    /// contribution is multiplied by its factor
+    /// ([`crate::shadow::LightShadow::visibility_lanes`]).
+    pub shadows: Option<&'a crate::shadow::ShadowMaps>,
 }
 
 /// A shader written once over the lane type; see the module docs.

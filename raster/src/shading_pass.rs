@@ -173,6 +173,7 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
         lights: &scene.lights,
         environment: scene.environment,
         env_map: scene.env_map.as_deref(),
+        shadows: ctx.shadows,
     };
     let (tx, ty) = target.tile_origin(t);
     let background = scene.environment.unwrap_or(scene.background);

@@ -12,6 +12,7 @@ use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
 use specula_core::light::Light;
 use specula_core::models::MetallicRoughness;
 use specula_core::Model;
+use specula_raster::shadow::{ShadowFilter, ShadowSettings};
 use specula_raster::{Camera, SceneData};
 use specula_raster::{Lit, Material};
 use std::collections::{BTreeMap, HashMap, HashSet};
@@ -346,6 +347,7 @@ impl<'a> SceneBuilder<'a> {
                 materials: Vec::new(),
                 geometry: Vec::new(),
                 lights: Vec::new(),
+                shadows: Vec::new(),
                 environment: None,
                 env_map: None,
                 background,
@@ -644,7 +646,15 @@ impl<'a> SceneBuilder<'a> {
     ) -> Result<(), String> {
         for (i, l) in descs.iter().enumerate() {
             let light = self.build_light(i, l, area)?;
+            let shadow = build_shadow(i, l)?;
+            if let Some(s) = &shadow {
+                crate::memory::reserve(&format!("light[{i}]'s shadow maps"), s.bytes(&light))?;
+            }
             self.data.lights.push(light);
+            self.data.shadows.push(shadow);
+        }
+        if self.data.shadows.iter().all(Option::is_none) {
+            self.data.shadows.clear();
         }
         Ok(())
     }
@@ -661,6 +671,7 @@ impl<'a> SceneBuilder<'a> {
                 position,
                 intensity,
                 range,
+                ..
             } => {
                 check_point(&format!("{field}.position"), *position)?;
                 checks::radiometric(&format!("{field}.intensity"), *intensity)?;
@@ -678,6 +689,7 @@ impl<'a> SceneBuilder<'a> {
                 inner_cone,
                 outer_cone,
                 range,
+                ..
             } => {
                 check_point(&format!("{field}.position"), *position)?;
                 let d = crate::validate::direction(&format!("{field}.direction"), *direction)?;
@@ -701,6 +713,7 @@ impl<'a> SceneBuilder<'a> {
             LightDesc::Directional {
                 direction,
                 irradiance,
+                ..
             } => {
                 checks::radiometric(&format!("{field}.irradiance"), *irradiance)?;
                 let d = crate::validate::direction(&format!("{field}.direction"), *direction)?;
@@ -891,4 +904,61 @@ fn has_sheen(m: &Material) -> bool {
         .as_any()
         .downcast_ref::<Lit>()
         .is_some_and(|l| matches!(l.model(), Model::Gltf(g) if g.has_sheen()))
+}
+
+/// Light `i`'s shadow settings, checked (`None`: no shadows).
+fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, String> {
+    let (shadows, map_size, bias, normal_bias, filter_radius, light_size) = match l {
+        LightDesc::Point {
+            shadows,
+            shadow_map_size,
+            bias,
+            normal_bias,
+            filter_radius,
+            light_size,
+            ..
+        }
+        | LightDesc::Spot {
+            shadows,
+            shadow_map_size,
+            bias,
+            normal_bias,
+            filter_radius,
+            light_size,
+            ..
+        }
+        | LightDesc::Directional {
+            shadows,
+            shadow_map_size,
+            bias,
+            normal_bias,
+            filter_radius,
+            light_size,
+            ..
+        } => (
+            *shadows,
+            *shadow_map_size,
+            *bias,
+            *normal_bias,
+            *filter_radius,
+            *light_size,
+        ),
+        LightDesc::Polygon { .. } => return Ok(None),
+    };
+    let filter = match shadows {
+        ShadowsDesc::None => return Ok(None),
+        ShadowsDesc::Hard => ShadowFilter::Hard,
+        ShadowsDesc::Pcf => ShadowFilter::Pcf,
+        ShadowsDesc::Pcss => ShadowFilter::Pcss,
+    };
+    let s = ShadowSettings {
+        filter,
+        map_size,
+        bias,
+        normal_bias,
+        filter_radius,
+        light_size,
+    };
+    s.check().map_err(|e| format!("light[{i}].{e}"))?;
+    Ok(Some(s))
 }

@@ -271,6 +271,25 @@ pub(super) enum LightDesc {
         /// Distance at which the light's smooth cutoff reaches zero.
         #[serde(default = "infinite")]
         range: f32,
+        /// Shadows: "none", "hard", "pcf" or "pcss" (shadow.rs).
+        #[serde(default)]
+        shadows: ShadowsDesc,
+        /// Shadow map side in texels (each cube face's for point lights).
+        #[serde(default = "shadow_map_size")]
+        shadow_map_size: u32,
+        /// Depth offset toward the light, in texels.
+        #[serde(default = "one")]
+        bias: f32,
+        /// Offset along the surface normal, in texels.
+        #[serde(default = "one")]
+        normal_bias: f32,
+        /// PCF half-width in texels.
+        #[serde(default = "filter_radius")]
+        filter_radius: f32,
+        /// PCSS light diameter in world units (directional: tangent of
+        /// its angular diameter).
+        #[serde(default = "light_size")]
+        light_size: f32,
     },
     Spot {
         position: [f32; 3],
@@ -286,12 +305,50 @@ pub(super) enum LightDesc {
         /// Distance at which the light's smooth cutoff reaches zero.
         #[serde(default = "infinite")]
         range: f32,
+        /// Shadows: "none", "hard", "pcf" or "pcss" (shadow.rs).
+        #[serde(default)]
+        shadows: ShadowsDesc,
+        /// Shadow map side in texels (each cube face's for point lights).
+        #[serde(default = "shadow_map_size")]
+        shadow_map_size: u32,
+        /// Depth offset toward the light, in texels.
+        #[serde(default = "one")]
+        bias: f32,
+        /// Offset along the surface normal, in texels.
+        #[serde(default = "one")]
+        normal_bias: f32,
+        /// PCF half-width in texels.
+        #[serde(default = "filter_radius")]
+        filter_radius: f32,
+        /// PCSS light diameter in world units (directional: tangent of
+        /// its angular diameter).
+        #[serde(default = "light_size")]
+        light_size: f32,
     },
     Directional {
         /// Direction the light travels (from the light toward the scene).
         direction: [f32; 3],
         /// Irradiance on a surface facing the light, RGB.
         irradiance: [f32; 3],
+        /// Shadows: "none", "hard", "pcf" or "pcss" (shadow.rs).
+        #[serde(default)]
+        shadows: ShadowsDesc,
+        /// Shadow map side in texels (each cube face's for point lights).
+        #[serde(default = "shadow_map_size")]
+        shadow_map_size: u32,
+        /// Depth offset toward the light, in texels.
+        #[serde(default = "one")]
+        bias: f32,
+        /// Offset along the surface normal, in texels.
+        #[serde(default = "one")]
+        normal_bias: f32,
+        /// PCF half-width in texels.
+        #[serde(default = "filter_radius")]
+        filter_radius: f32,
+        /// PCSS light diameter in world units (directional: tangent of
+        /// its angular diameter).
+        #[serde(default = "light_size")]
+        light_size: f32,
     },
     Polygon {
         /// A planar simple polygon (convex or not), 3 to 16 vertices,
@@ -306,4 +363,27 @@ pub(super) enum LightDesc {
         #[serde(default = "yes")]
         visible: bool,
     },
+}
+
+/// A light's `shadows` field.
+#[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
+#[serde(rename_all = "snake_case")]
+pub(super) enum ShadowsDesc {
+    #[default]
+    None,
+    Hard,
+    Pcf,
+    Pcss,
+}
+
+fn shadow_map_size() -> u32 {
+    specula_raster::shadow::ShadowSettings::default().map_size
+}
+
+fn filter_radius() -> f32 {
+    specula_raster::shadow::ShadowSettings::default().filter_radius
+}
+
+fn light_size() -> f32 {
+    specula_raster::shadow::ShadowSettings::default().light_size
 }

@@ -374,6 +374,19 @@ pub fn load_gltf_str(
         ));
     } else {
         scene.data.lights.extend(g.lights.iter().cloned());
+        // The file's punctual lights cast PCF shadows.
+        let pcf = specula_raster::shadow::ShadowSettings {
+            filter: specula_raster::shadow::ShadowFilter::Pcf,
+            ..Default::default()
+        };
+        scene.data.shadows = (scene.data.lights.iter())
+            .map(|l| (!matches!(l, Light::Polygon { .. })).then_some(pcf))
+            .collect();
+        for (l, s) in scene.data.lights.iter().zip(&scene.data.shadows) {
+            if let Some(s) = s {
+                crate::memory::reserve("a glTF light's shadow maps", s.bytes(l))?;
+            }
+        }
     }
     scene.warm_tables();
     let SceneBuilder {

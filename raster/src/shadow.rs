@@ -1,0 +1,684 @@
+//! Shadow maps: per shadowed light, depth-only passes of the scene through
+//! the light's view (the same setup, binning and scan as the camera's
+//! passes, `frame::depth_pass`), and the per-lane lookups the light loop
+//! multiplies a light's contribution by.
+//!
+//! A directional light gets one orthographic map, fitted across its
+//! direction to the part of the scene's bounds the camera can see (the
+//! receivers) and along it to the whole scene (every caster); a spot light
+//! one perspective map covering its outer cone; a point light a cube map
+//! (six perspective maps of a little over 90°, so a filter near a face's
+//! edge stays inside that face). Maps store linear depth along the light's
+//! axis (infinity where nothing was drawn), so biases are in world units.
+//!
+//! Biases are given in texels and scaled by the world size of a texel at
+//! the shaded point: `bias` moves the compared depth toward the light,
+//! `normal_bias` moves the shaded point along its normal (times
+//! 1 + the filter's radius, since a wider filter reads the surface farther
+//! from the point). The factor is 1 outside a map.
+
+use crate::camera::{Camera, View};
+use crate::frame::{depth_pass, FrameStats, Visibility};
+use crate::scene::SceneData;
+use crate::target::Target;
+use glam::{Mat4, Vec3, Vec4};
+use rayon::prelude::*;
+use specula_core::light::Light;
+use specula_core::{Real, V3};
+
+/// How a light's shadow is filtered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShadowFilter {
+    /// One depth comparison at the nearest texel.
+    #[default]
+    Hard,
+    /// Percentage-closer filtering: the mean of bilinear depth comparisons
+    /// over a square of `filter_radius` texels.
+    Pcf,
+    /// Percentage-closer soft shadows: a blocker search, the penumbra
+    /// width from the light's size, then PCF over that width.
+    Pcss,
+}
+
+/// One light's shadow settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowSettings {
+    pub filter: ShadowFilter,
+    /// Map side in texels (each cube face's for point lights).
+    pub map_size: u32,
+    /// Depth offset toward the light, in texels at the shaded point.
+    pub bias: f32,
+    /// Offset of the shaded point along its normal, in texels at the
+    /// point (times 1 + the filter radius).
+    pub normal_bias: f32,
+    /// PCF half-width in texels.
+    pub filter_radius: f32,
+    /// PCSS: the light's diameter in world units (directional lights: the
+    /// tangent of its angular diameter).
+    pub light_size: f32,
+}
+
+/// Largest accepted map side.
+pub const MAX_MAP_SIZE: u32 = 8192;
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        ShadowSettings {
+            filter: ShadowFilter::Hard,
+            map_size: 1024,
+            bias: 1.0,
+            normal_bias: 1.0,
+            filter_radius: 1.5,
+            light_size: 0.1,
+        }
+    }
+}
+
+impl ShadowSettings {
+    /// Checks every field; the error names the field.
+    pub fn check(&self) -> Result<(), String> {
+        if !(1..=MAX_MAP_SIZE).contains(&self.map_size) {
+            return Err(format!(
+                "shadow_map_size: must be 1..={MAX_MAP_SIZE} texels, got {}",
+                self.map_size
+            ));
+        }
+        let fields = [
+            ("bias", self.bias, 1e3),
+            ("normal_bias", self.normal_bias, 1e3),
+            ("filter_radius", self.filter_radius, 64.0),
+            ("light_size", self.light_size, 1e9),
+        ];
+        for (name, v, max) in fields {
+            if !(0.0..=max).contains(&v) {
+                return Err(format!(
+                    "{name}: must be a finite number in [0, {max}], got {v}"
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Faces of a light's map: 6 for a point light, 1 otherwise.
+    pub fn faces(light: &Light) -> u32 {
+        match light {
+            Light::Point { .. } => 6,
+            _ => 1,
+        }
+    }
+
+    /// Bytes of a light's maps (a frame's depth and id per texel, and the
+    /// linear depth kept for lookups).
+    pub fn bytes(&self, light: &Light) -> u64 {
+        let side = (self.map_size as u64).div_ceil(64) * 64;
+        side * side * 12 * Self::faces(light) as u64
+    }
+
+    /// Texels a lookup may read away from its centre texel.
+    fn reach(&self) -> f32 {
+        match self.filter {
+            ShadowFilter::Hard => 1.0,
+            ShadowFilter::Pcf => self.filter_radius + 2.0,
+            ShadowFilter::Pcss => self.filter_radius.max(PCSS_MAX_RADIUS) + 2.0,
+        }
+    }
+}
+
+/// Largest PCSS filter half-width in texels.
+const PCSS_MAX_RADIUS: f32 = 24.0;
+
+/// One shadow map: a light's view and the depth it saw.
+#[derive(Clone, Debug, Default)]
+struct Face {
+    /// World → the light's clip space.
+    clip: Mat4,
+    size: u32,
+    /// Row-major linear depth (along `axis` from `origin`); infinity where
+    /// nothing was drawn.
+    depth: Vec<f32>,
+    origin: Vec3,
+    axis: Vec3,
+    /// World size of a texel (perspective maps: at unit depth).
+    texel: f32,
+    perspective: bool,
+    /// Perspective maps: the near distance (NDC depth = near / depth).
+    /// Orthographic: NDC depth = 1 − (depth − near) / span.
+    near: f32,
+    span: f32,
+}
+
+/// A shadowed light's maps for one frame.
+#[derive(Default)]
+pub struct LightShadow {
+    pub settings: ShadowSettings,
+    faces: Vec<Face>,
+    /// Point lights: the light's position (cube face selection).
+    cube_centre: Option<Vec3>,
+    /// The frames' working buffers of each face's depth pass.
+    passes: Vec<Option<Visibility>>,
+}
+
+/// Every shadowed light's maps for one frame, by light index.
+#[derive(Default)]
+pub struct ShadowMaps {
+    lights: Vec<Option<LightShadow>>,
+    any: bool,
+}
+
+impl std::fmt::Debug for ShadowMaps {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShadowMaps")
+            .field("passes", &self.passes())
+            .finish()
+    }
+}
+
+impl ShadowMaps {
+    /// The maps when some light has shadows.
+    pub fn active(&self) -> Option<&ShadowMaps> {
+        self.any.then_some(self)
+    }
+
+    /// Light `k`'s maps, if it has shadows.
+    pub fn light(&self, k: usize) -> Option<&LightShadow> {
+        self.lights.get(k).and_then(Option::as_ref)
+    }
+
+    /// Depth passes rendered this frame.
+    pub fn passes(&self) -> u32 {
+        self.lights
+            .iter()
+            .flatten()
+            .map(|l| l.faces.len() as u32)
+            .sum()
+    }
+
+    /// Renders every shadowed light's maps of `scene` for the camera's
+    /// `view`; `stats.times.shadow` gets their time.
+    pub fn render(&mut self, scene: &SceneData, view: &View, stats: &mut FrameStats) {
+        self.lights.resize_with(scene.lights.len(), || None);
+        self.any = false;
+        let Some(bounds) = Bounds::of(scene) else {
+            self.lights.iter_mut().for_each(|l| *l = None);
+            return;
+        };
+        for (k, light) in scene.lights.iter().enumerate() {
+            let Some(settings) = scene.shadows.get(k).copied().flatten() else {
+                self.lights[k] = None;
+                continue;
+            };
+            let Some((faces, cube_centre)) = light_faces(&settings, light, &bounds, view) else {
+                self.lights[k] = None;
+                continue;
+            };
+            let ls = self.lights[k].get_or_insert_with(LightShadow::default);
+            ls.settings = settings;
+            ls.cube_centre = cube_centre;
+            // The previous frame's depth buffers are refilled, not reallocated.
+            let mut faces = faces;
+            for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
+                new.depth = old.depth;
+            }
+            ls.faces = faces;
+            ls.passes.resize_with(ls.faces.len(), || None);
+            for (face, pass) in ls.faces.iter_mut().zip(&mut ls.passes) {
+                render_face(scene, face, pass, stats);
+            }
+            self.any = true;
+        }
+    }
+}
+
+/// The maps of `light` (and a point light's position), or `None` for a
+/// light without shadow maps.
+fn light_faces(
+    settings: &ShadowSettings,
+    light: &Light,
+    bounds: &Bounds,
+    view: &View,
+) -> Option<(Vec<Face>, Option<Vec3>)> {
+    Some(match light {
+        Light::Directional { to_light, .. } => (
+            vec![directional_face(
+                settings,
+                Vec3::from(*to_light),
+                bounds,
+                view,
+            )],
+            None,
+        ),
+        Light::Spot {
+            position,
+            direction,
+            cos_outer,
+            ..
+        } => {
+            let half = cos_outer.clamp(-1.0, 1.0).acos();
+            let tan_half = half.min(MAX_SPOT_HALF_ANGLE.to_radians()).tan();
+            let face = perspective_face(
+                settings,
+                Vec3::from(*position),
+                Vec3::from(*direction),
+                tan_half,
+                bounds,
+            );
+            (vec![face], None)
+        }
+        Light::Point { position, .. } => {
+            let pos = Vec3::from(*position);
+            let n = settings.map_size as f32;
+            let margin = settings.reach().ceil().min(n / 4.0);
+            let tan_half = n / (n - 2.0 * margin);
+            let faces = CUBE_AXES
+                .iter()
+                .map(|a| perspective_face(settings, pos, *a, tan_half, bounds))
+                .collect();
+            (faces, Some(pos))
+        }
+        Light::Polygon { .. } => return None,
+    })
+}
+
+/// Widest half-angle a spot light's map covers (degrees); points outside
+/// it are lit.
+const MAX_SPOT_HALF_ANGLE: f32 = 80.0;
+
+/// The cube map's face axes: +x, −x, +y, −y, +z, −z.
+const CUBE_AXES: [Vec3; 6] = [
+    Vec3::X,
+    Vec3::NEG_X,
+    Vec3::Y,
+    Vec3::NEG_Y,
+    Vec3::Z,
+    Vec3::NEG_Z,
+];
+
+/// The scene's world bounds.
+struct Bounds {
+    min: Vec3,
+    max: Vec3,
+}
+
+impl Bounds {
+    fn of(scene: &SceneData) -> Option<Bounds> {
+        let (min, max) = scene
+            .positions
+            .iter()
+            .filter(|p| p.is_finite())
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        (min.cmple(max).all()).then_some(Bounds { min, max })
+    }
+
+    fn corners(&self) -> [Vec3; 8] {
+        std::array::from_fn(|i| {
+            Vec3::new(
+                if i & 1 == 0 { self.min.x } else { self.max.x },
+                if i & 2 == 0 { self.min.y } else { self.max.y },
+                if i & 4 == 0 { self.min.z } else { self.max.z },
+            )
+        })
+    }
+
+    fn diagonal(&self) -> f32 {
+        (self.max - self.min).length().max(1e-6)
+    }
+}
+
+/// A unit vector orthogonal to `axis` (a fixed choice per axis).
+fn up_for(axis: Vec3) -> Vec3 {
+    if axis.y.abs() < 0.9 {
+        Vec3::Y
+    } else {
+        Vec3::Z
+    }
+}
+
+/// The orthographic map of a directional light toward `to_light`: across
+/// the light, the scene's bounds cut to the camera frustum's (as far as the
+/// scene reaches); along it, the whole scene.
+fn directional_face(s: &ShadowSettings, to_light: Vec3, b: &Bounds, view: &View) -> Face {
+    let axis = -to_light.normalize();
+    let right = axis.cross(up_for(axis)).normalize();
+    let up = right.cross(axis);
+    let lx = |p: Vec3| Vec3::new(p.dot(right), p.dot(up), p.dot(axis));
+    let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+    for c in b.corners() {
+        (lo, hi) = (lo.min(lx(c)), hi.max(lx(c)));
+    }
+    // The view frustum out to the farthest scene corner.
+    let far = b
+        .corners()
+        .iter()
+        .map(|c| (*c - view.eye).dot(view.forward))
+        .fold(0.0f32, f32::max);
+    if far > 0.0 {
+        let (mut flo, mut fhi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
+        for d in [far * 1e-4, far] {
+            for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
+                let p = view.eye
+                    + (view.forward + view.right * (sx * view.tan_x) + view.up * (sy * view.tan_y))
+                        * d;
+                (flo, fhi) = (flo.min(lx(p)), fhi.max(lx(p)));
+            }
+        }
+        let (x0, x1) = (lo.x.max(flo.x), hi.x.min(fhi.x));
+        let (y0, y1) = (lo.y.max(flo.y), hi.y.min(fhi.y));
+        if x0 < x1 && y0 < y1 {
+            (lo.x, hi.x, lo.y, hi.y) = (x0, x1, y0, y1);
+        }
+    }
+    let n = s.map_size as f32;
+    // Square texels: the larger extent on both axes.
+    let extent = (hi.x - lo.x).max(hi.y - lo.y).max(b.diagonal() * 1e-6);
+    let margin = s.reach().ceil() + 1.0;
+    let texel = extent / (n - 2.0 * margin).max(1.0);
+    let half = 0.5 * texel * n;
+    let centre = Vec3::new(0.5 * (lo.x + hi.x), 0.5 * (lo.y + hi.y), 0.0);
+    let pad = 0.01 * (hi.z - lo.z) + b.diagonal() * 1e-4;
+    let (near, span) = (lo.z - pad, (hi.z - lo.z) + 2.0 * pad);
+    // Rows of the world → clip matrix: x, y across; z = 1 − (d − near)/span.
+    let row_x = (right / half).extend(-centre.x / half);
+    let row_y = (up / half).extend(-centre.y / half);
+    let row_z = (-axis / span).extend(1.0 + near / span);
+    let clip = Mat4::from_cols(row_x, row_y, row_z, Vec4::W).transpose();
+    Face {
+        clip,
+        size: s.map_size,
+        depth: Vec::new(),
+        origin: Vec3::ZERO,
+        axis,
+        texel,
+        perspective: false,
+        near,
+        span,
+    }
+}
+
+/// A perspective map from `pos` along `axis` with a square field of view
+/// of half-width tan = `tan_half`.
+fn perspective_face(s: &ShadowSettings, pos: Vec3, axis: Vec3, tan_half: f32, b: &Bounds) -> Face {
+    let axis = axis.normalize();
+    let near = b.diagonal() * 1e-4;
+    let camera = Camera {
+        eye: pos,
+        target: pos + axis,
+        up: up_for(axis),
+        fov_y_deg: (2.0 * tan_half.atan()).to_degrees(),
+        near,
+        far: f32::INFINITY,
+    };
+    let view = camera.view(s.map_size, s.map_size);
+    Face {
+        clip: view.view_proj,
+        size: s.map_size,
+        depth: Vec::new(),
+        origin: pos,
+        axis,
+        texel: 2.0 * tan_half / s.map_size as f32,
+        perspective: true,
+        near,
+        span: 0.0,
+    }
+}
+
+/// Draws `face`'s depth pass and keeps its linear depth, row-major.
+fn render_face(
+    scene: &SceneData,
+    face: &mut Face,
+    pass: &mut Option<Visibility>,
+    stats: &mut FrameStats,
+) {
+    let target = Target::new(face.size, face.size).expect("map size checked at load");
+    let v = depth_pass(scene, &target, face.clip, pass, stats);
+    let n = face.size as usize;
+    face.depth.resize(n * n, 0.0);
+    let (perspective, near, span) = (face.perspective, face.near, face.span);
+    face.depth
+        .par_chunks_mut(n)
+        .enumerate()
+        .for_each(|(y, row)| {
+            for (x, d) in row.iter_mut().enumerate() {
+                let z = v.vis.depth[target.index(x as u32, y as u32)];
+                *d = if z <= 0.0 {
+                    f32::INFINITY
+                } else if perspective {
+                    near / z
+                } else {
+                    near + (1.0 - z) * span
+                };
+            }
+        });
+}
+
+impl Face {
+    /// Linear depth of `p`.
+    fn depth_of(&self, p: Vec3) -> f32 {
+        (p - self.origin).dot(self.axis)
+    }
+
+    /// The map's depth at integer texel (x, y), clamped to the map.
+    fn at(&self, x: i32, y: i32) -> f32 {
+        let n = self.size as i32;
+        self.depth[(y.clamp(0, n - 1) * n + x.clamp(0, n - 1)) as usize]
+    }
+
+    /// Bilinear mean of the comparisons `d <= depth` at continuous texel
+    /// coordinates (u, v) (texel centres at integers).
+    fn compare_bilinear(&self, u: f32, v: f32, d: f32) -> f32 {
+        let (x0, y0) = (u.floor(), v.floor());
+        let (fx, fy) = (u - x0, v - y0);
+        let (x0, y0) = (x0 as i32, y0 as i32);
+        let lit = |x, y| (d <= self.at(x, y)) as u32 as f32;
+        let top = lit(x0, y0) * (1.0 - fx) + lit(x0 + 1, y0) * fx;
+        let bottom = lit(x0, y0 + 1) * (1.0 - fx) + lit(x0 + 1, y0 + 1) * fx;
+        top * (1.0 - fy) + bottom * fy
+    }
+
+    /// Mean of bilinear comparisons over a 3 × 3 grid of half-width
+    /// `radius` texels around (u, v).
+    fn pcf(&self, u: f32, v: f32, d: f32, radius: f32) -> f32 {
+        if radius <= 0.0 {
+            return self.compare_bilinear(u, v, d);
+        }
+        let mut sum = 0.0;
+        for j in -1..=1 {
+            for i in -1..=1 {
+                sum += self.compare_bilinear(u + i as f32 * radius, v + j as f32 * radius, d);
+            }
+        }
+        sum / 9.0
+    }
+
+    /// Mean of bilinear comparisons over the taps of a 7 × 7 grid that
+    /// lie in a disk of radius `radius` texels around (u, v): the shape of
+    /// a round light's footprint, for PCSS.
+    fn pcf_disk(&self, u: f32, v: f32, d: f32, radius: f32) -> f32 {
+        let step = radius / 3.0;
+        let (mut sum, mut n) = (0.0, 0u32);
+        for j in -3i32..=3 {
+            for i in -3i32..=3 {
+                if i * i + j * j <= 9 {
+                    sum += self.compare_bilinear(u + i as f32 * step, v + j as f32 * step, d);
+                    n += 1;
+                }
+            }
+        }
+        sum / n as f32
+    }
+
+    /// The mean depth of the texels nearer than `d` in a square of
+    /// half-width `radius` texels around (u, v), if any.
+    fn blockers(&self, u: f32, v: f32, d: f32, radius: f32) -> Option<f32> {
+        let step = radius / 3.0;
+        let (mut sum, mut count) = (0.0, 0u32);
+        for j in -3..=3 {
+            for i in -3..=3 {
+                let z = self.at(
+                    (u + i as f32 * step).round() as i32,
+                    (v + j as f32 * step).round() as i32,
+                );
+                if z < d {
+                    sum += z;
+                    count += 1;
+                }
+            }
+        }
+        (count > 0).then(|| sum / count as f32)
+    }
+}
+
+impl LightShadow {
+    /// The face that sees `p`.
+    fn face_for(&self, p: Vec3) -> &Face {
+        let Some(c) = self.cube_centre else {
+            return &self.faces[0];
+        };
+        let d = p - c;
+        let a = d.abs();
+        let i = if a.x >= a.y && a.x >= a.z {
+            (d.x < 0.0) as usize
+        } else if a.y >= a.z {
+            2 + (d.y < 0.0) as usize
+        } else {
+            4 + (d.z < 0.0) as usize
+        };
+        &self.faces[i]
+    }
+
+    /// The fraction of the light reaching world point `p` with unit
+    /// normal `n`: 0 in shadow, 1 lit (between: filtered).
+    pub fn visibility(&self, p: Vec3, n: Vec3) -> f32 {
+        if !(p.is_finite() && n.is_finite()) {
+            return 1.0;
+        }
+        let face = self.face_for(p);
+        let s = &self.settings;
+        let scale = if face.perspective {
+            face.depth_of(p).max(face.near)
+        } else {
+            1.0
+        };
+        let texel = face.texel * scale;
+        let radius = match s.filter {
+            ShadowFilter::Hard => 0.0,
+            _ => s.filter_radius,
+        };
+        let p = p + n * (s.normal_bias * texel * (1.0 + radius));
+        let c = face.clip * p.extend(1.0);
+        if c.w <= 0.0 {
+            return 1.0;
+        }
+        let (x, y) = (c.x / c.w, c.y / c.w);
+        if !(x.abs() <= 1.0 && y.abs() <= 1.0) {
+            return 1.0;
+        }
+        let size = face.size as f32;
+        let u = (x + 1.0) * 0.5 * size - 0.5;
+        let v = (1.0 - y) * 0.5 * size - 0.5;
+        let d = face.depth_of(p) - s.bias * texel;
+        match s.filter {
+            ShadowFilter::Hard => (d <= face.at(u.round() as i32, v.round() as i32)) as u32 as f32,
+            ShadowFilter::Pcf => face.pcf(u, v, d, s.filter_radius),
+            ShadowFilter::Pcss => self.pcss(face, u, v, d, texel),
+        }
+    }
+
+    /// Blocker search over the light's footprint, penumbra width
+    /// w = (d_receiver − d_blocker) · size / d_blocker (perspective; the
+    /// size itself for directional lights, as an angle), then PCF over w.
+    fn pcss(&self, face: &Face, u: f32, v: f32, d: f32, texel: f32) -> f32 {
+        let s = &self.settings;
+        let size = s.light_size;
+        // Search half-width: the cone from the receiver to the light, at
+        // blockers half way to the light (perspective) or anywhere up to
+        // the map's near side (directional), in texels at the receiver.
+        let search = if face.perspective {
+            0.5 * size / texel
+        } else {
+            0.5 * size * (d - face.near).max(0.0) / texel
+        };
+        let search = search.clamp(1.0, PCSS_MAX_RADIUS);
+        let Some(blocker) = face.blockers(u, v, d, search) else {
+            return 1.0;
+        };
+        let width = if face.perspective {
+            (d - blocker) * size / blocker.max(1e-12)
+        } else {
+            (d - blocker) * size
+        };
+        // Half the penumbra in texels at the receiver.
+        let radius = (0.5 * width / texel).clamp(0.0, PCSS_MAX_RADIUS);
+        face.pcf_disk(u, v, d, radius.max(s.filter_radius.min(1.0)))
+    }
+
+    /// [`LightShadow::visibility`] of each lane of `p`, `n` in `lanes`
+    /// (1 elsewhere).
+    pub fn visibility_lanes<R: Real>(&self, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
+        let mut c = [[0.0f32; 8]; 6];
+        for (out, v) in c.iter_mut().zip([p.x, p.y, p.z, n.x, n.y, n.z]) {
+            v.store(out);
+        }
+        let mut f = [1.0f32; 8];
+        for (i, f) in f.iter_mut().enumerate().take(R::LANES) {
+            if lanes & (1 << i) != 0 {
+                *f = self.visibility(
+                    Vec3::new(c[0][i], c[1][i], c[2][i]),
+                    Vec3::new(c[3][i], c[4][i], c[5][i]),
+                );
+            }
+        }
+        R::load(&f)
+    }
+}
+
+/// A drawn pixel's surface and one light's shadow factor there
+/// ([`pixel_shadows`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PixelShadow {
+    /// World position and unit shading normal at the pixel centre.
+    pub p: Vec3,
+    pub n: Vec3,
+    /// Light k's shadow factor (what the light loop multiplies by).
+    pub factor: f32,
+}
+
+/// Every pixel of `target` (row-major) as the shading pass sees it for
+/// light `k`: its surface point and normal, and the light's shadow factor
+/// there; `None` where no triangle is drawn. Empty when light `k` has no
+/// shadow map in `v`. For tests and tools that compare the maps with
+/// exact visibility.
+pub fn pixel_shadows(
+    scene: &SceneData,
+    target: &Target,
+    v: &Visibility,
+    k: usize,
+) -> Vec<Option<PixelShadow>> {
+    let Some(light) = v.shadows.light(k) else {
+        return Vec::new();
+    };
+    let ctx = crate::resolve::ResolveContext::new(scene, &v.planes, &v.view);
+    let mut out = Vec::with_capacity(target.pixel_count());
+    for y in 0..target.height {
+        for x in 0..target.width {
+            let id = v.vis.id[target.index(x, y)];
+            if id == crate::target::MISS {
+                out.push(None);
+                continue;
+            }
+            let tris = crate::resolve::PacketTris::new(&[id], 1, &ctx);
+            let f = ctx.resolve::<f32>(x, y, &tris);
+            let (p, n) = (
+                Vec3::new(f.p.x, f.p.y, f.p.z),
+                Vec3::new(f.n.x, f.n.y, f.n.z),
+            );
+            out.push(Some(PixelShadow {
+                p,
+                n,
+                factor: light.visibility(p, n),
+            }));
+        }
+    }
+    out
+}

@@ -1,0 +1,358 @@
+//! Shadow maps end to end: the scene fields' checks, and acne and
+//! peter-panning measured against analytic visibility on a floor lit at
+//! 10°–80° above the horizon (an empty floor must be lit everywhere; a box
+//! standing on it casts a shadow whose exact extent is a ray–box test).
+
+mod common;
+
+use glam::Vec3;
+use specula::scene::LoadedScene;
+use specula_raster::shadow::pixel_shadows;
+use specula_raster::{visibility, FrameStats, Target};
+
+const SIDE: u32 = 256;
+
+/// A floor (12 × 12, facing +Y), optionally a unit box standing on it at
+/// the origin, under one directional light `elevation` degrees above the
+/// horizon, seen from above at an angle.
+fn floor_scene(elevation: f64, with_box: bool, filter: &str) -> LoadedScene {
+    let e = elevation.to_radians();
+    // Light travels down toward −x (the shadow falls toward −x).
+    let dir = [-e.cos(), -e.sin(), 0.0];
+    let cube = if with_box {
+        "[[mesh]]\ncube = { size = 1.0 }\ntranslate = [0.0, 0.5, 0.0]\nmaterial = \"floor\"\n"
+    } else {
+        ""
+    };
+    let text = format!(
+        r#"
+[camera]
+eye = [-1.0, 5.0, 3.0]
+target = [-1.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 45.0
+near = 0.1
+far = 50.0
+[output]
+width = {SIDE}
+height = {SIDE}
+[[mesh]]
+plane = {{ size = [12.0, 12.0] }}
+material = "floor"
+{cube}
+[materials.floor]
+model = "lambert"
+base_color = [0.5, 0.5, 0.5]
+[[light]]
+type = "directional"
+direction = [{}, {}, {}]
+irradiance = [1.0, 1.0, 1.0]
+shadows = "{filter}"
+shadow_map_size = 1024
+"#,
+        dir[0], dir[1], dir[2]
+    );
+    common::scene(&text, &[])
+}
+
+/// Whether the ray from `p` toward `to_light` meets the unit box standing
+/// on the floor at the origin (slab test, in f64).
+fn box_blocks(p: Vec3, to_light: Vec3) -> bool {
+    let (lo, hi) = ([-0.5f64, 0.0, -0.5], [0.5f64, 1.0, 0.5]);
+    let (o, d) = (p.as_dvec3().to_array(), to_light.as_dvec3().to_array());
+    let (mut t0, mut t1) = (1e-6f64, f64::INFINITY);
+    for k in 0..3 {
+        if d[k].abs() < 1e-12 {
+            if o[k] < lo[k] || o[k] > hi[k] {
+                return false;
+            }
+            continue;
+        }
+        let (a, b) = ((lo[k] - o[k]) / d[k], (hi[k] - o[k]) / d[k]);
+        t0 = t0.max(a.min(b));
+        t1 = t1.min(a.max(b));
+    }
+    t0 <= t1
+}
+
+struct Measured {
+    /// Floor pixels facing the light that are exactly lit.
+    lit: usize,
+    /// Of those, the ones the map darkens (factor < 0.5): acne.
+    wrongly_shadowed: usize,
+    /// Exactly shadowed floor pixels next to the box (the contact line).
+    contact: usize,
+    /// Exactly shadowed floor pixels within 3 px of the box that the map
+    /// leaves lit: the gap between the contact and its shadow.
+    gap: usize,
+}
+
+fn measure(s: &LoadedScene) -> Measured {
+    let target = Target::new(SIDE, SIDE).unwrap();
+    let v = visibility(&s.data, &target, &mut FrameStats::default());
+    let px = pixel_shadows(&s.data, &target, &v, 0);
+    let specula_core::light::Light::Directional { to_light, .. } = s.data.lights[0] else {
+        unreachable!()
+    };
+    let to_light = Vec3::from(to_light);
+    let on_floor = |i: usize| px[i].is_some_and(|p| p.p.y.abs() < 1e-4);
+    let w = SIDE as i32;
+    let near_box = |x: i32, y: i32, r: i32| {
+        (-r..=r).any(|dy| {
+            (-r..=r).any(|dx| {
+                let (xx, yy) = (x + dx, y + dy);
+                xx >= 0 && yy >= 0 && xx < w && yy < w && {
+                    let j = (yy * w + xx) as usize;
+                    px[j].is_some() && !on_floor(j)
+                }
+            })
+        })
+    };
+    let mut m = Measured {
+        lit: 0,
+        wrongly_shadowed: 0,
+        contact: 0,
+        gap: 0,
+    };
+    for y in 0..w {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            if !on_floor(i) {
+                continue;
+            }
+            let p = px[i].unwrap();
+            if box_blocks(p.p, to_light) {
+                if near_box(x, y, 1) {
+                    m.contact += 1;
+                }
+                if p.factor >= 0.5 && near_box(x, y, 3) {
+                    m.gap += 1;
+                }
+            } else {
+                m.lit += 1;
+                m.wrongly_shadowed += (p.factor < 0.5) as usize;
+            }
+        }
+    }
+    m
+}
+
+#[test]
+fn no_acne_on_a_floor_lit_from_10_to_80_degrees() {
+    for filter in ["hard", "pcf"] {
+        for elevation in [10.0, 20.0, 30.0, 45.0, 60.0, 80.0] {
+            let m = measure(&floor_scene(elevation, false, filter));
+            let frac = m.wrongly_shadowed as f64 / m.lit as f64;
+            eprintln!(
+                "{filter} at {elevation}°: {} of {} lit floor pixels shadowed ({:.4} %)",
+                m.wrongly_shadowed,
+                m.lit,
+                100.0 * frac
+            );
+            assert!(m.lit > 10_000);
+            assert!(frac <= 1e-3, "{filter} at {elevation}°: acne {frac}");
+        }
+    }
+}
+
+#[test]
+fn shadows_touch_their_caster() {
+    for filter in ["hard", "pcf"] {
+        for elevation in [10.0, 20.0, 30.0, 45.0, 60.0, 80.0] {
+            let m = measure(&floor_scene(elevation, true, filter));
+            let gap = m.gap as f64 / m.contact.max(1) as f64;
+            let acne = m.wrongly_shadowed as f64 / m.lit as f64;
+            eprintln!(
+                "{filter} at {elevation}°: contact line {} px, gap {:.3} px, {:.4} % of lit floor shadowed",
+                m.contact,
+                gap,
+                100.0 * acne
+            );
+            assert!(
+                m.contact > 20,
+                "{filter} at {elevation}°: no contact line seen"
+            );
+            assert!(gap <= 1.0, "{filter} at {elevation}°: gap of {gap} px");
+        }
+    }
+}
+
+/// The scene fields' checks name the field.
+#[test]
+fn bad_shadow_fields_are_refused_by_name() {
+    let base = |extra: &str| {
+        format!(
+            r#"
+[camera]
+eye = [0.0, 2.0, 5.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 50.0
+[[mesh]]
+plane = {{ size = [4.0, 4.0] }}
+[[light]]
+type = "point"
+position = [0.0, 3.0, 0.0]
+intensity = [1.0, 1.0, 1.0]
+[[light]]
+type = "spot"
+position = [0.0, 3.0, 0.0]
+direction = [0.0, -1.0, 0.0]
+intensity = [1.0, 1.0, 1.0]
+outer_cone = 30.0
+shadows = "pcss"
+{extra}
+"#
+        )
+    };
+    let read = |_: &std::path::Path| -> std::io::Result<Vec<u8>> {
+        Err(std::io::ErrorKind::NotFound.into())
+    };
+    let load = |extra: &str| {
+        specula::scene::load_scene_str(std::path::Path::new("s.toml"), &base(extra), &read)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    for (extra, field) in [
+        ("shadow_map_size = 0", "light[1].shadow_map_size"),
+        ("shadow_map_size = 1000000000", "light[1].shadow_map_size"),
+        ("bias = -0.5", "light[1].bias"),
+        ("normal_bias = -1.0", "light[1].normal_bias"),
+        ("light_size = nan", "light[1].light_size"),
+        ("filter_radius = inf", "light[1].filter_radius"),
+    ] {
+        let e = load(extra);
+        assert!(e.contains(field), "{extra}: {e}");
+    }
+    assert!(load("").is_empty(), "the defaults load");
+}
+
+/// Area of the intersection of two disks of radii `a` and `b` whose
+/// centres are `d` apart.
+fn disk_overlap(a: f64, b: f64, d: f64) -> f64 {
+    use std::f64::consts::PI;
+    if d >= a + b {
+        return 0.0;
+    }
+    if d <= (a - b).abs() {
+        return PI * a.min(b).powi(2);
+    }
+    let ca = ((d * d + a * a - b * b) / (2.0 * d * a))
+        .clamp(-1.0, 1.0)
+        .acos();
+    let cb = ((d * d + b * b - a * a) / (2.0 * d * b))
+        .clamp(-1.0, 1.0)
+        .acos();
+    a * a * (ca - ca.sin() * ca.cos()) + b * b * (cb - cb.sin() * cb.cos())
+}
+
+/// The fraction of a spherical light (centre `l`, radius `a`) a floor
+/// point `q` sees past a sphere (centre `c`, radius `r`): one minus the
+/// overlap of the two disks they subtend (angular radii and the angle
+/// between their centres, in the small-angle plane).
+fn sphere_light_visible(q: [f64; 3], l: [f64; 3], a: f64, c: [f64; 3], r: f64) -> f64 {
+    let sub = |u: [f64; 3], v: [f64; 3]| [u[0] - v[0], u[1] - v[1], u[2] - v[2]];
+    let len = |u: [f64; 3]| (u[0] * u[0] + u[1] * u[1] + u[2] * u[2]).sqrt();
+    let (tl, tc) = (sub(l, q), sub(c, q));
+    let (dl, dc) = (len(tl), len(tc));
+    let (al, ac) = ((a / dl).asin(), (r / dc).asin());
+    let cos = (tl[0] * tc[0] + tl[1] * tc[1] + tl[2] * tc[2]) / (dl * dc);
+    let theta = cos.clamp(-1.0, 1.0).acos();
+    1.0 - disk_overlap(al, ac, theta) / (std::f64::consts::PI * al * al)
+}
+
+/// Where a profile sampled at increasing `x` first reaches `level`
+/// (linear between samples).
+fn crossing(xs: &[f64], ys: &[f64], level: f64) -> f64 {
+    for i in 1..xs.len() {
+        if ys[i - 1] < level && ys[i] >= level {
+            let t = (level - ys[i - 1]) / (ys[i] - ys[i - 1]);
+            return xs[i - 1] + t * (xs[i] - xs[i - 1]);
+        }
+    }
+    f64::NAN
+}
+
+/// PCSS against the analytic penumbra of a sphere over a floor under a
+/// spherical light: the width over which the shadow goes from 10 % to
+/// 90 % of the light, along the floor away from the shadow's centre.
+#[test]
+fn pcss_penumbra_matches_a_sphere_under_a_spherical_light() {
+    let (h_light, a, h_sphere, r) = (4.0f64, 0.3f64, 1.0f64, 0.5f64);
+    let text = format!(
+        r#"
+[camera]
+eye = [0.0, 3.0, 3.2]
+target = [0.0, 0.0, 0.6]
+up = [0.0, 1.0, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 50.0
+[output]
+width = 512
+height = 512
+[[mesh]]
+plane = {{ size = [8.0, 8.0] }}
+[[mesh]]
+sphere = {{ radius = {r}, segments = 128, rings = 64 }}
+translate = [0.0, {h_sphere}, 0.0]
+[[light]]
+type = "point"
+position = [0.0, {h_light}, 0.0]
+intensity = [10.0, 10.0, 10.0]
+shadows = "pcss"
+light_size = {}
+shadow_map_size = 2048
+"#,
+        2.0 * a
+    );
+    let s = common::scene(&text, &[]);
+    let target = Target::new(512, 512).unwrap();
+    let v = visibility(&s.data, &target, &mut FrameStats::default());
+    let px = pixel_shadows(&s.data, &target, &v, 0);
+    // Mean factor per ring of the floor around the shadow's centre.
+    let bin = 0.01;
+    let bins = 150;
+    let mut sum = vec![0.0f64; bins];
+    let mut count = vec![0usize; bins];
+    for p in px.iter().flatten() {
+        if p.p.y.abs() > 1e-4 {
+            continue;
+        }
+        let rho = (p.p.x as f64).hypot(p.p.z as f64);
+        let b = (rho / bin) as usize;
+        if b < bins {
+            sum[b] += p.factor as f64;
+            count[b] += 1;
+        }
+    }
+    let (mut xs, mut ours, mut exact) = (Vec::new(), Vec::new(), Vec::new());
+    for b in 0..bins {
+        if count[b] < 20 {
+            continue;
+        }
+        let rho = (b as f64 + 0.5) * bin;
+        xs.push(rho);
+        ours.push(sum[b] / count[b] as f64);
+        exact.push(sphere_light_visible(
+            [rho, 0.0, 0.0],
+            [0.0, h_light, 0.0],
+            a,
+            [0.0, h_sphere, 0.0],
+            r,
+        ));
+    }
+    let width = |ys: &[f64]| crossing(&xs, ys, 0.9) - crossing(&xs, ys, 0.1);
+    let (w_ours, w_exact) = (width(&ours), width(&exact));
+    eprintln!(
+        "PCSS 10–90 % penumbra width {w_ours:.4}, analytic {w_exact:.4} (ratio {:.3})",
+        w_ours / w_exact
+    );
+    assert!(
+        (w_ours / w_exact - 1.0).abs() <= 0.2,
+        "penumbra width {w_ours} against {w_exact}"
+    );
+}
