@@ -4,61 +4,10 @@
 
 mod common;
 
+use common::cli::{expect_error, load_err, run_in, stderr, CAMERA};
 use common::{specula, temp_dir};
 use std::path::Path;
-use std::process::{Command, Output};
-
-const CAMERA: &str = r#"
-[camera]
-eye = [0.0, 0.0, 3.0]
-target = [0.0, 0.0, 0.0]
-fov_y = 45.0
-near = 0.1
-far = 10.0
-
-[output]
-width = 32
-height = 24
-
-[[light]]
-type = "point"
-position = [2.0, 2.0, 2.0]
-intensity = [10.0, 10.0, 10.0]
-"#;
-
-/// Writes `files` into a fresh folder and runs specula there.
-fn run_in(name: &str, files: &[(&str, &[u8])], args: &[&str]) -> (Output, std::path::PathBuf) {
-    let dir = temp_dir(name);
-    for (n, b) in files {
-        std::fs::write(dir.join(n), b).unwrap();
-    }
-    (specula(args, &dir), dir)
-}
-
-fn stderr(o: &Output) -> String {
-    String::from_utf8_lossy(&o.stderr).into_owned()
-}
-
-/// Expects failure without a panic, with every needle in stderr, and no
-/// file in the folder other than `files`.
-fn expect_error(name: &str, files: &[(&str, &[u8])], args: &[&str], needles: &[&str]) -> String {
-    let (out, dir) = run_in(name, files, args);
-    let err = stderr(&out);
-    assert!(!out.status.success(), "{name}: expected failure: {err}");
-    assert_eq!(out.status.code(), Some(1), "{name}: exit code: {err}");
-    assert!(!err.contains("panicked"), "{name}: panicked: {err}");
-    for n in needles {
-        assert!(err.contains(n), "{name}: stderr lacks {n:?}: {err}");
-    }
-    let mut left: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
-        .filter(|n| !files.iter().any(|(f, _)| f == n))
-        .collect();
-    left.sort();
-    assert!(left.is_empty(), "{name}: left files behind: {left:?}");
-    err
-}
+use std::process::Command;
 
 fn obj_scene() -> String {
     format!("{CAMERA}\n[[mesh]]\nobj = \"m.obj\"\n")
@@ -279,15 +228,6 @@ fn dash_writes_png_to_standard_output() {
         1,
         "no file named -"
     );
-}
-
-/// The error loading `toml` (files: none), via the library.
-fn load_err(toml: &str) -> String {
-    let read = |_: &Path| -> std::io::Result<Vec<u8>> { Err(std::io::ErrorKind::NotFound.into()) };
-    match specula::scene::load_scene_str(Path::new("s.toml"), toml, &read) {
-        Ok(_) => panic!("accepted:\n{toml}"),
-        Err(e) => e.to_string(),
-    }
 }
 
 fn load_ok(toml: &str) -> specula::scene::LoadedScene {

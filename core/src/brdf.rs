@@ -48,6 +48,24 @@ pub struct EnvLobes<R: Real> {
     pub roughness: R,
 }
 
+impl<R: Real> EnvLobes<R> {
+    /// `total` (the directional albedo) split into `diffuse`, capped per
+    /// channel at `total`, and the rest as the glossy part at `roughness`.
+    #[inline(always)]
+    pub fn split(total: Rgb<R>, diffuse: Rgb<R>, roughness: R) -> EnvLobes<R> {
+        let diffuse = Rgb::new(
+            diffuse.x.min(total.x),
+            diffuse.y.min(total.y),
+            diffuse.z.min(total.z),
+        );
+        EnvLobes {
+            diffuse,
+            specular: total - diffuse,
+            roughness,
+        }
+    }
+}
+
 /// Smallest α any model passes to an NDF: below it D(m) is a spike narrower
 /// than f32 can resolve at the peak. (Microfacet inputs are clamped to it
 /// with a warning where the scene is read.)

@@ -614,8 +614,17 @@ impl LightShadow {
     }
 
     /// [`LightShadow::visibility`] of each lane of `p`, `n` in `lanes`
-    /// (1 elsewhere).
+    /// (1 elsewhere), bit for bit. Hard and PCF lookups run on all lanes at
+    /// once ([`LightShadow::visibility_packet`]) when the packet's points
+    /// fall on one face of a map small enough for exact f32 gather
+    /// indices; PCSS (whose search and filter widths differ per lane), a
+    /// packet spread over cube faces and larger maps go lane by lane.
     pub fn visibility_lanes<R: Real>(&self, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
+        if self.settings.filter != ShadowFilter::Pcss {
+            if let Some(face) = self.packet_face(p, lanes) {
+                return self.visibility_packet(face, p, n, lanes);
+            }
+        }
         let mut c = [[0.0f32; 8]; 6];
         for (out, v) in c.iter_mut().zip([p.x, p.y, p.z, n.x, n.y, n.z]) {
             v.store(out);
@@ -630,6 +639,148 @@ impl LightShadow {
             }
         }
         R::load(&f)
+    }
+
+    /// The one face every finite point of the packet's `lanes` falls on,
+    /// if its map is at most [`MAX_PACKET_MAP`] on a side.
+    fn packet_face<R: Real>(&self, p: &V3<R>, lanes: u32) -> Option<&Face> {
+        let face = match self.cube_centre {
+            None => &self.faces[0],
+            Some(_) => {
+                let mut seen: Option<&Face> = None;
+                for i in (0..R::LANES).filter(|i| lanes & (1 << i) != 0) {
+                    let q = Vec3::new(p.x.lane(i) as f32, p.y.lane(i) as f32, p.z.lane(i) as f32);
+                    if !q.is_finite() {
+                        continue;
+                    }
+                    let f = self.face_for(q);
+                    match seen {
+                        Some(s) if !std::ptr::eq(s, f) => return None,
+                        _ => seen = Some(f),
+                    }
+                }
+                seen?
+            }
+        };
+        (face.size <= MAX_PACKET_MAP).then_some(face)
+    }
+
+    /// [`LightShadow::visibility`] on every lane at once, for a hard or
+    /// PCF light whose lanes all use `face`: the same operations in the
+    /// same order (no fused multiply-adds), so the same bits.
+    #[inline(always)]
+    fn visibility_packet<R: Real>(&self, face: &Face, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
+        let s = &self.settings;
+        let k = |x: f32| R::splat(x as f64);
+        let finite = p.x.is_finite()
+            & p.y.is_finite()
+            & p.z.is_finite()
+            & n.x.is_finite()
+            & n.y.is_finite()
+            & n.z.is_finite();
+        let texel = if face.perspective {
+            k(face.texel) * face.depth_of_lanes(p).max(k(face.near))
+        } else {
+            k(face.texel)
+        };
+        let radius = match s.filter {
+            ShadowFilter::Hard => 0.0,
+            _ => s.filter_radius,
+        };
+        let push = k(s.normal_bias) * texel * k(1.0 + radius);
+        let p = V3::new(p.x + n.x * push, p.y + n.y * push, p.z + n.z * push);
+        // face.clip × (p, 1), column by column as glam's Mat4 × Vec4 adds.
+        let [c0, c1, c2, c3] = [
+            face.clip.x_axis,
+            face.clip.y_axis,
+            face.clip.z_axis,
+            face.clip.w_axis,
+        ];
+        let row = |a: f32, b: f32, c: f32, d: f32| k(a) * p.x + k(b) * p.y + k(c) * p.z + k(d);
+        let cx = row(c0.x, c1.x, c2.x, c3.x);
+        let cy = row(c0.y, c1.y, c2.y, c3.y);
+        let cw = row(c0.w, c1.w, c2.w, c3.w);
+        let (x, y) = (cx / cw, cy / cw);
+        let inside = cw.gt(R::ZERO) & x.abs().le(R::ONE) & y.abs().le(R::ONE);
+        let use_map = finite & inside & R::mask_from_bits(lanes);
+        let size = k(face.size as f32);
+        let half = R::HALF;
+        let u = R::select(use_map, (x + R::ONE) * half * size - half, R::ZERO);
+        let v = R::select(use_map, (R::ONE - y) * half * size - half, R::ZERO);
+        let d = R::select(
+            use_map,
+            face.depth_of_lanes(&p) - k(s.bias) * texel,
+            R::ZERO,
+        );
+        let f = match s.filter {
+            ShadowFilter::Hard => face.lit_lanes(round_lanes(u), round_lanes(v), d),
+            _ => face.pcf_lanes(u, v, d, s.filter_radius),
+        };
+        R::select(use_map, f, R::ONE)
+    }
+}
+
+/// Largest map side whose texel indices (up to side² − 1) are exact in
+/// f32, the index type of the lanes' gathers.
+const MAX_PACKET_MAP: u32 = 4096;
+
+/// f32's `round` (half away from zero) for values that are then clamped
+/// to texels ≥ 0: below 0 it may differ, but only among values that
+/// clamp to texel 0 alike. (The fraction u − ⌊u⌋ is exact.)
+#[inline(always)]
+fn round_lanes<R: Real>(u: R) -> R {
+    let t = u.floor();
+    R::select((u - t).ge(R::HALF), t + R::ONE, t)
+}
+
+impl Face {
+    /// [`Face::depth_of`] per lane, with its operations in its order.
+    #[inline(always)]
+    fn depth_of_lanes<R: Real>(&self, p: &V3<R>) -> R {
+        let k = |x: f32| R::splat(x as f64);
+        let (o, a) = (self.origin, self.axis);
+        (p.x - k(o.x)) * k(a.x) + (p.y - k(o.y)) * k(a.y) + (p.z - k(o.z)) * k(a.z)
+    }
+
+    /// 1 where `d` ≤ the map's depth at integer texel (x, y) (clamped to
+    /// the map), 0 elsewhere: [`Face::at`]'s comparison per lane.
+    #[inline(always)]
+    fn lit_lanes<R: Real>(&self, x: R, y: R, d: R) -> R {
+        let last = R::splat((self.size - 1) as f64);
+        let (x, y) = (x.clamp(R::ZERO, last), y.clamp(R::ZERO, last));
+        let depth = R::gather(&self.depth, y * R::splat(self.size as f64) + x);
+        R::select(d.le(depth), R::ONE, R::ZERO)
+    }
+
+    /// [`Face::compare_bilinear`] per lane.
+    #[inline(always)]
+    fn compare_bilinear_lanes<R: Real>(&self, u: R, v: R, d: R) -> R {
+        let (x0, y0) = (u.floor(), v.floor());
+        let (fx, fy) = (u - x0, v - y0);
+        let (x1, y1) = (x0 + R::ONE, y0 + R::ONE);
+        let top = self.lit_lanes(x0, y0, d) * (R::ONE - fx) + self.lit_lanes(x1, y0, d) * fx;
+        let bottom = self.lit_lanes(x0, y1, d) * (R::ONE - fx) + self.lit_lanes(x1, y1, d) * fx;
+        top * (R::ONE - fy) + bottom * fy
+    }
+
+    /// [`Face::pcf`] per lane.
+    #[inline(always)]
+    fn pcf_lanes<R: Real>(&self, u: R, v: R, d: R, radius: f32) -> R {
+        if radius <= 0.0 {
+            return self.compare_bilinear_lanes(u, v, d);
+        }
+        let mut sum = R::ZERO;
+        for j in -1..=1 {
+            for i in -1..=1 {
+                let (du, dv) = (i as f32 * radius, j as f32 * radius);
+                sum += self.compare_bilinear_lanes(
+                    u + R::splat(du as f64),
+                    v + R::splat(dv as f64),
+                    d,
+                );
+            }
+        }
+        sum / R::splat(9.0)
     }
 }
 

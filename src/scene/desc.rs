@@ -261,6 +261,9 @@ pub(super) struct MeshDesc {
     pub(super) scale: Scale,
 }
 
+// The six shadow fields repeat in the point, spot and directional
+// variants: serde's `flatten` would share them, but it cannot be combined
+// with `deny_unknown_fields`, which the scene files rely on.
 #[derive(Debug, Deserialize)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
 pub(super) enum LightDesc {

@@ -41,3 +41,4 @@ pub fn specula(args: &[&str], dir: &Path) -> Output {
         .output()
         .expect("run specula")
 }
+pub mod cli;

@@ -489,16 +489,7 @@ impl Brdf for Gltf {
         }
         let total = self.albedo_local(p);
         let diffuse = Rgb::select(p.o.above, diffuse, Rgb::zero());
-        let diffuse = Rgb::new(
-            diffuse.x.min(total.x),
-            diffuse.y.min(total.y),
-            diffuse.z.min(total.z),
-        );
-        EnvLobes {
-            diffuse,
-            specular: total - diffuse,
-            roughness: px.alpha.sqrt(),
-        }
+        EnvLobes::split(total, diffuse, px.alpha.sqrt())
     }
 
     /// The LTC lookups and the lobes' albedo factors (zero where the view

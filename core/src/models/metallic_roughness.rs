@@ -237,35 +237,18 @@ impl Brdf for MetallicRoughness {
 
     #[inline(always)]
     fn albedo_local<R: Real>(&self, p: &MetallicRoughnessPrepared<R>) -> Rgb<R> {
-        let o = &p.o;
-        let t = AlbedoTables::get().ggx_schlick(p.px.alpha, o.wo.z.max(R::ZERO));
-        // Split sum: E_spec = F0·A + B, E_diff = (1 − F0)(1 − C)·ρd   (see albedo_tables)
-        let f0 = p.px.f0;
-        let spec = Rgb::new(
-            f0.x.mul_add(t.a, t.b),
-            f0.y.mul_add(t.a, t.b),
-            f0.z.mul_add(t.a, t.b),
-        );
-        let diff = p.px.one_minus_f0.mul_elem(p.px.diffuse) * (R::ONE - t.c);
-        Rgb::select(o.above, spec + diff, Rgb::zero())
+        let (spec, diff) = split_sum_terms(p);
+        Rgb::select(p.o.above, spec + diff, Rgb::zero())
     }
 
     /// The split sum's two terms: F0·A + B on the GGX lobe at α, and
     /// (1 − F0)(1 − C)·ρd on the irradiance.
     #[inline(always)]
     fn env_lobes<R: Real>(&self, p: &MetallicRoughnessPrepared<R>) -> EnvLobes<R> {
-        let o = &p.o;
-        let t = AlbedoTables::get().ggx_schlick(p.px.alpha, o.wo.z.max(R::ZERO));
-        let f0 = p.px.f0;
-        let spec = Rgb::new(
-            f0.x.mul_add(t.a, t.b),
-            f0.y.mul_add(t.a, t.b),
-            f0.z.mul_add(t.a, t.b),
-        );
-        let diff = p.px.one_minus_f0.mul_elem(p.px.diffuse) * (R::ONE - t.c);
+        let (spec, diff) = split_sum_terms(p);
         EnvLobes {
-            diffuse: Rgb::select(o.above, diff, Rgb::zero()),
-            specular: Rgb::select(o.above, spec, Rgb::zero()),
+            diffuse: Rgb::select(p.o.above, diff, Rgb::zero()),
+            specular: Rgb::select(p.o.above, spec, Rgb::zero()),
             roughness: p.px.alpha.sqrt(),
         }
     }
@@ -329,4 +312,20 @@ pub struct MetallicRoughnessPolygons<R: Real> {
     pub diffuse: Rgb<R>,
     /// No lane has a diffuse lobe.
     pub metal: bool,
+}
+
+/// The split sum's two terms at the prepared view (see albedo_tables):
+/// E_spec = F0·A + B and E_diff = (1 − F0)(1 − C)·ρd, before the horizon
+/// test.
+#[inline(always)]
+fn split_sum_terms<R: Real>(p: &MetallicRoughnessPrepared<R>) -> (Rgb<R>, Rgb<R>) {
+    let t = AlbedoTables::get().ggx_schlick(p.px.alpha, p.o.wo.z.max(R::ZERO));
+    let f0 = p.px.f0;
+    let spec = Rgb::new(
+        f0.x.mul_add(t.a, t.b),
+        f0.y.mul_add(t.a, t.b),
+        f0.z.mul_add(t.a, t.b),
+    );
+    let diff = p.px.one_minus_f0.mul_elem(p.px.diffuse) * (R::ONE - t.c);
+    (spec, diff)
 }

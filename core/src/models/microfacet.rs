@@ -228,16 +228,7 @@ impl Brdf for Microfacet {
             diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
         }
         let diffuse = Rgb::select(p.o.above, diffuse, Rgb::zero());
-        let diffuse = Rgb::new(
-            diffuse.x.min(total.x),
-            diffuse.y.min(total.y),
-            diffuse.z.min(total.z),
-        );
-        EnvLobes {
-            diffuse,
-            specular: total - diffuse,
-            roughness: R::splat(self.params.alpha as f64).sqrt(),
-        }
+        EnvLobes::split(total, diffuse, R::splat(self.params.alpha as f64).sqrt())
     }
 
     /// The GGX LTC lookup at this α and the view, with the factors of
