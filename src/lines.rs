@@ -1,6 +1,6 @@
 //! The scene file's line tables: `[[outline]]` (any number, drawn in
-//! order) and `[strokes]` (npr/src/outline.rs, sobel/, extrude.rs,
-//! edges.rs, overlay/). Parsed with serde like the rest of the scene,
+//! order) and `[strokes]` (npr/src/outline.rs, sobel/, extrude/,
+//! edges/, overlay/). Parsed with serde like the rest of the scene,
 //! every field checked once here with a message naming it; the checked
 //! description then becomes post stages and geometry passes.
 

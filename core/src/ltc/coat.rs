@@ -2,7 +2,7 @@
 //! `core/data/ltc_coat.bin`, which `specula fit-ltc-coat` writes
 //! (src/fit_ltc_coat.rs; rerun it to regenerate) \[Heitz16\].
 //!
-//! **The lobe.** f_r μi with f_r = F_r D_r G_r / (4 μi μo) (models/disney.rs
+//! **The lobe.** f_r μi with f_r = F_r D_r G_r / (4 μi μo) (models/disney/
 //! without its weight ¼ clearcoat): D_r GTR1 at α ∈ [0.001, 0.1], G_r
 //! separable Smith GGX at α = 0.25, F_r Schlick with F0 = 0.04. Every
 //! constant but α is fixed, so the Fresnel factor is fitted into the
