@@ -480,7 +480,7 @@ fn run_tam(a: TamArgs) -> Result<(), String> {
     // Renamed into place below; until then an interrupt removes it.
     let _interrupted = output_plan::TemporaryDir::track(staging.path());
     let tam = specula_npr::tam::generate(p).map_err(|e| format!("tam: {e}"))?;
-    tam.write_dir(staging.path())?;
+    tam.write_dir(staging.path()).map_err(|e| e.to_string())?;
     if replacing {
         let old = tempfile::Builder::new()
             .prefix(".specula-tam-old-")

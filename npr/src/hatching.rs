@@ -18,7 +18,7 @@
 //! 4. Colour: ink + (paper − ink) × brightness (brightness 1 is paper).
 
 use crate::lights::for_each_light_shadowed;
-use crate::tam::TamTexture;
+use crate::tam::{TamError, TamTexture};
 use specula_core::{Real, Rgb};
 use specula_raster::texture::{Filter, Sampler, Wrap};
 use specula_raster::{PacketShader, ShadeEnv, ShadeInput};
@@ -40,13 +40,17 @@ pub struct Hatching {
 
 /// The map `hatching` uses when the material names none: 6 tones, 256²
 /// down to 16², seed 1, generated once per process (about 0.1 s).
-pub fn builtin_tam() -> Result<Arc<TamTexture>, String> {
+/// A failure is kept as its message (the error itself is not `Clone`).
+pub fn builtin_tam() -> Result<Arc<TamTexture>, TamError> {
     static TAM: std::sync::OnceLock<Result<Arc<TamTexture>, String>> = std::sync::OnceLock::new();
     TAM.get_or_init(|| {
-        let tam = crate::tam::generate(crate::tam::TamParams::new(6, 256, 1))?;
-        Ok(Arc::new(TamTexture::from_tam(&tam)?))
+        crate::tam::generate(crate::tam::TamParams::new(6, 256, 1))
+            .and_then(|tam| TamTexture::from_tam(&tam))
+            .map(Arc::new)
+            .map_err(|e| e.to_string())
     })
     .clone()
+    .map_err(TamError::Layout)
 }
 
 /// Maps tile and filter trilinearly.

@@ -29,7 +29,7 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
 use specula_raster::texture::Texture;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use tiny_skia::{LineCap, Paint, PathBuilder, Pixmap, Stroke, Transform};
 
 /// Darkness of the darkest tone.
@@ -48,6 +48,69 @@ pub(crate) const MIN_LEVEL_SIZE: u32 = 16;
 /// Strokes tried per tone and level before giving up (never reached for
 /// valid parameters; a guard against looping forever).
 const MAX_STROKES: usize = 200_000;
+
+/// What can go wrong generating, writing or reading a tonal art map. Each
+/// message names the option, tone and level, or file it is about.
+#[derive(Debug, thiserror::Error)]
+pub enum TamError {
+    /// A generation option out of range.
+    #[error("{option}: {reason}")]
+    Option {
+        option: &'static str,
+        reason: String,
+    },
+    /// A tone whose darkness the stroke budget could not reach.
+    #[error("tone {tone} level {level}: darkness {reached:.3} did not reach {target:.3} in {MAX_STROKES} strokes")]
+    Unreachable {
+        tone: usize,
+        level: usize,
+        reached: f64,
+        target: f64,
+    },
+    /// Reading or writing a file of the map.
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// `tam.json` is not a manifest.
+    #[error("{}: {source}", path.display())]
+    Manifest {
+        path: PathBuf,
+        source: serde_json::Error,
+    },
+    /// An image of the map could not be decoded or encoded.
+    #[error("{}: {source}", path.display())]
+    Image {
+        path: PathBuf,
+        source: image::ImageError,
+    },
+    /// A file whose content disagrees with the manifest or the limits.
+    #[error("{}: {reason}", path.display())]
+    Invalid { path: PathBuf, reason: String },
+    /// Tones, levels and darkness values that do not make a map.
+    #[error("{0}")]
+    Layout(String),
+    /// The caller's memory budget refused the map (its message).
+    #[error("{0}")]
+    Budget(String),
+}
+
+impl TamError {
+    fn io(path: &Path) -> impl FnOnce(std::io::Error) -> TamError + '_ {
+        move |source| TamError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+
+    fn image(path: &Path) -> impl FnOnce(image::ImageError) -> TamError + '_ {
+        move |source| TamError::Image {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+}
 
 /// What `specula tam` takes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
@@ -83,22 +146,31 @@ impl TamParams {
     }
 
     /// Checks the ranges; the error names the option.
-    pub(crate) fn validate(&self) -> Result<(), String> {
+    pub(crate) fn validate(&self) -> Result<(), TamError> {
         if !(1..=16).contains(&self.tones) {
-            return Err(format!("tones: must be in 1..=16, got {}", self.tones));
+            return Err(TamError::Option {
+                option: "tones",
+                reason: format!("must be in 1..=16, got {}", self.tones),
+            });
         }
         if !self.size.is_power_of_two() || !(MIN_LEVEL_SIZE..=4096).contains(&self.size) {
-            return Err(format!(
-                "size: must be a power of two in {MIN_LEVEL_SIZE}..=4096, got {}",
-                self.size
-            ));
+            return Err(TamError::Option {
+                option: "size",
+                reason: format!(
+                    "must be a power of two in {MIN_LEVEL_SIZE}..=4096, got {}",
+                    self.size
+                ),
+            });
         }
         let max = Self::max_levels(self.size);
         if !(1..=max).contains(&self.levels) {
-            return Err(format!(
-                "levels: must be in 1..={max} for size {} (the smallest level is at least {MIN_LEVEL_SIZE}×{MIN_LEVEL_SIZE}), got {}",
-                self.size, self.levels
-            ));
+            return Err(TamError::Option {
+                option: "levels",
+                reason: format!(
+                    "must be in 1..={max} for size {} (the smallest level is at least {MIN_LEVEL_SIZE}×{MIN_LEVEL_SIZE}), got {}",
+                    self.size, self.levels
+                ),
+            });
         }
         Ok(())
     }
@@ -182,7 +254,7 @@ pub fn grey_darkness(img: &[u8]) -> f64 {
 }
 
 /// Generates a map; see the module docs.
-pub fn generate(params: TamParams) -> Result<Tam, String> {
+pub fn generate(params: TamParams) -> Result<Tam, TamError> {
     params.validate()?;
     let mut rng = ChaCha8Rng::seed_from_u64(params.seed);
     let sizes: Vec<u32> = (0..params.levels).map(|l| params.level_size(l)).collect();
@@ -205,10 +277,12 @@ pub fn generate(params: TamParams) -> Result<Tam, String> {
             while dark[l] < target - TOLERANCE {
                 tries += 1;
                 if tries > MAX_STROKES {
-                    return Err(format!(
-                        "tone {t} level {l}: darkness {:.3} did not reach {target:.3} in {MAX_STROKES} strokes",
-                        dark[l]
-                    ));
+                    return Err(TamError::Unreachable {
+                        tone: t,
+                        level: l,
+                        reached: dark[l],
+                        target,
+                    });
                 }
                 let along_v = cross && rng.random_bool(0.5);
                 let base = if along_v {
@@ -304,19 +378,24 @@ impl Tam {
     }
 
     /// Writes the PNGs and `tam.json` into `dir` (created if missing).
-    pub fn write_dir(&self, dir: &Path) -> Result<(), String> {
-        std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+    pub fn write_dir(&self, dir: &Path) -> Result<(), TamError> {
+        std::fs::create_dir_all(dir).map_err(TamError::io(dir))?;
         for (t, tone) in self.images.iter().enumerate() {
             for (l, img) in tone.iter().enumerate() {
                 let n = self.params.level_size(l);
                 let path = dir.join(file_name(t, l));
                 image::save_buffer(&path, img, n, n, image::ExtendedColorType::L8)
-                    .map_err(|e| format!("{}: {e}", path.display()))?;
+                    .map_err(TamError::image(&path))?;
             }
         }
-        let json = serde_json::to_string_pretty(&self.manifest()).map_err(|e| e.to_string())?;
         let path = dir.join("tam.json");
-        std::fs::write(&path, json + "\n").map_err(|e| format!("{}: {e}", path.display()))
+        let json = serde_json::to_string_pretty(&self.manifest()).map_err(|source| {
+            TamError::Manifest {
+                path: path.clone(),
+                source,
+            }
+        })?;
+        std::fs::write(&path, json + "\n").map_err(TamError::io(&path))
     }
 }
 
@@ -337,24 +416,26 @@ impl TamTexture {
         images: &[Vec<Vec<u8>>],
         size: u32,
         darkness: &[f64],
-    ) -> Result<TamTexture, String> {
+    ) -> Result<TamTexture, TamError> {
         let tones = images.len();
         if tones == 0 || darkness.len() != tones {
-            return Err(format!(
+            return Err(TamError::Layout(format!(
                 "a tonal art map needs at least one tone and one darkness per tone ({tones} tones, {} darkness values)",
                 darkness.len()
-            ));
+            )));
         }
         if darkness.windows(2).any(|w| w[1] <= w[0])
             || darkness.iter().any(|d| !(*d > 0.0 && *d <= 1.0))
         {
-            return Err(format!(
+            return Err(TamError::Layout(format!(
                 "tone darkness must increase strictly within (0, 1], got {darkness:?}"
-            ));
+            )));
         }
         let levels = images[0].len();
         if images.iter().any(|t| t.len() != levels) || levels == 0 {
-            return Err("every tone needs the same number of levels (≥ 1)".into());
+            return Err(TamError::Layout(
+                "every tone needs the same number of levels (≥ 1)".into(),
+            ));
         }
         let c = tones + 1;
         let mut out = Vec::with_capacity(levels);
@@ -364,10 +445,10 @@ impl TamTexture {
             for (t, tone) in images.iter().enumerate() {
                 let img = &tone[l];
                 if img.len() != n * n {
-                    return Err(format!(
+                    return Err(TamError::Layout(format!(
                         "tone {t} level {l}: {} pixels, expected {n}×{n}",
                         img.len()
-                    ));
+                    )));
                 }
                 for (i, &v) in img.iter().enumerate() {
                     data[i * c + t + 1] = v as f32 / 255.0;
@@ -376,19 +457,19 @@ impl TamTexture {
             out.push((n, n, data));
         }
         Ok(TamTexture {
-            texture: Texture::from_levels(c, out)?,
+            texture: Texture::from_levels(c, out).map_err(TamError::Layout)?,
             darkness: std::iter::once(0.0)
                 .chain(darkness.iter().map(|&d| d as f32))
                 .collect(),
         })
     }
 
-    pub fn from_tam(tam: &Tam) -> Result<TamTexture, String> {
+    pub fn from_tam(tam: &Tam) -> Result<TamTexture, TamError> {
         TamTexture::new(&tam.images, tam.params.size, &tam.darkness)
     }
 
     /// Reads a directory written by [`Tam::write_dir`]; errors name the file.
-    pub fn read_dir(dir: &Path) -> Result<TamTexture, String> {
+    pub fn read_dir(dir: &Path) -> Result<TamTexture, TamError> {
         TamTexture::read_with(dir, &|p: &Path| std::fs::read(p))
     }
 
@@ -397,7 +478,7 @@ impl TamTexture {
     pub fn read_with(
         dir: &Path,
         read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-    ) -> Result<TamTexture, String> {
+    ) -> Result<TamTexture, TamError> {
         TamTexture::read_with_budget(dir, read, &|_, _| Ok(()))
     }
 
@@ -410,23 +491,30 @@ impl TamTexture {
         dir: &Path,
         read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
         reserve: &dyn Fn(&str, u64) -> Result<(), String>,
-    ) -> Result<TamTexture, String> {
+    ) -> Result<TamTexture, TamError> {
         let path = dir.join("tam.json");
-        let bytes = read(&path).map_err(|e| format!("{}: {e}", path.display()))?;
-        let m: Manifest =
-            serde_json::from_slice(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+        let bytes = read(&path).map_err(TamError::io(&path))?;
+        let m: Manifest = serde_json::from_slice(&bytes).map_err(|source| TamError::Manifest {
+            path: path.clone(),
+            source,
+        })?;
+        let invalid = |path: &Path, reason: String| TamError::Invalid {
+            path: path.to_path_buf(),
+            reason,
+        };
         if m.sizes.len() != m.levels || m.darkness.len() != m.tones || m.levels == 0 {
-            return Err(format!(
-                "{}: sizes must list the {} levels and darkness the {} tones",
-                path.display(),
-                m.levels,
-                m.tones
+            return Err(invalid(
+                &path,
+                format!(
+                    "sizes must list the {} levels and darkness the {} tones",
+                    m.levels, m.tones
+                ),
             ));
         }
         if m.tones > 64 || m.sizes.iter().any(|&n| n == 0 || n > 8192) {
-            return Err(format!(
-                "{}: at most 64 tones of at most 8192×8192",
-                path.display()
+            return Err(invalid(
+                &path,
+                "at most 64 tones of at most 8192×8192".into(),
             ));
         }
         reserve(
@@ -438,42 +526,34 @@ impl TamTexture {
                 m.sizes[0]
             ),
             manifest_bytes(&m),
-        )?;
+        )
+        .map_err(TamError::Budget)?;
         let mut images = Vec::with_capacity(m.tones);
         for t in 0..m.tones {
             let mut tone = Vec::with_capacity(m.levels);
             for (l, &n) in m.sizes.iter().enumerate() {
                 let p = dir.join(file_name(t, l));
-                let bytes = read(&p).map_err(|e| format!("{}: {e}", p.display()))?;
+                let bytes = read(&p).map_err(TamError::io(&p))?;
                 let header = image::ImageReader::new(std::io::Cursor::new(&bytes))
                     .with_guessed_format()
-                    .map_err(|e| format!("{}: {e}", p.display()))?
+                    .map_err(TamError::io(&p))?
                     .into_dimensions()
-                    .map_err(|e| format!("{}: {e}", p.display()))?;
+                    .map_err(TamError::image(&p))?;
+                let wrong_size =
+                    |(w, h): (u32, u32)| invalid(&p, format!("is {w}×{h}, tam.json says {n}×{n}"));
                 if header != (n, n) {
-                    return Err(format!(
-                        "{}: is {}×{}, tam.json says {n}×{n}",
-                        p.display(),
-                        header.0,
-                        header.1
-                    ));
+                    return Err(wrong_size(header));
                 }
                 let img = image::load_from_memory(&bytes)
-                    .map_err(|e| format!("{}: {e}", p.display()))?
+                    .map_err(TamError::image(&p))?
                     .to_luma8();
                 if img.dimensions() != (n, n) {
-                    return Err(format!(
-                        "{}: is {}×{}, tam.json says {n}×{n}",
-                        p.display(),
-                        img.width(),
-                        img.height()
-                    ));
+                    return Err(wrong_size(img.dimensions()));
                 }
                 tone.push(img.into_raw());
             }
             images.push(tone);
         }
-        TamTexture::new(&images, m.sizes[0], &m.darkness)
-            .map_err(|e| format!("{}: {e}", dir.display()))
+        TamTexture::new(&images, m.sizes[0], &m.darkness).map_err(|e| invalid(dir, e.to_string()))
     }
 }
