@@ -26,3 +26,21 @@ pub mod posterize;
 pub mod sobel;
 pub mod tam;
 pub mod toon;
+
+/// A parameter out of range: the field it is about (as the scene names
+/// it) and why.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{field}: {reason}")]
+pub struct ParamError {
+    pub field: String,
+    pub reason: String,
+}
+
+impl ParamError {
+    pub(crate) fn new(field: impl Into<String>, reason: String) -> ParamError {
+        ParamError {
+            field: field.into(),
+            reason,
+        }
+    }
+}

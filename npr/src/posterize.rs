@@ -10,6 +10,7 @@
 //! codes per channel. The cut points are computed once (in f64) when the
 //! stage is made; a pixel costs one short search, no `powf`.
 
+use crate::ParamError;
 use specula_raster::post::{srgb_curve_inverse, HdrImage, PostStage};
 use specula_raster::FrameBuffers;
 
@@ -41,9 +42,12 @@ const LUMA: [f32; 3] = [0.2126, 0.7152, 0.0722];
 
 impl Posterize {
     /// `levels` in 2..=256.
-    pub fn new(levels: u32, mode: PosterizeMode) -> Result<Posterize, String> {
+    pub fn new(levels: u32, mode: PosterizeMode) -> Result<Posterize, ParamError> {
         if !(2..=256).contains(&levels) {
-            return Err(format!("levels: must be in 2..=256, got {levels}"));
+            return Err(ParamError::new(
+                "levels",
+                format!("must be in 2..=256, got {levels}"),
+            ));
         }
         let n = (levels - 1) as f64;
         Ok(Posterize {

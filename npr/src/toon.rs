@@ -17,6 +17,7 @@
 //! model's are (raster's maps.rs).
 
 use crate::lights::for_each_light_shadowed;
+use crate::ParamError;
 use specula_core::{LaneParams, Real, Rgb};
 use specula_raster::maps::ParamMaps;
 use specula_raster::{PacketShader, ShadeEnv, ShadeInput};
@@ -31,9 +32,12 @@ pub struct Ramp {
 
 impl Ramp {
     /// `n` bands of equal width over n·l ∈ (0, 1] (module docs).
-    pub fn bands(n: u32) -> Result<Ramp, String> {
+    pub fn bands(n: u32) -> Result<Ramp, ParamError> {
         if !(1..=64).contains(&n) {
-            return Err(format!("bands: must be in 1..=64, got {n}"));
+            return Err(ParamError::new(
+                "bands",
+                format!("must be in 1..=64, got {n}"),
+            ));
         }
         Ok(Ramp {
             steps: (0..n)
@@ -45,23 +49,30 @@ impl Ramp {
 
     /// An explicit ramp: colour `c_i` from `e_i` (in [−1, 1], strictly
     /// increasing) up to the next edge; black below the first.
-    pub fn explicit(steps: Vec<(f32, [f32; 3])>) -> Result<Ramp, String> {
+    pub fn explicit(steps: Vec<(f32, [f32; 3])>) -> Result<Ramp, ParamError> {
         if steps.is_empty() || steps.len() > 64 {
-            return Err(format!("ramp: needs 1 to 64 entries, got {}", steps.len()));
+            return Err(ParamError::new(
+                "ramp",
+                format!("needs 1 to 64 entries, got {}", steps.len()),
+            ));
         }
         for (i, (e, c)) in steps.iter().enumerate() {
             if !(-1.0..=1.0).contains(e) {
-                return Err(format!("ramp[{i}]: edge must be in [-1, 1], got {e}"));
+                return Err(ParamError::new(
+                    format!("ramp[{i}]"),
+                    format!("edge must be in [-1, 1], got {e}"),
+                ));
             }
             if i > 0 && *e <= steps[i - 1].0 {
-                return Err(format!(
-                    "ramp[{i}]: edges must increase, got {e} after {}",
-                    steps[i - 1].0
+                return Err(ParamError::new(
+                    format!("ramp[{i}]"),
+                    format!("edges must increase, got {e} after {}", steps[i - 1].0),
                 ));
             }
             if !c.iter().all(|v| v.is_finite() && *v >= 0.0) {
-                return Err(format!(
-                    "ramp[{i}]: colour components must be finite and ≥ 0, got {c:?}"
+                return Err(ParamError::new(
+                    format!("ramp[{i}]"),
+                    format!("colour components must be finite and ≥ 0, got {c:?}"),
                 ));
             }
         }

@@ -77,9 +77,9 @@ fn values_go_to_the_level_nearest_in_encoded_terms() {
     assert_eq!(p.quantize(f32::NAN), 0.0);
     assert_eq!(p.quantize(-3.0), 0.0);
     assert_eq!(p.quantize(7.0), 1.0);
-    assert!(Posterize::new(1, PosterizeMode::Rgb)
-        .unwrap_err()
-        .contains("levels"));
+    let err = Posterize::new(1, PosterizeMode::Rgb).unwrap_err();
+    assert_eq!(err.field, "levels");
+    assert!(err.to_string().starts_with("levels: "), "{err}");
 }
 
 #[test]

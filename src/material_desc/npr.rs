@@ -77,9 +77,9 @@ impl ToonDesc {
                 for (i, (_, color)) in r.iter().enumerate() {
                     checks::linear_color(&format!("ramp[{i}]"), *color)?;
                 }
-                Ramp::explicit(r.clone())?
+                Ramp::explicit(r.clone()).map_err(|e| e.to_string())?
             }
-            (b, None) => Ramp::bands(b.unwrap_or(3))?,
+            (b, None) => Ramp::bands(b.unwrap_or(3)).map_err(|e| e.to_string())?,
         };
         let hard = |field: &str, t: Option<f32>, color: [f32; 3], cfield: &str| {
             t.map(|t| {
