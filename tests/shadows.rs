@@ -227,6 +227,18 @@ shadows = "pcss"
         let e = load(extra);
         assert!(e.contains(field), "{extra}: {e}");
     }
+    // Cascades belong to directional lights, 1 to 4 of them.
+    let sun = "[[light]]\ntype = \"directional\"\ndirection = [0.0, -1.0, 0.0]\nirradiance = [1.0, 1.0, 1.0]\nshadows = \"pcf\"\n";
+    for bad in ["cascades = 0", "cascades = 5", "cascades = -1"] {
+        let e = load(&format!("{sun}{bad}"));
+        assert!(e.contains("light[2].cascades"), "{bad}: {e}");
+    }
+    assert!(
+        load(&format!("{sun}cascades = 4")).is_empty(),
+        "4 cascades load"
+    );
+    let e = load("cascades = 2");
+    assert!(e.contains("cascades"), "a spot light's cascades: {e}");
     assert!(load("").is_empty(), "the defaults load");
 }
 
@@ -355,4 +367,88 @@ shadow_map_size = 2048
         (w_ours / w_exact - 1.0).abs() <= 0.2,
         "penumbra width {w_ours} against {w_exact}"
     );
+}
+
+/// The 8-lane lookup gives each lane the scalar lookup's bits when the
+/// lanes spread over a directional light's cascades and a point light's
+/// cube faces (hard and PCF), and for PCSS (lane by lane).
+#[test]
+#[allow(clippy::needless_range_loop)]
+fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
+    use specula_core::{f32x8, Real, V3};
+    let mut rng = 0x9e37_79b9_7f4a_7c15u64;
+    let mut next = move || {
+        rng ^= rng << 13;
+        rng ^= rng >> 7;
+        rng ^= rng << 17;
+        (rng >> 40) as f32 / (1u64 << 24) as f32
+    };
+    let cases = [
+        ("shadows_cascades.toml", 0, 4, "hard"),
+        ("shadows_cascades.toml", 0, 3, "pcf"),
+        ("shadows_cascades.toml", 0, 2, "pcss"),
+        ("shadows.toml", 2, 1, "hard"),
+        ("shadows.toml", 2, 1, "pcf"),
+    ];
+    for (file, k, cascades, filter) in cases {
+        let mut s = specula::scene::load_scene(&common::fixtures().join("scenes").join(file))
+            .expect("fixture scene");
+        let light = s.data.lights[k].clone();
+        s.data.lights = vec![light];
+        let mut settings = s.data.shadows[k].expect("a shadowed light");
+        settings.cascades = cascades;
+        settings.map_size = 256;
+        settings.filter = match filter {
+            "hard" => specula_raster::shadow::ShadowFilter::Hard,
+            "pcf" => specula_raster::shadow::ShadowFilter::Pcf,
+            _ => specula_raster::shadow::ShadowFilter::Pcss,
+        };
+        s.data.shadows = vec![Some(settings)];
+        let target = Target::new(96, 54).unwrap();
+        let v = visibility(&s.data, &target, &mut FrameStats::default());
+        let ls = v.shadows.light(0).expect("the light's maps");
+        let (lo, hi) = s
+            .data
+            .positions
+            .iter()
+            .fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(*p), hi.max(*p))
+            });
+        let mut shadowed = 0;
+        for _ in 0..4000 {
+            // Points on and above the floor spread over the scene, normals
+            // mostly up, some lanes off.
+            let mut c = [[0.0f32; 8]; 6];
+            for l in 0..8 {
+                let y = if next() < 0.7 { 0.0 } else { next() * 2.0 };
+                c[0][l] = lo.x + (hi.x - lo.x) * next();
+                c[1][l] = y;
+                c[2][l] = lo.z + (hi.z - lo.z) * next();
+                let n = Vec3::new(next() - 0.5, 2.0, next() - 0.5).normalize();
+                (c[3][l], c[4][l], c[5][l]) = (n.x, n.y, n.z);
+            }
+            let lanes = (next() * 256.0) as u32 | 1;
+            let p = V3::new(f32x8::load(&c[0]), f32x8::load(&c[1]), f32x8::load(&c[2]));
+            let n = V3::new(f32x8::load(&c[3]), f32x8::load(&c[4]), f32x8::load(&c[5]));
+            let got = ls.visibility_lanes(&p, &n, lanes);
+            for l in 0..8 {
+                let want = if lanes & (1 << l) != 0 {
+                    ls.visibility(
+                        Vec3::new(c[0][l], c[1][l], c[2][l]),
+                        Vec3::new(c[3][l], c[4][l], c[5][l]),
+                    )
+                } else {
+                    1.0
+                };
+                shadowed += (want < 1.0) as u32;
+                assert_eq!(
+                    (got.lane(l) as f32).to_bits(),
+                    want.to_bits(),
+                    "{file} light {k}, {cascades} cascades, {filter}: lane {l}"
+                );
+            }
+        }
+        assert!(shadowed > 100, "{file} {filter}: some points in shadow");
+        assert_eq!(ls.faces(), if k == 2 { 6 } else { cascades as usize });
+    }
 }

@@ -407,8 +407,8 @@ fn lights_from_polygon<B: Brdf, R: Real>(
 }
 
 /// The reflected radiance of `lights` when some have shadow maps: each
-/// delta light's part times its shadow factor at the packet's points
-/// (polygon lights unshadowed). Out of line, like [`lights_from_polygon`],
+/// light's part times its shadow factor at the packet's points (a polygon
+/// light's part is its unshadowed integral). Out of line, like [`lights_from_polygon`],
 /// so scenes without shadows keep the light loop as it was; the
 /// parameters, the frame and the prepared view are made again here.
 #[inline(never)]
@@ -442,8 +442,28 @@ fn shadowed_lights<B: Brdf, R: Real>(
             None => add_delta_light(brdf, prepared, frag, frame, light, acc),
         };
     }
-    if B::POLYGON_LIGHTS && polygons {
-        acc += lights_from_polygon(brdf, maps, input, lights, false);
+    if !(B::POLYGON_LIGHTS && polygons) {
+        return acc;
+    }
+    let shadowed_polygon =
+        |(k, l): (usize, &Light)| matches!(l, Light::Polygon { .. }) && shadows.light(k).is_some();
+    if !lights.iter().enumerate().any(shadowed_polygon) {
+        return acc + lights_from_polygon(brdf, maps, input, lights, false);
+    }
+    // Each polygon light's unshadowed integral times its shadow factor
+    // (the visibility ratio its cube map estimates).
+    for (k, light) in lights.iter().enumerate() {
+        if !matches!(light, Light::Polygon { .. }) {
+            continue;
+        }
+        let part = lights_from_polygon(brdf, maps, input, std::slice::from_ref(light), false);
+        acc = match shadows.light(k) {
+            Some(shadow) => part.mul_elem_add(
+                V3::splat(shadow.visibility_lanes(&frag.p, &frag.n, input.lanes)),
+                acc,
+            ),
+            None => acc + part,
+        };
     }
     acc
 }

@@ -56,7 +56,17 @@ pub struct ShadowSettings {
     /// PCSS: the light's diameter in world units (directional lights: the
     /// tangent of its angular diameter).
     pub light_size: f32,
+    /// Directional lights: maps along the view's depth (1..=4), each
+    /// `map_size` a side ([`cascade_splits`]); 1 for other lights.
+    pub cascades: u32,
 }
+
+/// Largest number of cascades of a directional light.
+pub const MAX_CASCADES: u32 = 4;
+
+/// The practical split scheme's blend between logarithmic (1) and uniform
+/// (0) split depths.
+pub const CASCADE_LAMBDA: f32 = 0.75;
 
 /// Largest accepted map side.
 pub const MAX_MAP_SIZE: u32 = 8192;
@@ -70,6 +80,7 @@ impl Default for ShadowSettings {
             normal_bias: 1.0,
             filter_radius: 1.5,
             light_size: 0.1,
+            cascades: 1,
         }
     }
 }
@@ -81,6 +92,12 @@ impl ShadowSettings {
             return Err(format!(
                 "shadow_map_size: must be 1..={MAX_MAP_SIZE} texels, got {}",
                 self.map_size
+            ));
+        }
+        if !(1..=MAX_CASCADES).contains(&self.cascades) {
+            return Err(format!(
+                "cascades: must be 1..={MAX_CASCADES}, got {}",
+                self.cascades
             ));
         }
         let fields = [
@@ -100,9 +117,10 @@ impl ShadowSettings {
     }
 
     /// Faces of a light's map: 6 for a point light, 1 otherwise.
-    pub fn faces(light: &Light) -> u32 {
+    pub fn faces(&self, light: &Light) -> u32 {
         match light {
-            Light::Point { .. } => 6,
+            Light::Point { .. } | Light::Polygon { .. } => 6,
+            Light::Directional { .. } => self.cascades,
             _ => 1,
         }
     }
@@ -111,7 +129,7 @@ impl ShadowSettings {
     /// linear depth kept for lookups).
     pub fn bytes(&self, light: &Light) -> u64 {
         let side = (self.map_size as u64).div_ceil(64) * 64;
-        side * side * 12 * Self::faces(light) as u64
+        side * side * 12 * self.faces(light) as u64
     }
 
     /// Texels a lookup may read away from its centre texel.
@@ -152,10 +170,28 @@ struct Face {
 pub struct LightShadow {
     pub settings: ShadowSettings,
     faces: Vec<Face>,
-    /// Point lights: the light's position (cube face selection).
-    cube_centre: Option<Vec3>,
+    /// How a point picks its face.
+    pick: Pick,
     /// The frames' working buffers of each face's depth pass.
     passes: Vec<Option<Visibility>>,
+}
+
+/// How a shaded point picks one of a light's faces.
+#[derive(Clone, Debug, Default)]
+enum Pick {
+    /// The only face.
+    #[default]
+    One,
+    /// A point light's cube around this centre: the face of the largest
+    /// coordinate of the point's offset from it.
+    Cube(Vec3),
+    /// A directional light's cascades: the point's view depth
+    /// ((p − eye) · forward) against the split depths between them.
+    Cascades {
+        eye: Vec3,
+        forward: Vec3,
+        splits: Vec<f32>,
+    },
 }
 
 /// Every shadowed light's maps for one frame, by light index.
@@ -207,13 +243,15 @@ impl ShadowMaps {
                 self.lights[k] = None;
                 continue;
             };
-            let Some((faces, cube_centre)) = light_faces(&settings, light, &bounds, view) else {
+            let Some((faces, pick)) =
+                light_faces(&settings, light, &bounds, view, scene.camera.near)
+            else {
                 self.lights[k] = None;
                 continue;
             };
             let ls = self.lights[k].get_or_insert_with(LightShadow::default);
             ls.settings = settings;
-            ls.cube_centre = cube_centre;
+            ls.pick = pick;
             // The previous frame's depth buffers are refilled, not reallocated.
             let mut faces = faces;
             for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
@@ -229,24 +267,44 @@ impl ShadowMaps {
     }
 }
 
-/// The maps of `light` (and a point light's position), or `None` for a
-/// light without shadow maps.
+/// The maps of `light` and how a point picks one, or `None` for a light
+/// without shadow maps. `near` is the camera's near distance.
 fn light_faces(
     settings: &ShadowSettings,
     light: &Light,
     bounds: &Bounds,
     view: &View,
-) -> Option<(Vec<Face>, Option<Vec3>)> {
+    near: f32,
+) -> Option<(Vec<Face>, Pick)> {
     Some(match light {
-        Light::Directional { to_light, .. } => (
-            vec![directional_face(
-                settings,
-                Vec3::from(*to_light),
-                bounds,
-                view,
-            )],
-            None,
-        ),
+        Light::Directional { to_light, .. } => {
+            let to_light = Vec3::from(*to_light);
+            // The view frustum out to the farthest scene corner.
+            let far = bounds
+                .corners()
+                .iter()
+                .map(|c| (*c - view.eye).dot(view.forward))
+                .fold(0.0f32, f32::max);
+            let first = far * 1e-4;
+            if settings.cascades <= 1 || far <= 0.0 {
+                let face = directional_face(settings, to_light, bounds, view, (first, far));
+                return Some((vec![face], Pick::One));
+            }
+            let splits = cascade_splits(settings.cascades, near.max(first), far);
+            let faces = (0..splits.len() + 1)
+                .map(|i| {
+                    let d0 = if i == 0 { first } else { splits[i - 1] };
+                    let d1 = splits.get(i).copied().unwrap_or(far);
+                    directional_face(settings, to_light, bounds, view, (d0, d1))
+                })
+                .collect();
+            let pick = Pick::Cascades {
+                eye: view.eye,
+                forward: view.forward,
+                splits,
+            };
+            (faces, pick)
+        }
         Light::Spot {
             position,
             direction,
@@ -262,7 +320,7 @@ fn light_faces(
                 tan_half,
                 bounds,
             );
-            (vec![face], None)
+            (vec![face], Pick::One)
         }
         Light::Point { position, .. } => {
             let pos = Vec3::from(*position);
@@ -273,10 +331,73 @@ fn light_faces(
                 .iter()
                 .map(|a| perspective_face(settings, pos, *a, tan_half, bounds))
                 .collect();
-            (faces, Some(pos))
+            (faces, Pick::Cube(pos))
         }
-        Light::Polygon { .. } => return None,
+        Light::Polygon {
+            vertices,
+            two_sided,
+            ..
+        } => {
+            let (centre, normal, _) = polygon_shape(vertices)?;
+            // A one-sided polygon's cube sits a hair in front of it, so its
+            // own triangles lie behind the centre instead of through it.
+            let pos = if *two_sided {
+                centre
+            } else {
+                centre + normal * (bounds.diagonal() * 1e-4)
+            };
+            let n = settings.map_size as f32;
+            let margin = settings.reach().ceil().min(n / 4.0);
+            let tan_half = n / (n - 2.0 * margin);
+            let faces = CUBE_AXES
+                .iter()
+                .map(|a| perspective_face(settings, pos, *a, tan_half, bounds))
+                .collect();
+            (faces, Pick::Cube(pos))
+        }
     })
+}
+
+/// A polygon's vertex mean, unit normal (Newell's, toward the side a
+/// counter-clockwise polygon faces) and area, or `None` when it has no
+/// area.
+fn polygon_shape(vertices: &[[f32; 3]]) -> Option<(Vec3, Vec3, f32)> {
+    let v: Vec<Vec3> = vertices.iter().map(|p| Vec3::from(*p)).collect();
+    if v.len() < 3 {
+        return None;
+    }
+    let centre = v.iter().copied().sum::<Vec3>() / v.len() as f32;
+    let twice = (0..v.len())
+        .map(|i| (v[i] - centre).cross(v[(i + 1) % v.len()] - centre))
+        .sum::<Vec3>();
+    let area = 0.5 * twice.length();
+    (area > 0.0 && area.is_finite()).then(|| (centre, twice.normalize(), area))
+}
+
+/// The PCSS light size of a polygon light: the diameter of the disk of
+/// the polygon's area (0 for a polygon without area).
+pub fn polygon_light_size(vertices: &[[f32; 3]]) -> f32 {
+    polygon_shape(vertices).map_or(0.0, |(_, _, a)| 2.0 * (a / std::f32::consts::PI).sqrt())
+}
+
+/// The `count − 1` view depths between `count` cascades over the view
+/// depths `near..far`: the practical split scheme, a blend by
+/// [`CASCADE_LAMBDA`] of the logarithmic split near·(far/near)^(i/count)
+/// and the uniform one near + (far − near)·i/count.
+pub fn cascade_splits(count: u32, near: f32, far: f32) -> Vec<f32> {
+    if !(far > 0.0 && far.is_finite()) {
+        return vec![0.0; count.saturating_sub(1) as usize];
+    }
+    // At most 1e6 between near and far, so the powers stay finite.
+    let near = near.max(far * 1e-6).min(far);
+    (1..count)
+        .map(|i| {
+            let t = i as f32 / count as f32;
+            let log = near * (far / near).powf(t);
+            let uniform = near + (far - near) * t;
+            CASCADE_LAMBDA * log + (1.0 - CASCADE_LAMBDA) * uniform
+        })
+        .collect()
 }
 
 /// Widest half-angle a spot light's map covers (degrees); points outside
@@ -336,9 +457,15 @@ fn up_for(axis: Vec3) -> Vec3 {
 }
 
 /// The orthographic map of a directional light toward `to_light`: across
-/// the light, the scene's bounds cut to the camera frustum's (as far as the
-/// scene reaches); along it, the whole scene.
-fn directional_face(s: &ShadowSettings, to_light: Vec3, b: &Bounds, view: &View) -> Face {
+/// the light, the scene's bounds cut to the camera frustum's slice between
+/// view depths `slice.0` and `slice.1`; along it, the whole scene.
+fn directional_face(
+    s: &ShadowSettings,
+    to_light: Vec3,
+    b: &Bounds,
+    view: &View,
+    slice: (f32, f32),
+) -> Face {
     let axis = -to_light.normalize();
     let right = axis.cross(up_for(axis)).normalize();
     let up = right.cross(axis);
@@ -347,15 +474,9 @@ fn directional_face(s: &ShadowSettings, to_light: Vec3, b: &Bounds, view: &View)
     for c in b.corners() {
         (lo, hi) = (lo.min(lx(c)), hi.max(lx(c)));
     }
-    // The view frustum out to the farthest scene corner.
-    let far = b
-        .corners()
-        .iter()
-        .map(|c| (*c - view.eye).dot(view.forward))
-        .fold(0.0f32, f32::max);
-    if far > 0.0 {
+    if slice.1 > 0.0 {
         let (mut flo, mut fhi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
-        for d in [far * 1e-4, far] {
+        for d in [slice.0, slice.1] {
             for (sx, sy) in [(-1.0, -1.0), (1.0, -1.0), (-1.0, 1.0), (1.0, 1.0)] {
                 let p = view.eye
                     + (view.forward + view.right * (sx * view.tan_x) + view.up * (sy * view.tan_y))
@@ -530,21 +651,40 @@ impl Face {
 }
 
 impl LightShadow {
+    /// The index of the face that sees `p`.
+    fn face_index(&self, p: Vec3) -> usize {
+        match &self.pick {
+            Pick::One => 0,
+            Pick::Cube(c) => {
+                let d = p - *c;
+                let a = d.abs();
+                if a.x >= a.y && a.x >= a.z {
+                    (d.x < 0.0) as usize
+                } else if a.y >= a.z {
+                    2 + (d.y < 0.0) as usize
+                } else {
+                    4 + (d.z < 0.0) as usize
+                }
+            }
+            Pick::Cascades {
+                eye,
+                forward,
+                splits,
+            } => {
+                let depth = (p - *eye).dot(*forward);
+                splits.iter().filter(|s| **s <= depth).count()
+            }
+        }
+    }
+
     /// The face that sees `p`.
     fn face_for(&self, p: Vec3) -> &Face {
-        let Some(c) = self.cube_centre else {
-            return &self.faces[0];
-        };
-        let d = p - c;
-        let a = d.abs();
-        let i = if a.x >= a.y && a.x >= a.z {
-            (d.x < 0.0) as usize
-        } else if a.y >= a.z {
-            2 + (d.y < 0.0) as usize
-        } else {
-            4 + (d.z < 0.0) as usize
-        };
-        &self.faces[i]
+        &self.faces[self.face_index(p)]
+    }
+
+    /// Maps this light renders (a cube's faces, cascades, or one).
+    pub fn faces(&self) -> usize {
+        self.faces.len()
     }
 
     /// The fraction of the light reaching world point `p` with unit
@@ -614,16 +754,26 @@ impl LightShadow {
     }
 
     /// [`LightShadow::visibility`] of each lane of `p`, `n` in `lanes`
-    /// (1 elsewhere), bit for bit. Hard and PCF lookups run on all lanes at
-    /// once ([`LightShadow::visibility_packet`]) when the packet's points
-    /// fall on one face of a map small enough for exact f32 gather
-    /// indices; PCSS (whose search and filter widths differ per lane), a
-    /// packet spread over cube faces and larger maps go lane by lane.
+    /// (1 elsewhere), bit for bit. Hard and PCF lookups on maps small
+    /// enough for exact f32 gather indices run on all lanes at once
+    /// ([`LightShadow::visibility_packet`]): each lane picks its face (cube
+    /// face or cascade) as the scalar lookup does, and each face present
+    /// runs once under its lanes' mask. PCSS (whose search and filter
+    /// widths differ per lane) and larger maps go lane by lane.
     pub fn visibility_lanes<R: Real>(&self, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
-        if self.settings.filter != ShadowFilter::Pcss {
-            if let Some(face) = self.packet_face(p, lanes) {
-                return self.visibility_packet(face, p, n, lanes);
+        if self.settings.filter != ShadowFilter::Pcss && self.faces[0].size <= MAX_PACKET_MAP {
+            if self.faces.len() == 1 {
+                return self.visibility_packet(&self.faces[0], p, n, lanes);
             }
+            let masks = self.face_masks(p, lanes);
+            let mut out = R::ONE;
+            for (face, m) in self.faces.iter().zip(masks) {
+                if m != 0 {
+                    let f = self.visibility_packet(face, p, n, m);
+                    out = R::select(R::mask_from_bits(m), f, out);
+                }
+            }
+            return out;
         }
         let mut c = [[0.0f32; 8]; 6];
         for (out, v) in c.iter_mut().zip([p.x, p.y, p.z, n.x, n.y, n.z]) {
@@ -641,28 +791,16 @@ impl LightShadow {
         R::load(&f)
     }
 
-    /// The one face every finite point of the packet's `lanes` falls on,
-    /// if its map is at most [`MAX_PACKET_MAP`] on a side.
-    fn packet_face<R: Real>(&self, p: &V3<R>, lanes: u32) -> Option<&Face> {
-        let face = match self.cube_centre {
-            None => &self.faces[0],
-            Some(_) => {
-                let mut seen: Option<&Face> = None;
-                for i in (0..R::LANES).filter(|i| lanes & (1 << i) != 0) {
-                    let q = Vec3::new(p.x.lane(i) as f32, p.y.lane(i) as f32, p.z.lane(i) as f32);
-                    if !q.is_finite() {
-                        continue;
-                    }
-                    let f = self.face_for(q);
-                    match seen {
-                        Some(s) if !std::ptr::eq(s, f) => return None,
-                        _ => seen = Some(f),
-                    }
-                }
-                seen?
-            }
-        };
-        (face.size <= MAX_PACKET_MAP).then_some(face)
+    /// Per face, the mask of the `lanes` whose point it sees (a lane with
+    /// a non-finite point goes to face 0, whose lookup gives it 1).
+    fn face_masks<R: Real>(&self, p: &V3<R>, lanes: u32) -> [u32; 6] {
+        let mut masks = [0u32; 6];
+        for i in (0..R::LANES).filter(|i| lanes & (1 << i) != 0) {
+            let q = Vec3::new(p.x.lane(i) as f32, p.y.lane(i) as f32, p.z.lane(i) as f32);
+            let f = if q.is_finite() { self.face_index(q) } else { 0 };
+            masks[f] |= 1 << i;
+        }
+        masks
     }
 
     /// [`LightShadow::visibility`] on every lane at once, for a hard or
@@ -832,4 +970,56 @@ pub fn pixel_shadows(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The split depths of 4 cascades over 1..10000: the logarithmic ones
+    /// are 10, 100 and 1000, the uniform ones 2500.75, 5000.5 and
+    /// 7500.25, blended 3 : 1.
+    #[test]
+    fn cascade_splits_blend_log_and_uniform() {
+        let s = cascade_splits(4, 1.0, 10000.0);
+        let want = [
+            0.75 * 10.0 + 0.25 * 2500.75,
+            0.75 * 100.0 + 0.25 * 5000.5,
+            0.75 * 1000.0 + 0.25 * 7500.25,
+        ];
+        assert_eq!(s.len(), 3);
+        for (g, w) in s.iter().zip(want) {
+            assert!((g - w).abs() <= 1e-3 * w, "{s:?} vs {want:?}");
+        }
+        assert!(cascade_splits(1, 0.1, 50.0).is_empty());
+        // Increasing and inside the range for any near/far.
+        for (n, f) in [
+            (0.1, 50.0),
+            (1e-6, 1e6),
+            (3.0, 3.0),
+            (0.0, 10.0),
+            (1.0, 0.0),
+        ] {
+            let s = cascade_splits(4, n, f);
+            assert!(s.windows(2).all(|w| w[0] <= w[1]), "{s:?}");
+            assert!(s.iter().all(|z| z.is_finite() && *z <= f), "{s:?}");
+        }
+    }
+
+    /// A polygon's size for PCSS is the diameter of the disk of its area.
+    #[test]
+    fn polygon_light_size_is_the_equal_area_disk() {
+        let square = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 0.0, 2.0],
+            [0.0, 0.0, 2.0],
+        ];
+        let d = polygon_light_size(&square);
+        assert!(
+            (d - 2.0 * (4.0 / std::f32::consts::PI).sqrt()).abs() < 1e-5,
+            "{d}"
+        );
+        assert_eq!(polygon_light_size(&[[0.0; 3]; 3]), 0.0);
+    }
 }

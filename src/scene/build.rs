@@ -727,6 +727,7 @@ impl<'a> SceneBuilder<'a> {
                 radiance,
                 two_sided,
                 visible,
+                ..
             } => {
                 use crate::polygon_light::{add_visible, check_polygon};
                 use specula_core::light::AreaMethod;
@@ -908,6 +909,10 @@ fn has_sheen(m: &Material) -> bool {
 
 /// Light `i`'s shadow settings, checked (`None`: no shadows).
 fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, String> {
+    let cascades = match l {
+        LightDesc::Directional { cascades, .. } => *cascades,
+        _ => 1,
+    };
     let (shadows, map_size, bias, normal_bias, filter_radius, light_size) = match l {
         LightDesc::Point {
             shadows,
@@ -943,7 +948,22 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
             *filter_radius,
             *light_size,
         ),
-        LightDesc::Polygon { .. } => return Ok(None),
+        LightDesc::Polygon {
+            vertices,
+            shadows,
+            shadow_map_size,
+            bias,
+            normal_bias,
+            filter_radius,
+            ..
+        } => (
+            *shadows,
+            *shadow_map_size,
+            *bias,
+            *normal_bias,
+            *filter_radius,
+            specula_raster::shadow::polygon_light_size(vertices),
+        ),
     };
     let filter = match shadows {
         ShadowsDesc::None => return Ok(None),
@@ -958,6 +978,7 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
         normal_bias,
         filter_radius,
         light_size,
+        cascades,
     };
     s.check().map_err(|e| format!("light[{i}].{e}"))?;
     Ok(Some(s))

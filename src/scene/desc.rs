@@ -352,6 +352,9 @@ pub(super) enum LightDesc {
         /// its angular diameter).
         #[serde(default = "light_size")]
         light_size: f32,
+        /// Shadow maps along the view's depth, 1 to 4 (shadow.rs).
+        #[serde(default = "cascades")]
+        cascades: u32,
     },
     Polygon {
         /// A planar simple polygon (convex or not), 3 to 16 vertices,
@@ -365,6 +368,23 @@ pub(super) enum LightDesc {
         /// Drawn as unlit geometry of its radiance.
         #[serde(default = "yes")]
         visible: bool,
+        /// Shadows: "none", "hard", "pcf" or "pcss" (shadow.rs): a cube
+        /// map from the polygon's centre; PCSS with the polygon's size
+        /// gives the soft shadow.
+        #[serde(default)]
+        shadows: ShadowsDesc,
+        /// Shadow map side in texels (each cube face's).
+        #[serde(default = "shadow_map_size")]
+        shadow_map_size: u32,
+        /// Depth offset toward the light, in texels.
+        #[serde(default = "one")]
+        bias: f32,
+        /// Offset along the surface normal, in texels.
+        #[serde(default = "one")]
+        normal_bias: f32,
+        /// PCF half-width in texels.
+        #[serde(default = "filter_radius")]
+        filter_radius: f32,
     },
 }
 
@@ -385,6 +405,10 @@ fn shadow_map_size() -> u32 {
 
 fn filter_radius() -> f32 {
     specula_raster::shadow::ShadowSettings::default().filter_radius
+}
+
+fn cascades() -> u32 {
+    specula_raster::shadow::ShadowSettings::default().cascades
 }
 
 fn light_size() -> f32 {
