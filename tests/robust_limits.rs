@@ -7,7 +7,7 @@
 mod common;
 
 use common::cli::{expect_error, left_behind, load_err, no_files, run_in, stderr, CAMERA};
-use common::{specula, temp_dir};
+use common::{eval, specula, temp_dir};
 use std::path::Path;
 
 fn material_scene(material: &str) -> String {
@@ -35,32 +35,6 @@ fn non_finite_pixels(toml: &str) -> usize {
                 .count()
         })
         .sum()
-}
-
-/// Runs `specula eval` on `input`: the answer lines.
-fn eval(input: &str) -> Vec<serde_json::Value> {
-    use std::io::Write;
-    use std::process::{Command, Stdio};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specula"))
-        .arg("eval")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run specula eval");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(input.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "{}", stderr(&out));
-    String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
-        .collect()
 }
 
 fn gtr(gamma: &str, alpha: &str, exact: bool) -> String {
