@@ -946,8 +946,7 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
         LightDesc::Polygon { .. } => return Ok(None),
     };
     let filter = match shadows {
-        ShadowsDesc::None => return Ok(None),
-        ShadowsDesc::Hard => ShadowFilter::Hard,
+        ShadowsDesc::None | ShadowsDesc::Hard => ShadowFilter::Hard,
         ShadowsDesc::Pcf => ShadowFilter::Pcf,
         ShadowsDesc::Pcss => ShadowFilter::Pcss,
     };
@@ -959,6 +958,8 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
         filter_radius,
         light_size,
     };
+    // Checked with shadows off too: a value out of range is a mistake
+    // whether or not it is used.
     s.check().map_err(|e| format!("light[{i}].{e}"))?;
-    Ok(Some(s))
+    Ok((shadows != ShadowsDesc::None).then_some(s))
 }
