@@ -203,6 +203,36 @@ pub fn integrate_polygon(
     f_cos: &dyn Fn(V3<f64>) -> [f64; 3],
     tol: Tolerance,
 ) -> Estimate {
+    integrate_polygon_toward(vertices, two_sided, f_cos, tol, None)
+}
+
+/// Where a lobe narrower than the quadrature's first nodes peaks, for
+/// [`integrate_polygon_toward`]: its unit direction and the angle (radians)
+/// the triangles around it are graded down to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Peak {
+    pub direction: V3<f64>,
+    pub angle: f64,
+}
+
+/// [`integrate_polygon`] for an integrand that may peak sharply around
+/// `peak` (a glossy lobe around the mirror direction). Adaptive refinement
+/// alone can miss such a lobe: when it is narrower than the spacing of the
+/// first rule's nodes, every node and every child reads its tail, the
+/// coarse and refined values agree, and the estimate claims a converged
+/// value near zero. So when the peak direction meets the polygon's plane,
+/// the signed fan is taken from that point (a fan from any point of the
+/// plane integrates a closed polygon), and each triangle of the fan is
+/// split toward it, the three other children refined as usual, until the
+/// triangle at the peak spans less than `peak.angle` as seen from the
+/// origin. The Duffy map clusters nodes at that corner.
+pub fn integrate_polygon_toward(
+    vertices: &[V3<f64>],
+    two_sided: bool,
+    f_cos: &dyn Fn(V3<f64>) -> [f64; 3],
+    tol: Tolerance,
+    peak: Option<Peak>,
+) -> Estimate {
     let zero = Estimate {
         value: [0.0; 3],
         error: 0.0,
@@ -226,14 +256,30 @@ pub fn integrate_polygon(
         return zero;
     }
     let mut heap = BinaryHeap::new();
-    for k in 1..c.len() - 1 {
-        let tri = [c[0], c[k], c[k + 1]];
-        let turn = (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(unit_n);
-        if turn == 0.0 {
-            continue;
+    let mut nodes = 0;
+    match peak.and_then(|p| on_plane(p.direction, unit_n, c[0]).map(|x| (x, p.angle))) {
+        Some((apex, angle)) => {
+            for k in 0..c.len() {
+                let tri = [apex, c[k], c[(k + 1) % c.len()]];
+                let turn = (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(unit_n);
+                if turn == 0.0 {
+                    continue;
+                }
+                nodes += graded(tri, turn.signum(), angle, unit_n, f_cos, &mut heap);
+            }
         }
-        let coarse = triangle_rule(&tri, unit_n, f_cos);
-        heap.push(Node::new(tri, turn.signum(), coarse, unit_n, f_cos));
+        None => {
+            for k in 1..c.len() - 1 {
+                let tri = [c[0], c[k], c[k + 1]];
+                let turn = (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(unit_n);
+                if turn == 0.0 {
+                    continue;
+                }
+                let coarse = triangle_rule(&tri, unit_n, f_cos);
+                heap.push(Node::new(tri, turn.signum(), coarse, unit_n, f_cos));
+                nodes += 1;
+            }
+        }
     }
     let total = |h: &BinaryHeap<Node>| {
         let mut v = [0.0; 3];
@@ -248,7 +294,6 @@ pub fn integrate_polygon(
         (v, e)
     };
     let (mut value, mut error) = total(&heap);
-    let mut nodes = heap.len();
     let target = |v: &[f64; 3]| {
         (tol.relative * v.iter().fold(0.0f64, |m, x| m.max(x.abs()))).max(tol.absolute)
     };
@@ -274,6 +319,52 @@ pub fn integrate_polygon(
     // summed afresh so that no rounding drift is reported.
     let (value, error) = total(&heap);
     Estimate { value, error }
+}
+
+/// Where the ray from the origin along unit `d` meets the plane through
+/// `p` with unit normal `n`, if it does in front of the origin and above
+/// the horizon.
+fn on_plane(d: V3<f64>, n: V3<f64>, p: V3<f64>) -> Option<V3<f64>> {
+    let t = n.dot(p) / n.dot(d);
+    let x = d * t;
+    (t > 0.0 && t.is_finite() && x.z > 0.0).then_some(x)
+}
+
+/// The angle between the directions of `a` and `b` from the origin
+/// (atan2 of |a × b| and a · b: accurate for tiny angles).
+fn angle_between(a: V3<f64>, b: V3<f64>) -> f64 {
+    a.cross(b).length().atan2(a.dot(b))
+}
+
+/// Pushes triangle `tri` (its corner 0 at the peak) onto `heap` split
+/// toward corner 0 until the triangle there spans less than `angle` from
+/// the origin (at most 64 times); the other children go on the heap as
+/// they are. Returns the nodes pushed.
+fn graded(
+    mut tri: [V3<f64>; 3],
+    sign: f64,
+    angle: f64,
+    n: V3<f64>,
+    f: &dyn Fn(V3<f64>) -> [f64; 3],
+    heap: &mut BinaryHeap<Node>,
+) -> usize {
+    let mut pushed = 0;
+    for _ in 0..64 {
+        let span = angle_between(tri[0], tri[1]).max(angle_between(tri[0], tri[2]));
+        if span.is_nan() || span <= angle {
+            break;
+        }
+        let [corner, rest @ ..] = Node::split(&tri);
+        for t in rest {
+            let coarse = triangle_rule(&t, n, f);
+            heap.push(Node::new(t, sign, coarse, n, f));
+            pushed += 1;
+        }
+        tri = corner;
+    }
+    let coarse = triangle_rule(&tri, n, f);
+    heap.push(Node::new(tri, sign, coarse, n, f));
+    pushed + 1
 }
 
 /// The reference for every lane of a packet: each lane's parameters, view
