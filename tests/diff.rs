@@ -177,7 +177,7 @@ fn diff_flags_are_range_checked_and_inputs_never_overwritten() {
     };
     for (extra, needle) in [
         (&["--ppd", "0"][..], "--ppd 0"),
-        (&["--ppd", "-3"], "--ppd -3"),
+        (&["--ppd=-3"], "--ppd -3"),
         (&["--ppd", "nan"], "--ppd NaN"),
         (&["--ppd", "inf"], "--ppd inf"),
         (&["--ppd", "1e9"], "--ppd 1000000000"),

@@ -210,8 +210,15 @@ shadows = "pcss"
     let read = |_: &std::path::Path| -> std::io::Result<Vec<u8>> {
         Err(std::io::ErrorKind::NotFound.into())
     };
+    // `shadows = ...` replaces the spot light's own line 21; any other
+    // field is added at line 22.
     let load = |extra: &str| {
-        specula::scene::load_scene_str(std::path::Path::new("s.toml"), &base(extra), &read)
+        let text = if extra.starts_with("shadows") {
+            base("").replace("shadows = \"pcss\"", extra)
+        } else {
+            base(extra)
+        };
+        specula::scene::load_scene_str(std::path::Path::new("s.toml"), &text, &read)
             .err()
             .map(|e| e.to_string())
             .unwrap_or_default()
@@ -237,9 +244,11 @@ shadows = "pcss"
         let e = load(extra);
         assert!(e.contains(field), "{extra}: {e}");
     }
-    // A wrong type or name is placed at its own line (line 22 of the text).
+    // A wrong value or type is placed at its own line.
     let e = load("shadows = \"soft\"");
-    assert!(e.contains("line 22"), "{e}");
+    assert!(e.contains("line 21"), "{e}");
+    let e = load("bias = \"small\"");
+    assert!(e.contains("line 22") && e.contains("light[1].bias"), "{e}");
     assert!(load("").is_empty(), "the defaults load");
     // With shadows off the fields are checked all the same (light[0]).
     let off = base("").replacen(
