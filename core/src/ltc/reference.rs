@@ -221,7 +221,8 @@ pub struct Peak {
 /// first rule's nodes, every node and every child reads its tail, the
 /// coarse and refined values agree, and the estimate claims a converged
 /// value near zero. So when the peak direction meets the polygon's plane,
-/// the signed fan is taken from that point (a fan from any point of the
+/// the signed fan is taken from that point, or from the nearest point of
+/// the polygon's edge when it falls outside (a fan from any point of the
 /// plane integrates a closed polygon), and each triangle of the fan is
 /// split toward it, the three other children refined as usual, until the
 /// triangle at the peak spans less than `peak.angle` as seen from the
@@ -257,7 +258,10 @@ pub fn integrate_polygon_toward(
     }
     let mut heap = BinaryHeap::new();
     let mut nodes = 0;
-    match peak.and_then(|p| on_plane(p.direction, unit_n, c[0]).map(|x| (x, p.angle))) {
+    let apex = peak.and_then(|p| {
+        on_plane(p.direction, unit_n, c[0]).map(|x| (nearest_in_polygon(x, &c, unit_n), p.angle))
+    });
+    match apex {
         Some((apex, angle)) => {
             for k in 0..c.len() {
                 let tri = [apex, c[k], c[(k + 1) % c.len()]];
@@ -328,6 +332,49 @@ fn on_plane(d: V3<f64>, n: V3<f64>, p: V3<f64>) -> Option<V3<f64>> {
     let t = n.dot(p) / n.dot(d);
     let x = d * t;
     (t > 0.0 && t.is_finite() && x.z > 0.0).then_some(x)
+}
+
+/// `x` (a point of the polygon's plane) when it is inside polygon `c`
+/// (even–odd rule, in the plane's two coordinates that `n` tilts least),
+/// else the nearest point of `c`'s boundary: a fan from a point far
+/// outside would integrate the polygon as the difference of large, thin
+/// triangles.
+fn nearest_in_polygon(x: V3<f64>, c: &[V3<f64>], n: V3<f64>) -> V3<f64> {
+    let (i, j) = if n.z.abs() >= n.x.abs() && n.z.abs() >= n.y.abs() {
+        (0, 1)
+    } else if n.y.abs() >= n.x.abs() {
+        (2, 0)
+    } else {
+        (1, 2)
+    };
+    let at = |v: V3<f64>, k: usize| [v.x, v.y, v.z][k];
+    let (px, py) = (at(x, i), at(x, j));
+    let mut inside = false;
+    let mut best = (f64::INFINITY, x);
+    for k in 0..c.len() {
+        let (a, b) = (c[k], c[(k + 1) % c.len()]);
+        let (ax, ay, bx, by) = (at(a, i), at(a, j), at(b, i), at(b, j));
+        if (ay > py) != (by > py) && px < ax + (py - ay) / (by - ay) * (bx - ax) {
+            inside = !inside;
+        }
+        let ab = b - a;
+        let len2 = ab.length_squared();
+        let t = if len2 > 0.0 {
+            ((x - a).dot(ab) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let q = a + ab * t;
+        let d = (x - q).length_squared();
+        if d < best.0 {
+            best = (d, q);
+        }
+    }
+    if inside {
+        x
+    } else {
+        best.1
+    }
 }
 
 /// The angle between the directions of `a` and `b` from the origin
