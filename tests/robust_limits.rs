@@ -544,3 +544,65 @@ fn sigint_while_a_tonal_art_map_is_made_leaves_no_staging_folder() {
         _ => assert_eq!(left, ["map"], "{status:?}"),
     }
 }
+
+/// A tonal art map's files are inputs of the render: `-o`, `--stats-json`
+/// or an AOV naming one is refused, and the map still loads afterwards.
+#[test]
+fn outputs_may_not_overwrite_a_tonal_art_map() {
+    let dir = temp_dir("limits-tam-inputs");
+    let made = specula(&["tam", "-o", "map", "--tones", "4", "--size", "64"], &dir);
+    assert!(made.status.success(), "{}", stderr(&made));
+    std::fs::write(
+        dir.join("scene.toml"),
+        material_scene("model = \"hatching\"\ntam = \"map\""),
+    )
+    .unwrap();
+    let snapshot = |d: &Path| -> Vec<(String, Vec<u8>)> {
+        let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(d.join("map"))
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    std::fs::read(e.path()).unwrap(),
+                )
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let before = snapshot(&dir);
+    let tone = before
+        .iter()
+        .map(|(n, _)| n.clone())
+        .find(|n| n.ends_with(".png"))
+        .expect("a tone image");
+    let tone = format!("map/{tone}");
+    for args in [
+        vec!["render", "scene.toml", "-o", tone.as_str()],
+        vec![
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--stats-json",
+            "map/tam.json",
+        ],
+        vec![
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--exr",
+            tone.as_str(),
+        ],
+    ] {
+        let out = specula(&args, &dir);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("refusing to overwrite"), "{args:?}: {err}");
+        assert_eq!(snapshot(&dir), before, "{args:?} changed the map");
+    }
+    let ok = specula(&["render", "scene.toml", "-o", "out.png"], &dir);
+    assert!(ok.status.success(), "the map still loads: {}", stderr(&ok));
+}
