@@ -102,14 +102,21 @@ pub fn decode_equirect(name: &str, bytes: &[u8]) -> Result<Equirect, String> {
     })
 }
 
+/// The map from a file's bytes (decoded and checked by
+/// [`decode_equirect`], texels clamped and scaled by the settings), its
+/// derived data not yet built ([`EnvMap::prepare`]).
+pub fn new_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, String> {
+    let source = decode_equirect(name, bytes)?;
+    EnvMap::new(source, s.intensity, s.rotate_deg, s.visible, s.method)
+        .map_err(|e| format!("{name}: {e}"))
+}
+
 /// The map from a file's bytes with its derived data: from the table
 /// cache when it holds them, else built (with a progress bar on stderr
 /// for maps of a million texels and more) and stored there.
 pub fn load_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, String> {
-    let source = decode_equirect(name, bytes)?;
-    let texels = source.width * source.height;
-    let mut map = EnvMap::new(source, s.intensity, s.rotate_deg, s.visible, s.method)
-        .map_err(|e| format!("{name}: {e}"))?;
+    let mut map = new_env_map(name, bytes, s)?;
+    let texels = map.source.width * map.source.height;
     let key = cache_key(bytes, s.intensity);
     if let Some(derived) = load_cached(&key) {
         if map.set_derived(derived) {

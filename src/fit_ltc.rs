@@ -22,9 +22,9 @@
 //! parallel, each in a fixed order, so the table does not depend on the
 //! thread count).
 
+use crate::progress::Progress;
 use argmin::core::{CostFunction, Error, Executor, State};
 use argmin::solver::neldermead::NelderMead;
-use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use specula_core::ltc::ggx::{Cell, N, X_AXIS, Y_AXIS};
 use specula_core::ltc::small_light::{self, Scene};
@@ -233,19 +233,10 @@ where
     (best, res.state().get_best_cost())
 }
 
-/// The fitters' progress bar on stderr (hidden when not `show`).
-pub(crate) fn progress_bar(name: &str, cells: usize, show: bool) -> ProgressBar {
-    if !show {
-        return ProgressBar::hidden();
-    }
-    let b = ProgressBar::new(cells as u64);
-    b.set_style(
-        ProgressStyle::with_template(&format!(
-            "{name} {{bar:40}} {{pos}}/{{len}} cells, {{elapsed}} (eta {{eta}})"
-        ))
-        .expect("a valid template"),
-    );
-    b
+/// The fitters' progress on stderr (progress.rs; nothing when not
+/// `show`).
+pub(crate) fn cell_progress(name: &str, cells: usize, show: bool) -> Progress {
+    Progress::new(name, "cells", cells as u64, show)
 }
 
 impl CostFunction for Problem<'_> {
@@ -300,11 +291,11 @@ pub fn node(i: usize, j: usize) -> (f64, f64) {
     (r * r, 1.0 - t * t)
 }
 
-/// The whole table, rows in y (view), with each cell's L1 error; a
-/// progress bar on stderr when `progress`.
+/// The whole table, rows in y (view), with each cell's L1 error; progress
+/// on stderr when `progress` (a bar on a terminal, else plain lines).
 pub fn fit_table(progress: bool) -> (Vec<Vec<Cell>>, Vec<Vec<f64>>) {
     let pts = points();
-    let bar = progress_bar("fit-ltc", N * N, progress);
+    let bar = cell_progress("fit-ltc", N * N, progress);
     // The α = 1 row (x = N − 1), from the normal view outward.
     let mut start = [1.0, 0.0, 1.0, 0.0];
     let mut top = Vec::with_capacity(N);
@@ -313,7 +304,7 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<Cell>>, Vec<Vec<f64>>) {
         let (cell, err) = fit_cell(alpha, mu, start, &pts);
         start = [cell.a, cell.b, cell.c, cell.d];
         top.push((cell, err));
-        bar.inc(1);
+        bar.inc();
     }
     // Each view column from α = 1 down.
     let columns: Vec<Vec<(Cell, f64)>> = (0..N)
@@ -326,7 +317,7 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<Cell>>, Vec<Vec<f64>>) {
                 let r = fit_cell(alpha, mu, s, &pts);
                 s = [r.0.a, r.0.b, r.0.c, r.0.d];
                 col[i] = r;
-                bar.inc(1);
+                bar.inc();
             }
             col
         })

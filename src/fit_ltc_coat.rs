@@ -30,8 +30,8 @@
 //! orders, and a coat between two α nodes erred by up to 16 %).
 
 use crate::fit_ltc::{
-    cosine_step, ltc_density, ltc_sample, nelder_mead, outside_search, params_to_m, points,
-    progress_bar, reflect, reflected_pdf, MU_MIN,
+    cell_progress, cosine_step, ltc_density, ltc_sample, nelder_mead, outside_search, params_to_m,
+    points, reflect, reflected_pdf, MU_MIN,
 };
 use argmin::core::{CostFunction, Error};
 use rayon::prelude::*;
@@ -238,11 +238,11 @@ fn log(progress: bool, i: usize, j: usize, r: &(CoatCell, Params, f64)) {
     }
 }
 
-/// The whole table, rows in y (view), with each cell's L1 error; a
-/// progress bar on stderr when `progress`.
+/// The whole table, rows in y (view), with each cell's L1 error; progress
+/// on stderr when `progress` (a bar on a terminal, else plain lines).
 pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
     let pts = points();
-    let bar = progress_bar("fit-ltc-coat", NX * NY, progress);
+    let bar = cell_progress("fit-ltc-coat", NX * NY, progress);
     // The α = 0.001 column, from the normal view to grazing.
     let mut start = first_start(node(0, 0).0);
     let mut first = Vec::with_capacity(NY);
@@ -252,7 +252,7 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
         log(progress, 0, j, &r);
         start = r.1;
         first.push(r);
-        bar.inc(1);
+        bar.inc();
     }
     // Each view's row from α = 0.001 up.
     let rows: Vec<Vec<(CoatCell, f64)>> = (0..NY)
@@ -266,7 +266,7 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
                 log(progress, i, j, &r);
                 s = r.1;
                 row.push((r.0, r.2));
-                bar.inc(1);
+                bar.inc();
             }
             row
         })

@@ -26,6 +26,7 @@ pub mod mesh;
 pub mod objcheck;
 pub mod output_plan;
 pub mod polygon_light;
+pub mod progress;
 pub mod render;
 pub mod scene;
 pub mod sky;

@@ -236,7 +236,7 @@ pub fn plan(
             let canon = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
             if inputs.contains(&canon) {
                 return Err(format!(
-                    "{flag} {}: is an input of the scene; refusing to overwrite it",
+                    "{flag} {}: is an input of this run; refusing to overwrite it",
                     path.display()
                 ));
             }

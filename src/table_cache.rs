@@ -63,7 +63,10 @@ impl TableStore for DirStore {
 pub fn write_committed(out: &std::path::Path) -> Result<(), String> {
     crate::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
-    let tables = specula_core::kc_tables::build_all();
+    let total = specula_core::kc_tables::committed_tables().len() as u64;
+    let progress = crate::progress::Progress::new("kc-tables", "tables", total, true);
+    let tables = specula_core::kc_tables::build_all_reporting(&mut || progress.inc());
+    progress.finish();
     let comments = vec![
         format!("written by `specula kc-tables --output {}`", out.display()),
         "Kulla-Conty E(mu, alpha), F = 1; mu: 64 nodes (j/63)^2; sqrt(alpha): 32 nodes k/31 (alpha floored at ALPHA_MIN)".into(),

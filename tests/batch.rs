@@ -158,3 +158,43 @@ fn diff_dir_compares_two_batches_with_one_exit_status() {
         "{text}"
     );
 }
+
+/// `diff --dir`: a mask is refused (one mask cannot fit every scene), and
+/// a heat map folder or JSON file over either batch folder's images or
+/// manifests is refused before anything is compared, the files untouched.
+#[test]
+fn diff_dir_refuses_a_mask_and_outputs_over_its_inputs() {
+    let dir = temp_dir("batch-diff-dir-outputs");
+    let scenes = vec![fixtures().join("scenes/furnace.toml")];
+    for side in ["a", "b"] {
+        run(&args(scenes.clone(), &dir.join(side), None, 1), false).unwrap();
+    }
+    let diff = |extra: &[&str]| {
+        let mut a = vec!["diff", "--dir", "a", "b"];
+        a.extend_from_slice(extra);
+        let out = specula(&a, &dir);
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    let (code, err) = diff(&[]);
+    assert_eq!(code, Some(0), "{err}");
+    let image = std::fs::read(dir.join("a/furnace.png")).unwrap();
+    let manifest = std::fs::read(dir.join("b/manifest.jsonl")).unwrap();
+    for (extra, needle) in [
+        (&["--mask", "a/furnace.png"][..], "--mask"),
+        (&["--heatmap", "a"], "refusing to overwrite"),
+        (&["--json", "b/manifest.jsonl"], "refusing to overwrite"),
+        (&["--json", "b/furnace.png"], "refusing to overwrite"),
+    ] {
+        let (code, err) = diff(extra);
+        assert_eq!(code, Some(2), "{extra:?}: {err}");
+        assert!(err.contains(needle), "{extra:?}: {err}");
+    }
+    assert_eq!(std::fs::read(dir.join("a/furnace.png")).unwrap(), image);
+    assert_eq!(
+        std::fs::read(dir.join("b/manifest.jsonl")).unwrap(),
+        manifest
+    );
+}

@@ -496,6 +496,62 @@ fn table_generators_refuse_an_unwritable_output_at_once() {
     }
 }
 
+/// Off a terminal (stderr piped, as into a log) each generator prints
+/// plain progress lines, the first one when its first step is done. The
+/// run is stopped at that line: the whole work takes minutes.
+#[test]
+fn table_generators_print_progress_lines_off_a_terminal() {
+    use std::io::BufRead;
+    use std::process::{Command, Stdio};
+    let dir = temp_dir("cli-generators-progress");
+    for (cmd, first) in [
+        ("kc-tables", "kc-tables: 1/116 tables (0 %), "),
+        ("fit-ltc", "fit-ltc: 1/4096 cells (0 %), "),
+        ("fit-ltc-coat", "fit-ltc-coat: 1/384 cells (0 %), "),
+    ] {
+        let mut child = Command::new(env!("CARGO_BIN_EXE_specula"))
+            .args([cmd, "--output", "t.bin"])
+            .current_dir(&dir)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped())
+            .spawn()
+            .expect("run specula");
+        let stderr = child.stderr.take().unwrap();
+        let (tx, rx) = std::sync::mpsc::channel();
+        let reader = std::thread::spawn(move || {
+            for line in std::io::BufReader::new(stderr).lines() {
+                let Ok(line) = line else { break };
+                if tx.send(line).is_err() {
+                    break;
+                }
+            }
+        });
+        // A guard against a run that never reports, not a timing check.
+        let mut seen = Vec::new();
+        let found = loop {
+            match rx.recv_timeout(std::time::Duration::from_secs(600)) {
+                Ok(line) if line.starts_with(first) => break Some(line),
+                Ok(line) => seen.push(line),
+                Err(_) => break None,
+            }
+        };
+        child.kill().unwrap();
+        child.wait().unwrap();
+        drop(rx);
+        reader.join().unwrap();
+        let line = found.unwrap_or_else(|| panic!("{cmd}: no progress line in {seen:?}"));
+        assert!(
+            line.contains(" s, about ") && line.ends_with(" s left"),
+            "{cmd}: {line}"
+        );
+        assert!(
+            !dir.join("t.bin").exists(),
+            "{cmd}: an output before the end"
+        );
+    }
+}
+
 #[test]
 fn refuses_to_overwrite_the_scene_file() {
     let dir = temp_dir("cli-overwrite");

@@ -156,3 +156,68 @@ fn hdr_images_use_hdr_flip() {
     ]);
     assert_eq!(code, Some(0), "{out}");
 }
+
+/// Every flag of `specula diff` is checked before any image is read, with
+/// an error naming the flag (exit status 2), and no output may replace an
+/// image or mask it compares.
+#[test]
+fn diff_flags_are_range_checked_and_inputs_never_overwritten() {
+    let dir = temp_dir("diff-flags");
+    for f in ["ldr-ref.png", "ldr-shift.png"] {
+        std::fs::copy(fixtures().join("flip").join(f), dir.join(f)).unwrap();
+    }
+    let run_here = |extra: &[&str]| {
+        let mut args = vec!["diff", "ldr-ref.png", "ldr-shift.png"];
+        args.extend_from_slice(extra);
+        let out = specula(&args, &dir);
+        (
+            out.status.code(),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
+    };
+    for (extra, needle) in [
+        (&["--ppd", "0"][..], "--ppd 0"),
+        (&["--ppd=-3"], "--ppd -3"),
+        (&["--ppd", "nan"], "--ppd NaN"),
+        (&["--ppd", "inf"], "--ppd inf"),
+        (&["--ppd", "1e9"], "--ppd 1000000000"),
+        (&["--exposures", "5:1"], "--exposures 5:1"),
+        (&["--exposures", "a:b"], "--exposures a:b"),
+        (&["--exposures", "1"], "--exposures 1"),
+        (&["--exposures", "1:2:3:4"], "--exposures 1:2:3:4"),
+        (&["--exposures", "1:2:1"], "--exposures 1:2:1"),
+        (&["--exposures", "1:2:65"], "--exposures 1:2:65"),
+        (&["--exposures", "nan:1"], "--exposures nan:1"),
+        (&["--exposures", "-inf:1"], "--exposures -inf:1"),
+        (&["--tonemap", "filmic"], "--tonemap filmic"),
+        (&["--fail-above", "flip_mean"], "expected METRIC=VALUE"),
+        (&["--fail-above", "flip_mean=nan"], "not a finite number"),
+        (&["--fail-below", "psnr=inf"], "not a finite number"),
+        (&["--fail-below", "psnr="], "not a finite number"),
+        (&["--fail-above", "=1"], "unknown metric"),
+    ] {
+        let (code, err) = run_here(extra);
+        assert_eq!(code, Some(2), "{extra:?}: {err}");
+        assert!(err.contains(needle), "{extra:?}: {err}");
+    }
+    // Outputs over the images compared or the mask are refused, the
+    // files untouched.
+    let before = std::fs::read(dir.join("ldr-ref.png")).unwrap();
+    std::fs::copy(dir.join("ldr-ref.png"), dir.join("mask.png")).unwrap();
+    for extra in [
+        &["--heatmap", "ldr-ref.png"][..],
+        &["--json", "ldr-shift.png"],
+        &["--mask", "mask.png", "--heatmap", "mask.png"],
+        &["--heatmap", "h.png", "--json", "h.png"],
+    ] {
+        let (code, err) = run_here(extra);
+        assert_eq!(code, Some(2), "{extra:?}: {err}");
+        assert!(
+            err.contains("refusing to overwrite") || err.contains("the same file"),
+            "{extra:?}: {err}"
+        );
+    }
+    assert_eq!(std::fs::read(dir.join("ldr-ref.png")).unwrap(), before);
+    assert_eq!(std::fs::read(dir.join("mask.png")).unwrap(), before);
+    assert!(!dir.join("h.png").exists());
+}

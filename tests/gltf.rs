@@ -5,14 +5,12 @@
 
 mod common;
 
-use common::fixtures;
+use common::{eval, fixtures};
 use specula::render::{render_scene, RenderSettings};
 use specula::scene::{load_scene, load_scene_str};
 use specula_raster::frame::ShadePath;
 use std::f64::consts::PI;
-use std::io::Write;
 use std::path::Path;
-use std::process::{Command, Stdio};
 
 #[test]
 fn sweep_fixture_renders_finite_and_paths_agree() {
@@ -93,29 +91,6 @@ fn bad_fields_are_errors_naming_the_field() {
     .err()
     .expect("sheen under a polygon light");
     assert!(e.contains("sheen"), "{e}");
-}
-
-fn eval(input: &str) -> Vec<serde_json::Value> {
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specula"))
-        .arg("eval")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run specula eval");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(input.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    assert!(out.status.success());
-    String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
-        .collect()
 }
 
 #[test]

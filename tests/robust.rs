@@ -5,7 +5,7 @@
 mod common;
 
 use common::cli::{expect_error, load_err, run_in, stderr, CAMERA};
-use common::{specula, temp_dir};
+use common::{eval_bytes, specula, temp_dir};
 use std::path::Path;
 use std::process::Command;
 
@@ -288,27 +288,6 @@ fn huge_finite_directions_are_accepted() {
     );
 }
 
-/// Runs `specula eval` on raw bytes: (exit success, answer lines).
-fn eval_bytes(input: &[u8]) -> (bool, Vec<serde_json::Value>) {
-    use std::io::Write;
-    use std::process::Stdio;
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specula"))
-        .arg("eval")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run specula eval");
-    child.stdin.take().unwrap().write_all(input).unwrap();
-    let out = child.wait_with_output().unwrap();
-    let lines = String::from_utf8(out.stdout)
-        .expect("answers are UTF-8")
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
-        .collect();
-    (out.status.success(), lines)
-}
-
 const LAMBERT: &str =
     r#"{"material":{"model":"lambert","base_color":[1,1,1]},"wi":[0,0,1],"wo":[0,0,1]}"#;
 
@@ -319,7 +298,7 @@ fn eval_answers_a_non_utf8_line_and_goes_on() {
     input.extend_from_slice(b"\n\xff\xfe{\"wi\": \xc3\n\x00\x01\x02\r\n");
     input.extend_from_slice(LAMBERT.as_bytes());
     input.push(b'\n');
-    let (ok, lines) = eval_bytes(&input);
+    let (ok, _, lines) = eval_bytes(&input);
     assert!(ok);
     assert_eq!(lines.len(), 4, "{lines:?}");
     let e = lines[1]["error"].as_str().expect("an error");
@@ -349,7 +328,7 @@ fn eval_warns_about_a_clamped_alpha_and_refuses_a_negative_one() {
         ggx("0"),
     ]
     .join("\n");
-    let (ok, lines) = eval_bytes(input.as_bytes());
+    let (ok, _, lines) = eval_bytes(input.as_bytes());
     assert!(ok);
     for (i, want) in [
         (0, "clamped to 0.001"),
@@ -485,7 +464,7 @@ fn a_huge_bad_value_is_not_echoed_whole() {
     );
     assert!(err.len() < 20_000, "stderr is {} bytes", err.len());
     let line = format!("{{\"material\":{{\"model\":\"{big}\"}},\"wi\":[0,0,1],\"wo\":[0,0,1]}}\n");
-    let (ok, lines) = eval_bytes(line.as_bytes());
+    let (ok, _, lines) = eval_bytes(line.as_bytes());
     assert!(ok);
     let e = lines[0]["error"].as_str().unwrap();
     assert!(
@@ -587,7 +566,7 @@ fn eval_is_finite_for_extreme_gamma_and_nearly_opposite_grazing_directions() {
             input += &format!("{{\"material\":{m},\"wi\":{wi},\"wo\":{wo}}}\n");
         }
     }
-    let (ok, lines) = eval_bytes(input.as_bytes());
+    let (ok, _, lines) = eval_bytes(input.as_bytes());
     assert!(ok);
     assert_eq!(lines.len(), materials.len() * dirs.len());
     for (i, l) in lines.iter().enumerate() {

@@ -7,7 +7,7 @@
 mod common;
 
 use common::cli::{expect_error, left_behind, load_err, no_files, run_in, stderr, CAMERA};
-use common::{specula, temp_dir};
+use common::{eval, specula, temp_dir};
 use std::path::Path;
 
 fn material_scene(material: &str) -> String {
@@ -35,32 +35,6 @@ fn non_finite_pixels(toml: &str) -> usize {
                 .count()
         })
         .sum()
-}
-
-/// Runs `specula eval` on `input`: the answer lines.
-fn eval(input: &str) -> Vec<serde_json::Value> {
-    use std::io::Write;
-    use std::process::{Command, Stdio};
-    let mut child = Command::new(env!("CARGO_BIN_EXE_specula"))
-        .arg("eval")
-        .stdin(Stdio::piped())
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("run specula eval");
-    child
-        .stdin
-        .take()
-        .unwrap()
-        .write_all(input.as_bytes())
-        .unwrap();
-    let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "{}", stderr(&out));
-    String::from_utf8(out.stdout)
-        .unwrap()
-        .lines()
-        .map(|l| serde_json::from_str(l).expect("one JSON object per line"))
-        .collect()
 }
 
 fn gtr(gamma: &str, alpha: &str, exact: bool) -> String {
@@ -569,4 +543,66 @@ fn sigint_while_a_tonal_art_map_is_made_leaves_no_staging_folder() {
         Some(130) => assert_eq!(left, Vec::<String>::new()),
         _ => assert_eq!(left, ["map"], "{status:?}"),
     }
+}
+
+/// A tonal art map's files are inputs of the render: `-o`, `--stats-json`
+/// or an AOV naming one is refused, and the map still loads afterwards.
+#[test]
+fn outputs_may_not_overwrite_a_tonal_art_map() {
+    let dir = temp_dir("limits-tam-inputs");
+    let made = specula(&["tam", "-o", "map", "--tones", "4", "--size", "64"], &dir);
+    assert!(made.status.success(), "{}", stderr(&made));
+    std::fs::write(
+        dir.join("scene.toml"),
+        material_scene("model = \"hatching\"\ntam = \"map\""),
+    )
+    .unwrap();
+    let snapshot = |d: &Path| -> Vec<(String, Vec<u8>)> {
+        let mut v: Vec<(String, Vec<u8>)> = std::fs::read_dir(d.join("map"))
+            .unwrap()
+            .map(|e| {
+                let e = e.unwrap();
+                (
+                    e.file_name().to_string_lossy().into_owned(),
+                    std::fs::read(e.path()).unwrap(),
+                )
+            })
+            .collect();
+        v.sort();
+        v
+    };
+    let before = snapshot(&dir);
+    let tone = before
+        .iter()
+        .map(|(n, _)| n.clone())
+        .find(|n| n.ends_with(".png"))
+        .expect("a tone image");
+    let tone = format!("map/{tone}");
+    for args in [
+        vec!["render", "scene.toml", "-o", tone.as_str()],
+        vec![
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--stats-json",
+            "map/tam.json",
+        ],
+        vec![
+            "render",
+            "scene.toml",
+            "-o",
+            "out.png",
+            "--exr",
+            tone.as_str(),
+        ],
+    ] {
+        let out = specula(&args, &dir);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(1), "{args:?}: {err}");
+        assert!(err.contains("refusing to overwrite"), "{args:?}: {err}");
+        assert_eq!(snapshot(&dir), before, "{args:?} changed the map");
+    }
+    let ok = specula(&["render", "scene.toml", "-o", "out.png"], &dir);
+    assert!(ok.status.success(), "the map still loads: {}", stderr(&ok));
 }

@@ -210,19 +210,36 @@ shadows = "pcss"
     let read = |_: &std::path::Path| -> std::io::Result<Vec<u8>> {
         Err(std::io::ErrorKind::NotFound.into())
     };
+    // `shadows = ...` replaces the spot light's own line 21; any other
+    // field is added at line 22.
     let load = |extra: &str| {
-        specula::scene::load_scene_str(std::path::Path::new("s.toml"), &base(extra), &read)
+        let text = if extra.starts_with("shadows") {
+            base("").replace("shadows = \"pcss\"", extra)
+        } else {
+            base(extra)
+        };
+        specula::scene::load_scene_str(std::path::Path::new("s.toml"), &text, &read)
             .err()
             .map(|e| e.to_string())
             .unwrap_or_default()
     };
     for (extra, field) in [
         ("shadow_map_size = 0", "light[1].shadow_map_size"),
+        ("shadow_map_size = 8193", "light[1].shadow_map_size"),
         ("shadow_map_size = 1000000000", "light[1].shadow_map_size"),
+        ("shadow_map_size = -1", "light[1].shadow_map_size"),
         ("bias = -0.5", "light[1].bias"),
+        ("bias = 1001.0", "light[1].bias"),
         ("normal_bias = -1.0", "light[1].normal_bias"),
+        ("normal_bias = nan", "light[1].normal_bias"),
         ("light_size = nan", "light[1].light_size"),
+        ("light_size = -1.0", "light[1].light_size"),
+        ("light_size = 1e10", "light[1].light_size"),
         ("filter_radius = inf", "light[1].filter_radius"),
+        ("filter_radius = 64.5", "light[1].filter_radius"),
+        ("filter_radius = -1.0", "light[1].filter_radius"),
+        ("shadows = \"soft\"", "light[1].shadows"),
+        ("shadows = true", "light[1].shadows"),
     ] {
         let e = load(extra);
         assert!(e.contains(field), "{extra}: {e}");
@@ -239,7 +256,81 @@ shadows = "pcss"
     );
     let e = load("cascades = 2");
     assert!(e.contains("cascades"), "a spot light's cascades: {e}");
+    // A wrong value or type is placed at its own line.
+    let e = load("shadows = \"soft\"");
+    assert!(e.contains("line 21"), "{e}");
+    let e = load("bias = \"small\"");
+    assert!(e.contains("line 22") && e.contains("light[1].bias"), "{e}");
     assert!(load("").is_empty(), "the defaults load");
+    // With shadows off the fields are checked all the same (light[0]).
+    let off = base("").replacen(
+        "intensity = [1.0, 1.0, 1.0]",
+        "intensity = [1.0, 1.0, 1.0]\nshadow_map_size = 0",
+        1,
+    );
+    let e = specula::scene::load_scene_str(std::path::Path::new("s.toml"), &off, &read)
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(e.contains("light[0].shadow_map_size"), "{e}");
+}
+
+/// Each shadow field at both ends of its range, under each filter and
+/// each light kind, renders finite in f32x8 and in f32.
+#[test]
+fn shadow_fields_at_their_range_ends_render_finite() {
+    use specula::render::{render_scene, RenderSettings};
+    use specula_raster::frame::ShadePath;
+    let ends = [
+        "shadow_map_size = 1\nbias = 0.0\nnormal_bias = 0.0\nfilter_radius = 64.0\nlight_size = 1e9",
+        "shadow_map_size = 512\nbias = 1000.0\nnormal_bias = 1000.0\nfilter_radius = 0.0\nlight_size = 0.0",
+    ];
+    let lights = [
+        "type = \"point\"\nposition = [0.5, 3.0, 0.5]\nintensity = [20.0, 20.0, 20.0]",
+        "type = \"spot\"\nposition = [0.5, 3.0, 0.5]\ndirection = [0.0, -1.0, 0.0]\nintensity = [20.0, 20.0, 20.0]\nouter_cone = 40.0",
+        "type = \"directional\"\ndirection = [-0.3, -1.0, -0.2]\nirradiance = [2.0, 2.0, 2.0]",
+    ];
+    for light in lights {
+        for filter in ["hard", "pcf", "pcss"] {
+            for end in ends {
+                let toml = format!(
+                    r#"
+[camera]
+eye = [0.0, 2.0, 5.0]
+target = [0.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 40.0
+near = 0.1
+far = 50.0
+[output]
+width = 24
+height = 16
+[[mesh]]
+plane = {{ size = [4.0, 4.0] }}
+[[mesh]]
+cube = {{ size = 0.5 }}
+translate = [0.0, 0.25, 0.0]
+[[light]]
+{light}
+shadows = "{filter}"
+{end}
+"#
+                );
+                let scene = common::scene(&toml, &[]);
+                let mut settings = RenderSettings::from_scene(&scene);
+                for path in [ShadePath::Simd, ShadePath::Scalar] {
+                    settings.path = path;
+                    let r = render_scene(&scene, &settings, 0.0).expect("renders");
+                    let bad = r
+                        .hdr()
+                        .iter()
+                        .filter(|p| !p.iter().all(|c| c.is_finite()))
+                        .count();
+                    assert_eq!(bad, 0, "{light} {filter} {end} {path:?}");
+                }
+            }
+        }
+    }
 }
 
 /// Area of the intersection of two disks of radii `a` and `b` whose

@@ -133,13 +133,21 @@ pub fn committed() -> &'static HashMap<String, Vec<f32>> {
 /// Builds every table of [`committed_tables`] (what the generator writes):
 /// (store name, values).
 pub fn build_all() -> Vec<(String, Vec<f32>)> {
+    build_all_reporting(&mut || {})
+}
+
+/// [`build_all`], calling `built` after each table (the generator's
+/// progress).
+pub fn build_all_reporting(built: &mut dyn FnMut()) -> Vec<(String, Vec<f32>)> {
     committed_tables()
         .into_iter()
         .map(|(ndf, smith, exact)| {
-            (
+            let t = (
                 KcTable::store_name(ndf, smith, exact),
                 KcTable::build_values(ndf, smith, exact),
-            )
+            );
+            built();
+            t
         })
         .collect()
 }

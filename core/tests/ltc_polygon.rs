@@ -3,11 +3,12 @@
 //! and straddling rectangles, clipping identities (a vertex on the
 //! horizon, all below, a concave polygon), nearly parallel and nearly
 //! antipodal vertices in f32x8, f32x8 against f64; the reference
-//! integration of a BRDF against an independent Monte Carlo.
+//! integration of a BRDF against an independent Monte Carlo, and its fan
+//! from a peak direction inside, outside and beside the polygon.
 
 use rand::{Rng, SeedableRng};
 use specula_core::light::{PolygonLocal, MAX_POLYGON_VERTICES};
-use specula_core::ltc::reference::{integrate_polygon, Tolerance};
+use specula_core::ltc::reference::{integrate_polygon, integrate_polygon_toward, Peak, Tolerance};
 use specula_core::ltc::{form_factor, form_factor_signed};
 use specula_core::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
 use specula_core::models::{Lambert, MetallicRoughness};
@@ -543,5 +544,68 @@ fn the_reference_of_lambert_is_rho_times_the_analytic_form_factor() {
         );
         let two = integrate_polygon(&back, true, &f, Tolerance::FINE);
         assert!((two.value[1] - 0.5 * want).abs() < 1e-5 * want);
+    }
+}
+
+/// The fan taken from where a peak direction meets the plane, with its
+/// triangles graded toward that point, integrates the same polygon: the
+/// analytic form factor for the lambert integrand whether the point is
+/// inside the rectangle, outside it, far away nearly along the plane, or
+/// on its edge; and a concave polygon matches its ungraded integral.
+#[test]
+fn the_graded_fan_from_a_peak_integrates_the_same_polygon() {
+    let m = Lambert {
+        base_color: [1.0, 0.5, 0.25],
+    };
+    let p = m.prepare(v(0.0, 0.0, 1.0));
+    let f = |wi: V3<f64>| {
+        let c = m.f_cos_local(&p, wi);
+        [c.x, c.y, c.z]
+    };
+    let (x0, x1, y0, y1, c) = (-3.0, 4.0, 1.0, 2.5, 0.7);
+    let want = parallel_rect(x0, x1, y0, y1, c);
+    let quad = rect_down(x0, x1, y0, y1, c);
+    for d in [
+        v(0.0, 1.5, 0.7),  // inside
+        v(0.0, -1.0, 0.7), // outside
+        v(1.0, 1e3, 1e-3), // far out, nearly along the plane
+        v(4.0, 2.0, 0.7),  // on an edge
+        v(-3.0, 1.0, 0.7), // on a corner
+    ] {
+        for angle in [1e-2, 1e-7] {
+            let peak = Peak {
+                direction: d.normalize(),
+                angle,
+            };
+            let r = integrate_polygon_toward(&quad, false, &f, Tolerance::FINE, Some(peak));
+            assert!(
+                (r.value[0] - want).abs() < 2e-5 * want,
+                "toward {d:?} to {angle}: {} ± {} vs {want}",
+                r.value[0],
+                r.error
+            );
+        }
+    }
+    let l_shape = vec![
+        v(-1.0, -1.0, 0.6),
+        v(-1.0, 2.0, 0.6),
+        v(0.0, 2.0, 0.6),
+        v(0.0, 0.0, 0.6),
+        v(2.0, 0.0, 0.6),
+        v(2.0, -1.0, 0.6),
+    ];
+    let plain = integrate_polygon(&l_shape, true, &f, Tolerance::FINE);
+    for d in [v(1.0, 1.0, 0.6), v(-0.5, -0.5, 0.6), v(0.5, 1.0, 0.6)] {
+        let peak = Peak {
+            direction: d.normalize(),
+            angle: 1e-6,
+        };
+        let r = integrate_polygon_toward(&l_shape, true, &f, Tolerance::FINE, Some(peak));
+        assert!(
+            (r.value[0] - plain.value[0]).abs() < 2e-5 * plain.value[0],
+            "L toward {d:?}: {} vs {}",
+            r.value[0],
+            plain.value[0]
+        );
     }
 }

@@ -20,6 +20,22 @@ fn has_manifest(dir: &Path) -> bool {
     })
 }
 
+/// The manifest files of a batch folder (none when it cannot be read).
+fn manifests(dir: &Path) -> Vec<PathBuf> {
+    std::fs::read_dir(dir)
+        .map(|rd| {
+            rd.filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|p| {
+                    p.file_name().and_then(|n| n.to_str()).is_some_and(|n| {
+                        n == "manifest.jsonl"
+                            || (n.starts_with("manifest-") && n.ends_with(".jsonl"))
+                    })
+                })
+                .collect()
+        })
+        .unwrap_or_default()
+}
+
 /// The records of a batch folder: `manifest.jsonl` when present, else every
 /// shard manifest; a scene listed twice is an error.
 pub fn folder_records(dir: &Path) -> Result<Vec<Record>, String> {
@@ -77,6 +93,11 @@ pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Ver
     } else {
         folder_records(&a.test)?
     };
+    if a.mask.is_some() {
+        return Err(
+            "--mask: not with --dir (one mask cannot fit every scene); compare the pairs one by one, or give --ignore-background".into(),
+        );
+    }
     if let Some(h) = &a.heatmap {
         std::fs::create_dir_all(h)
             .map_err(|e| format!("--heatmap {}: cannot create the folder: {e}", h.display()))?;
@@ -92,7 +113,27 @@ pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Ver
         }
     }
     names.sort();
-    for name in names {
+    // Every output is checked before any image is compared: none may be
+    // an image or manifest of either folder, nor two the same file.
+    let mut inputs: Vec<PathBuf> = refs
+        .iter()
+        .map(|r| a.reference.join(&r.output))
+        .chain(tests.iter().map(|t| a.test.join(&t.output)))
+        .collect();
+    inputs.extend(manifests(&a.reference));
+    inputs.extend(manifests(&a.test));
+    let heat_paths: Vec<PathBuf> = match &a.heatmap {
+        Some(h) => names.iter().map(|n| h.join(format!("{n}.png"))).collect(),
+        None => Vec::new(),
+    };
+    let mut outs: Vec<(&str, &Path)> = heat_paths
+        .iter()
+        .map(|p| ("--heatmap", p.as_path()))
+        .collect();
+    outs.extend(a.json.as_deref().map(|j| ("--json", j)));
+    let plan = crate::output_plan::plan(&outs, &inputs, None)?;
+    let (heat_plan, json_plan) = plan.split_at(heat_paths.len());
+    for (k, name) in names.into_iter().enumerate() {
         let r = refs.iter().find(|r| r.scene == name);
         let t = tests.iter().find(|r| r.scene == name);
         let (r, t) = match (r, t) {
@@ -117,10 +158,8 @@ pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Ver
         match result {
             Ok(mut rep) => {
                 apply_bounds(&mut rep, bounds);
-                if let Some(h) = &a.heatmap {
-                    let png = heatmap_png(&rep)?;
-                    let p = h.join(format!("{name}.png"));
-                    std::fs::write(&p, png).map_err(|e| format!("{}: {e}", p.display()))?;
+                if let Some(out) = heat_plan.get(k) {
+                    out.write(&heatmap_png(&rep)?)?;
                 }
                 let status = if rep.failed.is_empty() {
                     "pass".to_string()
@@ -188,9 +227,9 @@ pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Ver
         failures,
         errors
     );
-    if let Some(j) = &a.json {
+    if let Some(out) = json_plan.first() {
         let json = serde_json::to_string_pretty(&reports).map_err(|e| e.to_string())?;
-        std::fs::write(j, json).map_err(|e| format!("--json {}: {e}", j.display()))?;
+        out.write(json.as_bytes())?;
     }
     if errors > 0 {
         return Err(format!(

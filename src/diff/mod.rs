@@ -408,7 +408,8 @@ pub fn run(a: &DiffArgs) -> Result<Verdict, String> {
     let mut outs: Vec<(&str, &Path)> = Vec::new();
     outs.extend(a.heatmap.as_deref().map(|p| ("--heatmap", p)));
     outs.extend(a.json.as_deref().map(|p| ("--json", p)));
-    let inputs = [a.reference.clone(), a.test.clone()];
+    let mut inputs = vec![a.reference.clone(), a.test.clone()];
+    inputs.extend(a.mask.clone());
     let plan = crate::output_plan::plan(&outs, &inputs, None)?;
     let r = load::load(&a.reference)?;
     let t = load::load(&a.test)?;

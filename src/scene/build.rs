@@ -966,8 +966,7 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
         ),
     };
     let filter = match shadows {
-        ShadowsDesc::None => return Ok(None),
-        ShadowsDesc::Hard => ShadowFilter::Hard,
+        ShadowsDesc::None | ShadowsDesc::Hard => ShadowFilter::Hard,
         ShadowsDesc::Pcf => ShadowFilter::Pcf,
         ShadowsDesc::Pcss => ShadowFilter::Pcss,
     };
@@ -980,6 +979,8 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
         light_size,
         cascades,
     };
+    // Checked with shadows off too: a value out of range is a mistake
+    // whether or not it is used.
     s.check().map_err(|e| format!("light[{i}].{e}"))?;
-    Ok(Some(s))
+    Ok((shadows != ShadowsDesc::None).then_some(s))
 }

@@ -203,6 +203,37 @@ pub fn integrate_polygon(
     f_cos: &dyn Fn(V3<f64>) -> [f64; 3],
     tol: Tolerance,
 ) -> Estimate {
+    integrate_polygon_toward(vertices, two_sided, f_cos, tol, None)
+}
+
+/// Where a lobe narrower than the quadrature's first nodes peaks, for
+/// [`integrate_polygon_toward`]: its unit direction and the angle (radians)
+/// the triangles around it are graded down to.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Peak {
+    pub direction: V3<f64>,
+    pub angle: f64,
+}
+
+/// [`integrate_polygon`] for an integrand that may peak sharply around
+/// `peak` (a glossy lobe around the mirror direction). Adaptive refinement
+/// alone can miss such a lobe: when it is narrower than the spacing of the
+/// first rule's nodes, every node and every child reads its tail, the
+/// coarse and refined values agree, and the estimate claims a converged
+/// value near zero. So when the peak direction meets the polygon's plane,
+/// the signed fan is taken from that point, or from the nearest point of
+/// the polygon's edge when it falls outside (a fan from any point of the
+/// plane integrates a closed polygon), and each triangle of the fan is
+/// split toward it, the three other children refined as usual, until the
+/// triangle at the peak spans less than `peak.angle` as seen from the
+/// origin. The Duffy map clusters nodes at that corner.
+pub fn integrate_polygon_toward(
+    vertices: &[V3<f64>],
+    two_sided: bool,
+    f_cos: &dyn Fn(V3<f64>) -> [f64; 3],
+    tol: Tolerance,
+    peak: Option<Peak>,
+) -> Estimate {
     let zero = Estimate {
         value: [0.0; 3],
         error: 0.0,
@@ -226,14 +257,33 @@ pub fn integrate_polygon(
         return zero;
     }
     let mut heap = BinaryHeap::new();
-    for k in 1..c.len() - 1 {
-        let tri = [c[0], c[k], c[k + 1]];
-        let turn = (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(unit_n);
-        if turn == 0.0 {
-            continue;
+    let mut nodes = 0;
+    let apex = peak.and_then(|p| {
+        on_plane(p.direction, unit_n, c[0]).map(|x| (nearest_in_polygon(x, &c, unit_n), p.angle))
+    });
+    match apex {
+        Some((apex, angle)) => {
+            for k in 0..c.len() {
+                let tri = [apex, c[k], c[(k + 1) % c.len()]];
+                let turn = (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(unit_n);
+                if turn == 0.0 {
+                    continue;
+                }
+                nodes += graded(tri, turn.signum(), angle, unit_n, f_cos, &mut heap);
+            }
         }
-        let coarse = triangle_rule(&tri, unit_n, f_cos);
-        heap.push(Node::new(tri, turn.signum(), coarse, unit_n, f_cos));
+        None => {
+            for k in 1..c.len() - 1 {
+                let tri = [c[0], c[k], c[k + 1]];
+                let turn = (tri[1] - tri[0]).cross(tri[2] - tri[0]).dot(unit_n);
+                if turn == 0.0 {
+                    continue;
+                }
+                let coarse = triangle_rule(&tri, unit_n, f_cos);
+                heap.push(Node::new(tri, turn.signum(), coarse, unit_n, f_cos));
+                nodes += 1;
+            }
+        }
     }
     let total = |h: &BinaryHeap<Node>| {
         let mut v = [0.0; 3];
@@ -248,7 +298,6 @@ pub fn integrate_polygon(
         (v, e)
     };
     let (mut value, mut error) = total(&heap);
-    let mut nodes = heap.len();
     let target = |v: &[f64; 3]| {
         (tol.relative * v.iter().fold(0.0f64, |m, x| m.max(x.abs()))).max(tol.absolute)
     };
@@ -274,6 +323,95 @@ pub fn integrate_polygon(
     // summed afresh so that no rounding drift is reported.
     let (value, error) = total(&heap);
     Estimate { value, error }
+}
+
+/// Where the ray from the origin along unit `d` meets the plane through
+/// `p` with unit normal `n`, if it does in front of the origin and above
+/// the horizon.
+fn on_plane(d: V3<f64>, n: V3<f64>, p: V3<f64>) -> Option<V3<f64>> {
+    let t = n.dot(p) / n.dot(d);
+    let x = d * t;
+    (t > 0.0 && t.is_finite() && x.z > 0.0).then_some(x)
+}
+
+/// `x` (a point of the polygon's plane) when it is inside polygon `c`
+/// (even–odd rule, in the plane's two coordinates that `n` tilts least),
+/// else the nearest point of `c`'s boundary: a fan from a point far
+/// outside would integrate the polygon as the difference of large, thin
+/// triangles.
+fn nearest_in_polygon(x: V3<f64>, c: &[V3<f64>], n: V3<f64>) -> V3<f64> {
+    let (i, j) = if n.z.abs() >= n.x.abs() && n.z.abs() >= n.y.abs() {
+        (0, 1)
+    } else if n.y.abs() >= n.x.abs() {
+        (2, 0)
+    } else {
+        (1, 2)
+    };
+    let at = |v: V3<f64>, k: usize| [v.x, v.y, v.z][k];
+    let (px, py) = (at(x, i), at(x, j));
+    let mut inside = false;
+    let mut best = (f64::INFINITY, x);
+    for k in 0..c.len() {
+        let (a, b) = (c[k], c[(k + 1) % c.len()]);
+        let (ax, ay, bx, by) = (at(a, i), at(a, j), at(b, i), at(b, j));
+        if (ay > py) != (by > py) && px < ax + (py - ay) / (by - ay) * (bx - ax) {
+            inside = !inside;
+        }
+        let ab = b - a;
+        let len2 = ab.length_squared();
+        let t = if len2 > 0.0 {
+            ((x - a).dot(ab) / len2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        let q = a + ab * t;
+        let d = (x - q).length_squared();
+        if d < best.0 {
+            best = (d, q);
+        }
+    }
+    if inside {
+        x
+    } else {
+        best.1
+    }
+}
+
+/// The angle between the directions of `a` and `b` from the origin
+/// (atan2 of |a × b| and a · b: accurate for tiny angles).
+fn angle_between(a: V3<f64>, b: V3<f64>) -> f64 {
+    a.cross(b).length().atan2(a.dot(b))
+}
+
+/// Pushes triangle `tri` (its corner 0 at the peak) onto `heap` split
+/// toward corner 0 until the triangle there spans less than `angle` from
+/// the origin (at most 64 times); the other children go on the heap as
+/// they are. Returns the nodes pushed.
+fn graded(
+    mut tri: [V3<f64>; 3],
+    sign: f64,
+    angle: f64,
+    n: V3<f64>,
+    f: &dyn Fn(V3<f64>) -> [f64; 3],
+    heap: &mut BinaryHeap<Node>,
+) -> usize {
+    let mut pushed = 0;
+    for _ in 0..64 {
+        let span = angle_between(tri[0], tri[1]).max(angle_between(tri[0], tri[2]));
+        if span.is_nan() || span <= angle {
+            break;
+        }
+        let [corner, rest @ ..] = Node::split(&tri);
+        for t in rest {
+            let coarse = triangle_rule(&t, n, f);
+            heap.push(Node::new(t, sign, coarse, n, f));
+            pushed += 1;
+        }
+        tri = corner;
+    }
+    let coarse = triangle_rule(&tri, n, f);
+    heap.push(Node::new(tri, sign, coarse, n, f));
+    pushed + 1
 }
 
 /// The reference for every lane of a packet: each lane's parameters, view
