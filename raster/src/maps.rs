@@ -23,11 +23,52 @@
 //!   the lights);
 //! - `emissive`: RGB (sRGB texels) multiplies the material's emissive
 //!   colour, added to the reflected radiance.
+//!
+//! Each map may move its texture over the surface by a [`UvTransform`]
+//! (glTF's KHR_texture_transform): the uv and its screen derivatives are
+//! transformed before the lookup, so the filter's footprint follows. The
+//! tangent frame a normal map is read in stays the mesh's (that of the
+//! untransformed uvs), as GPU engines do.
 
 use crate::shader::ShadeInput;
 use crate::texture::{Filter, Sampler, Texture};
 use specula_core::{LaneParams, Real, Rgb, ShadingFrame, V3};
 use std::sync::Arc;
+
+/// An affine map of texture coordinates, applied before a map is sampled:
+/// uv' = M·uv + c, each row of `rows` being (M₀, M₁, c) of one output
+/// coordinate; uv derivatives are mapped by M alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// u' = rows\[0\]·(u, v, 1), v' = rows\[1\]·(u, v, 1).
+    pub rows: [[f32; 3]; 2],
+}
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform {
+        rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+    };
+
+    /// The transformed point.
+    #[inline(always)]
+    pub fn apply<R: Real>(&self, uv: [R; 2]) -> [R; 2] {
+        self.rows.map(|[a, b, c]| {
+            R::splat(a as f64).mul_add(uv[0], R::splat(b as f64).mul_add(uv[1], R::splat(c as f64)))
+        })
+    }
+
+    /// The transformed direction (a derivative of uv): the linear part.
+    #[inline(always)]
+    pub fn apply_vector<R: Real>(&self, d: [R; 2]) -> [R; 2] {
+        self.rows
+            .map(|[a, b, _]| R::splat(a as f64).mul_add(d[0], R::splat(b as f64) * d[1]))
+    }
+
+    /// Every coefficient finite (a check for loaders).
+    pub fn is_finite(&self) -> bool {
+        self.rows.iter().flatten().all(|c| c.is_finite())
+    }
+}
 
 /// An image sampled at the surface's uv: what every map holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,6 +76,9 @@ pub struct ColorMap {
     /// At least three channels (linear values).
     pub texture: Arc<Texture>,
     pub sampler: Sampler,
+    /// Applied to the surface's uv (and its derivatives) before the
+    /// lookup; `None` reads the uv as it is.
+    pub transform: Option<UvTransform>,
 }
 
 impl ColorMap {
@@ -45,7 +89,15 @@ impl ColorMap {
     pub fn sample<R: Real>(&self, input: &ShadeInput<R>) -> Rgb<R> {
         match input.surface {
             Some(s) => {
-                let [r, g, b] = self.texture.sample(&self.sampler, s.uv, s.duv_dx, s.duv_dy);
+                let [r, g, b] = match &self.transform {
+                    None => self.texture.sample(&self.sampler, s.uv, s.duv_dx, s.duv_dy),
+                    Some(t) => self.texture.sample(
+                        &self.sampler,
+                        t.apply(s.uv),
+                        t.apply_vector(s.duv_dx),
+                        t.apply_vector(s.duv_dy),
+                    ),
+                };
                 V3::new(r, g, b)
             }
             None => Rgb::splat(R::ONE),

@@ -124,6 +124,7 @@ fn random_map(rng: &mut impl Rng, w: usize, h: usize, filter: Filter) -> ColorMa
     ColorMap {
         texture: Arc::new(Texture::from_f32(w, h, 3, img).unwrap()),
         sampler: Sampler::new(Wrap::Repeat, filter),
+        transform: None,
     }
 }
 

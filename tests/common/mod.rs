@@ -42,3 +42,4 @@ pub fn specula(args: &[&str], dir: &Path) -> Output {
         .expect("run specula")
 }
 pub mod cli;
+pub mod gltf_doc;

@@ -1,0 +1,338 @@
+//! glTF's texture and material extensions and vertex attributes as they
+//! reach the pixels: KHR_texture_transform against the same uvs
+//! transformed in the file and against the extension's own examples.
+//! Every expected value is computed here from the specifications' text.
+
+mod common;
+
+use common::gltf_doc::{png_uri, srgb_decode, Buf};
+use serde_json::{json, Value};
+use std::f64::consts::PI;
+
+/// A quad's uvs in glTF's convention ((0, 0) at the top-left of the
+/// image), its corners in the order (−1, −1), (1, −1), (1, 1), (−1, 1).
+const QUAD_UV: [[f32; 2]; 4] = [[0.0, 1.0], [1.0, 1.0], [1.0, 0.0], [0.0, 0.0]];
+
+/// What a test quad carries besides its material.
+#[derive(Clone, Default)]
+struct Quad {
+    uv: Option<[[f32; 2]; 4]>,
+    /// NORMAL of every vertex (default +z).
+    normal: Option<[f32; 3]>,
+    /// Extra attributes by name.
+    attributes: Vec<(&'static str, Attr)>,
+    images: Vec<String>,
+    /// The glTF sampler every texture uses.
+    sampler: Option<Value>,
+}
+
+/// An attribute's values.
+#[derive(Clone)]
+enum Attr {
+    /// Float components, and the accessor type ("VEC3", …).
+    Floats(Vec<f32>, &'static str),
+}
+
+/// A 2 × 2 unit quad facing +z with `material`, as a glTF document.
+fn quad_doc(material: Value, q: &Quad) -> String {
+    let mut b = Buf::default();
+    let pos = b.floats(
+        &[
+            -1.0, -1.0, 0.0, 1.0, -1.0, 0.0, 1.0, 1.0, 0.0, -1.0, 1.0, 0.0,
+        ],
+        "VEC3",
+    );
+    let nrm = b.floats(&q.normal.unwrap_or([0.0, 0.0, 1.0]).repeat(4), "VEC3");
+    let uv = b.floats(q.uv.unwrap_or(QUAD_UV).as_flattened(), "VEC2");
+    let idx = b.u16s(&[0, 1, 2, 0, 2, 3]);
+    let mut attributes = json!({"POSITION": pos, "NORMAL": nrm, "TEXCOORD_0": uv});
+    for (name, attr) in &q.attributes {
+        let a = match attr {
+            Attr::Floats(values, ty) => b.floats(values, ty),
+        };
+        attributes[*name] = json!(a);
+    }
+    let textures: Vec<Value> = (0..q.images.len())
+        .map(|i| json!({"source": i, "sampler": 0}))
+        .collect();
+    let images: Vec<Value> = q.images.iter().map(|u| json!({ "uri": u })).collect();
+    let sampler = q
+        .sampler
+        .clone()
+        .unwrap_or(json!({"magFilter": 9728, "minFilter": 9728}));
+    b.doc(json!({
+        "extensionsUsed": ["KHR_texture_transform", "KHR_materials_unlit"],
+        "meshes": [{"primitives": [{"attributes": attributes, "indices": idx, "material": 0}]}],
+        "materials": [material],
+        "textures": textures,
+        "samplers": [sampler],
+        "images": images,
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}]
+    }))
+    .to_string()
+}
+
+/// Pixels of the rendered images (linear radiance, row-major).
+const SIZE: usize = 64;
+
+/// The quad 9 units in front of the camera, filling the middle ~58 pixels
+/// of 64, lit head-on by a directional light of irradiance 2 (no
+/// environment); every pixel's radiance, and the scene's warnings.
+fn render(doc: &str) -> (Vec<[f32; 3]>, Vec<String>) {
+    let toml = r#"
+[camera]
+eye = [0.0, 0.0, 10.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 14.0
+near = 1.0
+far = 100.0
+[output]
+width = 64
+height = 64
+[[mesh]]
+gltf = "quad.gltf"
+translate = [0.0, 0.0, 1.0]
+[[light]]
+type = "directional"
+direction = [0.0, 0.0, -1.0]
+irradiance = [2.0, 2.0, 2.0]
+"#;
+    let s = common::scene(toml, &[("quad.gltf", doc)]);
+    let set = specula::render::RenderSettings::from_scene(&s);
+    let r = specula::render::render_scene(&s, &set, 0.0).unwrap();
+    let px = (0..SIZE * SIZE)
+        .map(|i| r.frame.buffers.color.get(i))
+        .collect();
+    (px, s.warnings.clone())
+}
+
+/// Radiance of the head-on lit rough dielectric (metallic 0, roughness 1)
+/// of base colour c, seen along the normal: E · ((1 − F0) c/π + D V F0)
+/// with F0 = 0.04, D(n) = 1/π (α = 1), V = 1/4, E = 2.
+fn lit_rough(c: f64) -> f64 {
+    2.0 * (0.96 * c + 0.01) / PI
+}
+
+/// The 4 × 4 test image: texel (column i, row j from the top) is
+/// (32 + 64 i, 32 + 64 j, 96 + 32 (i + j)) in sRGB bytes; every texel
+/// differs from every other.
+fn image_4x4() -> (Vec<u8>, impl Fn(usize, usize) -> [u8; 3]) {
+    let texel = |i: usize, j: usize| {
+        [
+            (32 + 64 * i) as u8,
+            (32 + 64 * j) as u8,
+            (96 + 32 * (i + j)).min(255) as u8,
+        ]
+    };
+    let bytes = (0..4)
+        .flat_map(|j| (0..4).flat_map(move |i| texel(i, j)))
+        .collect();
+    (bytes, texel)
+}
+
+fn rough_textured(extension: Option<Value>) -> Value {
+    let mut tex = json!({"index": 0});
+    if let Some(e) = extension {
+        tex["extensions"] = json!({ "KHR_texture_transform": e });
+    }
+    json!({"pbrMetallicRoughness": {"baseColorTexture": tex,
+        "metallicFactor": 0.0, "roughnessFactor": 1.0}})
+}
+
+/// The pixel at the centre of each quarter of the quad, in the order
+/// top-left, top-right, bottom-left, bottom-right (the quad spans pixels
+/// ~3 to ~61; their centres are 13.5 pixels from the image's middle).
+const QUARTERS: [(usize, usize); 4] = [(18, 18), (45, 18), (18, 45), (45, 45)];
+
+/// KHR_texture_transform's first example: offset (0, 1), rotation π/2,
+/// scale ½ "utilizes only the lower left quadrant of the source image,
+/// rotated clockwise 90°". The lower-left quadrant of the 4 × 4 image is
+/// columns 0–1, rows 2–3; turned clockwise a quarter turn, its bottom-left
+/// texel comes to the top-left, its top-left to the top-right, its
+/// bottom-right to the bottom-left and its top-right to the bottom-right.
+/// The second example, offset (0, 1) and scale (1, −1), "inverts the T
+/// axis": the image upside down.
+#[test]
+fn texture_transform_follows_the_extension_examples() {
+    let (bytes, texel) = image_4x4();
+    let q = Quad {
+        images: vec![png_uri(4, 4, &bytes)],
+        ..Default::default()
+    };
+    let check = |doc: &str, want: [(usize, usize); 4], what: &str| {
+        let (px, warnings) = render(doc);
+        assert!(
+            !warnings.iter().any(|w| w.contains("KHR_texture_transform")),
+            "{what}: {warnings:?}"
+        );
+        for ((x, y), (i, j)) in QUARTERS.into_iter().zip(want) {
+            let w = texel(i, j).map(|b| lit_rough(srgb_decode(b)));
+            let got = px[y * SIZE + x];
+            for c in 0..3 {
+                // The view is up to ~5° off the normal at these pixels,
+                // which moves the specular term by ~1e-5.
+                assert!(
+                    (got[c] as f64 - w[c]).abs() <= 1e-3 * w[c] + 1e-4,
+                    "{what}: pixel ({x}, {y}) {got:?}, want texel ({i}, {j}) = {w:?}"
+                );
+            }
+        }
+    };
+    let example1 = quad_doc(
+        rough_textured(Some(
+            // The example writes π/2 as 1.57079632679.
+            json!({"offset": [0, 1], "rotation": std::f64::consts::FRAC_PI_2, "scale": [0.5, 0.5]}),
+        )),
+        &q,
+    );
+    // Quarter centres sample the middle of each texel of the quadrant.
+    check(
+        &example1,
+        [(0, 3), (0, 2), (1, 3), (1, 2)],
+        "lower-left quadrant, clockwise",
+    );
+    let example2 = quad_doc(
+        rough_textured(Some(json!({"offset": [0, 1], "scale": [1, -1]}))),
+        &q,
+    );
+    // Without the transform the quarters show texels (1, 1), (2, 1),
+    // (1, 2), (2, 2); upside down, rows 1 and 2 swap.
+    check(
+        &example2,
+        [(1, 2), (2, 2), (1, 1), (2, 1)],
+        "T axis inverted",
+    );
+    let plain = quad_doc(rough_textured(None), &q);
+    check(&plain, [(1, 1), (2, 1), (1, 2), (2, 2)], "no transform");
+}
+
+/// A 3 × 3 matrix product (row-major).
+fn mul3(a: [[f64; 3]; 3], b: [[f64; 3]; 3]) -> [[f64; 3]; 3] {
+    core::array::from_fn(|i| core::array::from_fn(|j| (0..3).map(|k| a[i][k] * b[k][j]).sum()))
+}
+
+/// T(offset) · R(rotation) · S(scale) as the extension defines it, with
+/// R = [[cos, sin], [−sin, cos]] (the rotation its first example needs).
+fn spec_matrix(offset: [f64; 2], rotation: f64, scale: [f64; 2]) -> [[f64; 3]; 3] {
+    let t = [
+        [1.0, 0.0, offset[0]],
+        [0.0, 1.0, offset[1]],
+        [0.0, 0.0, 1.0],
+    ];
+    let (s, c) = rotation.sin_cos();
+    let r = [[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]];
+    let sc = [[scale[0], 0.0, 0.0], [0.0, scale[1], 0.0], [0.0, 0.0, 1.0]];
+    mul3(mul3(t, r), sc)
+}
+
+/// A transformed texture shows what the same quad shows with its uvs
+/// transformed in the file, pixel for pixel (up to the rounding of the
+/// uvs: 1e-4 relative), through a filtered (bilinear, mipmapped) repeating
+/// sampler so that the comparison also covers the derivatives the level
+/// of detail comes from. On every slot: base colour, and emissive (an
+/// unlit-independent, additive one).
+#[test]
+fn texture_transform_equals_uvs_transformed_in_the_file() {
+    let (bytes, _) = image_4x4();
+    let sampler = json!({"magFilter": 9729, "minFilter": 9987});
+    let (offset, rotation, scale) = ([0.3, -0.2], 0.7, [1.5, 0.8]);
+    let m = spec_matrix(offset, rotation, scale);
+    let moved: [[f32; 2]; 4] = QUAD_UV.map(|[u, v]| {
+        let (u, v) = (u as f64, v as f64);
+        [
+            (m[0][0] * u + m[0][1] * v + m[0][2]) as f32,
+            (m[1][0] * u + m[1][1] * v + m[1][2]) as f32,
+        ]
+    });
+    let ext = json!({"offset": offset, "rotation": rotation, "scale": scale});
+    let images = vec![png_uri(4, 4, &bytes)];
+    let with_ext = |slot: &str, ext: Option<&Value>| {
+        let mut tex = json!({"index": 0});
+        if let Some(e) = ext {
+            tex["extensions"] = json!({ "KHR_texture_transform": e });
+        }
+        match slot {
+            "base" => json!({"pbrMetallicRoughness": {"baseColorTexture": tex,
+                "metallicFactor": 0.0, "roughnessFactor": 1.0}}),
+            _ => json!({"pbrMetallicRoughness": {"baseColorFactor": [0.2, 0.2, 0.2, 1.0],
+                "metallicFactor": 0.0, "roughnessFactor": 1.0},
+                "emissiveFactor": [1.0, 1.0, 1.0], "emissiveTexture": tex}),
+        }
+    };
+    for slot in ["base", "emissive"] {
+        let transformed = quad_doc(
+            with_ext(slot, Some(&ext)),
+            &Quad {
+                images: images.clone(),
+                sampler: Some(sampler.clone()),
+                ..Default::default()
+            },
+        );
+        let in_file = quad_doc(
+            with_ext(slot, None),
+            &Quad {
+                uv: Some(moved),
+                images: images.clone(),
+                sampler: Some(sampler.clone()),
+                ..Default::default()
+            },
+        );
+        let untransformed = quad_doc(
+            with_ext(slot, None),
+            &Quad {
+                images: images.clone(),
+                sampler: Some(sampler.clone()),
+                ..Default::default()
+            },
+        );
+        let (a, _) = render(&transformed);
+        let (b, _) = render(&in_file);
+        let (c, _) = render(&untransformed);
+        let mut lit = 0;
+        let mut moved_px = 0;
+        for (i, ((p, q), r)) in a.iter().zip(&b).zip(&c).enumerate() {
+            lit += usize::from(q[0] > 0.0);
+            moved_px += usize::from((0..3).any(|k| (q[k] - r[k]).abs() > 0.01 * r[k]));
+            for k in 0..3 {
+                assert!(
+                    (p[k] - q[k]).abs() <= 1e-4 * q[k].max(1e-3),
+                    "{slot}: pixel {i}: {p:?} vs uvs in the file {q:?}"
+                );
+            }
+        }
+        assert!(lit > 2500, "{slot}: {lit} lit pixels");
+        assert!(
+            moved_px > 1000,
+            "{slot}: the transform shows ({moved_px} pixels)"
+        );
+    }
+    // The extension's texCoord overrides the reference's: the moved uvs
+    // as TEXCOORD_1 (TEXCOORD_0 all zero) read through {"texCoord": 1}
+    // show what they show as TEXCOORD_0.
+    let over = quad_doc(
+        with_ext("base", Some(&json!({"texCoord": 1}))),
+        &Quad {
+            uv: Some([[0.0; 2]; 4]),
+            attributes: vec![(
+                "TEXCOORD_1",
+                Attr::Floats(moved.as_flattened().to_vec(), "VEC2"),
+            )],
+            images: images.clone(),
+            sampler: Some(sampler.clone()),
+            ..Default::default()
+        },
+    );
+    let in_file = quad_doc(
+        with_ext("base", None),
+        &Quad {
+            uv: Some(moved),
+            images,
+            sampler: Some(sampler),
+            ..Default::default()
+        },
+    );
+    let (a, _) = render(&over);
+    let (b, _) = render(&in_file);
+    assert_eq!(a, b, "texCoord override");
+}
