@@ -336,3 +336,49 @@ fn texture_transform_equals_uvs_transformed_in_the_file() {
     let (b, _) = render(&in_file);
     assert_eq!(a, b, "texCoord override");
 }
+
+/// KHR_materials_unlit shows base colour factor × texel (sRGB decoded, as
+/// the spec's base colour texture is) whatever the light: the pixels at
+/// the quarters' centres are those products, computed here.
+#[test]
+fn unlit_shows_factor_times_texel() {
+    let (bytes, texel) = image_4x4();
+    let factor = [0.5, 0.8, 1.0];
+    let doc = quad_doc(
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [0.5, 0.8, 1.0, 1.0],
+            "baseColorTexture": {"index": 0}},
+            "extensions": {"KHR_materials_unlit": {}}}),
+        &Quad {
+            images: vec![png_uri(4, 4, &bytes)],
+            ..Default::default()
+        },
+    );
+    let (px, warnings) = render(&doc);
+    assert!(
+        !warnings.iter().any(|w| w.contains("unlit")),
+        "{warnings:?}"
+    );
+    for ((x, y), (i, j)) in QUARTERS.into_iter().zip([(1, 1), (2, 1), (1, 2), (2, 2)]) {
+        let t = texel(i, j);
+        let got = px[y * SIZE + x];
+        for c in 0..3 {
+            let want = factor[c] * srgb_decode(t[c]);
+            assert!(
+                (got[c] as f64 - want).abs() <= 1e-5 * want.max(1e-3),
+                "pixel ({x}, {y}): {got:?}, want {factor:?} × texel {t:?}"
+            );
+        }
+    }
+    // Without a texture: the factor alone, on every pixel of the quad.
+    let plain = quad_doc(
+        json!({"pbrMetallicRoughness": {"baseColorFactor": [0.25, 0.5, 0.75, 1.0]},
+            "extensions": {"KHR_materials_unlit": {}}}),
+        &Quad::default(),
+    );
+    let (px, _) = render(&plain);
+    let on_quad = px.iter().filter(|p| p[0] > 0.0).count();
+    assert!(on_quad > 2500, "{on_quad}");
+    for p in px.iter().filter(|p| p[0] > 0.0) {
+        assert_eq!(*p, [0.25, 0.5, 0.75], "unlit constant");
+    }
+}

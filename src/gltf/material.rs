@@ -14,7 +14,7 @@ use specula_core::models::Gltf;
 use specula_core::Model;
 use specula_raster::maps::{ColorMap, NormalMap, OcclusionMap, ParamMaps, UvTransform};
 use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
-use specula_raster::{Lit, Material};
+use specula_raster::{Lit, Material, UnlitBase};
 use std::collections::BTreeMap;
 
 /// KHR_texture_transform: uv' = T(offset) · R(rotation) · S(scale) · uv
@@ -532,7 +532,9 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// maps, each moved by its KHR_texture_transform
 /// ([`TextureTransform::uv_transform`]), the emissive factor times
 /// KHR_materials_emissive_strength; `doubleSided` as the material's.
-/// Everything else is listed in the warning.
+/// Everything else is listed in the warning. A KHR_materials_unlit
+/// material is [`UnlitBase`]: its base colour factor times its base
+/// colour texture, shown as it is.
 pub fn scene_material(
     m: &GltfMaterial,
     images: &mut Images,
@@ -554,7 +556,6 @@ pub fn scene_material(
         },
         m.alpha_mode != AlphaMode::Opaque,
     );
-    note("KHR_materials_unlit", m.unlit);
     note(
         "specularTexture / specularColorTexture",
         m.specular
@@ -650,6 +651,19 @@ pub fn scene_material(
         );
         Ok(map)
     };
+    if m.unlit {
+        // KHR_materials_unlit: the base colour alone (factor × texture);
+        // the other maps, the lights and the emission do not apply.
+        let base_color = (m.base_color_texture.as_ref())
+            .map(|t| load(t, Encoding::Srgb))
+            .transpose()?;
+        let shader = UnlitBase {
+            color: [r, g, b],
+            base_color,
+        };
+        let warning = rendered_without(&m.name, &missing);
+        return Ok((Material::new(&m.name, shader, m.double_sided), warning));
+    }
     if let Some(t) = &m.base_color_texture {
         maps.base_color = Some(load(t, Encoding::Srgb)?);
     }
@@ -692,12 +706,12 @@ pub fn scene_material(
     let shader = Lit::with_maps(model, maps)
         .map_err(|e| format!("{at}: {e}"))?
         .with_emission(emissive);
-    let warning = (!missing.is_empty()).then(|| {
-        format!(
-            "material {:?}: rendered without {}",
-            m.name,
-            missing.join(", ")
-        )
-    });
+    let warning = rendered_without(&m.name, &missing);
     Ok((Material::new(&m.name, shader, m.double_sided), warning))
+}
+
+/// The warning for what a material is rendered without, if anything.
+fn rendered_without(name: &str, missing: &[String]) -> Option<String> {
+    (!missing.is_empty())
+        .then(|| format!("material {name:?}: rendered without {}", missing.join(", ")))
 }
