@@ -31,6 +31,9 @@ struct Quad {
 enum Attr {
     /// Float components, and the accessor type ("VEC3", …).
     Floats(Vec<f32>, &'static str),
+    /// Little-endian bytes of normalized integers: the bytes, the
+    /// componentType, the element count and the accessor type.
+    Normalized(Vec<u8>, u32, usize, &'static str),
 }
 
 /// A 2 × 2 unit quad facing +z with `material`, as a glTF document.
@@ -49,6 +52,11 @@ fn quad_doc(material: Value, q: &Quad) -> String {
     for (name, attr) in &q.attributes {
         let a = match attr {
             Attr::Floats(values, ty) => b.floats(values, ty),
+            Attr::Normalized(bytes, component, count, ty) => {
+                let view = b.view(bytes, None);
+                b.accessor(json!({"bufferView": view, "componentType": component,
+                    "normalized": true, "count": count, "type": ty}))
+            }
         };
         attributes[*name] = json!(a);
     }
@@ -381,4 +389,175 @@ fn unlit_shows_factor_times_texel() {
     for p in px.iter().filter(|p| p[0] > 0.0) {
         assert_eq!(*p, [0.25, 0.5, 0.75], "unlit constant");
     }
+}
+
+/// COLOR_0 multiplies the base colour: a quad whose every vertex has the
+/// colour k renders as the same quad with k folded into its
+/// baseColorFactor (pixel for pixel), for float RGB, normalized u8 RGBA
+/// and normalized u16 RGBA colours (k = v/255 and v/65535 computed here),
+/// lit and unlit, with a base colour texture.
+#[test]
+fn a_vertex_colour_equals_the_same_factor_in_base_color_factor() {
+    let (bytes, _) = image_4x4();
+    let images = vec![png_uri(4, 4, &bytes)];
+    let base = [0.9, 0.7, 0.5];
+    let material = |factor: [f64; 3], unlit: bool| {
+        let mut m = json!({"pbrMetallicRoughness": {
+            "baseColorFactor": [factor[0], factor[1], factor[2], 1.0],
+            "baseColorTexture": {"index": 0},
+            "metallicFactor": 0.0, "roughnessFactor": 0.6}});
+        if unlit {
+            m["extensions"] = json!({"KHR_materials_unlit": {}});
+        }
+        m
+    };
+    let u8s: Vec<u8> = [128u8, 64, 255, 200].repeat(4);
+    let u16s: Vec<u8> = [40000u16, 1000, 65535, 7]
+        .repeat(4)
+        .iter()
+        .flat_map(|v| v.to_le_bytes())
+        .collect();
+    let cases = [
+        (
+            "float VEC3",
+            [0.5, 0.25, 1.0],
+            Attr::Floats([0.5f32, 0.25, 1.0].repeat(4), "VEC3"),
+        ),
+        (
+            "u8 VEC4",
+            [128.0 / 255.0, 64.0 / 255.0, 1.0],
+            Attr::Normalized(u8s, 5121, 4, "VEC4"),
+        ),
+        (
+            "u16 VEC4",
+            [40000.0 / 65535.0, 1000.0 / 65535.0, 1.0],
+            Attr::Normalized(u16s, 5123, 4, "VEC4"),
+        ),
+    ];
+    for (what, k, attr) in cases {
+        for unlit in [false, true] {
+            let coloured = quad_doc(
+                material(base, unlit),
+                &Quad {
+                    images: images.clone(),
+                    attributes: vec![("COLOR_0", attr.clone())],
+                    ..Default::default()
+                },
+            );
+            let folded = quad_doc(
+                material(core::array::from_fn(|c| base[c] * k[c]), unlit),
+                &Quad {
+                    images: images.clone(),
+                    ..Default::default()
+                },
+            );
+            let (a, warnings) = render(&coloured);
+            assert!(
+                !warnings.iter().any(|w| w.contains("COLOR_0")),
+                "{what}: {warnings:?}"
+            );
+            let (b, _) = render(&folded);
+            let mut lit = 0;
+            for (i, (p, q)) in a.iter().zip(&b).enumerate() {
+                lit += usize::from(q[0] > 0.0);
+                for c in 0..3 {
+                    assert!(
+                        (p[c] - q[c]).abs() <= 2e-6 * q[c].max(1e-3),
+                        "{what}, unlit {unlit}: pixel {i}: {p:?} vs folded {q:?}"
+                    );
+                }
+            }
+            assert!(lit > 2500, "{what}: {lit}");
+        }
+    }
+}
+
+/// Vertex colours are interpolated perspective-correctly: an unlit quad
+/// tilted in depth (z = 0.75 y) whose vertex colours are an affine
+/// function of position, c(x, y) = (0.5 + 0.4 x, 0.5 + 0.4 y,
+/// 0.5 + 0.2 x − 0.2 y), shows at every pixel c of the point its ray
+/// hits, found here by intersecting the pixel centre's ray with the plane
+/// (both triangles interpolate the same affine function, so the answer
+/// does not depend on the diagonal). Interpolating in screen space
+/// instead would be off by more than 1e-3 (checked below).
+#[test]
+fn vertex_colours_are_interpolated_perspective_correctly() {
+    let c = |x: f64, y: f64| [0.5 + 0.4 * x, 0.5 + 0.4 * y, 0.5 + 0.2 * x - 0.2 * y];
+    let corners = [[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]];
+    let mut b = Buf::default();
+    let pos: Vec<f32> = corners
+        .iter()
+        .flat_map(|[x, y]| [*x as f32, *y as f32, (0.75 * y) as f32])
+        .collect();
+    let pos = b.floats(&pos, "VEC3");
+    let n = {
+        let l = (0.75f64 * 0.75 + 1.0).sqrt();
+        [0.0, (-0.75 / l) as f32, (1.0 / l) as f32]
+    };
+    let nrm = b.floats(&n.repeat(4), "VEC3");
+    let col: Vec<f32> = corners
+        .iter()
+        .flat_map(|[x, y]| c(*x, *y).map(|v| v as f32))
+        .collect();
+    let col = b.floats(&col, "VEC3");
+    let idx = b.u16s(&[0, 1, 2, 0, 2, 3]);
+    let doc = b.doc(json!({
+        "meshes": [{"primitives": [{"attributes": {"POSITION": pos, "NORMAL": nrm, "COLOR_0": col},
+            "indices": idx, "material": 0}]}],
+        "materials": [{"pbrMetallicRoughness": {}, "extensions": {"KHR_materials_unlit": {}}}],
+        "extensionsUsed": ["KHR_materials_unlit"],
+        "nodes": [{"mesh": 0}],
+        "scenes": [{"nodes": [0]}]
+    }));
+    let toml = r#"
+[camera]
+eye = [0.0, 0.0, 10.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 14.0
+near = 1.0
+far = 100.0
+[output]
+width = 64
+height = 64
+[[mesh]]
+gltf = "quad.gltf"
+"#;
+    let s = common::scene(toml, &[("quad.gltf", &doc.to_string())]);
+    let set = specula::render::RenderSettings::from_scene(&s);
+    let r = specula::render::render_scene(&s, &set, 0.0).unwrap();
+    let t = (7.0f64).to_radians().tan();
+    let mut checked = 0;
+    let mut worst_screen = 0.0f64;
+    for y in 0..SIZE {
+        for x in 0..SIZE {
+            // The ray through the pixel centre: eye + s (nx t, ny t, −1).
+            let nx = 2.0 * (x as f64 + 0.5) / SIZE as f64 - 1.0;
+            let ny = 1.0 - 2.0 * (y as f64 + 0.5) / SIZE as f64;
+            let s = 10.0 / (1.0 + 0.75 * ny * t);
+            let (px, py) = (s * nx * t, s * ny * t);
+            if px.abs() > 0.95 || py.abs() > 0.95 {
+                continue;
+            }
+            let want = c(px, py);
+            let got = r.frame.buffers.color.get(y * SIZE + x);
+            for k in 0..3 {
+                assert!(
+                    (got[k] as f64 - want[k]).abs() <= 2e-5,
+                    "pixel ({x}, {y}): {got:?}, want {want:?} at ({px}, {py})"
+                );
+            }
+            // Screen-space interpolation would take y affine in ny
+            // between the projections of the top (y = 1, z = 0.75) and
+            // bottom (y = −1, z = −0.75) edges.
+            let (top, bottom) = (1.0 / (9.25 * t), -1.0 / (10.75 * t));
+            let y_screen = -1.0 + 2.0 * (ny - bottom) / (top - bottom);
+            worst_screen = worst_screen.max(0.4 * (y_screen - py).abs());
+            checked += 1;
+        }
+    }
+    assert!(checked > 2000, "{checked} pixels checked");
+    assert!(
+        worst_screen > 1e-3,
+        "the tilt tells perspective-correct from screen-space: {worst_screen}"
+    );
 }

@@ -22,7 +22,9 @@
 //!   environment term only (glTF: it applies to indirect light, not to
 //!   the lights);
 //! - `emissive`: RGB (sRGB texels) multiplies the material's emissive
-//!   colour, added to the reflected radiance.
+//!   colour, added to the reflected radiance;
+//! - `vertex_color` (not a texture): the mesh's interpolated vertex
+//!   colour multiplies the base colour.
 //!
 //! Each map may move its texture over the surface by a [`UvTransform`]
 //! (glTF's KHR_texture_transform): the uv and its screen derivatives are
@@ -133,6 +135,9 @@ pub struct ParamMaps {
     pub occlusion: Option<OcclusionMap>,
     /// Multiplies the material's emissive colour.
     pub emissive: Option<ColorMap>,
+    /// The surface's vertex colour ([`crate::fragment::Surface::color`])
+    /// multiplies the base colour (glTF's COLOR_0).
+    pub vertex_color: bool,
 }
 
 /// Smallest n·wo a normal-mapped shading normal is allowed: the same
@@ -147,6 +152,7 @@ impl ParamMaps {
             && self.normal.is_none()
             && self.occlusion.is_none()
             && self.emissive.is_none()
+            && !self.vertex_color
     }
 
     /// Every map, mutably (to set their samplers at once).
@@ -179,6 +185,9 @@ impl ParamMaps {
         if self.base_color.is_some() && params.base_color_mut().is_none() {
             return Some("base_color_texture");
         }
+        if self.vertex_color && params.base_color_mut().is_none() {
+            return Some("COLOR_0");
+        }
         if self.metallic_roughness.is_some()
             && (params.metallic_mut().is_none() || !params.scale_roughness(1.0))
         {
@@ -194,6 +203,11 @@ impl ParamMaps {
         if let Some(map) = &self.base_color {
             if let Some(c) = params.base_color_mut() {
                 *c = c.mul_elem(map.sample(input));
+            }
+        }
+        if let (true, Some(s)) = (self.vertex_color, input.surface) {
+            if let Some(c) = params.base_color_mut() {
+                *c = c.mul_elem(s.color);
             }
         }
         if let Some(map) = &self.metallic_roughness {

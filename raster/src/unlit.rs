@@ -37,20 +37,26 @@ impl PacketShader for Unlit {
 pub struct UnlitBase {
     pub color: [f32; 3],
     pub base_color: Option<ColorMap>,
+    /// The surface's vertex colour multiplies it (glTF's COLOR_0).
+    pub vertex_color: bool,
 }
 
 impl PacketShader for UnlitBase {
     #[inline(always)]
     fn shade<R: Real>(&self, input: &ShadeInput<R>, _env: &ShadeEnv) -> Rgb<R> {
         let c = Rgb::from_f32(self.color);
-        match &self.base_color {
+        let c = match &self.base_color {
             Some(map) => c.mul_elem(map.sample(input)),
             None => c,
+        };
+        match (self.vertex_color, input.surface) {
+            (true, Some(s)) => c.mul_elem(s.color),
+            _ => c,
         }
     }
 
     fn needs_surface(&self) -> bool {
-        self.base_color.is_some()
+        self.base_color.is_some() || self.vertex_color
     }
 
     fn with_texture_filter(&self, filter: Filter) -> Option<UnlitBase> {

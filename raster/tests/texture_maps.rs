@@ -218,6 +218,8 @@ fn inputs<R: Real>(lanes: &[LaneIn]) -> (Fragment<R>, Surface<R>) {
         tangent: t,
         bitangent_sign: sign,
         frame: ShadingFrame::from_normal_tangent(n, t, sign),
+        color: V3::splat(R::ONE),
+        alpha: R::ONE,
     };
     (frag, surface)
 }

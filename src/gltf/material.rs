@@ -519,7 +519,8 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 }
 
 /// The scene material for a glTF material, and what of it is not
-/// rendered (one warning, or none).
+/// rendered (one warning, or none). With `vertex_color` (some primitive
+/// using it has COLOR_0) the vertex colour multiplies its base colour.
 ///
 /// Today: the `gltf` model (the specification's normative BRDF) with the
 /// base colour factor's RGB (its alpha is not used), the metallic and
@@ -537,6 +538,7 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// colour texture, shown as it is.
 pub fn scene_material(
     m: &GltfMaterial,
+    vertex_color: bool,
     images: &mut Images,
 ) -> Result<(Material, Option<String>), String> {
     let mut missing: Vec<String> = Vec::new();
@@ -635,7 +637,10 @@ pub fn scene_material(
     );
     let params = desc.params().map_err(|e| format!("{at}: {e}"))?;
     let model = Model::Gltf(Gltf::new(params));
-    let mut maps = ParamMaps::default();
+    let mut maps = ParamMaps {
+        vertex_color,
+        ..Default::default()
+    };
     let mut sets = Vec::new();
     let mut load = |t: &TextureRef, encoding: Encoding| -> Result<ColorMap, String> {
         let mut map = images
@@ -660,6 +665,7 @@ pub fn scene_material(
         let shader = UnlitBase {
             color: [r, g, b],
             base_color,
+            vertex_color,
         };
         let warning = rendered_without(&m.name, &missing);
         return Ok((Material::new(&m.name, shader, m.double_sided), warning));

@@ -11,7 +11,7 @@ use crate::gltf::material::{scene_material, GltfMaterial};
 use crate::gltf::{GltfScene, Projection};
 use crate::memory;
 use crate::mesh::MeshData;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
 use specula_raster::{Camera, GeometryPass};
 use std::path::{Path, PathBuf};
@@ -104,7 +104,21 @@ impl SceneBuilder<'_> {
             ..Default::default()
         };
         let mut any_uv = false;
-        let mut colors = 0usize;
+        // Materials some primitive with COLOR_0 uses: their base colour
+        // is multiplied by it (the others see white).
+        let mut colored = vec![false; nmat + 1];
+        for prim in g.primitives.iter().filter(|p| p.color0.is_some()) {
+            colored[prim.material.unwrap_or(nmat)] = true;
+        }
+        let any_color = colored.contains(&true);
+        if any_color {
+            let n: usize = g.primitives.iter().map(|p| p.positions.len()).sum();
+            memory::reserve(
+                &format!("{what}: vertex colours ({n} vertices)"),
+                memory::COLOR_VERTEX_BYTES.saturating_mul(n as u64),
+            )?;
+        }
+        let mut clamped = 0usize;
         for prim in &g.primitives {
             let k = prim.material.unwrap_or(nmat);
             if local[k] == u32::MAX {
@@ -112,7 +126,7 @@ impl SceneBuilder<'_> {
                     Some(i) => g.materials[i].clone(),
                     None => GltfMaterial::default_material(),
                 };
-                let (mut built, warning) = scene_material(&desc, &mut images)
+                let (mut built, warning) = scene_material(&desc, colored[k], &mut images)
                     .map_err(|e| format!("{what}: {file}: {e}"))?;
                 built.name = format!("{file}#{}", desc.name);
                 self.warnings
@@ -128,7 +142,6 @@ impl SceneBuilder<'_> {
                 self.materials.list.push(built);
                 local[k] = id;
             }
-            colors += usize::from(prim.color0.is_some());
             // The uv set the material's texture reads (TEXCOORD_0 otherwise),
             // flipped to our convention (v = 0 at the bottom of the image).
             let set = textured[k].unwrap_or(0);
@@ -156,14 +169,25 @@ impl SceneBuilder<'_> {
                     .uvs
                     .extend(std::iter::repeat_n(Vec2::ZERO, prim.positions.len())),
             }
+            match (&prim.color0, any_color) {
+                (Some(c), _) => mesh.colors.extend(c.iter().map(|c| {
+                    let k = c.clamp(Vec4::ZERO, Vec4::ONE);
+                    clamped += usize::from(k != *c);
+                    k
+                })),
+                (None, true) => mesh
+                    .colors
+                    .extend(std::iter::repeat_n(Vec4::ONE, prim.positions.len())),
+                (None, false) => {}
+            }
             mesh.triangles
                 .extend(prim.triangles.iter().map(|t| t.map(|i| i + base)));
             mesh.tri_material
                 .extend(std::iter::repeat_n(k as u32, prim.triangles.len()));
         }
-        if colors > 0 {
+        if clamped > 0 {
             self.warnings.push(format!(
-                "{file}: COLOR_0 of {colors} primitives is not rendered (vertex colours are kept by the loader only)"
+                "{file}: COLOR_0 of {clamped} vertices had components outside [0, 1], clamped to it"
             ));
         }
         self.inputs.append(&mut images.inputs);
