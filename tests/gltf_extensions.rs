@@ -561,3 +561,170 @@ gltf = "quad.gltf"
         "the tilt tells perspective-correct from screen-space: {worst_screen}"
     );
 }
+
+/// [`render`] under a point light off the axis (so normals tilted along x
+/// and along y light differently) and a uniform environment.
+fn render_off_axis(doc: &str) -> Vec<[f32; 3]> {
+    let toml = r#"
+[camera]
+eye = [0.0, 0.0, 10.0]
+target = [0.0, 0.0, 0.0]
+fov_y = 14.0
+near = 1.0
+far = 100.0
+[output]
+width = 64
+height = 64
+[[mesh]]
+gltf = "quad.gltf"
+translate = [0.0, 0.0, 1.0]
+[[light]]
+type = "point"
+position = [1.5, 0.5, 4.0]
+intensity = [8.0, 8.0, 8.0]
+[environment]
+uniform = [0.2, 0.2, 0.2]
+"#;
+    let s = common::scene(toml, &[("quad.gltf", doc)]);
+    let set = specula::render::RenderSettings::from_scene(&s);
+    let r = specula::render::render_scene(&s, &set, 0.0).unwrap();
+    (0..SIZE * SIZE)
+        .map(|i| r.frame.buffers.color.get(i))
+        .collect()
+}
+
+/// Given TANGENTs are used instead of MikkTSpace's. The quad's uvs run
+/// along +x and +y, so generated tangents are t = +x, b = +y. Given
+/// t = +y with w = −1, glTF's bitangent w (n × t) = −(z × y) = +x: the
+/// map's x and y swap. So the constant texel (255, 128, 255), the
+/// tangent-space normal (1, 1/255, 1), bends the normal toward
+/// (1/255, 1, 1) instead of (1, 1/255, 1); with w = +1 the bitangent is
+/// −x, and the texel (128, 255, 255), (1/255, 1, 1) in tangent space,
+/// bends it toward (−1, 1/255, 1): mirrored. Each render equals the same
+/// quad with that world normal as its vertex normal and no map.
+#[test]
+fn given_tangents_are_used_with_their_handedness() {
+    let rough = json!({"baseColorFactor": [0.9, 0.6, 0.3, 1.0],
+        "metallicFactor": 0.0, "roughnessFactor": 0.5});
+    let mapped = |texel: [u8; 3], tangent: Option<[f32; 4]>| {
+        let mut attributes = Vec::new();
+        if let Some(t) = tangent {
+            attributes.push(("TANGENT", Attr::Floats(t.repeat(4), "VEC4")));
+        }
+        render_off_axis(&quad_doc(
+            json!({"pbrMetallicRoughness": rough, "normalTexture": {"index": 0}}),
+            &Quad {
+                images: vec![png_uri(1, 1, &texel)],
+                attributes,
+                ..Default::default()
+            },
+        ))
+    };
+    let by_normal = |n: [f64; 3]| {
+        let l = (n[0] * n[0] + n[1] * n[1] + n[2] * n[2]).sqrt();
+        render_off_axis(&quad_doc(
+            json!({"pbrMetallicRoughness": rough}),
+            &Quad {
+                normal: Some(n.map(|c| (c / l) as f32)),
+                ..Default::default()
+            },
+        ))
+    };
+    let e = 1.0 / 255.0;
+    let same = |a: &[[f32; 3]], b: &[[f32; 3]], what: &str| {
+        let mut lit = 0;
+        for (i, (p, q)) in a.iter().zip(b).enumerate() {
+            lit += usize::from(q[0] > 0.0);
+            for c in 0..3 {
+                assert!(
+                    (p[c] - q[c]).abs() <= 1e-3 * q[c].max(1e-3),
+                    "{what}: pixel {i}: {p:?} vs vertex normal {q:?}"
+                );
+            }
+        }
+        assert!(lit > 2500, "{what}: {lit}");
+    };
+    let generated = mapped([255, 128, 255], None);
+    same(&generated, &by_normal([1.0, e, 1.0]), "generated tangents");
+    let given = mapped([255, 128, 255], Some([0.0, 1.0, 0.0, -1.0]));
+    same(&given, &by_normal([e, 1.0, 1.0]), "given t = +y, w = −1");
+    let mirrored = mapped([128, 255, 255], Some([0.0, 1.0, 0.0, 1.0]));
+    same(
+        &mirrored,
+        &by_normal([-1.0, e, 1.0]),
+        "given t = +y, w = +1",
+    );
+    // The three differ where the light is off the axis.
+    let mid = 32 * SIZE + 32;
+    for (a, b) in [(&generated, &given), (&given, &mirrored)] {
+        assert!(
+            (a[mid][0] - b[mid][0]).abs() > 0.05 * a[mid][0],
+            "{:?} vs {:?}",
+            a[mid],
+            b[mid]
+        );
+    }
+}
+
+/// The error of loading `doc` as the quad of a scene.
+fn load_error(doc: &str) -> String {
+    let toml = "[camera]\neye = [0.0, 0.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nfov_y = 40.0\nnear = 0.1\nfar = 10.0\n[[mesh]]\ngltf = \"q.gltf\"\n";
+    let text = doc.to_string();
+    let read = move |p: &std::path::Path| -> std::io::Result<Vec<u8>> {
+        if p == std::path::Path::new("q.gltf") {
+            Ok(text.clone().into_bytes())
+        } else {
+            Err(std::io::ErrorKind::NotFound.into())
+        }
+    };
+    specula::scene::load_scene_str(std::path::Path::new("s.toml"), toml, &read)
+        .err()
+        .expect("refused")
+        .to_string()
+}
+
+/// A transform that is not finite (a scale beyond f32) or not of the
+/// extension's form is refused naming its JSON path; float COLOR_0
+/// values outside [0, 1] are clamped with a warning.
+#[test]
+fn bad_extension_values_are_refused_or_clamped() {
+    let images = vec![png_uri(1, 1, &[128, 128, 255])];
+    let q = Quad {
+        images: images.clone(),
+        ..Default::default()
+    };
+    let huge = quad_doc(rough_textured(Some(json!({"scale": [1e39, 1.0]}))), &q);
+    let e = load_error(&huge);
+    assert!(
+        e.contains(
+            "materials[0].pbrMetallicRoughness.baseColorTexture.extensions.KHR_texture_transform"
+        ),
+        "{e}"
+    );
+    let malformed = quad_doc(
+        json!({"normalTexture": {"index": 0,
+            "extensions": {"KHR_texture_transform": {"offset": "up"}}}}),
+        &q,
+    );
+    let e = load_error(&malformed);
+    assert!(
+        e.contains("materials[0].normalTexture.extensions.KHR_texture_transform"),
+        "{e}"
+    );
+    let bright = quad_doc(
+        json!({"pbrMetallicRoughness": {}}),
+        &Quad {
+            attributes: vec![(
+                "COLOR_0",
+                Attr::Floats([1.5f32, 0.5, -0.25].repeat(4), "VEC3"),
+            )],
+            ..Default::default()
+        },
+    );
+    let (px, warnings) = render(&bright);
+    assert!(
+        warnings.iter().any(|w| w.contains("COLOR_0 of 4 vertices")),
+        "{warnings:?}"
+    );
+    assert!(px.iter().flatten().all(|c| c.is_finite() && *c >= 0.0));
+}

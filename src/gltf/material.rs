@@ -22,9 +22,8 @@ use std::collections::BTreeMap;
 ///
 /// That R is the one the extension's example JSON needs (offset (0, 1),
 /// rotation π/2, scale ½ shows "the lower left quadrant of the image,
-/// rotated clockwise 90°"), and the one three.js and the Khronos viewer
-/// use; the README's GLSL listing, read with GLSL's column-major `mat3`,
-/// is its transpose.
+/// rotated clockwise 90°"); the README's GLSL listing, read with GLSL's
+/// column-major `mat3`, is its transpose.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureTransform {
     pub offset: [f32; 2],

@@ -111,6 +111,7 @@ impl SceneBuilder<'_> {
             colored[prim.material.unwrap_or(nmat)] = true;
         }
         let any_color = colored.contains(&true);
+        let any_tangents = g.primitives.iter().any(|p| p.tangents.is_some());
         if any_color {
             let n: usize = g.primitives.iter().map(|p| p.positions.len()).sum();
             memory::reserve(
@@ -156,34 +157,62 @@ impl SceneBuilder<'_> {
                     prim.at
                 ));
             }
-            let base = mesh.positions.len() as u32;
-            mesh.positions.extend_from_slice(&prim.positions);
-            mesh.normals.extend_from_slice(&prim.normals);
-            match uvs {
+            let mut piece = MeshData {
+                positions: prim.positions.clone(),
+                normals: prim.normals.clone(),
+                triangles: prim.triangles.clone(),
+                ..Default::default()
+            };
+            piece.uvs = match uvs {
                 Some(uv) => {
                     any_uv = true;
-                    mesh.uvs
-                        .extend(uv.iter().map(|t| Vec2::new(t.x, 1.0 - t.y)));
+                    uv.iter().map(|t| Vec2::new(t.x, 1.0 - t.y)).collect()
                 }
-                None => mesh
-                    .uvs
-                    .extend(std::iter::repeat_n(Vec2::ZERO, prim.positions.len())),
+                None => vec![Vec2::ZERO; prim.positions.len()],
+            };
+            piece.colors = match (&prim.color0, any_color) {
+                (Some(c), _) => c
+                    .iter()
+                    .map(|c| {
+                        let k = c.clamp(Vec4::ZERO, Vec4::ONE);
+                        clamped += usize::from(k != *c);
+                        k
+                    })
+                    .collect(),
+                (None, true) => vec![Vec4::ONE; prim.positions.len()],
+                (None, false) => Vec::new(),
+            };
+            if any_tangents {
+                // Some primitive brings TANGENT: every one gets tangents
+                // here, its own, else MikkTSpace's (normal-mapped), else
+                // the per-vertex uv tangents every mesh gets.
+                let normal_mapped = self.materials.normal_mapped.contains(&local[k]);
+                match &prim.tangents {
+                    Some(t) => piece.tangents = t.clone(),
+                    None if normal_mapped => {
+                        crate::tangents::add_mikktspace_tangents(&mut piece)
+                            .map_err(|e| format!("{what}: {file}: {}: {e}", prim.at))?
+                    }
+                    None => {
+                        piece.tangents = specula_raster::scene::compute_tangents(
+                            &piece.positions,
+                            &piece.normals,
+                            &piece.uvs,
+                            &piece.triangles,
+                        )
+                    }
+                }
             }
-            match (&prim.color0, any_color) {
-                (Some(c), _) => mesh.colors.extend(c.iter().map(|c| {
-                    let k = c.clamp(Vec4::ZERO, Vec4::ONE);
-                    clamped += usize::from(k != *c);
-                    k
-                })),
-                (None, true) => mesh
-                    .colors
-                    .extend(std::iter::repeat_n(Vec4::ONE, prim.positions.len())),
-                (None, false) => {}
-            }
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend_from_slice(&piece.positions);
+            mesh.normals.extend_from_slice(&piece.normals);
+            mesh.uvs.extend_from_slice(&piece.uvs);
+            mesh.colors.extend_from_slice(&piece.colors);
+            mesh.tangents.extend_from_slice(&piece.tangents);
             mesh.triangles
-                .extend(prim.triangles.iter().map(|t| t.map(|i| i + base)));
+                .extend(piece.triangles.iter().map(|t| t.map(|i| i + base)));
             mesh.tri_material
-                .extend(std::iter::repeat_n(k as u32, prim.triangles.len()));
+                .extend(std::iter::repeat_n(k as u32, piece.triangles.len()));
         }
         if clamped > 0 {
             self.warnings.push(format!(
