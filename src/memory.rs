@@ -15,6 +15,9 @@ use std::sync::atomic::{AtomicU64, Ordering};
 /// (mesh arrays, scene copies, clip-space vertices, setup and bins).
 const VERTEX_BYTES: u64 = 64;
 const TRIANGLE_BYTES: u64 = 72;
+/// Bytes per vertex of a glTF mesh with vertex colours, on top of
+/// [`mesh_bytes`]: its RGBA (4 f32) in the mesh and in the scene.
+pub const COLOR_VERTEX_BYTES: u64 = 32;
 /// Bytes per OBJ byte while tobj parses it (text, parsed arrays, our copy).
 const OBJ_BYTES_PER_BYTE: u64 = 8;
 /// Bytes per supersample: visibility buffer, colour, resolve.

@@ -15,6 +15,8 @@ pub struct MeshData {
     /// position, or empty (then made when the scene is built: tangents.rs
     /// for normal-mapped materials, `compute_tangents` otherwise).
     pub tangents: Vec<glam::Vec4>,
+    /// Vertex colours (linear RGBA), one per position, or empty.
+    pub colors: Vec<glam::Vec4>,
     pub triangles: Vec<[u32; 3]>,
     pub tri_material: Vec<u32>,
     /// Names of the materials the triangles use (`None`: none assigned).

@@ -204,6 +204,10 @@ pub fn add_visible(
         data.tangents
             .extend(std::iter::repeat_n(Vec4::from((t, 1.0)), vertices.len()));
     }
+    if !data.colors.is_empty() {
+        data.colors
+            .extend(std::iter::repeat_n(Vec4::ONE, vertices.len()));
+    }
     for t in triangulate(vertices) {
         data.triangles.push(t.map(|k| base + k as u32));
         data.tri_material.push(mat);

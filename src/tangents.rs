@@ -62,7 +62,7 @@ pub fn corner_tangents(mesh: &MeshData) -> Result<Vec<[f32; 4]>, String> {
 
 /// Gives `mesh` (with uvs, without tangents) MikkTSpace tangents, one per
 /// vertex: a vertex whose corners got different tangents is split into
-/// one copy per distinct tangent (same position, normal and uv).
+/// one copy per distinct tangent (same position, normal, uv and colour).
 pub fn add_mikktspace_tangents(mesh: &mut MeshData) -> Result<(), String> {
     let corners = corner_tangents(mesh)?;
     let n = mesh.positions.len();
@@ -85,6 +85,9 @@ pub fn add_mikktspace_tangents(mesh: &mut MeshData) -> Result<(), String> {
                         mesh.positions.push(mesh.positions[i]);
                         mesh.normals.push(mesh.normals[i]);
                         mesh.uvs.push(mesh.uvs[i]);
+                        if !mesh.colors.is_empty() {
+                            mesh.colors.push(mesh.colors[i]);
+                        }
                         tangents.push(Some(tan));
                         (mesh.positions.len() - 1) as u32
                     });

@@ -103,5 +103,6 @@ pub fn decode_map(
     Ok(ColorMap {
         texture: Arc::new(texture),
         sampler,
+        transform: None,
     })
 }

@@ -12,78 +12,7 @@ use specula::core::light::Light;
 use specula::gltf::{load, GltfScene};
 use std::path::Path;
 
-/// A buffer being written: its bytes, views and accessors.
-#[derive(Default)]
-struct Buf {
-    bytes: Vec<u8>,
-    views: Vec<Value>,
-    accessors: Vec<Value>,
-}
-
-impl Buf {
-    fn view(&mut self, data: &[u8], stride: Option<usize>) -> usize {
-        while !self.bytes.len().is_multiple_of(4) {
-            self.bytes.push(0);
-        }
-        let mut v = json!({"buffer": 0, "byteOffset": self.bytes.len(), "byteLength": data.len()});
-        if let Some(s) = stride {
-            v["byteStride"] = json!(s);
-        }
-        self.bytes.extend_from_slice(data);
-        self.views.push(v);
-        self.views.len() - 1
-    }
-    fn accessor(&mut self, a: Value) -> usize {
-        self.accessors.push(a);
-        self.accessors.len() - 1
-    }
-    /// A float accessor of `ty` ("VEC3", …) over its own view.
-    fn floats(&mut self, v: &[f32], ty: &str) -> usize {
-        let n = match ty {
-            "SCALAR" => 1,
-            "VEC2" => 2,
-            "VEC3" => 3,
-            _ => 4,
-        };
-        let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
-        let view = self.view(&bytes, None);
-        self.accessor(
-            json!({"bufferView": view, "componentType": 5126, "count": v.len() / n, "type": ty}),
-        )
-    }
-    fn u16s(&mut self, v: &[u16]) -> usize {
-        let bytes: Vec<u8> = v.iter().flat_map(|x| x.to_le_bytes()).collect();
-        let view = self.view(&bytes, None);
-        self.accessor(
-            json!({"bufferView": view, "componentType": 5123, "count": v.len(), "type": "SCALAR"}),
-        )
-    }
-    fn u8s(&mut self, v: &[u8]) -> usize {
-        let view = self.view(v, None);
-        self.accessor(
-            json!({"bufferView": view, "componentType": 5121, "count": v.len(), "type": "SCALAR"}),
-        )
-    }
-    fn data_uri(&self) -> String {
-        format!(
-            "data:application/octet-stream;base64,{}",
-            base64::engine::general_purpose::STANDARD.encode(&self.bytes)
-        )
-    }
-    /// A whole glTF document around `rest` (meshes, nodes, …).
-    fn doc(&self, rest: Value) -> Value {
-        let mut d = json!({
-            "asset": {"version": "2.0"},
-            "buffers": [{"byteLength": self.bytes.len(), "uri": self.data_uri()}],
-            "bufferViews": self.views,
-            "accessors": self.accessors,
-        });
-        for (k, v) in rest.as_object().unwrap() {
-            d[k] = v.clone();
-        }
-        d
-    }
-}
+use common::gltf_doc::Buf;
 
 fn no_files(_: &Path) -> std::io::Result<Vec<u8>> {
     Err(std::io::ErrorKind::NotFound.into())

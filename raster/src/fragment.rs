@@ -5,7 +5,7 @@
 //! both so the seam does not depend on `resolve`, which reads the scene,
 //! which holds the materials' shaders.
 
-use specula_core::{Real, ShadingFrame, V3};
+use specula_core::{Real, Rgb, ShadingFrame, V3};
 
 /// Per-lane surface data the shading pass needs.
 #[derive(Clone, Copy, Debug)]
@@ -40,4 +40,9 @@ pub struct Surface<R: Real> {
     /// The shading frame of the uv tangent where the mesh has one, any
     /// frame around the normal elsewhere.
     pub frame: ShadingFrame<R>,
+    /// The vertex colour (linear RGB), interpolated perspective-correctly;
+    /// 1 where the scene has no vertex colours.
+    pub color: Rgb<R>,
+    /// The vertex colour's alpha, likewise.
+    pub alpha: R,
 }

@@ -54,7 +54,7 @@ pub use lit::{env_split_sum, Lit};
 pub use scene::SceneData;
 pub use shader::{Material, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};
-pub use unlit::Unlit;
+pub use unlit::{Unlit, UnlitBase};
 
 /// The fixed-point setup, binning and scan conversion, reached past the
 /// frame's pass list. Public only so specula's fuzz entry points and this

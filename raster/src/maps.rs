@@ -22,12 +22,55 @@
 //!   environment term only (glTF: it applies to indirect light, not to
 //!   the lights);
 //! - `emissive`: RGB (sRGB texels) multiplies the material's emissive
-//!   colour, added to the reflected radiance.
+//!   colour, added to the reflected radiance;
+//! - `vertex_color` (not a texture): the mesh's interpolated vertex
+//!   colour multiplies the base colour.
+//!
+//! Each map may move its texture over the surface by a [`UvTransform`]
+//! (glTF's KHR_texture_transform): the uv and its screen derivatives are
+//! transformed before the lookup, so the filter's footprint follows. The
+//! tangent frame a normal map is read in stays the mesh's (that of the
+//! untransformed uvs), as GPU engines do.
 
 use crate::shader::ShadeInput;
 use crate::texture::{Filter, Sampler, Texture};
 use specula_core::{LaneParams, Real, Rgb, ShadingFrame, V3};
 use std::sync::Arc;
+
+/// An affine map of texture coordinates, applied before a map is sampled:
+/// uv' = M·uv + c, each row of `rows` being (M₀, M₁, c) of one output
+/// coordinate; uv derivatives are mapped by M alone.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct UvTransform {
+    /// u' = rows\[0\]·(u, v, 1), v' = rows\[1\]·(u, v, 1).
+    pub rows: [[f32; 3]; 2],
+}
+
+impl UvTransform {
+    pub const IDENTITY: UvTransform = UvTransform {
+        rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
+    };
+
+    /// The transformed point.
+    #[inline(always)]
+    pub fn apply<R: Real>(&self, uv: [R; 2]) -> [R; 2] {
+        self.rows.map(|[a, b, c]| {
+            R::splat(a as f64).mul_add(uv[0], R::splat(b as f64).mul_add(uv[1], R::splat(c as f64)))
+        })
+    }
+
+    /// The transformed direction (a derivative of uv): the linear part.
+    #[inline(always)]
+    pub fn apply_vector<R: Real>(&self, d: [R; 2]) -> [R; 2] {
+        self.rows
+            .map(|[a, b, _]| R::splat(a as f64).mul_add(d[0], R::splat(b as f64) * d[1]))
+    }
+
+    /// Every coefficient finite (a check for loaders).
+    pub fn is_finite(&self) -> bool {
+        self.rows.iter().flatten().all(|c| c.is_finite())
+    }
+}
 
 /// An image sampled at the surface's uv: what every map holds.
 #[derive(Clone, Debug, PartialEq)]
@@ -35,6 +78,9 @@ pub struct ColorMap {
     /// At least three channels (linear values).
     pub texture: Arc<Texture>,
     pub sampler: Sampler,
+    /// Applied to the surface's uv (and its derivatives) before the
+    /// lookup; `None` reads the uv as it is.
+    pub transform: Option<UvTransform>,
 }
 
 impl ColorMap {
@@ -45,7 +91,15 @@ impl ColorMap {
     pub fn sample<R: Real>(&self, input: &ShadeInput<R>) -> Rgb<R> {
         match input.surface {
             Some(s) => {
-                let [r, g, b] = self.texture.sample(&self.sampler, s.uv, s.duv_dx, s.duv_dy);
+                let [r, g, b] = match &self.transform {
+                    None => self.texture.sample(&self.sampler, s.uv, s.duv_dx, s.duv_dy),
+                    Some(t) => self.texture.sample(
+                        &self.sampler,
+                        t.apply(s.uv),
+                        t.apply_vector(s.duv_dx),
+                        t.apply_vector(s.duv_dy),
+                    ),
+                };
                 V3::new(r, g, b)
             }
             None => Rgb::splat(R::ONE),
@@ -81,6 +135,9 @@ pub struct ParamMaps {
     pub occlusion: Option<OcclusionMap>,
     /// Multiplies the material's emissive colour.
     pub emissive: Option<ColorMap>,
+    /// The surface's vertex colour ([`crate::fragment::Surface::color`])
+    /// multiplies the base colour (glTF's COLOR_0).
+    pub vertex_color: bool,
 }
 
 /// Smallest n·wo a normal-mapped shading normal is allowed: the same
@@ -95,6 +152,7 @@ impl ParamMaps {
             && self.normal.is_none()
             && self.occlusion.is_none()
             && self.emissive.is_none()
+            && !self.vertex_color
     }
 
     /// Every map, mutably (to set their samplers at once).
@@ -127,6 +185,9 @@ impl ParamMaps {
         if self.base_color.is_some() && params.base_color_mut().is_none() {
             return Some("base_color_texture");
         }
+        if self.vertex_color && params.base_color_mut().is_none() {
+            return Some("COLOR_0");
+        }
         if self.metallic_roughness.is_some()
             && (params.metallic_mut().is_none() || !params.scale_roughness(1.0))
         {
@@ -142,6 +203,11 @@ impl ParamMaps {
         if let Some(map) = &self.base_color {
             if let Some(c) = params.base_color_mut() {
                 *c = c.mul_elem(map.sample(input));
+            }
+        }
+        if let (true, Some(s)) = (self.vertex_color, input.surface) {
+            if let Some(c) = params.base_color_mut() {
+                *c = c.mul_elem(s.color);
             }
         }
         if let Some(map) = &self.metallic_roughness {

@@ -315,6 +315,7 @@ impl ResolveContext<'_> {
     #[inline(always)]
     pub fn surface<R: Real>(&self, tris: &PacketTris, frag: &Fragment<R>) -> Surface<R> {
         let scene = self.scene;
+        let (color, alpha) = self.vertex_color(tris, frag);
         if scene.uvs.is_empty() {
             return Surface {
                 uv: [R::ZERO; 2],
@@ -323,6 +324,8 @@ impl ResolveContext<'_> {
                 tangent: V3::zero(),
                 bitangent_sign: R::ONE,
                 frame: ShadingFrame::from_normal(frag.n),
+                color,
+                alpha,
             };
         }
         // Per triangle: uv0, uv1 − uv0, uv2 − uv0, three tangents (xyz),
@@ -379,7 +382,38 @@ impl ResolveContext<'_> {
                 b: V3::select(has, tangent_frame.b, any.b),
                 n: frag.n,
             },
+            color,
+            alpha,
         }
+    }
+
+    /// The vertex colour (RGB, alpha) of `frag`, interpolated with its
+    /// perspective-correct barycentrics; 1 where the scene has none.
+    #[inline(always)]
+    fn vertex_color<R: Real>(&self, tris: &PacketTris, frag: &Fragment<R>) -> (V3<R>, R) {
+        let scene = self.scene;
+        if scene.colors.is_empty() {
+            return (V3::splat(R::ONE), R::ONE);
+        }
+        // Per triangle: c0, c1 − c0, c2 − c0 (RGBA each).
+        let gathered = |t: usize| -> [f32; 12] {
+            let tri = scene.triangles[tris.tri[t] as usize];
+            let [c0, c1, c2] = tri.map(|i| scene.colors[i as usize]);
+            let (e1, e2) = (c1 - c0, c2 - c0);
+            [
+                c0.x, c0.y, c0.z, c0.w, e1.x, e1.y, e1.z, e1.w, e2.x, e2.y, e2.z, e2.w,
+            ]
+        };
+        let mut lanes = gathered(0).map(|c| R::splat(c as f64));
+        for t in 1..tris.n {
+            let m = R::mask_from_bits(tris.lanes[t]);
+            for (l, c) in lanes.iter_mut().zip(gathered(t)) {
+                *l = R::select(m, R::splat(c as f64), *l);
+            }
+        }
+        let (b1, b2) = (frag.b1, frag.b2);
+        let c = |k: usize| lanes[k + 4].mul_add(b1, lanes[k + 8].mul_add(b2, lanes[k]));
+        (V3::new(c(0), c(1), c(2)), c(3))
     }
 }
 

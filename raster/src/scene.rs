@@ -18,6 +18,9 @@ pub struct SceneData {
     /// Unit tangents (xyz, along increasing u, orthogonal to the normal) and
     /// handedness (w = ±1), one per position; empty when `uvs` is.
     pub tangents: Vec<Vec4>,
+    /// Vertex colours (glTF's COLOR_0: linear RGBA, 1 where a mesh has
+    /// none), one per position, or empty when no mesh has any.
+    pub colors: Vec<Vec4>,
     /// Vertex indices; a triangle's id is its index here.
     pub triangles: Vec<[u32; 3]>,
     /// Index into `materials`, one per triangle.
@@ -57,6 +60,12 @@ impl SceneData {
                 "{} tangents for {} uvs",
                 self.tangents.len(),
                 self.uvs.len()
+            ));
+        }
+        if !self.colors.is_empty() && self.colors.len() != nv {
+            return Err(format!(
+                "{} vertex colours for {nv} positions",
+                self.colors.len()
             ));
         }
         if self.tri_material.len() != self.triangles.len() {

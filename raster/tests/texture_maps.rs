@@ -124,6 +124,7 @@ fn random_map(rng: &mut impl Rng, w: usize, h: usize, filter: Filter) -> ColorMa
     ColorMap {
         texture: Arc::new(Texture::from_f32(w, h, 3, img).unwrap()),
         sampler: Sampler::new(Wrap::Repeat, filter),
+        transform: None,
     }
 }
 
@@ -217,6 +218,8 @@ fn inputs<R: Real>(lanes: &[LaneIn]) -> (Fragment<R>, Surface<R>) {
         tangent: t,
         bitangent_sign: sign,
         frame: ShadingFrame::from_normal_tangent(n, t, sign),
+        color: V3::splat(R::ONE),
+        alpha: R::ONE,
     };
     (frag, surface)
 }

@@ -12,12 +12,18 @@ use gltf::json;
 use json::validation::Checked;
 use specula_core::models::Gltf;
 use specula_core::Model;
-use specula_raster::maps::{ColorMap, NormalMap, OcclusionMap, ParamMaps};
+use specula_raster::maps::{ColorMap, NormalMap, OcclusionMap, ParamMaps, UvTransform};
 use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
-use specula_raster::{Lit, Material};
+use specula_raster::{Lit, Material, UnlitBase};
 use std::collections::BTreeMap;
 
-/// KHR_texture_transform: uv' = T(offset) · R(rotation) · S(scale) · uv.
+/// KHR_texture_transform: uv' = T(offset) · R(rotation) · S(scale) · uv
+/// in glTF's uvs, with R = [[cos r, sin r], [−sin r, cos r]] (rows).
+///
+/// That R is the one the extension's example JSON needs (offset (0, 1),
+/// rotation π/2, scale ½ shows "the lower left quadrant of the image,
+/// rotated clockwise 90°"); the README's GLSL listing, read with GLSL's
+/// column-major `mat3`, is its transpose.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureTransform {
     pub offset: [f32; 2],
@@ -26,6 +32,32 @@ pub struct TextureTransform {
     pub scale: [f32; 2],
     /// Overrides the reference's texCoord set.
     pub tex_coord: Option<u32>,
+}
+
+impl TextureTransform {
+    /// The transform as it acts on glTF's uvs (v = 0 at the top of the
+    /// image): uv' = rows · (u, v, 1).
+    pub fn gltf_rows(&self) -> [[f64; 3]; 2] {
+        let (s, c) = (self.rotation as f64).sin_cos();
+        let [sx, sy] = self.scale.map(|x| x as f64);
+        let [ox, oy] = self.offset.map(|x| x as f64);
+        [[c * sx, s * sy, ox], [-s * sx, c * sy, oy]]
+    }
+
+    /// The same transform on specula's uvs, which loading flipped
+    /// (v_ours = 1 − v_glTF, F(u, v) = (u, 1 − v)): F ∘ A ∘ F, so a texel
+    /// lands where glTF puts it.
+    pub fn uv_transform(&self) -> UvTransform {
+        let [[a, b, c], [d, e, f]] = self.gltf_rows();
+        // F(A(F(x))) with F = diag(1, −1)·x + (0, 1):
+        // linear part diag(1,−1)·L·diag(1,−1), offset diag(1,−1)·(L·(0,1) + o) + (0, 1).
+        UvTransform {
+            rows: [
+                [a as f32, -b as f32, (b + c) as f32],
+                [-d as f32, e as f32, (1.0 - e - f) as f32],
+            ],
+        }
+    }
 }
 
 /// A texture as a material refers to it: the image, how it is sampled,
@@ -238,6 +270,7 @@ fn texture_ref(
     index: json::Index<json::Texture>,
     tex_coord: u32,
     ext: Option<&json::extensions::texture::Info>,
+    others: Option<&serde_json::Map<String, serde_json::Value>>,
     scale: f32,
 ) -> Result<TextureRef, String> {
     let t = root
@@ -256,6 +289,17 @@ fn texture_ref(
             scale: t.scale.0,
             tex_coord: t.tex_coord,
         });
+    let transform = match transform {
+        Some(t) => Some(t),
+        None => other_transform(&at, others)?,
+    };
+    if let Some(t) = &transform {
+        if !t.uv_transform().is_finite() {
+            return Err(format!(
+                "{at}.extensions.KHR_texture_transform: offset, rotation and scale must be finite, got {t:?}"
+            ));
+        }
+    }
     Ok(TextureRef {
         at,
         texture: index.value(),
@@ -267,13 +311,42 @@ fn texture_ref(
     })
 }
 
+/// KHR_texture_transform where the `gltf` crate keeps it as plain JSON
+/// (normalTexture and occlusionTexture extensions).
+fn other_transform(
+    at: &str,
+    others: Option<&serde_json::Map<String, serde_json::Value>>,
+) -> Result<Option<TextureTransform>, String> {
+    let Some(v) = others.and_then(|o| o.get("KHR_texture_transform")) else {
+        return Ok(None);
+    };
+    let t: json::extensions::texture::TextureTransform = serde_json::from_value(v.clone())
+        .map_err(|e| format!("{at}.extensions.KHR_texture_transform: {e}"))?;
+    Ok(Some(TextureTransform {
+        offset: t.offset.0,
+        rotation: t.rotation.0,
+        scale: t.scale.0,
+        tex_coord: t.tex_coord,
+    }))
+}
+
 fn info(
     root: &json::Root,
     at: String,
     i: &Option<json::texture::Info>,
 ) -> Result<Option<TextureRef>, String> {
     i.as_ref()
-        .map(|i| texture_ref(root, at, i.index, i.tex_coord, i.extensions.as_ref(), 1.0))
+        .map(|i| {
+            texture_ref(
+                root,
+                at,
+                i.index,
+                i.tex_coord,
+                i.extensions.as_ref(),
+                None,
+                1.0,
+            )
+        })
         .transpose()
 }
 
@@ -308,6 +381,7 @@ pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial,
                 n.index,
                 n.tex_coord,
                 None,
+                n.extensions.as_ref().map(|e| &e.others),
                 n.scale,
             )
         })
@@ -322,6 +396,7 @@ pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial,
                 n.index,
                 n.tex_coord,
                 None,
+                n.extensions.as_ref().map(|e| &e.others),
                 n.strength.0,
             )
         })
@@ -443,7 +518,8 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 }
 
 /// The scene material for a glTF material, and what of it is not
-/// rendered (one warning, or none).
+/// rendered (one warning, or none). With `vertex_color` (some primitive
+/// using it has COLOR_0) the vertex colour multiplies its base colour.
 ///
 /// Today: the `gltf` model (the specification's normative BRDF) with the
 /// base colour factor's RGB (its alpha is not used), the metallic and
@@ -453,11 +529,15 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// through [`ParamMaps::base_color`] (its sampler kept; uvs from the set it
 /// names, chosen where the mesh is built), the metallic-roughness,
 /// normal (with its scale), occlusion (with its strength) and emissive
-/// maps, the emissive factor times KHR_materials_emissive_strength;
-/// `doubleSided` as the material's. Everything else is listed in the
-/// warning.
+/// maps, each moved by its KHR_texture_transform
+/// ([`TextureTransform::uv_transform`]), the emissive factor times
+/// KHR_materials_emissive_strength; `doubleSided` as the material's.
+/// Everything else is listed in the warning. A KHR_materials_unlit
+/// material is [`UnlitBase`]: its base colour factor times its base
+/// colour texture, shown as it is.
 pub fn scene_material(
     m: &GltfMaterial,
+    vertex_color: bool,
     images: &mut Images,
 ) -> Result<(Material, Option<String>), String> {
     let mut missing: Vec<String> = Vec::new();
@@ -477,11 +557,6 @@ pub fn scene_material(
         },
         m.alpha_mode != AlphaMode::Opaque,
     );
-    note(
-        "KHR_texture_transform",
-        m.textures().iter().any(|t| t.transform.is_some()),
-    );
-    note("KHR_materials_unlit", m.unlit);
     note(
         "specularTexture / specularColorTexture",
         m.specular
@@ -561,13 +636,17 @@ pub fn scene_material(
     );
     let params = desc.params().map_err(|e| format!("{at}: {e}"))?;
     let model = Model::Gltf(Gltf::new(params));
-    let mut maps = ParamMaps::default();
+    let mut maps = ParamMaps {
+        vertex_color,
+        ..Default::default()
+    };
     let mut sets = Vec::new();
     let mut load = |t: &TextureRef, encoding: Encoding| -> Result<ColorMap, String> {
         let mut map = images
             .map(t.image, encoding)
             .map_err(|e| format!("{}: {e}", t.at))?;
         map.sampler = t.sampler;
+        map.transform = t.transform.as_ref().map(TextureTransform::uv_transform);
         sets.push(
             t.transform
                 .as_ref()
@@ -576,6 +655,20 @@ pub fn scene_material(
         );
         Ok(map)
     };
+    if m.unlit {
+        // KHR_materials_unlit: the base colour alone (factor × texture);
+        // the other maps, the lights and the emission do not apply.
+        let base_color = (m.base_color_texture.as_ref())
+            .map(|t| load(t, Encoding::Srgb))
+            .transpose()?;
+        let shader = UnlitBase {
+            color: [r, g, b],
+            base_color,
+            vertex_color,
+        };
+        let warning = rendered_without(&m.name, &missing);
+        return Ok((Material::new(&m.name, shader, m.double_sided), warning));
+    }
     if let Some(t) = &m.base_color_texture {
         maps.base_color = Some(load(t, Encoding::Srgb)?);
     }
@@ -618,12 +711,12 @@ pub fn scene_material(
     let shader = Lit::with_maps(model, maps)
         .map_err(|e| format!("{at}: {e}"))?
         .with_emission(emissive);
-    let warning = (!missing.is_empty()).then(|| {
-        format!(
-            "material {:?}: rendered without {}",
-            m.name,
-            missing.join(", ")
-        )
-    });
+    let warning = rendered_without(&m.name, &missing);
     Ok((Material::new(&m.name, shader, m.double_sided), warning))
+}
+
+/// The warning for what a material is rendered without, if anything.
+fn rendered_without(name: &str, missing: &[String]) -> Option<String> {
+    (!missing.is_empty())
+        .then(|| format!("material {name:?}: rendered without {}", missing.join(", ")))
 }

@@ -238,6 +238,8 @@ impl MaterialDesc {
                 },
             ),
             emissive: load("emissive_texture", m.emissive_texture, Encoding::Srgb)?,
+            // Scene materials do not read vertex colours (OBJ has none).
+            vertex_color: false,
         };
         Ok((maps, m.emissive))
     }

@@ -342,6 +342,7 @@ impl<'a> SceneBuilder<'a> {
                 normals: Vec::new(),
                 uvs: Vec::new(),
                 tangents: Vec::new(),
+                colors: Vec::new(),
                 triangles: Vec::new(),
                 tri_material: Vec::new(),
                 materials: Vec::new(),
@@ -623,6 +624,20 @@ impl<'a> SceneBuilder<'a> {
                 })
                 .collect();
             self.given_tangents.push((base as usize, placed));
+        }
+        // Vertex colours: white for meshes without any, and the scene has
+        // none until a mesh brings some.
+        match (mesh.colors.is_empty(), data.colors.is_empty()) {
+            (true, true) => {}
+            (true, false) => data
+                .colors
+                .extend(std::iter::repeat_n(glam::Vec4::ONE, mesh.positions.len())),
+            (false, empty) => {
+                if empty {
+                    data.colors.resize(base as usize, glam::Vec4::ONE);
+                }
+                data.colors.extend_from_slice(&mesh.colors);
+            }
         }
         data.uvs.extend(mesh.uvs.iter().copied());
         if mesh.uvs.is_empty() {

@@ -11,7 +11,7 @@ use crate::gltf::material::{scene_material, GltfMaterial};
 use crate::gltf::{GltfScene, Projection};
 use crate::memory;
 use crate::mesh::MeshData;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
 use specula_raster::{Camera, GeometryPass};
 use std::path::{Path, PathBuf};
@@ -104,7 +104,22 @@ impl SceneBuilder<'_> {
             ..Default::default()
         };
         let mut any_uv = false;
-        let mut colors = 0usize;
+        // Materials some primitive with COLOR_0 uses: their base colour
+        // is multiplied by it (the others see white).
+        let mut colored = vec![false; nmat + 1];
+        for prim in g.primitives.iter().filter(|p| p.color0.is_some()) {
+            colored[prim.material.unwrap_or(nmat)] = true;
+        }
+        let any_color = colored.contains(&true);
+        let any_tangents = g.primitives.iter().any(|p| p.tangents.is_some());
+        if any_color {
+            let n: usize = g.primitives.iter().map(|p| p.positions.len()).sum();
+            memory::reserve(
+                &format!("{what}: vertex colours ({n} vertices)"),
+                memory::COLOR_VERTEX_BYTES.saturating_mul(n as u64),
+            )?;
+        }
+        let mut clamped = 0usize;
         for prim in &g.primitives {
             let k = prim.material.unwrap_or(nmat);
             if local[k] == u32::MAX {
@@ -112,7 +127,7 @@ impl SceneBuilder<'_> {
                     Some(i) => g.materials[i].clone(),
                     None => GltfMaterial::default_material(),
                 };
-                let (mut built, warning) = scene_material(&desc, &mut images)
+                let (mut built, warning) = scene_material(&desc, colored[k], &mut images)
                     .map_err(|e| format!("{what}: {file}: {e}"))?;
                 built.name = format!("{file}#{}", desc.name);
                 self.warnings
@@ -128,7 +143,6 @@ impl SceneBuilder<'_> {
                 self.materials.list.push(built);
                 local[k] = id;
             }
-            colors += usize::from(prim.color0.is_some());
             // The uv set the material's texture reads (TEXCOORD_0 otherwise),
             // flipped to our convention (v = 0 at the bottom of the image).
             let set = textured[k].unwrap_or(0);
@@ -143,27 +157,66 @@ impl SceneBuilder<'_> {
                     prim.at
                 ));
             }
-            let base = mesh.positions.len() as u32;
-            mesh.positions.extend_from_slice(&prim.positions);
-            mesh.normals.extend_from_slice(&prim.normals);
-            match uvs {
+            let mut piece = MeshData {
+                positions: prim.positions.clone(),
+                normals: prim.normals.clone(),
+                triangles: prim.triangles.clone(),
+                ..Default::default()
+            };
+            piece.uvs = match uvs {
                 Some(uv) => {
                     any_uv = true;
-                    mesh.uvs
-                        .extend(uv.iter().map(|t| Vec2::new(t.x, 1.0 - t.y)));
+                    uv.iter().map(|t| Vec2::new(t.x, 1.0 - t.y)).collect()
                 }
-                None => mesh
-                    .uvs
-                    .extend(std::iter::repeat_n(Vec2::ZERO, prim.positions.len())),
+                None => vec![Vec2::ZERO; prim.positions.len()],
+            };
+            piece.colors = match (&prim.color0, any_color) {
+                (Some(c), _) => c
+                    .iter()
+                    .map(|c| {
+                        let k = c.clamp(Vec4::ZERO, Vec4::ONE);
+                        clamped += usize::from(k != *c);
+                        k
+                    })
+                    .collect(),
+                (None, true) => vec![Vec4::ONE; prim.positions.len()],
+                (None, false) => Vec::new(),
+            };
+            if any_tangents {
+                // Some primitive brings TANGENT: every one gets tangents
+                // here, its own, else MikkTSpace's (normal-mapped), else
+                // the per-vertex uv tangents every mesh gets.
+                let normal_mapped = self.materials.normal_mapped.contains(&local[k]);
+                match &prim.tangents {
+                    Some(t) => piece.tangents = t.clone(),
+                    None if normal_mapped => {
+                        crate::tangents::add_mikktspace_tangents(&mut piece)
+                            .map_err(|e| format!("{what}: {file}: {}: {e}", prim.at))?
+                    }
+                    None => {
+                        piece.tangents = specula_raster::scene::compute_tangents(
+                            &piece.positions,
+                            &piece.normals,
+                            &piece.uvs,
+                            &piece.triangles,
+                        )
+                    }
+                }
             }
+            let base = mesh.positions.len() as u32;
+            mesh.positions.extend_from_slice(&piece.positions);
+            mesh.normals.extend_from_slice(&piece.normals);
+            mesh.uvs.extend_from_slice(&piece.uvs);
+            mesh.colors.extend_from_slice(&piece.colors);
+            mesh.tangents.extend_from_slice(&piece.tangents);
             mesh.triangles
-                .extend(prim.triangles.iter().map(|t| t.map(|i| i + base)));
+                .extend(piece.triangles.iter().map(|t| t.map(|i| i + base)));
             mesh.tri_material
-                .extend(std::iter::repeat_n(k as u32, prim.triangles.len()));
+                .extend(std::iter::repeat_n(k as u32, piece.triangles.len()));
         }
-        if colors > 0 {
+        if clamped > 0 {
             self.warnings.push(format!(
-                "{file}: COLOR_0 of {colors} primitives is not rendered (vertex colours are kept by the loader only)"
+                "{file}: COLOR_0 of {clamped} vertices had components outside [0, 1], clamped to it"
             ));
         }
         self.inputs.append(&mut images.inputs);

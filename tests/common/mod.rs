@@ -82,3 +82,4 @@ pub fn eval(input: &str) -> Vec<serde_json::Value> {
     assert!(ok, "specula eval failed: {stderr}");
     lines
 }
+pub mod gltf_doc;
