@@ -964,7 +964,6 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
             *light_size,
         ),
         LightDesc::Polygon {
-            vertices,
             shadows,
             shadow_map_size,
             bias,
@@ -977,7 +976,10 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
             *bias,
             *normal_bias,
             *filter_radius,
-            specula_raster::shadow::polygon_light_size(vertices),
+            // Not a field of polygon lights: derived below, after the
+            // check (a polygon up to the world bound has a size past
+            // the field's range).
+            0.0,
         ),
     };
     let filter = match shadows {
@@ -985,7 +987,7 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
         ShadowsDesc::Pcf => ShadowFilter::Pcf,
         ShadowsDesc::Pcss => ShadowFilter::Pcss,
     };
-    let s = ShadowSettings {
+    let mut s = ShadowSettings {
         filter,
         map_size,
         bias,
@@ -997,5 +999,8 @@ fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, Strin
     // Checked with shadows off too: a value out of range is a mistake
     // whether or not it is used.
     s.check().map_err(|e| format!("light[{i}].{e}"))?;
+    if let LightDesc::Polygon { vertices, .. } = l {
+        s.light_size = specula_raster::shadow::polygon_light_size(vertices);
+    }
     Ok((shadows != ShadowsDesc::None).then_some(s))
 }
