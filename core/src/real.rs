@@ -98,16 +98,15 @@ pub trait Real:
 
     fn sqrt(self) -> Self;
     /// 1/√x for finite x > 0 (other inputs give NaN or inf: callers mask or
-    /// clamp them). f64: exact. f32 and f32x8: the hardware estimate
-    /// (`rsqrtss`/`vrsqrtps`, 12 bits) refined by one Newton step, within
-    /// 4e-7 relative (tested); ~4× cheaper than `sqrt` + `div` on the CPUs
-    /// we run, where those two are not pipelined. Scalar and SIMD use the
-    /// same estimate instruction, so their results agree bit for bit.
+    /// clamp them): `1 / sqrt(x)`, each step correctly rounded, so every
+    /// CPU gives the same bits. (Not the `rsqrtps` estimate refined by a
+    /// Newton step: that estimate is not specified to the bit, so the same
+    /// binary rendered different pixels on Intel and AMD processors.)
     fn rsqrt(self) -> Self;
-    /// 1/x for finite x ≠ 0 with |x| in the normal range; accuracy and
-    /// rationale as [`Real::rsqrt`] (`rcpss`/`vrcpps` + one Newton step).
-    /// (Not named `recip`: wide's inherent `f32x8::recip` is the bare
-    /// 12-bit estimate and would silently win method lookup.)
+    /// 1/x, correctly rounded (a division, for the reason given at
+    /// [`Real::rsqrt`]). (Not named `recip`: wide's inherent
+    /// `f32x8::recip` is the bare 12-bit `rcpps` estimate and would
+    /// silently win method lookup.)
     fn rcp(self) -> Self;
     /// `self * a + b`, fused where the lane type has FMA.
     fn mul_add(self, a: Self, b: Self) -> Self;
@@ -157,45 +156,6 @@ pub trait Real:
     fn sqr(self) -> Self {
         self * self
     }
-}
-
-/// One Newton step for 1/√x from estimate y: y (3 − x y²) / 2.
-#[inline(always)]
-fn newton_rsqrt<R: Real>(x: R, y: R) -> R {
-    let hx = x * R::HALF;
-    y * (-(hx * y)).mul_add(y, R::splat(1.5))
-}
-
-/// One Newton step for 1/x from estimate y: y (2 − x y).
-#[inline(always)]
-fn newton_recip<R: Real>(x: R, y: R) -> R {
-    y * (-x).mul_add(y, R::splat(2.0))
-}
-
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn rsqrt_estimate_f32(x: f32) -> f32 {
-    use core::arch::x86_64::{_mm_cvtss_f32, _mm_rsqrt_ss, _mm_set_ss};
-    // SAFETY: SSE is part of the x86_64 baseline.
-    unsafe { _mm_cvtss_f32(_mm_rsqrt_ss(_mm_set_ss(x))) }
-}
-
-#[cfg(target_arch = "x86_64")]
-#[inline(always)]
-fn recip_estimate_f32(x: f32) -> f32 {
-    use core::arch::x86_64::{_mm_cvtss_f32, _mm_rcp_ss, _mm_set_ss};
-    // SAFETY: SSE is part of the x86_64 baseline.
-    unsafe { _mm_cvtss_f32(_mm_rcp_ss(_mm_set_ss(x))) }
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn rsqrt_estimate_f32(x: f32) -> f32 {
-    1.0 / x.sqrt()
-}
-
-#[cfg(not(target_arch = "x86_64"))]
-fn recip_estimate_f32(x: f32) -> f32 {
-    1.0 / x
 }
 
 macro_rules! scalar_real {
@@ -335,8 +295,8 @@ scalar_real!(
     false,
     core::f32::consts::PI,
     core::f32::consts::FRAC_1_PI,
-    |x: f32| newton_rsqrt(x, rsqrt_estimate_f32(x)),
-    |x: f32| newton_recip(x, recip_estimate_f32(x))
+    |x: f32| 1.0 / x.sqrt(),
+    |x: f32| 1.0 / x
 );
 scalar_real!(
     f64,
@@ -391,11 +351,11 @@ impl Real for f32x8 {
     }
     #[inline(always)]
     fn rsqrt(self) -> Self {
-        newton_rsqrt(self, self.recip_sqrt())
+        f32x8::ONE / f32x8::sqrt(self)
     }
     #[inline(always)]
     fn rcp(self) -> Self {
-        newton_recip(self, f32x8::recip(self))
+        f32x8::ONE / self
     }
     #[inline(always)]
     fn mul_add(self, a: Self, b: Self) -> Self {
@@ -574,8 +534,55 @@ mod tests {
         }
     }
 
+    /// The renderer's sources never call an instruction whose result is
+    /// not specified to the bit (`rcpps`/`rsqrtps` estimates: AMD and Intel
+    /// processors return different values), so a frame has the same bytes
+    /// on every x86-64-v3 CPU. wide's `recip`/`recip_sqrt` are those
+    /// estimates.
     #[test]
-    fn refined_estimates_are_accurate_and_agree_across_lane_widths() {
+    fn no_source_uses_a_cpu_dependent_estimate() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("..");
+        let banned = [
+            ["recip", "_sqrt("].concat(),
+            [".recip", "()"].concat(),
+            ["_rcp", "_p"].concat(),
+            ["_rcp", "_s"].concat(),
+            ["_rsqrt", "_p"].concat(),
+            ["_rsqrt", "_s"].concat(),
+        ];
+        let mut stack: Vec<_> = ["core/src", "raster/src", "npr/src", "src"]
+            .iter()
+            .map(|d| root.join(d))
+            .collect();
+        let mut files = 0;
+        while let Some(dir) = stack.pop() {
+            for entry in std::fs::read_dir(&dir).unwrap() {
+                let path = entry.unwrap().path();
+                if path.is_dir() {
+                    stack.push(path);
+                } else if path.extension().is_some_and(|e| e == "rs") {
+                    files += 1;
+                    let text = std::fs::read_to_string(&path).unwrap();
+                    for b in &banned {
+                        assert!(!text.contains(b.as_str()), "{} uses {b}", path.display());
+                    }
+                }
+            }
+        }
+        assert!(
+            files > 50,
+            "found only {files} source files under {}",
+            root.display()
+        );
+    }
+
+    #[test]
+    fn rsqrt_and_rcp_are_rounded_ieee_steps_on_every_lane_width() {
+        // The reference: the same two steps in f64, rounded to f32 after
+        // each (f64 has more than 2 × 24 + 2 bits, so that rounding is the
+        // correctly rounded f32 result): any CPU gives these bits.
+        let rsqrt_ref = |x: f32| (1.0 / ((x as f64).sqrt() as f32) as f64) as f32;
+        let rcp_ref = |x: f32| (1.0 / x as f64) as f32;
         let mut worst = (0.0f64, 0.0f64);
         let mut x = 1e-30f32;
         while x < 1e30 {
@@ -588,6 +595,18 @@ mod tests {
                 let v = xs[i] as f64;
                 worst.0 = worst.0.max((rs[i] as f64 * v.sqrt() - 1.0).abs());
                 worst.1 = worst.1.max((rc[i] as f64 * v - 1.0).abs());
+                assert_eq!(
+                    rs[i].to_bits(),
+                    rsqrt_ref(xs[i]).to_bits(),
+                    "rsqrt of {}",
+                    xs[i]
+                );
+                assert_eq!(
+                    rc[i].to_bits(),
+                    rcp_ref(xs[i]).to_bits(),
+                    "rcp of {}",
+                    xs[i]
+                );
                 assert_eq!(
                     rs[i].to_bits(),
                     xs[i].rsqrt().to_bits(),

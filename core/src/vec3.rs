@@ -66,7 +66,7 @@ impl<R: Real> V3<R> {
     pub fn length(self) -> R {
         self.dot(self).sqrt()
     }
-    /// Unit vector (through [`Real::rsqrt`]: within 4e-7 of unit length).
+    /// Unit vector (through [`Real::rsqrt`]: within 3e-7 of unit length).
     /// A zero or tiny vector gives NaN lanes; callers that can see one
     /// (interpolated normals that cancel) use [`V3::normalize_or`].
     #[inline(always)]

@@ -37,7 +37,7 @@
 //! rounding counts. The terms use the points as given (no normalization:
 //! rounding a unit vector moves the vertex sideways by 6e-8 rad, 6e-3 of
 //! such an edge) and a correctly rounded square root and division for
-//! 1/|a||b| (a refined `rsqrt` estimate, 4e-7, would leave 1 % there);
+//! 1/|a||b|;
 //! the f32 form factor of that square is then within 4e-4 of exact
 //! (`nearly_parallel_and_antipodal_vertices_stay_accurate_in_f32x8`).
 //! n is formed as a × (b − a) for c ≥ 0 and a × (b + a) for c < 0 (both
