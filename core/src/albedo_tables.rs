@@ -21,8 +21,8 @@ use crate::real::Real;
 use crate::table::{Axis, Nodes, Table1, Table2, Warp};
 use std::sync::OnceLock;
 
-pub const N_MU: usize = 32;
-pub const N_ALPHA: usize = 32;
+pub(crate) const N_MU: usize = 32;
+pub(crate) const N_ALPHA: usize = 32;
 /// Quadrature points per table entry.
 const SAMPLES: u32 = 2048;
 
@@ -132,7 +132,7 @@ impl AlbedoTables {
 
     /// C alone (`AlbedoTables::ggx_schlick`'s c), per lane.
     #[inline(always)]
-    pub fn c<R: Real>(&self, mu_o: R) -> R {
+    pub(crate) fn c<R: Real>(&self, mu_o: R) -> R {
         let [c] = self.c.lookup(mu_o);
         c
     }

@@ -52,7 +52,7 @@ impl<R: Real> EnvLobes<R> {
     /// `total` (the directional albedo) split into `diffuse`, capped per
     /// channel at `total`, and the rest as the glossy part at `roughness`.
     #[inline(always)]
-    pub fn split(total: Rgb<R>, diffuse: Rgb<R>, roughness: R) -> EnvLobes<R> {
+    pub(crate) fn split(total: Rgb<R>, diffuse: Rgb<R>, roughness: R) -> EnvLobes<R> {
         let diffuse = Rgb::new(
             diffuse.x.min(total.x),
             diffuse.y.min(total.y),
@@ -69,7 +69,7 @@ impl<R: Real> EnvLobes<R> {
 /// Smallest α any model passes to an NDF: below it D(m) is a spike narrower
 /// than f32 can resolve at the peak. (Microfacet inputs are clamped to it
 /// with a warning where the scene is read.)
-pub const ALPHA_MIN: f32 = 1e-3;
+pub(crate) const ALPHA_MIN: f32 = 1e-3;
 
 /// Smallest cosine the models divide by: directions at or below the horizon
 /// are masked out by `above`, and this floor only keeps those lanes finite.
@@ -135,7 +135,7 @@ pub struct Outgoing<R: Real> {
 
 impl<R: Real> Outgoing<R> {
     #[inline(always)]
-    pub fn new(wo: V3<R>) -> Outgoing<R> {
+    pub(crate) fn new(wo: V3<R>) -> Outgoing<R> {
         Outgoing {
             wo,
             cos_o: wo.z.max(R::splat(COS_FLOOR)),
@@ -147,7 +147,7 @@ impl<R: Real> Outgoing<R> {
 /// The angles every microfacet model starts from, per lane, for one light
 /// direction against a prepared view direction (both local).
 #[derive(Clone, Copy, Debug)]
-pub struct HalfAngles<R: Real> {
+pub(crate) struct HalfAngles<R: Real> {
     /// n·wi and n·wo, floored at 1e-7 (see `above`).
     pub cos_i: R,
     pub cos_o: R,
@@ -181,7 +181,7 @@ pub(crate) const HALF_LEN2_MIN: f64 = 1e-6;
 impl<R: Real> HalfAngles<R> {
     /// From a unit local `wi` and the prepared view direction.
     #[inline(always)]
-    pub fn new(wi: V3<R>, o: &Outgoing<R>) -> HalfAngles<R> {
+    pub(crate) fn new(wi: V3<R>, o: &Outgoing<R>) -> HalfAngles<R> {
         Self::from_sum(wi.z, wi + o.wo, o)
     }
 
@@ -189,7 +189,7 @@ impl<R: Real> HalfAngles<R> {
     /// inv_len = 1/|v|: s = v · inv_len + wo in one fused step (one step
     /// shorter on the light loop's dependency chains, which bound it).
     #[inline(always)]
-    pub fn scaled(v: V3<R>, inv_len: R, o: &Outgoing<R>) -> HalfAngles<R> {
+    pub(crate) fn scaled(v: V3<R>, inv_len: R, o: &Outgoing<R>) -> HalfAngles<R> {
         Self::from_sum(v.z * inv_len, v.mul_add(inv_len, o.wo), o)
     }
 

@@ -15,7 +15,7 @@
 //! - lines `# ...`: comments (the command that wrote the file);
 //! - `count` lines `t <name>`: each table's store name
 //!   ([`KcTable::store_name`]: NDF, γ bits, Smith form, exact Λ and
-//!   [`TABLE_VERSION`]), in data order;
+//!   `TABLE_VERSION`), in data order;
 //! - the line `end`;
 //! - per table, N_MU × N_ALPHA f32 little-endian, α rows in order, μ
 //!   inside a row (the [`crate::kulla_conty::TableStore`] layout).
@@ -27,7 +27,6 @@
 //! rebuilds a few tables and compares them with the file.
 //!
 //! [`GAMMA_AXIS`]: crate::kulla_conty::GAMMA_AXIS
-//! [`TABLE_VERSION`]: crate::kulla_conty::TABLE_VERSION
 //! [`KcTable::store_name`]: crate::kulla_conty::KcTable::store_name
 
 use crate::kulla_conty::{gamma_node, KcTable, N_ALPHA, N_GAMMA, N_MU};
@@ -37,7 +36,7 @@ use std::collections::HashMap;
 use std::sync::OnceLock;
 
 /// The first header line's prefix.
-pub const MAGIC: &str = "specula-kc 1";
+pub(crate) const MAGIC: &str = "specula-kc 1";
 
 /// The committed file.
 static DATA: &[u8] = include_bytes!("../data/kc_tables.bin");

@@ -115,7 +115,7 @@ pub fn tables_built_on_this_thread() -> usize {
 /// Somewhere to keep built tables between runs (the CLI keeps them in
 /// the user's cache folder, src/table_cache.rs; core itself does no I/O).
 /// A table is its N_MU × N_ALPHA node values, α rows in order, under a
-/// name that says everything it depends on, [`TABLE_VERSION`] included.
+/// name that says everything it depends on, `TABLE_VERSION` included.
 pub trait TableStore: Send + Sync {
     fn load(&self, name: &str) -> Option<Vec<f32>>;
     fn save(&self, name: &str, values: &[f32]);
@@ -125,7 +125,7 @@ pub trait TableStore: Send + Sync {
 /// changes (axes, quadrature, clamping), so old stored tables are ignored.
 /// 4: the exact GTR Λ's θ integral graded at grazing views (its tables
 /// for small α and large γ moved by up to 1.9e-2 at μ = 2.5e-4).
-pub const TABLE_VERSION: u32 = 5;
+pub(crate) const TABLE_VERSION: u32 = 5;
 
 static STORE: OnceLock<Box<dyn TableStore>> = OnceLock::new();
 
@@ -406,7 +406,7 @@ pub(crate) fn color_factor(f_avg: f64, e_avg: f64, mode: KcColor) -> f64 {
 
 /// F_avg = 2 ∫₀¹ F(μ) μ dμ of a Fresnel term, per channel: closed form
 /// F0 + (1 − F0)/21 for Schlick, composite midpoint rule otherwise.
-pub fn f_avg(fresnel: &Fresnel) -> [f64; 3] {
+pub(crate) fn f_avg(fresnel: &Fresnel) -> [f64; 3] {
     if let Fresnel::Schlick { f0 } = fresnel {
         return f0.map(|f| f as f64 + (1.0 - f as f64) / 21.0);
     }

@@ -5,6 +5,8 @@
 //! directions point away from the surface, `wi` toward the light, `wo` toward
 //! the viewer. Citation keys such as `\[Walter07\]` resolve in docs/REFERENCES.md.
 
+#![warn(unreachable_pub)]
+
 pub mod albedo_tables;
 mod brdf;
 mod diffuse;

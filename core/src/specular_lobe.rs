@@ -79,7 +79,7 @@ impl MicrofacetParams {
 
     /// F at cos θd = i·h, per channel.
     #[inline(always)]
-    pub fn f<R: Real>(&self, cos_d: R) -> Rgb<R> {
+    pub(crate) fn f<R: Real>(&self, cos_d: R) -> Rgb<R> {
         match self.fresnel {
             Fresnel::Schlick { f0 } => f_schlick(Rgb::from_f32(f0), cos_d),
             Fresnel::Dielectric { ior } => Rgb::splat(f_dielectric(cos_d, R::splat(ior as f64))),
@@ -95,7 +95,7 @@ impl MicrofacetParams {
     /// angles already formed and the view's Λ(o) (a per-pixel value); the
     /// caller zeroes lanes outside `h.above`.
     #[inline(always)]
-    pub fn specular<R: Real>(&self, h: &HalfAngles<R>, lambda_o: R) -> Rgb<R> {
+    pub(crate) fn specular<R: Real>(&self, h: &HalfAngles<R>, lambda_o: R) -> Rgb<R> {
         let g2 = self.g2_lambdas(self.lambda(h.cos_i), lambda_o);
         let dg = self.d(h.cos2_h, h.sin2_h) * g2 / (R::splat(4.0) * h.cos_i * h.cos_o);
         self.f(h.cos_d) * dg
@@ -112,7 +112,7 @@ impl MicrofacetParams {
     /// the ring integrand is smooth: Simpson in φ. ring(u) is not smooth
     /// where that range starts to close or vanishes (a kink, or at μo = 1 a
     /// step), so u is integrated by adaptive Simpson (tolerance 1e-5) on
-    /// pieces that end there ([`MicrofacetParams::albedo_breaks`]).
+    /// pieces that end there (`MicrofacetParams::albedo_breaks`).
     /// Sampling h ∝ D(h)(n·h) instead was off by up to 6e-3 at grazing μo,
     /// where the weight (o·h)/(μo cos θh) swings with φ.
     pub fn specular_albedo(&self, mu_o: f64) -> [f64; 3] {
@@ -230,7 +230,7 @@ impl MicrofacetParams {
     /// F at normal incidence per channel: Schlick's F0, or the exact
     /// Fresnel's value at cos θ = 1 (what the LTC's Schlick split takes for
     /// the other Fresnel kinds).
-    pub fn f0(&self) -> [f32; 3] {
+    pub(crate) fn f0(&self) -> [f32; 3] {
         match self.fresnel {
             Fresnel::Schlick { f0 } => f0,
             Fresnel::Dielectric { ior } => [r0_from_ior(ior as f64) as f32; 3],

@@ -120,7 +120,7 @@ impl<R: Real> V3<R> {
     }
     /// Linear interpolation `a + (b - a) t`, per component.
     #[inline(always)]
-    pub fn lerp(a: Self, b: Self, t: R) -> Self {
+    pub(crate) fn lerp(a: Self, b: Self, t: R) -> Self {
         V3 {
             x: (b.x - a.x).mul_add(t, a.x),
             y: (b.y - a.y).mul_add(t, a.y),

@@ -98,7 +98,7 @@ pub fn for_each_light<R: Real>(p: V3<R>, env: &ShadeEnv, mut f: impl FnMut(V3<R>
 /// [`for_each_light`] at a packet, each light's irradiance times its
 /// shadow factor at the packet's points where it has a shadow map.
 #[inline(always)]
-pub fn for_each_light_shadowed<R: Real>(
+pub(crate) fn for_each_light_shadowed<R: Real>(
     input: &ShadeInput<R>,
     env: &ShadeEnv,
     mut f: impl FnMut(V3<R>, Rgb<R>),

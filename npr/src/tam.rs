@@ -475,14 +475,14 @@ impl TamTexture {
 
     /// [`TamTexture::read_dir`] with the files supplied by `read` (scene
     /// loaders resolve paths against the scene's folder).
-    pub fn read_with(
+    pub(crate) fn read_with(
         dir: &Path,
         read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     ) -> Result<TamTexture, TamError> {
         TamTexture::read_with_budget(dir, read, &|_, _| Ok(()))
     }
 
-    /// [`TamTexture::read_with`] that first asks `reserve` for the bytes
+    /// `TamTexture::read_with` that first asks `reserve` for the bytes
     /// the map will need (named by its folder), from `tam.json` alone, and
     /// checks each image's size in its header before decoding it: a map too
     /// large for the caller's memory budget is refused before any image is

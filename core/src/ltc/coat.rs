@@ -69,7 +69,7 @@ pub const X_AXIS: Axis = Axis::new(NX, -3.0 * LN_10, -LN_10, Warp::Linear, Nodes
 pub const Y_AXIS: Axis = Axis::new(NY, 0.0, 1.0, Warp::Linear, Nodes::Ends);
 
 /// The first header line's prefix.
-pub const MAGIC: &str = "specula-ltc-coat 2";
+pub(crate) const MAGIC: &str = "specula-ltc-coat 2";
 
 /// The committed table.
 static DATA: &[u8] = include_bytes!("../../data/ltc_coat.bin");
@@ -116,7 +116,7 @@ pub fn encode(cells: &[Vec<CoatCell>], comments: &[String]) -> Vec<u8> {
 }
 
 /// Reads a table file (format in `ltc::file`).
-pub fn decode(bytes: &[u8]) -> Result<Table2<CHANNELS>, String> {
+pub(crate) fn decode(bytes: &[u8]) -> Result<Table2<CHANNELS>, String> {
     crate::ltc::file::decode(bytes, MAGIC, (X_AXIS, Y_AXIS))
 }
 
@@ -141,7 +141,7 @@ impl<R: Real> LtcCoat<R> {
     /// The lookup at `ln_alpha` = ln α (clamped into the table) and the
     /// unit local view `wo` (μo clamped into [0, 1]).
     #[inline(always)]
-    pub fn new(ln_alpha: R, wo: V3<R>) -> LtcCoat<R> {
+    pub(crate) fn new(ln_alpha: R, wo: V3<R>) -> LtcCoat<R> {
         let mu = wo.z.clamp(R::ZERO, R::ONE);
         let y = (R::ONE - mu).sqrt();
         let v = table().lookup(ln_alpha, y);
@@ -161,7 +161,7 @@ impl<R: Real> LtcCoat<R> {
     /// polygon integrals dwarf a call, and the light loop of materials
     /// without a coat stays smaller.
     #[inline(never)]
-    pub fn integral(&self, poly: &PolygonLocal<R>) -> R {
+    pub(crate) fn integral(&self, poly: &PolygonLocal<R>) -> R {
         let mut c = R::ZERO;
         for (l, s) in self.ltc.iter().zip(self.scale) {
             c = s.mul_add(l.integral(poly), c);

@@ -11,7 +11,7 @@ fn header(magic: &str, nx: usize, ny: usize, channels: usize) -> String {
 }
 
 /// A table file's bytes: `cells` in row order, each giving its channels.
-pub fn encode<'a, const C: usize>(
+pub(crate) fn encode<'a, const C: usize>(
     magic: &str,
     nx: usize,
     ny: usize,
@@ -33,7 +33,7 @@ pub fn encode<'a, const C: usize>(
 }
 
 /// Reads a table file written by [`encode`] with the same magic and size.
-pub fn decode<const C: usize>(
+pub(crate) fn decode<const C: usize>(
     bytes: &[u8],
     magic: &str,
     (x_axis, y_axis): (Axis, Axis),

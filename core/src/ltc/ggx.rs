@@ -64,7 +64,7 @@ const _: () =
     assert!((0.031_622_776_601_683_79f64 * 0.031_622_776_601_683_79 - ALPHA_MIN as f64) < 1e-9);
 
 /// The first header line's prefix.
-pub const MAGIC: &str = "specula-ltc 1";
+pub(crate) const MAGIC: &str = "specula-ltc 1";
 
 /// The committed table.
 static DATA: &[u8] = include_bytes!("../../data/ltc_ggx.bin");
@@ -137,7 +137,7 @@ impl<R: Real> LtcGgx<R> {
     /// The lookup at roughness α (any; clamped into the table) and unit
     /// local view `wo` (μo clamped into [0, 1]).
     #[inline(always)]
-    pub fn new(alpha: R, wo: V3<R>) -> LtcGgx<R> {
+    pub(crate) fn new(alpha: R, wo: V3<R>) -> LtcGgx<R> {
         let mu = wo.z.clamp(R::ZERO, R::ONE);
         let x = alpha.max(R::ZERO).sqrt();
         let y = (R::ONE - mu).sqrt();
@@ -172,7 +172,7 @@ impl<R: Real> LtcGgx<R> {
 
     /// `v` (local) in the cosine's coordinates.
     #[inline(always)]
-    pub fn map(&self, v: V3<R>) -> V3<R> {
+    pub(crate) fn map(&self, v: V3<R>) -> V3<R> {
         V3::new(self.rx.dot(v), self.ry.dot(v), self.rz.dot(v))
     }
 

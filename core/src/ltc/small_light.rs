@@ -8,7 +8,7 @@
 //! **The scenes** (GGX, height-correlated Smith, F = 1):
 //! - a sphere of radius 1 at the origin under the light at height 2 (1
 //!   above its top), seen by an orthographic camera looking down at 31°
-//!   ([`SPHERE_VIEW`]): a grid of pixels over its disc;
+//!   (`SPHERE_VIEW`): a grid of pixels over its disc;
 //! - a floor z = 0 under the light at height 1, seen from a point camera at
 //!   (0, −2, 1): a grid of points over x ∈ [−1, 1], y ∈ [−1.8, 1.2] (the
 //!   highlight is at y = −1, views about 10–75°).
@@ -36,9 +36,9 @@ use crate::Brdf;
 /// are not counted.
 pub const LIT: f64 = 0.1;
 /// The sphere's camera: the direction toward it (unit).
-pub const SPHERE_VIEW: [f64; 3] = [0.0, -0.857_492_925_712_544_3, 0.514_495_755_427_526_5];
+pub(crate) const SPHERE_VIEW: [f64; 3] = [0.0, -0.857_492_925_712_544_3, 0.514_495_755_427_526_5];
 /// Side of the light.
-pub const SIDE: f64 = 0.3;
+pub(crate) const SIDE: f64 = 0.3;
 
 /// One of the two scenes of the module docs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -84,7 +84,7 @@ impl Kinks {
 }
 
 /// The GGX lobe with F = 1 at roughness `alpha`.
-pub fn lobe(alpha: f64) -> Microfacet {
+pub(crate) fn lobe(alpha: f64) -> Microfacet {
     Microfacet::new_without_table(
         MicrofacetParams {
             ndf: Ndf::Ggx,
@@ -113,7 +113,7 @@ fn light(height: f64) -> [V3<f64>; 4] {
 }
 
 /// The scene's pixels on an `n` × `n` grid and its light.
-pub fn pixels(scene: Scene, n: usize) -> (Vec<Pixel>, [V3<f64>; 4]) {
+pub(crate) fn pixels(scene: Scene, n: usize) -> (Vec<Pixel>, [V3<f64>; 4]) {
     let t = |k: usize| (k as f64 + 0.5) / n as f64;
     match scene {
         Scene::Sphere => {
@@ -160,7 +160,7 @@ fn frame(n: V3<f64>) -> (V3<f64>, V3<f64>) {
 
 /// `table`'s LTC value of the lobe (F = 1: n ∫ D) at roughness `alpha`,
 /// unit local view `wo`, over the local polygon `q` (one-sided).
-pub fn ltc_value(table: &Table2<6>, alpha: f64, wo: V3<f64>, q: &[V3<f64>]) -> f64 {
+pub(crate) fn ltc_value(table: &Table2<6>, alpha: f64, wo: V3<f64>, q: &[V3<f64>]) -> f64 {
     let y = (1.0 - wo.z.clamp(0.0, 1.0)).sqrt();
     let [m00, m02, m20, m22, n, n_w] = table.lookup(alpha.sqrt(), y);
     let l = LtcGgx::from_inverse([m00, m02, m20, m22], n, n_w, wo);
@@ -168,7 +168,7 @@ pub fn ltc_value(table: &Table2<6>, alpha: f64, wo: V3<f64>, q: &[V3<f64>]) -> f
 }
 
 /// The reference value of the lobe over the local polygon `q`.
-pub fn reference_value(m: &Microfacet, wo: V3<f64>, q: &[V3<f64>]) -> f64 {
+pub(crate) fn reference_value(m: &Microfacet, wo: V3<f64>, q: &[V3<f64>]) -> f64 {
     let p = m.prepare(wo);
     let f = |wi: V3<f64>| {
         let c = m.f_cos_local(&p, wi);
@@ -233,7 +233,7 @@ pub fn pixel_error(table: &Table2<6>, alpha: f64, scene: Scene, n: usize, lit: f
 
 /// LTC / reference at roughness `alpha` and table view coordinate
 /// y = √(1 − μo), the light in the mirror direction (module docs).
-pub fn sweep_ratio(table: &Table2<6>, m: &Microfacet, alpha: f64, y: f64) -> f64 {
+pub(crate) fn sweep_ratio(table: &Table2<6>, m: &Microfacet, alpha: f64, y: f64) -> f64 {
     let mu = 1.0 - y * y;
     let s = (1.0 - mu * mu).max(0.0).sqrt();
     let wo = V3::new(s, 0.0, mu);

@@ -53,7 +53,7 @@ pub struct Microfacet {
 /// The compensation lobe of one material: E(μ) at its α, E_avg, and the
 /// colour factor per channel (kulla_conty.rs).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Compensation {
+pub(crate) struct Compensation {
     pub slice: KcSlice,
     pub factor: [f32; 3],
     /// factor / (π (1 − E_avg)) per channel: everything in f_ms that does
@@ -62,7 +62,7 @@ pub struct Compensation {
 }
 
 impl Compensation {
-    pub fn new(p: &MicrofacetParams, mode: KcColor) -> Compensation {
+    pub(crate) fn new(p: &MicrofacetParams, mode: KcColor) -> Compensation {
         let exact = matches!(p.gtr_lambda, GtrLambda::Exact(_));
         let slice = slice_for(p.ndf, p.smith, exact, p.alpha as f64);
         let fa = f_avg(&p.fresnel);
@@ -77,14 +77,14 @@ impl Compensation {
 
     /// 1 − E(μo): the view's factor of f_ms, computed once per pixel.
     #[inline(always)]
-    pub fn prepare<R: Real>(&self, cos_o: R) -> R {
+    pub(crate) fn prepare<R: Real>(&self, cos_o: R) -> R {
         R::ONE - self.slice.e_lanes(cos_o)
     }
 
     /// f_ms(μi, μo) · factor, per channel (no cosine), from the prepared
     /// 1 − E(μo); the caller masks lanes below either horizon.
     #[inline(always)]
-    pub fn f<R: Real>(&self, cos_i: R, one_minus_e_o: R) -> Rgb<R> {
+    pub(crate) fn f<R: Real>(&self, cos_i: R, one_minus_e_o: R) -> Rgb<R> {
         let ms = (R::ONE - self.slice.e_lanes(cos_i)) * one_minus_e_o;
         Rgb::from_f32(self.scale) * ms
     }

@@ -212,7 +212,7 @@ impl DisneyParams {
     }
 
     /// C_spec0, the specular lobe's Schlick F0 per channel.
-    pub fn cspec0(&self) -> [f64; 3] {
+    pub(crate) fn cspec0(&self) -> [f64; 3] {
         let tint = self.tint();
         let s = 0.08 * self.specular as f64;
         let (st, m) = (self.specular_tint as f64, self.metallic as f64);
@@ -220,7 +220,7 @@ impl DisneyParams {
     }
 
     /// C_sheen = mix(1, C_tint, sheen_tint).
-    pub fn csheen(&self) -> [f64; 3] {
+    pub(crate) fn csheen(&self) -> [f64; 3] {
         self.tint().map(|t| mix(1.0, t, self.sheen_tint as f64))
     }
 

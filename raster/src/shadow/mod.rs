@@ -1,0 +1,172 @@
+//! Shadow maps: per shadowed light, depth-only passes of the scene through
+//! the light's view (the same setup, binning and scan as the camera's
+//! passes, `frame::depth_pass`), and the per-lane lookups the light loop
+//! multiplies a light's contribution by.
+//!
+//! A directional light gets one orthographic map, fitted across its
+//! direction to the part of the scene's bounds the camera can see (the
+//! receivers) and along it to the whole scene (every caster); a spot light
+//! one perspective map covering its outer cone; a point light a cube map
+//! (six perspective maps of a little over 90°, so a filter near a face's
+//! edge stays inside that face). Maps store linear depth along the light's
+//! axis (infinity where nothing was drawn), so biases are in world units.
+//!
+//! Biases are given in texels and scaled by the world size of a texel at
+//! the shaded point: `bias` moves the compared depth toward the light,
+//! `normal_bias` moves the shaded point along its normal (times
+//! 1 + the filter's radius, since a wider filter reads the surface farther
+//! from the point). The factor is 1 outside a map.
+//!
+//! The pieces: [`ShadowSettings`] and their checks (`settings.rs`); the
+//! cascades' split depths (`cascades.rs`); each light kind's maps fitted
+//! to the scene and the view, and their depth passes (`passes.rs`); the
+//! scalar lookups with their filters, hard, PCF and PCSS (`lookup.rs`);
+//! the same lookups on a packet's lanes (`lanes.rs`); and every pixel's
+//! factor for tests and tools (`pixels.rs`).
+
+mod cascades;
+mod lanes;
+mod lookup;
+mod passes;
+mod pixels;
+mod settings;
+
+pub use cascades::{cascade_splits, CASCADE_LAMBDA, MAX_CASCADES};
+pub use passes::polygon_light_size;
+pub use pixels::{pixel_shadows, PixelShadow};
+pub use settings::{ShadowFilter, ShadowSettings, MAX_MAP_SIZE};
+
+use crate::camera::View;
+use crate::frame::{FrameStats, Visibility};
+use crate::scene::SceneData;
+use glam::{Mat4, Vec3};
+use passes::{light_faces, render_face, Bounds};
+
+/// One shadow map: a light's view and the depth it saw.
+#[derive(Clone, Debug, Default)]
+struct Face {
+    /// World → the light's clip space.
+    clip: Mat4,
+    size: u32,
+    /// Row-major linear depth (along `axis` from `origin`); infinity where
+    /// nothing was drawn.
+    depth: Vec<f32>,
+    origin: Vec3,
+    axis: Vec3,
+    /// World size of a texel (perspective maps: at unit depth).
+    texel: f32,
+    perspective: bool,
+    /// Perspective maps: the near distance (NDC depth = near / depth).
+    /// Orthographic: NDC depth = 1 − (depth − near) / span.
+    near: f32,
+    span: f32,
+}
+
+/// A shadowed light's maps for one frame.
+#[derive(Default)]
+pub struct LightShadow {
+    pub settings: ShadowSettings,
+    faces: Vec<Face>,
+    /// How a point picks its face.
+    pick: Pick,
+    /// The frames' working buffers of each face's depth pass.
+    passes: Vec<Option<Visibility>>,
+}
+
+/// How a shaded point picks one of a light's faces.
+#[derive(Clone, Debug, Default)]
+enum Pick {
+    /// The only face.
+    #[default]
+    One,
+    /// A point light's cube around this centre: the face of the largest
+    /// coordinate of the point's offset from it.
+    Cube(Vec3),
+    /// A directional light's cascades: the point's view depth
+    /// ((p − eye) · forward) against the split depths between them.
+    Cascades {
+        eye: Vec3,
+        forward: Vec3,
+        splits: Vec<f32>,
+    },
+}
+
+/// Every shadowed light's maps for one frame, by light index.
+#[derive(Default)]
+pub struct ShadowMaps {
+    lights: Vec<Option<LightShadow>>,
+    any: bool,
+}
+
+impl std::fmt::Debug for ShadowMaps {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("ShadowMaps")
+            .field("passes", &self.passes())
+            .finish()
+    }
+}
+
+impl ShadowMaps {
+    /// The maps when some light has shadows.
+    pub fn active(&self) -> Option<&ShadowMaps> {
+        self.any.then_some(self)
+    }
+
+    /// Light `k`'s maps, if it has shadows.
+    pub fn light(&self, k: usize) -> Option<&LightShadow> {
+        self.lights.get(k).and_then(Option::as_ref)
+    }
+
+    /// Depth passes rendered this frame.
+    pub fn passes(&self) -> u32 {
+        self.lights
+            .iter()
+            .flatten()
+            .map(|l| l.faces.len() as u32)
+            .sum()
+    }
+
+    /// Renders every shadowed light's maps of `scene` for the camera's
+    /// `view`; `stats.times.shadow` gets their time.
+    pub fn render(&mut self, scene: &SceneData, view: &View, stats: &mut FrameStats) {
+        self.lights.resize_with(scene.lights.len(), || None);
+        self.any = false;
+        let Some(bounds) = Bounds::of(scene) else {
+            self.lights.iter_mut().for_each(|l| *l = None);
+            return;
+        };
+        for (k, light) in scene.lights.iter().enumerate() {
+            let Some(settings) = scene.shadows.get(k).copied().flatten() else {
+                self.lights[k] = None;
+                continue;
+            };
+            let Some((faces, pick)) =
+                light_faces(&settings, light, &bounds, view, scene.camera.near)
+            else {
+                self.lights[k] = None;
+                continue;
+            };
+            let ls = self.lights[k].get_or_insert_with(LightShadow::default);
+            ls.settings = settings;
+            ls.pick = pick;
+            // The previous frame's depth buffers are refilled, not reallocated.
+            let mut faces = faces;
+            for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
+                new.depth = old.depth;
+            }
+            ls.faces = faces;
+            ls.passes.resize_with(ls.faces.len(), || None);
+            for (face, pass) in ls.faces.iter_mut().zip(&mut ls.passes) {
+                render_face(scene, face, pass, stats);
+            }
+            self.any = true;
+        }
+    }
+}
+
+impl LightShadow {
+    /// Maps this light renders (a cube's faces, cascades, or one).
+    pub fn faces(&self) -> usize {
+        self.faces.len()
+    }
+}

@@ -1,0 +1,118 @@
+//! A light's shadow settings: the filter, the map size, the biases and
+//! the filter's sizes, with the checks that name the field at fault, and
+//! what they cost (faces, bytes, how far a lookup reads).
+
+use super::cascades::MAX_CASCADES;
+use specula_core::light::Light;
+
+/// How a light's shadow is filtered.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum ShadowFilter {
+    /// One depth comparison at the nearest texel.
+    #[default]
+    Hard,
+    /// Percentage-closer filtering: the mean of bilinear depth comparisons
+    /// over a square of `filter_radius` texels.
+    Pcf,
+    /// Percentage-closer soft shadows: a blocker search, the penumbra
+    /// width from the light's size, then PCF over that width.
+    Pcss,
+}
+
+/// One light's shadow settings.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShadowSettings {
+    pub filter: ShadowFilter,
+    /// Map side in texels (each cube face's for point lights).
+    pub map_size: u32,
+    /// Depth offset toward the light, in texels at the shaded point.
+    pub bias: f32,
+    /// Offset of the shaded point along its normal, in texels at the
+    /// point (times 1 + the filter radius).
+    pub normal_bias: f32,
+    /// PCF half-width in texels.
+    pub filter_radius: f32,
+    /// PCSS: the light's diameter in world units (directional lights: the
+    /// tangent of its angular diameter).
+    pub light_size: f32,
+    /// Directional lights: maps along the view's depth (1..=4), each
+    /// `map_size` a side ([`cascade_splits`](super::cascade_splits)); 1 for other lights.
+    pub cascades: u32,
+}
+
+/// Largest accepted map side.
+pub const MAX_MAP_SIZE: u32 = 8192;
+
+impl Default for ShadowSettings {
+    fn default() -> Self {
+        ShadowSettings {
+            filter: ShadowFilter::Hard,
+            map_size: 1024,
+            bias: 1.0,
+            normal_bias: 1.0,
+            filter_radius: 1.5,
+            light_size: 0.1,
+            cascades: 1,
+        }
+    }
+}
+
+impl ShadowSettings {
+    /// Checks every field; the error names the field.
+    pub fn check(&self) -> Result<(), String> {
+        if !(1..=MAX_MAP_SIZE).contains(&self.map_size) {
+            return Err(format!(
+                "shadow_map_size: must be 1..={MAX_MAP_SIZE} texels, got {}",
+                self.map_size
+            ));
+        }
+        if !(1..=MAX_CASCADES).contains(&self.cascades) {
+            return Err(format!(
+                "cascades: must be 1..={MAX_CASCADES}, got {}",
+                self.cascades
+            ));
+        }
+        let fields = [
+            ("bias", self.bias, 1e3),
+            ("normal_bias", self.normal_bias, 1e3),
+            ("filter_radius", self.filter_radius, 64.0),
+            ("light_size", self.light_size, 1e9),
+        ];
+        for (name, v, max) in fields {
+            if !(0.0..=max).contains(&v) {
+                return Err(format!(
+                    "{name}: must be a finite number in [0, {max}], got {v}"
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// Faces of a light's map: 6 for a point light, 1 otherwise.
+    pub fn faces(&self, light: &Light) -> u32 {
+        match light {
+            Light::Point { .. } | Light::Polygon { .. } => 6,
+            Light::Directional { .. } => self.cascades,
+            _ => 1,
+        }
+    }
+
+    /// Bytes of a light's maps (a frame's depth and id per texel, and the
+    /// linear depth kept for lookups).
+    pub fn bytes(&self, light: &Light) -> u64 {
+        let side = (self.map_size as u64).div_ceil(64) * 64;
+        side * side * 12 * self.faces(light) as u64
+    }
+
+    /// Texels a lookup may read away from its centre texel.
+    pub(super) fn reach(&self) -> f32 {
+        match self.filter {
+            ShadowFilter::Hard => 1.0,
+            ShadowFilter::Pcf => self.filter_radius + 2.0,
+            ShadowFilter::Pcss => self.filter_radius.max(PCSS_MAX_RADIUS) + 2.0,
+        }
+    }
+}
+
+/// Largest PCSS filter half-width in texels.
+pub(super) const PCSS_MAX_RADIUS: f32 = 24.0;
