@@ -247,6 +247,7 @@ fn a_masked_texture_cuts_out_its_disk() {
                 }
             }
         }
+        eprintln!("ssaa {ssaa}: {wrong} wrong pixels away from the edge, {near_edge} within 1 px");
         assert_eq!(
             wrong, 0,
             "ssaa {ssaa}: pixels off the cutout, away from its edge"
@@ -480,6 +481,7 @@ fn a_masked_quad_casts_the_shadow_of_its_cutout() {
     // 0.5/π · cos 45° ≈ 0.11 (no environment: shadowed floor is black).
     let dark = b.iter().filter(|p| p[0] < 0.05).count();
     // The disk's area over a pixel's (2 · 12 tan 15° / 96)²: ~340.
+    eprintln!("{dark} shadowed floor pixels; {differ} pixels differ from the geometry's");
     assert!(dark > 250, "{dark} shadowed pixels");
     // Only along the outlines (the caster's and its shadow's: about
     // 2 · 2π · 0.7 units at ~0.07 units a pixel, ~130 pixels) may differ.

@@ -125,7 +125,7 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
                 let ids: [u32; 8] =
                     std::array::from_fn(|i| if lanes >> i & 1 == 1 { id } else { MISS });
                 let tris = PacketTris::new(&ids, R::LANES, ctx);
-                let x = (gx + sub as i32) as u32;
+                let x = (gx + sub) as u32;
                 let frag = ctx.resolve::<R>(x, y as u32, &tris);
                 let surface = needs_surface.then(|| ctx.surface(&tris, &frag));
                 let input = ShadeInput {
@@ -155,9 +155,9 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
                 for (ch, c) in [c.x, c.y, c.z].into_iter().enumerate() {
                     let row = &mut *rows[ch];
                     let mut dst = [0.0f32; 8];
-                    for i in 0..R::LANES {
-                        if let Some(d) = row.get(col0 + i) {
-                            dst[i] = *d;
+                    for (i, d) in dst.iter_mut().enumerate().take(R::LANES) {
+                        if let Some(v) = row.get(col0 + i) {
+                            *d = *v;
                         }
                     }
                     let out = c * a + R::load(&dst) * (R::ONE - a);
