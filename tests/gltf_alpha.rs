@@ -8,6 +8,9 @@ mod common;
 
 use common::gltf_doc::{png_rgba_uri, Buf};
 use serde_json::{json, Value};
+use specula::render::RenderSettings;
+use specula::scene::LoadedScene;
+use specula_raster::ShadePath;
 
 /// Pixels per side of the renders.
 const SIZE: usize = 64;
@@ -129,6 +132,14 @@ fn backdrop() -> String {
 /// 64 pixels), lit by a directional light; every pixel's linear radiance,
 /// and the scene's warnings.
 fn render(meshes: &[(String, [f32; 3])], extra: &str) -> (Vec<[f32; 3]>, Vec<String>) {
+    let s = scene_of(meshes, extra);
+    let set = RenderSettings::from_scene(&s);
+    let r = specula::render::render_scene(&s, &set, 0.0).unwrap();
+    (r.hdr(), s.warnings.clone())
+}
+
+/// The scene [`render`] renders.
+fn scene_of(meshes: &[(String, [f32; 3])], extra: &str) -> LoadedScene {
     let mut toml = format!(
         r#"
 [camera]
@@ -159,10 +170,7 @@ gltf = "backdrop.gltf"
         .iter()
         .map(|(a, b)| (a.as_str(), b.as_str()))
         .collect();
-    let s = common::scene(&toml, &files);
-    let set = specula::render::RenderSettings::from_scene(&s);
-    let r = specula::render::render_scene(&s, &set, 0.0).unwrap();
-    (r.hdr(), s.warnings.clone())
+    common::scene(&toml, &files)
 }
 
 /// Pixel (i, j)'s centre on the plane z = `z` (world x, y), by the
@@ -339,8 +347,9 @@ fn a_blended_quad_is_its_opaque_render_over_the_frame() {
     }
 }
 
-#[test]
-fn stacked_blended_quads_composite_back_to_front_in_any_file_order() {
+/// Two unlit blended quads, a red one (alpha ½) behind a green one
+/// (alpha 0.4), overlapping.
+fn stacked() -> [(String, [f32; 3]); 2] {
     let (a1, a2) = (0.5f32, 0.4f32);
     let far = (
         quad(unlit([1.0, 0.0, 0.0, a1], "BLEND", None, false), None, None),
@@ -350,6 +359,13 @@ fn stacked_blended_quads_composite_back_to_front_in_any_file_order() {
         quad(unlit([0.0, 1.0, 0.0, a2], "BLEND", None, false), None, None),
         [-0.3, 0.0, 1.5],
     );
+    [far, near]
+}
+
+#[test]
+fn stacked_blended_quads_composite_back_to_front_in_any_file_order() {
+    let (a1, a2) = (0.5f32, 0.4f32);
+    let [far, near] = stacked();
     let opaque = |m: &(String, [f32; 3])| (m.0.replace("BLEND", "OPAQUE"), m.1);
     let without = render(&[], "").0;
     let far_opaque = render(&[opaque(&far)], "").0;
@@ -486,4 +502,24 @@ fn a_masked_quad_casts_the_shadow_of_its_cutout() {
     // Only along the outlines (the caster's and its shadow's: about
     // 2 · 2π · 0.7 units at ~0.07 units a pixel, ~130 pixels) may differ.
     assert!(differ <= 40, "{differ} pixels differ (of {dark} in shadow)");
+}
+
+#[test]
+fn masking_and_blending_are_the_same_on_every_path_and_thread_count() {
+    let [far, near] = stacked();
+    let m = unlit([1.0, 1.0, 0.0, 1.0], "MASK", None, true);
+    let masked = (quad(m, Some(disk_image(64, 0.3)), None), [0.0, -0.4, 2.0]);
+    let s = scene_of(&[far, masked, near], "");
+    let run = |f: &dyn Fn(&mut RenderSettings)| {
+        let mut set = RenderSettings::from_scene(&s);
+        f(&mut set);
+        specula::render::render_scene(&s, &set, 0.0).unwrap().ldr
+    };
+    let reference = run(&|_| {});
+    // Encoded in the shading pass (no colour planes kept): composited first.
+    assert!(run(&|s| s.keep_hdr = false) == reference, "fused encode");
+    for t in [1, 3] {
+        assert!(run(&|s| s.threads = Some(t)) == reference, "{t} threads");
+    }
+    assert!(run(&|s| s.path = ShadePath::Scalar) == reference, "scalar");
 }
