@@ -55,6 +55,9 @@ pub fn decode_color_map(name: &str, bytes: &[u8]) -> Result<ColorMap, String> {
 /// texture they are assembled into (16), rounded up.
 pub const TEXEL_BYTES: u64 = 48;
 
+/// [`TEXEL_BYTES`] for RGBA textures: 8 + 4 + 4 + 21⅓ + 21⅓, rounded up.
+pub const TEXEL_BYTES_RGBA: u64 = 64;
+
 /// An image's width and height from its header, without decoding it.
 pub fn image_size(name: &str, bytes: &[u8]) -> Result<(u32, u32), String> {
     image::ImageReader::new(std::io::Cursor::new(bytes))
@@ -82,24 +85,48 @@ pub fn decode_map(
     encoding: Encoding,
     sampler: Sampler,
 ) -> Result<ColorMap, String> {
+    decode_map_channels(name, bytes, encoding, sampler, 3)
+}
+
+/// [`decode_map`] keeping `channels` of RGBA: 3 (alpha dropped) or 4
+/// (alpha kept as channel 3, linear whatever `encoding` says: glTF's
+/// base colour alpha is not sRGB-encoded; an image without alpha gets 1).
+pub fn decode_map_channels(
+    name: &str,
+    bytes: &[u8],
+    encoding: Encoding,
+    sampler: Sampler,
+    channels: usize,
+) -> Result<ColorMap, String> {
+    let channels = channels.clamp(3, 4);
     let (w, h) = image_size(name, bytes)?;
-    specula_raster::texture::check_mip_chain_size(w as usize, h as usize, 3)
+    specula_raster::texture::check_mip_chain_size(w as usize, h as usize, channels)
         .map_err(|e| format!("{name}: {e}"))?;
-    reserve_texture(name, (w, h))?;
-    let img = image::load_from_memory(bytes)
-        .map_err(|e| format!("{name}: {e}"))?
-        .to_rgb8();
-    let (w, h) = (img.width() as usize, img.height() as usize);
-    if w == 0 || h == 0 {
-        return Err(format!("{name}: the image is empty ({w}×{h})"));
+    let per_texel = if channels == 4 {
+        TEXEL_BYTES_RGBA
+    } else {
+        TEXEL_BYTES
+    };
+    memory::reserve(
+        &format!("{name} ({w}×{h})"),
+        (w as u64 * h as u64).saturating_mul(per_texel),
+    )?;
+    let img = image::load_from_memory(bytes).map_err(|e| format!("{name}: {e}"))?;
+    let raw = if channels == 4 {
+        img.to_rgba8().into_raw()
+    } else {
+        img.to_rgb8().into_raw()
+    };
+    let (w, h) = (w as usize, h as usize);
+    if w == 0 || h == 0 || raw.len() != w * h * channels {
+        return Err(format!("{name}: the image is empty or not {w}×{h}"));
     }
-    let raw = img.into_raw();
     let mut flipped = Vec::with_capacity(raw.len());
-    for row in raw.chunks_exact(w * 3).rev() {
+    for row in raw.chunks_exact(w * channels).rev() {
         flipped.extend_from_slice(row);
     }
     let texture =
-        Texture::from_u8(w, h, 3, &flipped, encoding).map_err(|e| format!("{name}: {e}"))?;
+        Texture::from_u8(w, h, channels, &flipped, encoding).map_err(|e| format!("{name}: {e}"))?;
     Ok(ColorMap {
         texture: Arc::new(texture),
         sampler,

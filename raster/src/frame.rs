@@ -6,6 +6,7 @@
 //! does not depend on the thread count.
 
 use crate::bin::{BinnedChunk, CHUNK};
+use crate::blend;
 use crate::buffers::{BufferSet, FrameBuffers, Planes3, TileWriter};
 use crate::camera::View;
 use crate::clip::GuardBand;
@@ -13,9 +14,9 @@ use crate::geometry::{mask_bits4, Cull, FrameContext, GeometryPass, VertexStage}
 use crate::occlusion::{tile_minima, DepthBounds, TileMinima};
 use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
-use crate::scan::rasterize_tile;
+use crate::scan::{rasterize_tile, rasterize_tile_alpha, AlphaScan};
 use crate::scene::SceneData;
-use crate::setup::{SetupContext, SetupCounts, TriPlanes};
+use crate::setup::{RasterTri, SetupContext, SetupCounts, TriPlanes};
 use crate::setup_x4::{Vertices4, LANES};
 use crate::shading_pass::{shade_tile, ShadeTargets};
 use crate::shadow::ShadowMaps;
@@ -71,6 +72,9 @@ pub struct Visibility {
     stages: Vec<(Arc<dyn VertexStage>, Box<dyn VertexStage>)>,
     /// The shadowed lights' maps of this frame (shadow.rs).
     pub shadows: ShadowMaps,
+    /// Per tile, the blended triangles of the first pass that touch it,
+    /// in scene order (blend.rs); empty when the scene has none.
+    pub(crate) blended: Vec<Vec<RasterTri>>,
 }
 
 impl Visibility {
@@ -113,6 +117,7 @@ pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) ->
         tile_bounds: Vec::new(),
         stages: Vec::new(),
         shadows: ShadowMaps::default(),
+        blended: Vec::new(),
     };
     visibility_into(scene, target, &mut v, stats);
     v
@@ -149,6 +154,7 @@ pub(crate) fn depth_pass<'a>(
         tile_bounds: Vec::new(),
         stages: Vec::new(),
         shadows: ShadowMaps::default(),
+        blended: Vec::new(),
     });
     if v.vis.id.len() != target.buffer_len() {
         v.vis = VisBuffer::new(target);
@@ -171,7 +177,7 @@ pub(crate) fn depth_pass<'a>(
         .resize(pass.ids().end as usize, TriPlanes::default());
     let mut own = FrameStats::default();
     // The first pass of its buffer: it clears it and tests against nothing.
-    geometry_pass(scene, target, &pass, 0, false, &mut true, v, &mut own);
+    geometry_pass(scene, target, &pass, 0, false, &mut true, v, &mut own, true);
     let t = own.times;
     stats.times.shadow += t.vertex + t.setup + t.bin + t.raster;
     stats.shadow_passes += 1;
@@ -216,6 +222,7 @@ pub fn visibility_into(
             &mut bounds_built,
             out,
             stats,
+            false,
         );
     }
     if scene.geometry.is_empty() {
@@ -238,7 +245,9 @@ pub fn visibility_into(
 /// ([`crate::geometry::VertexStage::hidden`]) stops after the vertex
 /// stage; its triangles count as hidden by earlier passes. With
 /// `same_stage` the previous pass ran this pass's vertex stage for this
-/// view: its positions in `out.clip` are reused.
+/// view: its positions in `out.clip` are reused. Masked materials are
+/// alpha-tested per sample; blended ones draw nothing, and the camera's
+/// first pass (not a `shadow` map's) keeps them per tile for blend.rs.
 #[allow(clippy::too_many_arguments)]
 fn geometry_pass(
     scene: &SceneData,
@@ -249,6 +258,7 @@ fn geometry_pass(
     bounds_built: &mut bool,
     out: &mut Visibility,
     stats: &mut FrameStats,
+    shadow: bool,
 ) {
     let first = index == 0;
     let t = Instant::now();
@@ -387,6 +397,19 @@ fn geometry_pass(
         // One entry a tile (1 KB), kept from frame to frame.
         out.tile_bounds.resize(tiles, [0.0; _]);
     }
+    let alpha = AlphaScan::new(scene, first && !shadow);
+    if first && !shadow {
+        out.blended.iter_mut().for_each(Vec::clear);
+        if alpha.is_some() {
+            out.blended.resize_with(tiles, Vec::new);
+        }
+    }
+    let alpha = alpha.as_ref();
+    let mut no_blended = Vec::new();
+    let blended = match alpha {
+        Some(a) if a.record_blend => &mut out.blended[..],
+        _ => &mut no_blended[..],
+    };
     out.vis
         .depth
         .par_chunks_mut(TILE_PIXELS)
@@ -397,14 +420,22 @@ fn geometry_pass(
             (out.tile_bounds.par_iter_mut().map(Some))
                 .chain((0..tiles).into_par_iter().map(|_| None)),
         )
+        .zip((blended.par_iter_mut().map(Some)).chain((0..tiles).into_par_iter().map(|_| None)))
         .enumerate()
-        .for_each(|(tile, ((depth, ids), minima))| {
+        .for_each(|(tile, (((depth, ids), minima), blended))| {
             if first {
                 // Cleared here, while the tile is about to be in cache anyway.
                 depth.fill(0.0);
                 ids.fill(MISS);
             }
-            rasterize_tile(target, tile, chunks, planes, depth, ids);
+            match alpha {
+                None => rasterize_tile(target, tile, chunks, planes, depth, ids),
+                Some(a) => {
+                    let mut skipped = Vec::new();
+                    let blended = blended.unwrap_or(&mut skipped);
+                    rasterize_tile_alpha(target, tile, chunks, planes, depth, ids, a, blended);
+                }
+            }
             if let Some(m) = minima.filter(|_| bounds) {
                 *m = tile_minima(depth);
             }
@@ -471,6 +502,33 @@ fn shade_impl(
         buffers.width == target.width && buffers.height == target.height,
         "frame buffers are for another target"
     );
+    let ldr = match ldr {
+        Some((enc, bytes)) if blend::any(v) => {
+            // Blended surfaces go over the shaded opaque frame before the
+            // encode: shaded into colour planes, composited, then encoded.
+            let kept = !buffers.color.is_empty();
+            if !kept {
+                buffers.color = Planes3::new(target.pixel_count());
+            }
+            shade_impl(scene, target, v, path, buffers, None, stats);
+            let w = target.width as usize;
+            bytes.resize(target.pixel_count() * 3, 0);
+            let c = &buffers.color;
+            bytes
+                .par_chunks_mut(w * 3)
+                .zip(
+                    c.r.par_chunks(w)
+                        .zip(c.g.par_chunks(w))
+                        .zip(c.b.par_chunks(w)),
+                )
+                .for_each(|(out, ((r, g), b))| enc.encode_row(r, g, b, out));
+            if !kept {
+                buffers.color = Planes3::default();
+            }
+            return;
+        }
+        ldr => ldr,
+    };
     let t = Instant::now();
     let mut ctx = ResolveContext::new(scene, &v.planes, &v.view);
     ctx.shadows = v.shadows.active();
@@ -516,6 +574,26 @@ fn shade_impl(
             }
         })
         .sum();
+    if blend::any(v) {
+        let color = [
+            TileWriter::new(&mut buffers.color.r, target),
+            TileWriter::new(&mut buffers.color.g, target),
+            TileWriter::new(&mut buffers.color.b, target),
+        ];
+        (0..target.tile_count()).into_par_iter().for_each(|tile| {
+            // SAFETY: each tile index goes to one call; tiles are disjoint.
+            unsafe {
+                match path {
+                    ShadePath::Simd => {
+                        blend::composite_tile::<f32x8>(&ctx, target, v, tile, &color)
+                    }
+                    ShadePath::Scalar => {
+                        blend::composite_tile::<f32>(&ctx, target, v, tile, &color)
+                    }
+                }
+            }
+        });
+    }
     stats.pixels_shaded = covered;
     stats.times.shade = ms_since(t);
 }

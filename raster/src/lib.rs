@@ -16,7 +16,9 @@
 //! material's per-pixel parameters from it; `post` runs the post stages (downsampling the
 //! supersamples, exposure, tone map, encode, and any custom image-space stage).
 
+pub mod alpha;
 mod bin;
+mod blend;
 pub mod buffers;
 pub mod camera;
 pub mod clip;
@@ -42,6 +44,7 @@ pub mod target;
 pub mod texture;
 mod unlit;
 
+pub use alpha::{AlphaMode, MaterialAlpha};
 pub use buffers::{BufferSet, FrameBuffers, Planes3};
 pub use camera::{Camera, View};
 pub use fragment::{Fragment, Surface};

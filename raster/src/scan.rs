@@ -1,8 +1,11 @@
 //! Scan conversion of one tile: row spans from exact integer edge functions,
 //! then an 8-pixel-wide depth test and visibility-buffer write.
 
+use crate::alpha::{vertex_inputs, AlphaInputs, AlphaMode, MaterialAlpha};
 use crate::bin::BinnedChunk;
 use crate::buffers::prefetch;
+use crate::geometry::IdMap;
+use crate::scene::SceneData;
 use crate::setup::{RasterTri, RectCoverage, TriPlanes};
 use crate::target::{Target, TILE, TILE_PIXELS};
 use specula_core::Real;
@@ -18,9 +21,62 @@ pub fn rasterize_tile(
     depth: &mut [f32],
     ids: &mut [u32],
 ) {
-    let (tx, ty) = target.tile_origin(t);
     let depth: &mut [f32; TILE_PIXELS] = depth.try_into().expect("a tile of depth");
     let ids: &mut [u32; TILE_PIXELS] = ids.try_into().expect("a tile of ids");
+    let (tx, ty) = target.tile_origin(t);
+    for_each_triangle(t, chunks, planes, |rt, p| {
+        scan_triangle(rt, p, tx as i32, ty as i32, depth, ids)
+    });
+}
+
+/// [`rasterize_tile`] in a scene with masked or blended materials
+/// (alpha.rs): a masked triangle's samples are covered only where its
+/// alpha passes the cutoff; a blended one draws nothing and, where
+/// `alpha` records them, is appended to `blended` for `blend.rs`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn rasterize_tile_alpha(
+    target: &Target,
+    t: usize,
+    chunks: &[BinnedChunk],
+    planes: &[TriPlanes],
+    depth: &mut [f32],
+    ids: &mut [u32],
+    alpha: &AlphaScan,
+    blended: &mut Vec<RasterTri>,
+) {
+    let depth: &mut [f32; TILE_PIXELS] = depth.try_into().expect("a tile of depth");
+    let ids: &mut [u32; TILE_PIXELS] = ids.try_into().expect("a tile of ids");
+    let (tx, ty) = target.tile_origin(t);
+    let (tx, ty) = (tx as i32, ty as i32);
+    for_each_triangle(t, chunks, planes, |rt, p| match alpha.of(rt.tri) {
+        None => scan_triangle(rt, p, tx, ty, depth, ids),
+        Some((tri, a)) => match a.mode {
+            AlphaMode::Mask { cutoff } => {
+                let (uvs, alphas) = alpha.vertex_inputs(tri);
+                let test = |x: u32, y: u32| {
+                    let i = AlphaInputs::<f32x8>::at(p, uvs, alphas, x, y);
+                    Real::ge(a.alpha(&i), f32x8::splat(cutoff))
+                };
+                scan_triangle_masked(rt, p, tx, ty, depth, ids, test);
+            }
+            AlphaMode::Blend => {
+                if alpha.record_blend {
+                    blended.push(*rt);
+                }
+            }
+        },
+    });
+}
+
+/// Calls `scan(rt, planes)` for every triangle binned to tile `t`, in
+/// scene order.
+#[inline(always)]
+fn for_each_triangle(
+    t: usize,
+    chunks: &[BinnedChunk],
+    planes: &[TriPlanes],
+    mut scan: impl FnMut(&RasterTri, &TriPlanes),
+) {
     for chunk in chunks {
         let items = chunk.tile_items(t);
         for (k, &i) in items.iter().enumerate() {
@@ -34,15 +90,48 @@ pub fn rasterize_tile(
                 prefetch(&planes[chunk.tris[next as usize].tri as usize]);
             }
             let rt = &chunk.tris[i as usize];
-            scan_triangle(
-                rt,
-                &planes[rt.tri as usize],
-                tx as i32,
-                ty as i32,
-                depth,
-                ids,
-            );
+            scan(rt, &planes[rt.tri as usize]);
         }
+    }
+}
+
+/// What the visibility pass needs to know of masked and blended
+/// materials; built once per geometry pass, only for scenes that have
+/// some.
+pub(crate) struct AlphaScan<'a> {
+    scene: &'a SceneData,
+    ids: IdMap,
+    /// Per material.
+    materials: Vec<Option<&'a MaterialAlpha>>,
+    /// Blended triangles are recorded for compositing (the camera's first
+    /// pass) rather than only skipped (shadow maps, later passes).
+    pub record_blend: bool,
+}
+
+impl<'a> AlphaScan<'a> {
+    /// `None` when no material of the scene is masked or blended.
+    pub(crate) fn new(scene: &'a SceneData, record_blend: bool) -> Option<AlphaScan<'a>> {
+        let materials: Vec<Option<&MaterialAlpha>> =
+            scene.materials.iter().map(|m| m.alpha.as_deref()).collect();
+        materials.iter().any(Option::is_some).then(|| AlphaScan {
+            scene,
+            ids: IdMap::new(&scene.geometry),
+            materials,
+            record_blend,
+        })
+    }
+
+    /// The source triangle and alpha of visibility id `id`, if its
+    /// material has one.
+    #[inline(always)]
+    fn of(&self, id: u32) -> Option<(u32, &'a MaterialAlpha)> {
+        let (tri, m) = self.ids.look_up(id, &self.scene.tri_material);
+        self.materials[m as usize].map(|a| (tri, a))
+    }
+
+    fn vertex_inputs(&self, tri: u32) -> ([glam::Vec2; 3], [f32; 3]) {
+        let s = self.scene;
+        vertex_inputs(&s.uvs, &s.colors, s.triangles[tri as usize])
     }
 }
 
@@ -164,6 +253,58 @@ pub fn scan_triangle(
         let at = at & (TILE_PIXELS - 8);
         let d_old = f32x8::load(&depth[at..at + 8]);
         let pass = f32x8::mask_from_bits(mask) & z.gt(d_old);
+        if pass.any() {
+            pass.select(z, d_old).store(&mut depth[at..at + 8]);
+            let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");
+            let m: u32x8 = bytemuck::cast(pass);
+            ids[at..at + 8].copy_from_slice(&m.select(id, u32x8::new(old)).to_array());
+        }
+    });
+}
+
+/// [`scan_triangle`] of a masked triangle: a sample that passes the depth
+/// test is written only where `test(x, y)` (the alpha test of the 8
+/// samples from (x, y)) passes too. Depth first: the alpha costs a
+/// texture lookup, the depth test a load.
+#[allow(clippy::too_many_arguments)]
+fn scan_triangle_masked(
+    rt: &RasterTri,
+    planes: &TriPlanes,
+    tx: i32,
+    ty: i32,
+    depth: &mut [f32; TILE_PIXELS],
+    ids: &mut [u32; TILE_PIXELS],
+    test: impl Fn(u32, u32) -> <f32x8 as Real>::Mask,
+) {
+    let [bx0, by0, bx1, by1] = rt.bbox;
+    let bounds = [
+        bx0.max(tx),
+        bx1.min(tx + TILE as i32),
+        by0.max(ty),
+        by1.min(ty + TILE as i32),
+    ];
+    let [za, zb, zc] = planes.z;
+    let [ox, oy] = planes.origin;
+    let id = u32x8::splat(rt.tri);
+    let za8 = f32x8::splat(za);
+    let lane_x = f32x8::lane_index() + f32x8::splat(0.5 - ox);
+    // Groups are aligned to the tile, so loads never cross a row.
+    covered_groups(rt, bounds, tx, |y, gx, mask| {
+        let row_z = zb.mul_add(y as f32 + 0.5 - oy, zc);
+        let z = (lane_x + f32x8::splat(gx as f32)).mul_add(za8, f32x8::splat(row_z));
+        let at = (y - ty) as usize * TILE + (gx - tx) as usize;
+        // Groups are aligned to 8 inside the tile, so `at` is a multiple of
+        // 8 below TILE_PIXELS and the mask changes nothing; it lets the
+        // compiler drop the bounds checks of the two 8-wide accesses.
+        debug_assert!(at.is_multiple_of(8) && at < TILE_PIXELS);
+        let at = at & (TILE_PIXELS - 8);
+        let d_old = f32x8::load(&depth[at..at + 8]);
+        let pass = f32x8::mask_from_bits(mask) & z.gt(d_old);
+        let pass = if pass.any() {
+            pass & test(gx as u32, y as u32)
+        } else {
+            pass
+        };
         if pass.any() {
             pass.select(z, d_old).store(&mut depth[at..at + 8]);
             let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");

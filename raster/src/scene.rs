@@ -115,6 +115,9 @@ impl SceneData {
             if let Some(shader) = m.shader.with_texture_filter(filter) {
                 m.shader = shader;
             }
+            if let Some(a) = &m.alpha {
+                m.alpha = Some(std::sync::Arc::new(a.with_texture_filter(filter)));
+            }
         }
     }
 }

@@ -247,6 +247,9 @@ pub struct Material {
     /// Back faces are drawn (and shaded with the normal flipped toward the
     /// viewer) instead of culled by a pass with [`crate::geometry::Cull::Back`].
     pub double_sided: bool,
+    /// Masked or blended (glTF's alphaMode MASK and BLEND; alpha.rs);
+    /// `None`: opaque.
+    pub alpha: Option<Arc<crate::alpha::MaterialAlpha>>,
 }
 
 impl Material {
@@ -255,6 +258,18 @@ impl Material {
             name: name.to_string(),
             shader: Arc::new(shader),
             double_sided,
+            alpha: None,
         }
+    }
+
+    /// This material masked or blended by `alpha`.
+    pub fn with_alpha(mut self, alpha: crate::alpha::MaterialAlpha) -> Material {
+        self.alpha = Some(Arc::new(alpha));
+        self
+    }
+
+    /// How alpha decides this material's coverage; `None`: opaque.
+    pub fn alpha_mode(&self) -> Option<crate::alpha::AlphaMode> {
+        self.alpha.as_ref().map(|a| a.mode)
     }
 }

@@ -16,7 +16,7 @@ pub struct Images<'a> {
     pub(super) read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     /// Files read (external images), for the scene's inputs.
     pub inputs: Vec<PathBuf>,
-    cache: HashMap<(usize, Encoding), ColorMap>,
+    cache: HashMap<(usize, Encoding, usize), ColorMap>,
 }
 
 impl<'a> Images<'a> {
@@ -47,7 +47,20 @@ impl<'a> Images<'a> {
     /// emission), linear for data (metallic-roughness, normal, occlusion).
     /// Each (image, encoding) is decoded once.
     pub fn map(&mut self, i: usize, encoding: Encoding) -> Result<ColorMap, String> {
-        if let Some(m) = self.cache.get(&(i, encoding)) {
+        self.map_channels(i, encoding, 3)
+    }
+
+    /// [`Images::map`] with `channels` of RGBA kept: 4 for a base colour
+    /// texture whose alpha a masked or blended material reads (alpha
+    /// linear; 1 where the image has none). Each (image, encoding,
+    /// channels) is decoded once.
+    pub fn map_channels(
+        &mut self,
+        i: usize,
+        encoding: Encoding,
+        channels: usize,
+    ) -> Result<ColorMap, String> {
+        if let Some(m) = self.cache.get(&(i, encoding, channels)) {
             return Ok(m.clone());
         }
         let at = format!("images[{i}]");
@@ -82,8 +95,8 @@ impl<'a> Images<'a> {
             return Err(format!("{at}: not an image this build can decode"));
         }
         let sampler = Sampler::new(Wrap::Repeat, Filter::Trilinear);
-        let map = crate::textures::decode_map(&at, &bytes, encoding, sampler)?;
-        self.cache.insert((i, encoding), map.clone());
+        let map = crate::textures::decode_map_channels(&at, &bytes, encoding, sampler, channels)?;
+        self.cache.insert((i, encoding, channels), map.clone());
         Ok(map)
     }
 }

@@ -14,7 +14,7 @@ use specula_core::models::Gltf;
 use specula_core::Model;
 use specula_raster::maps::{ColorMap, NormalMap, OcclusionMap, ParamMaps, UvTransform};
 use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
-use specula_raster::{Lit, Material, UnlitBase};
+use specula_raster::{Lit, Material, MaterialAlpha, UnlitBase};
 use std::collections::BTreeMap;
 
 /// KHR_texture_transform: uv' = T(offset) · R(rotation) · S(scale) · uv
@@ -522,7 +522,7 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// using it has COLOR_0) the vertex colour multiplies its base colour.
 ///
 /// Today: the `gltf` model (the specification's normative BRDF) with the
-/// base colour factor's RGB (its alpha is not used), the metallic and
+/// base colour factor's RGB, the metallic and
 /// roughness factors, KHR_materials_ior, the factors of
 /// KHR_materials_specular, _clearcoat and _sheen, each checked as the
 /// scene field of the same snake_case name is; the base colour texture
@@ -531,7 +531,10 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// normal (with its scale), occlusion (with its strength) and emissive
 /// maps, each moved by its KHR_texture_transform
 /// ([`TextureTransform::uv_transform`]), the emissive factor times
-/// KHR_materials_emissive_strength; `doubleSided` as the material's.
+/// KHR_materials_emissive_strength; `doubleSided` as the material's;
+/// alphaMode MASK and BLEND as the material's [`MaterialAlpha`]
+/// (baseColorFactor alpha × the base colour texture's alpha × COLOR_0's
+/// alpha; that texture is then read with four channels).
 /// Everything else is listed in the warning. A KHR_materials_unlit
 /// material is [`UnlitBase`]: its base colour factor times its base
 /// colour texture, shown as it is.
@@ -546,17 +549,6 @@ pub fn scene_material(
             missing.push(what.to_string());
         }
     };
-    note(
-        "baseColorFactor alpha",
-        m.base_color_factor[3] != 1.0 && m.alpha_mode != AlphaMode::Opaque,
-    );
-    note(
-        match m.alpha_mode {
-            AlphaMode::Mask { .. } => "alphaMode MASK",
-            _ => "alphaMode BLEND",
-        },
-        m.alpha_mode != AlphaMode::Opaque,
-    );
     note(
         "specularTexture / specularColorTexture",
         m.specular
@@ -641,54 +633,70 @@ pub fn scene_material(
         ..Default::default()
     };
     let mut sets = Vec::new();
-    let mut load = |t: &TextureRef, encoding: Encoding| -> Result<ColorMap, String> {
-        let mut map = images
-            .map(t.image, encoding)
-            .map_err(|e| format!("{}: {e}", t.at))?;
-        map.sampler = t.sampler;
-        map.transform = t.transform.as_ref().map(TextureTransform::uv_transform);
-        sets.push(
-            t.transform
-                .as_ref()
-                .and_then(|x| x.tex_coord)
-                .unwrap_or(t.tex_coord),
-        );
-        Ok(map)
+    // A masked or blended material reads its base colour texture's alpha
+    // too: that texture keeps four channels (the others three).
+    let alpha_mode = match m.alpha_mode {
+        AlphaMode::Opaque => None,
+        AlphaMode::Mask { cutoff } => Some(specula_raster::AlphaMode::Mask { cutoff }),
+        AlphaMode::Blend => Some(specula_raster::AlphaMode::Blend),
     };
+    let base_channels = if alpha_mode.is_some() { 4 } else { 3 };
+    let mut load =
+        |t: &TextureRef, encoding: Encoding, channels: usize| -> Result<ColorMap, String> {
+            let mut map = images
+                .map_channels(t.image, encoding, channels)
+                .map_err(|e| format!("{}: {e}", t.at))?;
+            map.sampler = t.sampler;
+            map.transform = t.transform.as_ref().map(TextureTransform::uv_transform);
+            sets.push(
+                t.transform
+                    .as_ref()
+                    .and_then(|x| x.tex_coord)
+                    .unwrap_or(t.tex_coord),
+            );
+            Ok(map)
+        };
     if m.unlit {
         // KHR_materials_unlit: the base colour alone (factor × texture);
         // the other maps, the lights and the emission do not apply.
         let base_color = (m.base_color_texture.as_ref())
-            .map(|t| load(t, Encoding::Srgb))
+            .map(|t| load(t, Encoding::Srgb, base_channels))
             .transpose()?;
+        let alpha = alpha_mode.map(|mode| MaterialAlpha {
+            mode,
+            factor: m.base_color_factor[3],
+            map: base_color.clone(),
+            vertex_alpha: vertex_color,
+        });
         let shader = UnlitBase {
             color: [r, g, b],
             base_color,
             vertex_color,
         };
         let warning = rendered_without(&m.name, &missing);
-        return Ok((Material::new(&m.name, shader, m.double_sided), warning));
+        let material = Material::new(&m.name, shader, m.double_sided);
+        return Ok((with_alpha(material, alpha), warning));
     }
     if let Some(t) = &m.base_color_texture {
-        maps.base_color = Some(load(t, Encoding::Srgb)?);
+        maps.base_color = Some(load(t, Encoding::Srgb, base_channels)?);
     }
     if let Some(t) = &m.metallic_roughness_texture {
-        maps.metallic_roughness = Some(load(t, Encoding::Linear)?);
+        maps.metallic_roughness = Some(load(t, Encoding::Linear, 3)?);
     }
     if let Some(t) = &m.normal_texture {
         maps.normal = Some(NormalMap {
-            map: load(t, Encoding::Linear)?,
+            map: load(t, Encoding::Linear, 3)?,
             scale: t.scale,
         });
     }
     if let Some(t) = &m.occlusion_texture {
         maps.occlusion = Some(OcclusionMap {
-            map: load(t, Encoding::Linear)?,
+            map: load(t, Encoding::Linear, 3)?,
             strength: t.scale.clamp(0.0, 1.0),
         });
     }
     if let Some(t) = &m.emissive_texture {
-        maps.emissive = Some(load(t, Encoding::Srgb)?);
+        maps.emissive = Some(load(t, Encoding::Srgb, 3)?);
     }
     sets.dedup();
     if sets.len() > 1 {
@@ -708,11 +716,25 @@ pub fn scene_material(
             crate::checks::MAX_RADIOMETRIC
         ));
     }
+    let alpha = alpha_mode.map(|mode| MaterialAlpha {
+        mode,
+        factor: m.base_color_factor[3],
+        map: maps.base_color.clone(),
+        vertex_alpha: vertex_color,
+    });
     let shader = Lit::with_maps(model, maps)
         .map_err(|e| format!("{at}: {e}"))?
         .with_emission(emissive);
     let warning = rendered_without(&m.name, &missing);
-    Ok((Material::new(&m.name, shader, m.double_sided), warning))
+    let material = Material::new(&m.name, shader, m.double_sided);
+    Ok((with_alpha(material, alpha), warning))
+}
+
+fn with_alpha(m: Material, alpha: Option<MaterialAlpha>) -> Material {
+    match alpha {
+        Some(a) => m.with_alpha(a),
+        None => m,
+    }
 }
 
 /// The warning for what a material is rendered without, if anything.

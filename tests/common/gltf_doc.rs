@@ -90,6 +90,19 @@ pub fn png_uri(w: u32, h: u32, rgb: &[u8]) -> String {
     )
 }
 
+/// An RGBA PNG of `w` × `h` texels (`rgba` row by row, top row first)
+/// as a data URI.
+pub fn png_rgba_uri(w: u32, h: u32, rgba: &[u8]) -> String {
+    let img = image::RgbaImage::from_raw(w, h, rgba.to_vec()).expect("w × h × 4 bytes");
+    let mut out = Vec::new();
+    img.write_to(&mut std::io::Cursor::new(&mut out), image::ImageFormat::Png)
+        .unwrap();
+    format!(
+        "data:image/png;base64,{}",
+        base64::engine::general_purpose::STANDARD.encode(out)
+    )
+}
+
 /// The sRGB decoding of an 8-bit value (IEC 61966-2-1), written out here.
 pub fn srgb_decode(v: u8) -> f64 {
     let v = v as f64 / 255.0;
