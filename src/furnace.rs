@@ -2,7 +2,7 @@
 //! for several roughnesses, without and with Kulla–Conty compensation —
 //! the white furnace test of the course notes as a table and a plot.
 
-use crate::material_desc::{MaterialDesc, Shading, Tables};
+use crate::material_desc::{MaterialDesc, MaterialError, Shading, Tables};
 use specula_core::{Model, V3};
 
 /// Albedo curves of one α: (μo, E without, E with compensation), RGB.
@@ -47,7 +47,9 @@ pub fn furnace(material_json: &str, alphas: &[f32]) -> Result<Vec<FurnaceCurve>,
             match MaterialDesc::Microfacet(d).build_shading(Tables::Build, &mut notes) {
                 Ok((Shading::Lit(m), _)) => Ok(m),
                 Ok(_) => unreachable!("a microfacet description builds a model"),
-                Err(e) if e.starts_with("alpha") => Err(format!("--alpha {alpha}: {e}")),
+                Err(MaterialError::Field(e)) if e.field == "alpha" => {
+                    Err(format!("--alpha {alpha}: {e}"))
+                }
                 Err(e) => Err(format!("--material.{e}")),
             }
         };

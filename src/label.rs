@@ -56,7 +56,7 @@ impl LabelDesc {
                 self.size
             ));
         }
-        crate::checks::display_color("color", self.color)
+        Ok(crate::checks::display_color("color", self.color)?)
     }
 }
 

@@ -2,6 +2,7 @@
 //! (planar, simple, 3 to `MAX_POLYGON_VERTICES` vertices) and the unlit
 //! triangles that draw a visible light.
 
+use crate::checks::{FieldError, FieldReason};
 use glam::{DVec2, DVec3, Vec3, Vec4};
 use specula_core::light::MAX_POLYGON_VERTICES;
 use specula_core::models::microfacet::Ndf;
@@ -57,29 +58,29 @@ fn segments_meet(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
 /// points, planar (within 1e-4 of its size), with a non-zero area, and
 /// simple (no edge meets another except its neighbours at their shared
 /// vertex), so its orientation and its inside are defined. Convex or not.
-pub fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), String> {
+pub fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), FieldError> {
+    let refuse = |reason| Err(FieldError::new(field, reason));
     if !(3..=MAX_POLYGON_VERTICES).contains(&v.len()) {
-        return Err(format!(
-            "{field}: a polygon light needs 3 to {MAX_POLYGON_VERTICES} vertices, got {}",
-            v.len()
-        ));
+        return refuse(FieldReason::PolygonVertexCount {
+            max: MAX_POLYGON_VERTICES,
+            got: v.len(),
+        });
     }
     for (k, p) in v.iter().enumerate() {
-        if !p.iter().all(|c| c.is_finite()) {
-            return Err(format!(
-                "{field}[{k}]: every component must be finite, got {p:?}"
-            ));
-        }
+        crate::checks::finite(&format!("{field}[{k}]"), p)?;
     }
     let p: Vec<DVec3> = v.iter().map(|q| DVec3::from(q.map(|c| c as f64))).collect();
     let (n, size) = normal_and_size(&p);
     if size == 0.0 || n.length() <= 1e-9 * size * size {
-        return Err(format!("{field}: the polygon has no area"));
+        return refuse(FieldReason::NoArea);
     }
     let un = n.normalize();
     for (k, q) in p.iter().enumerate() {
         if (*q - p[0]).dot(un).abs() > 1e-4 * size {
-            return Err(format!("{field}[{k}]: the polygon is not planar"));
+            return Err(FieldError::new(
+                format!("{field}[{k}]"),
+                FieldReason::NotPlanar,
+            ));
         }
     }
     let q = in_plane(&p, n);
@@ -87,14 +88,12 @@ pub fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), String> {
     for i in 0..m {
         for j in i + 1..m {
             if q[i] == q[j] {
-                return Err(format!("{field}: vertices {i} and {j} are the same point"));
+                return refuse(FieldReason::SamePoint(i, j));
             }
             // Non-adjacent edges i→i+1 and j→j+1 must not meet.
             let adjacent = j == i + 1 || (i == 0 && j == m - 1);
             if !adjacent && segments_meet(q[i], q[(i + 1) % m], q[j], q[(j + 1) % m]) {
-                return Err(format!(
-                    "{field}: the polygon is not simple (edges {i} and {j} cross)"
-                ));
+                return refuse(FieldReason::NotSimple(i, j));
             }
         }
     }
@@ -118,12 +117,24 @@ pub fn ltc_refusal(model: &Model) -> Option<String> {
     }
 }
 
+/// A material that polygon lights cannot light by LTC, and why
+/// ([`ltc_refusal`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("material {material:?}: {reason}")]
+pub struct LtcRefusal {
+    pub material: String,
+    pub reason: String,
+}
+
 /// Checks every lit material against polygon lights (see [`ltc_refusal`]).
-pub fn check_materials(materials: &[Material]) -> Result<(), String> {
+pub fn check_materials(materials: &[Material]) -> Result<(), LtcRefusal> {
     for m in materials {
         if let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() {
-            if let Some(why) = ltc_refusal(lit.model()) {
-                return Err(format!("material {:?}: {why}", m.name));
+            if let Some(reason) = ltc_refusal(lit.model()) {
+                return Err(LtcRefusal {
+                    material: m.name.clone(),
+                    reason,
+                });
             }
         }
     }
@@ -255,7 +266,14 @@ mod tests {
             [0.0, 1.0, 0.0],
             [1.3, 1.4, 0.0],
         ];
-        assert!(check_polygon("b", &bow).unwrap_err().contains("not simple"));
+        let e = check_polygon("b", &bow).unwrap_err();
+        // Edge 1 (x + y = 1) and edge 3 (back to the origin) cross near
+        // (0.48, 0.52); edges 0 and 2 lie at y = 0 and y ≥ 1.
+        assert_eq!(e.reason, FieldReason::NotSimple(1, 3), "{e}");
+        assert_eq!(
+            e.to_string(),
+            "b: the polygon is not simple (edges 1 and 3 cross)"
+        );
         let rep = [
             [0.0, 0.0, 0.0],
             [1.0, 0.0, 0.0],

@@ -23,6 +23,7 @@ pub fn truncate_lines(s: &str, max: usize) -> String {
         .join("\n")
 }
 
+use crate::checks::{FieldError, FieldReason};
 use glam::Vec3;
 
 /// Largest |coordinate| of a world-space point: vertices after their mesh's
@@ -43,23 +44,32 @@ pub const MIN_FOV_Y_DEG: f32 = 1e-3;
 pub const MAX_FOV_Y_DEG: f32 = 179.0;
 
 /// A point every coordinate of which is finite and within ±[`MAX_WORLD`].
-pub fn check_point(field: &str, v: [f32; 3]) -> Result<(), String> {
+pub fn check_point(field: &str, v: [f32; 3]) -> Result<(), FieldError> {
     if v.iter().all(|x| x.abs() <= MAX_WORLD) {
         Ok(())
     } else {
-        Err(format!(
-            "{field}: every coordinate must be finite and within ±{MAX_WORLD:e}, got {v:?}"
+        Err(FieldError::new(
+            field,
+            FieldReason::OutsideWorld {
+                max: MAX_WORLD,
+                got: v,
+            },
         ))
     }
 }
 
 /// A size (radius, edge length) in [[`MIN_EXTENT`], [`MAX_WORLD`]].
-pub fn check_extent(field: &str, v: f32) -> Result<(), String> {
+pub fn check_extent(field: &str, v: f32) -> Result<(), FieldError> {
     if (MIN_EXTENT..=MAX_WORLD).contains(&v) {
         Ok(())
     } else {
-        Err(format!(
-            "{field}: must be a number in [{MIN_EXTENT:e}, {MAX_WORLD:e}], got {v}"
+        Err(FieldError::new(
+            field,
+            FieldReason::Extent {
+                min: MIN_EXTENT,
+                max: MAX_WORLD,
+                got: v,
+            },
         ))
     }
 }
@@ -67,14 +77,11 @@ pub fn check_extent(field: &str, v: f32) -> Result<(), String> {
 /// The unit vector along `v`; any finite non-zero `v` works, however large
 /// or small its components (it is scaled by its largest one first, so
 /// [3e38, −3e38, 0] does not overflow to an infinite length).
-pub fn direction(field: &str, v: [f32; 3]) -> Result<Vec3, String> {
+pub fn direction(field: &str, v: [f32; 3]) -> Result<Vec3, FieldError> {
     let v = Vec3::from(v);
     let m = v.abs().max_element();
     if !(v.is_finite() && m > 0.0) {
-        return Err(format!(
-            "{field}: must be a finite non-zero vector, got {:?}",
-            v.to_array()
-        ));
+        return Err(FieldError::new(field, FieldReason::Direction(v.to_array())));
     }
     Ok((v / m).normalize())
 }

@@ -46,22 +46,23 @@ pub enum WrapsDesc {
 }
 
 /// glTF's wrap modes by their glTF names in snake case.
-pub(super) fn wrap_mode(name: &str) -> Result<Wrap, String> {
+pub(super) fn wrap_mode(name: &str) -> Result<Wrap, FieldError> {
     match name {
         "repeat" => Ok(Wrap::Repeat),
         "clamp_to_edge" => Ok(Wrap::Clamp),
         "mirrored_repeat" => Ok(Wrap::Mirror),
-        _ => Err(format!(
-            "texture_wrap: expected \"repeat\", \"clamp_to_edge\" or \"mirrored_repeat\", got {name:?}"
+        _ => Err(FieldError::new(
+            "texture_wrap",
+            FieldReason::Wrap(name.to_string()),
         )),
     }
 }
 
 impl<'a> SurfaceMaps<'a> {
     /// The sampler of the material's textures, checked.
-    pub(super) fn sampler(&self) -> Result<Sampler, String> {
+    pub(super) fn sampler(&self) -> Result<Sampler, MaterialError> {
         let filter = match self.texture_filter {
-            Some(f) => f.parse().map_err(|e| format!("texture_filter: {e}"))?,
+            Some(f) => f.parse().map_err(MaterialError::Filter)?,
             None => Filter::Trilinear,
         };
         let [u, v] = match self.texture_wrap {

@@ -2,7 +2,7 @@
 //! in `specula eval` share these serde types, so the field names are one
 //! contract (documented in the README).
 
-use crate::checks;
+use crate::checks::{self, FieldError, FieldReason};
 use serde::Deserialize;
 use specula_core::kulla_conty::KcColor;
 use specula_core::models::microfacet::clamp_alpha;
@@ -22,10 +22,13 @@ use std::sync::Arc;
 
 pub use crate::textures::ReadFile;
 
+mod error;
 #[macro_use]
 mod maps;
 mod npr;
 mod pbr;
+
+pub use error::MaterialError;
 
 use maps::SurfaceMaps;
 pub use maps::WrapsDesc;
@@ -57,11 +60,11 @@ fn one() -> f32 {
     1.0
 }
 
-fn check_positive(field: &str, v: f32) -> Result<(), String> {
+fn check_positive(field: &str, v: f32) -> Result<(), FieldError> {
     if v.is_finite() && v > 0.0 {
         Ok(())
     } else {
-        Err(format!("{field}: must be finite and > 0, got {v}"))
+        Err(FieldError::new(field, FieldReason::NotPositive(v)))
     }
 }
 
@@ -91,7 +94,7 @@ impl MaterialDesc {
         name: &str,
         tables: Tables,
         warnings: &mut Vec<String>,
-    ) -> Result<Material, String> {
+    ) -> Result<Material, MaterialError> {
         let no_files = |p: &Path| -> std::io::Result<Vec<u8>> {
             Err(std::io::Error::new(
                 std::io::ErrorKind::NotFound,
@@ -109,7 +112,7 @@ impl MaterialDesc {
         tables: Tables,
         warnings: &mut Vec<String>,
         read: ReadFile,
-    ) -> Result<Material, String> {
+    ) -> Result<Material, MaterialError> {
         match self {
             MaterialDesc::Toon(d) => {
                 return Ok(Material::new(name, d.shader(read)?, d.double_sided))
@@ -126,7 +129,7 @@ impl MaterialDesc {
                 let lit = if maps.is_empty() {
                     Lit::new(model)
                 } else {
-                    Lit::with_maps(model, maps)?
+                    Lit::with_maps(model, maps).map_err(MaterialError::Maps)?
                 };
                 Material::new(name, lit.with_emission(emissive), double_sided)
             }
@@ -188,16 +191,17 @@ impl MaterialDesc {
         &self,
         warnings: &mut Vec<String>,
         read: ReadFile,
-    ) -> Result<(ParamMaps, [f32; 3]), String> {
+    ) -> Result<(ParamMaps, [f32; 3]), MaterialError> {
         let Some(m) = self.surface_maps() else {
             return Ok((ParamMaps::default(), [0.0; 3]));
         };
         let sampler = m.sampler()?;
         if !m.normal_scale.is_finite() {
-            return Err(format!(
-                "normal_scale: must be a finite number, got {}",
-                m.normal_scale
-            ));
+            return Err(FieldError::new(
+                "normal_scale",
+                FieldReason::NotFiniteNumber(m.normal_scale),
+            )
+            .into());
         }
         checks::unit("occlusion_strength", m.occlusion_strength)?;
         checks::linear_color("emissive", m.emissive)?;
@@ -207,10 +211,10 @@ impl MaterialDesc {
                     .into(),
             );
         }
-        let load = |field: &str, path: Option<&Path>, encoding: Encoding| {
+        let load = |field: &'static str, path: Option<&Path>, encoding: Encoding| {
             path.map(|p| {
                 crate::textures::load_map(p, read, encoding, sampler)
-                    .map_err(|e| format!("{field}: {e}"))
+                    .map_err(|message| MaterialError::Texture { field, message })
             })
             .transpose()
         };
@@ -269,17 +273,15 @@ impl MaterialDesc {
         &self,
         tables: Tables,
         warnings: &mut Vec<String>,
-    ) -> Result<(Shading, bool), String> {
+    ) -> Result<(Shading, bool), MaterialError> {
         if let Some((field, _)) = self.texture_fields().first() {
-            return Err(format!("{field}: a textured material has no single BRDF value (it depends on uv); leave the texture out"));
+            return Err(FieldError::new(*field, FieldReason::TexturedBrdf).into());
         }
         if self.surface_maps().is_some_and(|m| m.emissive != [0.0; 3]) {
-            return Err("emissive: emission is radiance the surface adds, not part of its BRDF value; leave it out".into());
+            return Err(FieldError::new("emissive", FieldReason::EmissiveBrdf).into());
         }
         if let MaterialDesc::Toon(_) | MaterialDesc::Hatching(_) = self {
-            return Err(
-                "model: \"toon\" and \"hatching\" are stylized shaders with no BRDF value".into(),
-            );
+            return Err(FieldError::new("model", FieldReason::StylizedBrdf).into());
         }
         self.build_model(tables, warnings)
     }
@@ -288,25 +290,29 @@ impl MaterialDesc {
         &self,
         tables: Tables,
         warnings: &mut Vec<String>,
-    ) -> Result<(Shading, bool), String> {
+    ) -> Result<(Shading, bool), MaterialError> {
         let (model, double_sided) = match self {
             MaterialDesc::Toon(_) | MaterialDesc::Hatching(_) => {
-                return Err("model: a stylized shader has no BRDF".into())
+                return Err(FieldError::new("model", FieldReason::NoBrdf).into())
             }
             MaterialDesc::Unlit(d) => {
                 checks::linear_color("color", d.color)?;
                 if !(0.0..=checks::MAX_RADIOMETRIC).contains(&d.intensity) {
-                    return Err(format!(
-                        "intensity: must be finite and in [0, {:e}], got {}",
-                        checks::MAX_RADIOMETRIC,
-                        d.intensity
-                    ));
+                    return Err(FieldError::new(
+                        "intensity",
+                        FieldReason::UnlitIntensity(d.intensity),
+                    )
+                    .into());
                 }
                 if d.color.iter().any(|c| !(c * d.intensity).is_finite()) {
-                    return Err(format!(
-                        "intensity: color × intensity overflows f32 ({:?} × {})",
-                        d.color, d.intensity
-                    ));
+                    return Err(FieldError::new(
+                        "intensity",
+                        FieldReason::UnlitOverflow {
+                            color: d.color,
+                            intensity: d.intensity,
+                        },
+                    )
+                    .into());
                 }
                 let u = Unlit {
                     color: d.color,

@@ -65,26 +65,28 @@ pub struct UnlitDesc {
 }
 
 impl ToonDesc {
-    pub(super) fn shader(&self, read: ReadFile) -> Result<Toon, String> {
+    pub(super) fn shader(&self, read: ReadFile) -> Result<Toon, MaterialError> {
         checks::linear_color("base_color", self.base_color)?;
         // Checked whether or not their threshold is set: a colour in the
         // file is a colour, used or not.
         checks::linear_color("specular_color", self.specular_color)?;
         checks::linear_color("rim_color", self.rim_color)?;
         let ramp = match (&self.bands, &self.ramp) {
-            (Some(_), Some(_)) => return Err("bands / ramp: give one of them, not both".into()),
+            (Some(_), Some(_)) => {
+                return Err(FieldError::new("bands / ramp", FieldReason::BandsAndRamp).into())
+            }
             (_, Some(r)) => {
                 for (i, (_, color)) in r.iter().enumerate() {
                     checks::linear_color(&format!("ramp[{i}]"), *color)?;
                 }
-                Ramp::explicit(r.clone()).map_err(|e| e.to_string())?
+                Ramp::explicit(r.clone())?
             }
-            (b, None) => Ramp::bands(b.unwrap_or(3)).map_err(|e| e.to_string())?,
+            (b, None) => Ramp::bands(b.unwrap_or(3))?,
         };
         let hard = |field: &str, t: Option<f32>, color: [f32; 3], cfield: &str| {
             t.map(|t| {
                 if !(-1.0..=1.0).contains(&t) {
-                    return Err(format!("{field}: must be in [-1, 1], got {t}"));
+                    return Err(FieldError::new(field, FieldReason::NotSignedUnit(t)));
                 }
                 checks::linear_color(cfield, color)?;
                 Ok(Hard {
@@ -95,10 +97,12 @@ impl ToonDesc {
             .transpose()
         };
         let base_color_map = match &self.base_color_texture {
-            Some(p) => Some(
-                crate::textures::load_color_map(p, read)
-                    .map_err(|e| format!("base_color_texture: {e}"))?,
-            ),
+            Some(p) => Some(crate::textures::load_color_map(p, read).map_err(|message| {
+                MaterialError::Texture {
+                    field: "base_color_texture",
+                    message,
+                }
+            })?),
             None => None,
         };
         Ok(Toon {
@@ -125,16 +129,16 @@ impl ToonDesc {
 }
 
 impl HatchingDesc {
-    pub(super) fn shader(&self, read: ReadFile) -> Result<Hatching, String> {
+    pub(super) fn shader(&self, read: ReadFile) -> Result<Hatching, MaterialError> {
         checks::linear_color("ink", self.ink)?;
         checks::linear_color("paper", self.paper)?;
         check_positive("scale", self.scale)?;
         let tam = match &self.tam {
             Some(dir) => Arc::new(
                 TamTexture::read_with_budget(dir, read, &crate::memory::reserve)
-                    .map_err(|e| format!("tam: {e}"))?,
+                    .map_err(MaterialError::Tam)?,
             ),
-            None => builtin_tam().map_err(|e| format!("tam: the built-in map: {e}"))?,
+            None => builtin_tam().map_err(MaterialError::BuiltinTam)?,
         };
         Ok(Hatching {
             tam,

@@ -260,18 +260,10 @@ impl GltfDesc {
     /// finite and ≥ 0 (KHR_materials_specular allows values above 1; F0 is
     /// clamped to 1 after the IOR's r0 multiplies it), `ior` ≥ 1 and at
     /// most 1e4, or exactly 0 (KHR_materials_ior's infinite IOR).
-    pub(crate) fn params(&self) -> Result<GltfParams, String> {
-        let unit3 = |field: &str, c: [f32; 3]| -> Result<(), String> {
-            if c.iter().all(|v| (0.0..=1.0).contains(v)) {
-                Ok(())
-            } else {
-                Err(format!(
-                    "{field}: every component must be in [0, 1], got {c:?}"
-                ))
-            }
-        };
-        unit3("base_color_factor", self.base_color_factor)?;
-        unit3("sheen_color_factor", self.sheen_color_factor)?;
+    pub(crate) fn params(&self) -> Result<GltfParams, FieldError> {
+        // The same rule as a display colour's: every component in [0, 1].
+        checks::display_color("base_color_factor", self.base_color_factor)?;
+        checks::display_color("sheen_color_factor", self.sheen_color_factor)?;
         checks::linear_color("specular_color_factor", self.specular_color_factor)?;
         for (field, v) in [
             ("metallic_factor", self.metallic_factor),
@@ -287,10 +279,7 @@ impl GltfDesc {
             checks::unit(field, v)?;
         }
         if !(self.ior == 0.0 || (1.0..=MAX_IOR).contains(&self.ior)) {
-            return Err(format!(
-                "ior: must be in [1, 1e4], or 0 for an infinite IOR, got {}",
-                self.ior
-            ));
+            return Err(FieldError::new("ior", FieldReason::GltfIor(self.ior)));
         }
         Ok(GltfParams {
             base_color: self.base_color_factor,
@@ -307,9 +296,9 @@ impl GltfDesc {
                 "normative" => GltfFresnel::Normative,
                 "simplified" => GltfFresnel::Simplified,
                 other => {
-                    return Err(format!(
-                        "fresnel: must be \"normative\" or \"simplified\", got {:?}",
-                        crate::validate::truncate_echo(other, 100)
+                    return Err(FieldError::new(
+                        "fresnel",
+                        FieldReason::GltfFresnel(crate::validate::truncate_echo(other, 100)),
                     ))
                 }
             },
@@ -346,7 +335,7 @@ impl DisneyDesc {
     ///   and `anisotropic` (mixing weights: past 1 the blends extrapolate
     ///   to negative reflectance; aspect = √(1 − 0.9 anisotropic) turns
     ///   imaginary past 1.11) and of `clearcoat_gloss` (α of the coat < 0).
-    pub(super) fn params(&self, warnings: &mut Vec<String>) -> Result<DisneyParams, String> {
+    pub(super) fn params(&self, warnings: &mut Vec<String>) -> Result<DisneyParams, FieldError> {
         checks::linear_color("base_color", self.base_color)?;
         if self.base_color.iter().any(|c| *c > 1.0) {
             warnings.push(format!(
@@ -354,11 +343,11 @@ impl DisneyDesc {
                 self.base_color
             ));
         }
-        let finite_nonneg = |field: &str, v: f32| -> Result<(), String> {
+        let finite_nonneg = |field: &str, v: f32| -> Result<(), FieldError> {
             if v.is_finite() && v >= 0.0 {
                 Ok(())
             } else {
-                Err(format!("{field}: must be finite and ≥ 0, got {v}"))
+                Err(FieldError::new(field, FieldReason::Negative(v)))
             }
         };
         for (field, v) in [
@@ -400,7 +389,10 @@ impl DisneyDesc {
         ] {
             finite_nonneg(field, v)?;
             if v > max {
-                return Err(format!("{field}: must be ≤ {max}, got {v}"));
+                return Err(FieldError::new(
+                    field,
+                    FieldReason::AboveMax { max, got: v },
+                ));
             }
             if v > 1.0 {
                 warnings.push(format!(
@@ -429,23 +421,23 @@ impl DisneyDesc {
 /// below about 100.
 pub(super) const MAX_IOR: f32 = 1e4;
 
-pub(super) fn check_ior(field: &str, v: f32, zero_ok: bool) -> Result<(), String> {
+pub(super) fn check_ior(field: &str, v: f32, zero_ok: bool) -> Result<(), FieldError> {
     let low_ok = if zero_ok { v >= 0.0 } else { v > 0.0 };
     if low_ok && v <= MAX_IOR {
         Ok(())
     } else {
         let low = if zero_ok { "[0" } else { "(0" };
-        Err(format!("{field}: must be in {low}, 1e4], got {v}"))
+        Err(FieldError::new(field, FieldReason::Ior { low, got: v }))
     }
 }
 
 impl MicrofacetDesc {
-    pub(super) fn params(&self, warnings: &mut Vec<String>) -> Result<MicrofacetParams, String> {
+    pub(super) fn params(
+        &self,
+        warnings: &mut Vec<String>,
+    ) -> Result<MicrofacetParams, FieldError> {
         if !(self.alpha.is_finite() && self.alpha >= 0.0) {
-            return Err(format!(
-                "alpha: must be a finite number ≥ 0 (values outside [1e-3, 1] are clamped into it), got {}",
-                self.alpha
-            ));
+            return Err(FieldError::new("alpha", FieldReason::Alpha(self.alpha)));
         }
         let (alpha, clamped) = clamp_alpha(self.alpha);
         if clamped {
@@ -455,19 +447,22 @@ impl MicrofacetDesc {
             ));
         }
         if !(self.gamma > 0.0 && self.gamma <= GTR_GAMMA_MAX) {
-            return Err(format!(
-                "gamma: must be in (0, {GTR_GAMMA_MAX:e}], got {}",
-                self.gamma
+            return Err(FieldError::new(
+                "gamma",
+                FieldReason::Gamma {
+                    max: GTR_GAMMA_MAX,
+                    got: self.gamma,
+                },
             ));
         }
         let gtr_lambda = match (self.ndf, self.gtr_lambda) {
             (_, GtrLambdaDesc::Ggx) => GtrLambda::Ggx,
             (NdfDesc::Gtr, GtrLambdaDesc::Exact) => GtrLambda::exact(self.gamma, alpha),
             (_, GtrLambdaDesc::Exact) => {
-                return Err(
-                    "gtr_lambda: \"exact\" applies to ndf = \"gtr\" only (GGX and Beckmann always use their exact Λ)"
-                        .into(),
-                )
+                return Err(FieldError::new(
+                    "gtr_lambda",
+                    FieldReason::ExactLambdaNotGtr,
+                ))
             }
         };
         checks::linear_color("diffuse", self.diffuse)?;
@@ -475,7 +470,7 @@ impl MicrofacetDesc {
             FresnelDesc::Schlick { f0 } => {
                 checks::linear_color("fresnel.f0", *f0)?;
                 if f0.iter().any(|c| *c > 1.0) {
-                    return Err(format!("fresnel.f0: components must be ≤ 1, got {f0:?}"));
+                    return Err(FieldError::new("fresnel.f0", FieldReason::F0AboveOne(*f0)));
                 }
                 Fresnel::Schlick { f0: *f0 }
             }

@@ -94,7 +94,7 @@ pub fn load_scene_str(
         message,
     };
     let desc = parse(text).map_err(err)?;
-    build_scene(path, desc, read).map_err(err)
+    build_scene(path, desc, read).map_err(|e| err(e.to_string()))
 }
 
 /// The scene's tables from its text. A TOML error says the line; a value
@@ -126,7 +126,7 @@ fn build_scene(
     path: &Path,
     desc: SceneFile,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Result<LoadedScene, String> {
+) -> Result<LoadedScene, BuildError> {
     let camera = build_camera(&desc.camera)?;
     check_output(&desc.output)?;
     let mut scene = SceneBuilder::new(path, read, camera, desc.output.background);
@@ -149,7 +149,12 @@ fn build_scene(
     }
     scene.warm_tables();
     let outlines = check_outlines(&desc.outlines, &scene.materials.by_name)?;
-    let strokes = desc.strokes.as_ref().map(|s| s.check()).transpose()?;
+    let strokes = desc
+        .strokes
+        .as_ref()
+        .map(|s| s.check())
+        .transpose()
+        .map_err(BuildError::Lines)?;
 
     let SceneBuilder {
         mut data,
@@ -167,7 +172,7 @@ fn build_scene(
         desc.output.tonemap.into(),
         desc.output.exposure,
     );
-    data.validate()?;
+    data.validate().map_err(BuildError::Scene)?;
     let mut post_stages = build_posterize(desc.posterize.as_ref())?;
     post_stages.extend(std::mem::take(&mut lines.post));
     Ok(LoadedScene {

@@ -2,6 +2,7 @@
 //! the map's settings checked.
 
 use super::super::desc::{EnvironmentDesc, IblDesc};
+use super::BuildError;
 use crate::checks;
 use std::path::Path;
 
@@ -16,7 +17,7 @@ pub(in crate::scene) enum Environment {
 pub(in crate::scene) fn build_environment(
     e: &EnvironmentDesc,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Result<Environment, String> {
+) -> Result<Environment, BuildError> {
     match (&e.uniform, &e.map) {
         (Some(u), None) => {
             checks::radiometric("environment.uniform", *u)?;
@@ -24,37 +25,36 @@ pub(in crate::scene) fn build_environment(
         }
         (None, Some(path)) => {
             let settings = env_settings(e)?;
-            let bytes = read(Path::new(path))
-                .map_err(|err| format!("environment.map: cannot read {path}: {err}"))?;
-            let map = crate::envmap_file::load_env_map(path, &bytes, &settings)
-                .map_err(|err| format!("environment.map: {err}"))?;
+            let bytes = read(Path::new(path)).map_err(|source| BuildError::Read {
+                field: "environment.map".into(),
+                path: path.clone(),
+                source,
+            })?;
+            let map =
+                crate::envmap_file::load_env_map(path, &bytes, &settings).map_err(|message| {
+                    BuildError::Part {
+                        field: "environment.map".into(),
+                        message,
+                    }
+                })?;
             Ok(Environment::Map(std::sync::Arc::new(map)))
         }
-        (Some(_), Some(_)) => Err("environment: give either uniform or map, not both".into()),
-        (None, None) => Err("environment: give uniform = [r, g, b] or map = \"file.hdr\"".into()),
+        (Some(_), Some(_)) => Err(BuildError::EnvironmentBoth),
+        (None, None) => Err(BuildError::EnvironmentNeither),
     }
 }
 
 /// The map settings of `[environment]`, checked.
-fn env_settings(e: &EnvironmentDesc) -> Result<crate::envmap_file::EnvSettings, String> {
+fn env_settings(e: &EnvironmentDesc) -> Result<crate::envmap_file::EnvSettings, BuildError> {
     use specula_raster::envmap::IblMethod;
     if !(e.intensity.is_finite() && e.intensity >= 0.0) {
-        return Err(format!(
-            "environment.intensity must be finite and ≥ 0, got {}",
-            e.intensity
-        ));
+        return Err(BuildError::EnvironmentIntensity(e.intensity));
     }
     if !e.rotate.is_finite() {
-        return Err(format!(
-            "environment.rotate must be finite, got {}",
-            e.rotate
-        ));
+        return Err(BuildError::EnvironmentRotate(e.rotate));
     }
     if !(1..=1 << 20).contains(&e.ibl_samples) {
-        return Err(format!(
-            "environment.ibl_samples must be in 1..=1048576, got {}",
-            e.ibl_samples
-        ));
+        return Err(BuildError::IblSamples(e.ibl_samples));
     }
     Ok(crate::envmap_file::EnvSettings {
         intensity: e.intensity,

@@ -4,6 +4,7 @@
 
 use super::super::desc::{AreaLightsDesc, LightDesc};
 use super::shadows::build_shadow;
+use super::BuildError;
 use super::SceneBuilder;
 use crate::checks;
 use crate::validate::check_point;
@@ -16,12 +17,13 @@ impl SceneBuilder<'_> {
         &mut self,
         descs: &[LightDesc],
         area: AreaLightsDesc,
-    ) -> Result<(), String> {
+    ) -> Result<(), BuildError> {
         for (i, l) in descs.iter().enumerate() {
             let light = self.build_light(i, l, area)?;
             let shadow = build_shadow(i, l)?;
             if let Some(s) = &shadow {
-                crate::memory::reserve(&format!("light[{i}]'s shadow maps"), s.bytes(&light))?;
+                crate::memory::reserve(&format!("light[{i}]'s shadow maps"), s.bytes(&light))
+                    .map_err(BuildError::Memory)?;
             }
             self.data.lights.push(light);
             self.data.shadows.push(shadow);
@@ -37,7 +39,7 @@ impl SceneBuilder<'_> {
         i: usize,
         l: &LightDesc,
         area: AreaLightsDesc,
-    ) -> Result<Light, String> {
+    ) -> Result<Light, BuildError> {
         let field = format!("light[{i}]");
         let light = match l {
             LightDesc::Point {
@@ -141,7 +143,7 @@ impl SceneBuilder<'_> {
             }
         ) {
             crate::polygon_light::check_materials(&self.materials.list)
-                .map_err(|e| format!("{field}: {e}"))?;
+                .map_err(|source| BuildError::Ltc { field, source })?;
         }
         Ok(light)
     }

@@ -2,7 +2,7 @@
 //! material: gathered as the tables are read, with the ids meshes use.
 
 use super::super::desc::MeshDesc;
-use super::SceneBuilder;
+use super::{BuildError, SceneBuilder};
 use crate::material_desc::MaterialDesc;
 use crate::mesh::MeshData;
 use specula_core::models::MetallicRoughness;
@@ -45,8 +45,8 @@ fn mtl_material(
     m: &tobj::Material,
     obj_dir: &Path,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Result<Material, String> {
-    let param = |key: &str| -> Result<Option<f32>, String> {
+) -> Result<Material, BuildError> {
+    let param = |key: &str| -> Result<Option<f32>, BuildError> {
         match m.unknown_param.get(key) {
             None => Ok(None),
             Some(s) => s
@@ -55,20 +55,19 @@ fn mtl_material(
                 .ok()
                 .filter(|v| (0.0..=1.0).contains(v))
                 .map(Some)
-                .ok_or_else(|| {
-                    format!(
-                        "material {}: {key} must be a number in [0, 1], got {s:?}",
-                        m.name
-                    )
+                .ok_or_else(|| BuildError::MtlParam {
+                    material: m.name.clone(),
+                    key: key.to_string(),
+                    got: s.clone(),
                 }),
         }
     };
     let base_color = m.diffuse.unwrap_or([0.8, 0.8, 0.8]);
     if !base_color.iter().all(|c| c.is_finite() && *c >= 0.0) {
-        return Err(format!(
-            "material {}: Kd must be finite and ≥ 0, got {base_color:?}",
-            m.name
-        ));
+        return Err(BuildError::MtlKd {
+            material: m.name.clone(),
+            got: base_color,
+        });
     }
     let roughness = match (param("Pr")?, m.shininess) {
         (Some(r), _) => r,
@@ -83,14 +82,16 @@ fn mtl_material(
     match &m.diffuse_texture {
         Some(tex) => {
             let path = obj_dir.join(tex.trim());
-            let map = crate::textures::load_color_map(&path, read)
-                .map_err(|e| format!("material {}: map_Kd: {e}", m.name))?;
+            let map_kd = |message| BuildError::MtlMap {
+                material: m.name.clone(),
+                message,
+            };
+            let map = crate::textures::load_color_map(&path, read).map_err(map_kd)?;
             let maps = specula_raster::maps::ParamMaps {
                 base_color: Some(map),
                 ..Default::default()
             };
-            let shader = Lit::with_maps(model, maps)
-                .map_err(|e| format!("material {}: map_Kd: {e}", m.name))?;
+            let shader = Lit::with_maps(model, maps).map_err(map_kd)?;
             Ok(Material::new(&m.name, shader, false))
         }
         None => Ok(Material::new(&m.name, Lit::new(model), false)),
@@ -103,7 +104,7 @@ impl SceneBuilder<'_> {
     pub(in crate::scene) fn add_materials(
         &mut self,
         descs: &BTreeMap<String, MaterialDesc>,
-    ) -> Result<(), String> {
+    ) -> Result<(), BuildError> {
         let mats = &mut self.materials;
         for (name, m) in descs {
             let mut notes = Vec::new();
@@ -114,7 +115,10 @@ impl SceneBuilder<'_> {
                     &mut notes,
                     self.read,
                 )
-                .map_err(|e| format!("materials.{name}.{e}"))?;
+                .map_err(|source| BuildError::Material {
+                    name: name.clone(),
+                    source: Box::new(source),
+                })?;
             if m.needs_uvs() {
                 mats.textured.insert(mats.list.len() as u32);
             }
@@ -142,7 +146,7 @@ impl SceneBuilder<'_> {
         field: &str,
         md: &MeshDesc,
         mesh: &MeshData,
-    ) -> Result<Vec<u32>, String> {
+    ) -> Result<Vec<u32>, BuildError> {
         let mats = &mut self.materials;
         let mut local = Vec::with_capacity(mesh.material_names.len());
         for name in &mesh.material_names {
@@ -152,11 +156,17 @@ impl SceneBuilder<'_> {
                     Some(&id) => id,
                     None => {
                         let Some(mt) = mesh.mtl.iter().find(|m| &m.name == n) else {
-                            return Err(format!("{field}.material: no material named {n:?} in [materials] or the mesh's MTL"));
+                            return Err(BuildError::NoMaterial {
+                                field: field.to_string(),
+                                name: n.clone(),
+                            });
                         };
                         let obj_dir = md.obj.as_deref().and_then(Path::parent);
                         let built = mtl_material(mt, obj_dir.unwrap_or(Path::new("")), self.read)
-                            .map_err(|e| format!("{field}.obj: {e}"))?;
+                            .map_err(|e| BuildError::Mtl {
+                            field: format!("{field}.obj"),
+                            source: Box::new(e),
+                        })?;
                         if mt.diffuse_texture.is_some() {
                             mats.textured.insert(mats.list.len() as u32);
                         }

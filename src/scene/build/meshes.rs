@@ -5,7 +5,7 @@
 use super::super::desc::MeshDesc;
 use super::placement::{place_mesh, Placement};
 use super::shapes::{build_cube, build_plane, build_sphere, check_one_shape};
-use super::SceneBuilder;
+use super::{BuildError, SceneBuilder};
 use crate::memory;
 use crate::mesh::{self, MeshData};
 use glam::Vec3;
@@ -14,7 +14,7 @@ use std::path::Path;
 impl SceneBuilder<'_> {
     /// `[[mesh]]`s, appended in order; then the scene-wide uvs and
     /// tangents.
-    pub(in crate::scene) fn add_meshes(&mut self, descs: &[MeshDesc]) -> Result<(), String> {
+    pub(in crate::scene) fn add_meshes(&mut self, descs: &[MeshDesc]) -> Result<(), BuildError> {
         for (i, md) in descs.iter().enumerate() {
             self.add_mesh(&format!("mesh[{i}]"), md)?;
         }
@@ -49,10 +49,10 @@ impl SceneBuilder<'_> {
     }
 
     /// One `[[mesh]]`: its shape, its materials, its placement.
-    fn add_mesh(&mut self, field: &str, md: &MeshDesc) -> Result<(), String> {
+    fn add_mesh(&mut self, field: &str, md: &MeshDesc) -> Result<(), BuildError> {
         if let Some(p) = &md.gltf {
             check_one_shape(field, md)?;
-            return self.add_gltf_mesh(field, md, p);
+            return self.add_gltf_mesh(field, md, p).map_err(BuildError::Gltf);
         }
         let mut mesh = self.build_shape(field, md)?;
         let local = self.mesh_materials(field, md, &mesh)?;
@@ -71,19 +71,22 @@ impl SceneBuilder<'_> {
         field: &str,
         mesh: &mut MeshData,
         local: &[u32],
-    ) -> Result<(), String> {
+    ) -> Result<(), BuildError> {
         let normal_mapped = mesh
             .tri_material
             .iter()
             .any(|m| self.materials.normal_mapped.contains(&local[*m as usize]));
         if normal_mapped && mesh.tangents.is_empty() {
-            crate::tangents::add_mikktspace_tangents(mesh).map_err(|e| format!("{field}: {e}"))?;
+            crate::tangents::add_mikktspace_tangents(mesh).map_err(|message| BuildError::Part {
+                field: field.to_string(),
+                message,
+            })?;
         }
         Ok(())
     }
 
     /// The mesh's geometry: exactly one of obj, sphere, plane, cube.
-    fn build_shape(&mut self, field: &str, md: &MeshDesc) -> Result<MeshData, String> {
+    fn build_shape(&mut self, field: &str, md: &MeshDesc) -> Result<MeshData, BuildError> {
         check_one_shape(field, md)?;
         if let Some(p) = &md.obj {
             self.load_obj(field, p)
@@ -98,15 +101,22 @@ impl SceneBuilder<'_> {
 
     /// An OBJ file (and its MTLs), recorded as inputs; vertices the
     /// rasterizer will skip are worth a warning.
-    fn load_obj(&mut self, field: &str, p: &Path) -> Result<MeshData, String> {
-        let bytes =
-            (self.read)(p).map_err(|e| format!("{field}.obj: cannot read {}: {e}", p.display()))?;
+    fn load_obj(&mut self, field: &str, p: &Path) -> Result<MeshData, BuildError> {
+        let bytes = (self.read)(p).map_err(|source| BuildError::Read {
+            field: format!("{field}.obj"),
+            path: p.display().to_string(),
+            source,
+        })?;
         memory::reserve(
             &format!("{field}.obj ({} bytes)", bytes.len()),
             memory::obj_bytes(bytes.len() as u64),
-        )?;
+        )
+        .map_err(BuildError::Memory)?;
         self.inputs.push(p.to_path_buf());
-        let m = mesh::load_obj(p, &bytes, self.read).map_err(|e| format!("{field}.obj: {e}"))?;
+        let m = mesh::load_obj(p, &bytes, self.read).map_err(|message| BuildError::Part {
+            field: format!("{field}.obj"),
+            message,
+        })?;
         self.inputs.extend(m.mtl_files.iter().cloned());
         self.warnings.extend(m.warnings.iter().cloned());
         let limit = specula_raster::setup::MAX_CLIP_COORD as f32;
@@ -131,7 +141,7 @@ impl SceneBuilder<'_> {
         md: &MeshDesc,
         mesh: &MeshData,
         local: &[u32],
-    ) -> Result<(), String> {
+    ) -> Result<(), BuildError> {
         if !mesh.uvs.is_empty() {
             return Ok(());
         }
@@ -141,17 +151,11 @@ impl SceneBuilder<'_> {
             .map(|m| local[*m as usize])
             .collect();
         if let Some(m) = used.iter().find(|m| self.materials.textured.contains(m)) {
-            let what = match &md.obj {
-                Some(p) => format!(
-                    "{field}.obj: {} has no texture coordinates (vt)",
-                    p.display()
-                ),
-                None => format!("{field}: the mesh has no texture coordinates"),
-            };
-            return Err(format!(
-                "{what}, and its material {:?} samples a texture (give the mesh uvs or use an untextured material)",
-                self.materials.list[*m as usize].name
-            ));
+            return Err(BuildError::NoUvs {
+                field: field.to_string(),
+                obj: md.obj.clone(),
+                material: self.materials.list[*m as usize].name.clone(),
+            });
         }
         Ok(())
     }

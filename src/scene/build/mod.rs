@@ -10,6 +10,7 @@
 
 mod camera;
 mod environment;
+mod error;
 mod lights;
 mod materials;
 mod meshes;
@@ -21,6 +22,7 @@ mod shapes;
 
 pub(super) use camera::build_camera;
 pub(super) use environment::{build_environment, Environment};
+pub(super) use error::BuildError;
 use materials::Materials;
 pub(super) use output::check_output;
 pub(super) use placement::place_mesh;

@@ -3,6 +3,7 @@
 //! world.
 
 use super::super::desc::{MeshDesc, Scale};
+use super::BuildError;
 use crate::checks;
 use crate::validate::MAX_WORLD;
 use glam::{EulerRot, Mat3, Mat4, Quat, Vec3};
@@ -22,16 +23,17 @@ const MAX_SCALE: f32 = 1e12;
 
 /// Checks that a mesh's transform keeps its (finite, in-range) vertices
 /// inside ±MAX_WORLD.
-fn check_transform(field: &str, positions: &[Vec3], model: &Mat4) -> Result<(), String> {
+fn check_transform(field: &str, positions: &[Vec3], model: &Mat4) -> Result<(), BuildError> {
     let inside = |p: Vec3| p.is_finite() && p.abs().max_element() <= MAX_WORLD;
     if let Some(p) = positions
         .iter()
         .find(|p| inside(**p) && !inside(model.transform_point3(**p)))
     {
-        return Err(format!(
-            "{field}.translate / scale: move vertex {p} to {}, outside ±{MAX_WORLD:e} (the world's extent)",
-            model.transform_point3(*p)
-        ));
+        return Err(BuildError::OutsideWorld {
+            field: field.to_string(),
+            from: *p,
+            to: model.transform_point3(*p),
+        });
     }
     Ok(())
 }
@@ -42,7 +44,7 @@ pub(in crate::scene) fn place_mesh(
     field: &str,
     md: &MeshDesc,
     positions: &[Vec3],
-) -> Result<Placement, String> {
+) -> Result<Placement, BuildError> {
     let scale = match md.scale {
         Scale::Uniform(s) => Vec3::splat(s),
         Scale::Axes(a) => Vec3::from(a),
@@ -52,9 +54,12 @@ pub(in crate::scene) fn place_mesh(
     if !(scale.abs().cmpge(Vec3::splat(MIN_SCALE)) & scale.abs().cmple(Vec3::splat(MAX_SCALE)))
         .all()
     {
-        return Err(format!(
-            "{field}.scale: every component must be a number with {MIN_SCALE:e} ≤ |s| ≤ {MAX_SCALE:e}, got {scale}"
-        ));
+        return Err(BuildError::Scale {
+            field: field.to_string(),
+            min: MIN_SCALE,
+            max: MAX_SCALE,
+            got: scale,
+        });
     }
     let r = md.rotate.map(f32::to_radians);
     let rot = Quat::from_euler(EulerRot::ZYX, r[2], r[1], r[0]);

@@ -3,10 +3,11 @@
 //! turned into the rasterizer's shadow settings.
 
 use super::super::desc::{LightDesc, ShadowsDesc};
+use super::BuildError;
 use specula_raster::shadow::{ShadowFilter, ShadowSettings};
 
 /// Light `i`'s shadow settings, checked (`None`: no shadows).
-pub(super) fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, String> {
+pub(super) fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSettings>, BuildError> {
     let cascades = match l {
         LightDesc::Directional { cascades, .. } => *cascades,
         _ => 1,
@@ -81,7 +82,10 @@ pub(super) fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSetti
     };
     // Checked with shadows off too: a value out of range is a mistake
     // whether or not it is used.
-    s.check().map_err(|e| format!("light[{i}].{e}"))?;
+    s.check().map_err(|message| BuildError::Table {
+        table: format!("light[{i}]"),
+        message,
+    })?;
     if let LightDesc::Polygon { vertices, .. } = l {
         s.light_size = specula_raster::shadow::polygon_light_size(vertices);
     }
