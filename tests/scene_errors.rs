@@ -89,14 +89,24 @@ fn output_errors_name_their_field() {
         "output.width: must be in 1..=8192 (at most 16384 after ssaa 2), got 20000",
     );
     expect(
-        &scene(BASE_CAMERA, &format!("{BASE_OUTPUT}exposure = inf\n"), &rest),
+        &scene(
+            BASE_CAMERA,
+            &format!("{BASE_OUTPUT}exposure = inf\n"),
+            &rest,
+        ),
         "output.exposure: must be finite",
     );
 }
 
 #[test]
 fn environment_errors_name_their_field() {
-    let with = |env: &str| scene(BASE_CAMERA, BASE_OUTPUT, &format!("{SPHERE}[environment]\n{env}\n"));
+    let with = |env: &str| {
+        scene(
+            BASE_CAMERA,
+            BASE_OUTPUT,
+            &format!("{SPHERE}[environment]\n{env}\n"),
+        )
+    };
     expect(
         &with("uniform = [1.0, 1.0, 1.0]\nmap = \"sky.hdr\""),
         "environment: give either uniform or map, not both",
@@ -158,7 +168,9 @@ fn light_errors_name_their_field() {
         "light[0].range: must be a distance > 0 (or inf for no cutoff), got 0",
     );
     expect(
-        &with(&format!("{POINT_LIGHT}shadows = \"hard\"\nshadow_map_size = 0\n")),
+        &with(&format!(
+            "{POINT_LIGHT}shadows = \"hard\"\nshadow_map_size = 0\n"
+        )),
         "light[0].shadow_map_size: must be 1..=8192 texels, got 0",
     );
     // Edge 1 (x + y = 1) crosses edge 3 (from (1.3, 1.4) back to the
