@@ -166,7 +166,7 @@ translate = [0.9, 0.0, 0.0]
 /// checked by `envmap_file` (format, header size, memory budget), its
 /// texels clamped, its derived data built (SH irradiance, the prefiltered
 /// chain, the sampling distribution; the disk cache is not used), then
-/// lighting [`ENV_SCENE`] rendered at 16×16 by the split sum and by the
+/// lighting `ENV_SCENE` rendered at 16×16 by the split sum and by the
 /// Monte Carlo reference (4 samples a pixel), each in f32x8 and in f32.
 /// Checks that every texel is finite and within the documented clamp,
 /// that the derived data is finite, and that every pixel is finite.

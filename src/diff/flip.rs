@@ -1,6 +1,6 @@
 //! ꟻLIP, the perceptual difference of two images, as its authors define it:
-//! LDR-FLIP for display images [Andersson20] and HDR-FLIP for linear ones
-//! [Andersson21]. Written from the papers and checked against the authors'
+//! LDR-FLIP for display images \[Andersson20\] and HDR-FLIP for linear ones
+//! \[Andersson21\]. Written from the papers and checked against the authors'
 //! reference implementation (the `flip-evaluator` package) on the pairs in
 //! `fixtures/flip/` (`tests/flip.rs`, `fixtures/flip/flip_reference.py`).
 //!
@@ -35,14 +35,14 @@ const CSF_B1: [f32; 3] = [0.0047, 0.0053, 0.04];
 const CSF_A2: [f32; 3] = [0.0, 0.0, 13.5];
 const CSF_B2: [f32; 3] = [1.0e-5, 1.0e-5, 0.025];
 /// Colour-difference exponent qc, the share pc of the largest distance
-/// mapped onto [0, pt] [Andersson20].
+/// mapped onto [0, pt] \[Andersson20\].
 const QC: f32 = 0.7;
 const PC: f32 = 0.4;
 const PT: f32 = 0.95;
-/// Feature filter width w (degrees) and exponent qf [Andersson20].
+/// Feature filter width w (degrees) and exponent qf \[Andersson20\].
 const FEATURE_W: f32 = 0.082;
 const QF: f32 = 0.5;
-/// The exposure a tone curve maps to 0.85 sets c_start and c_stop [Andersson21].
+/// The exposure a tone curve maps to 0.85 sets c_start and c_stop \[Andersson21\].
 const HDR_TARGET: f32 = 0.85;
 
 /// Pixels per degree of the authors' default viewer: 0.7 m from a 0.7 m
@@ -482,7 +482,7 @@ pub struct Exposures {
     pub count: usize,
 }
 
-/// The authors' automatic range [Andersson21]: c_start puts the reference's
+/// The authors' automatic range \[Andersson21\]: c_start puts the reference's
 /// largest luminance, c_stop its median, where the tone curve reaches
 /// 0.85; one exposure per stop, at least two. `Err` when the largest or
 /// the median luminance is 0 (the range is then unbounded), with the
