@@ -5,39 +5,13 @@
 //! (specula::fuzzing::envmap). A cheap stand-in for a libFuzzer run that
 //! `cargo test` repeats every time.
 
-use std::path::Path;
+mod common;
 
-/// xorshift64*: a fixed sequence, so every run tries the same inputs.
-struct Rng(u64);
-impl Rng {
-    fn next(&mut self) -> u64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        self.0.wrapping_mul(0x2545_f491_4f6c_dd1d)
-    }
-    fn below(&mut self, n: usize) -> usize {
-        (self.next() % n.max(1) as u64) as usize
-    }
-}
+use common::mutate::{run, seeds, Rng};
 
 #[test]
 fn mutated_envmap_seeds_never_break_a_guarantee() {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/fuzz/envmap");
-    let mut seeds: Vec<(String, Vec<u8>)> = std::fs::read_dir(&dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| {
-            p.file_name()
-                .unwrap()
-                .to_str()
-                .unwrap()
-                .starts_with("seed-")
-        })
-        .map(|p| (p.display().to_string(), std::fs::read(&p).unwrap()))
-        .collect();
-    seeds.sort();
-    assert!(!seeds.is_empty());
+    let seeds = seeds("envmap");
     let replacements: &[u8] = b"0123456789-+ XY\n\xff\x00\x7f\x80";
     let mut rng = Rng(0x2545_f491_4f6c_dd1d);
     let (mut tried, mut accepted) = (0, 0);
@@ -68,17 +42,7 @@ fn mutated_envmap_seeds_never_break_a_guarantee() {
                 }
             }
             tried += 1;
-            match std::panic::catch_unwind(|| specula::fuzzing::envmap(&data)) {
-                Ok(r) => accepted += usize::from(r.is_ok()),
-                Err(_) => {
-                    let out = std::env::temp_dir().join("envmap-mutation-crash");
-                    std::fs::write(&out, &data).unwrap();
-                    panic!(
-                        "a mutation of {name} (round {round}) broke a guarantee; the input is in {}",
-                        out.display()
-                    );
-                }
-            }
+            accepted += usize::from(run("envmap", specula::fuzzing::envmap, name, round, &data));
         }
     }
     eprintln!("{tried} mutated inputs, {accepted} accepted");

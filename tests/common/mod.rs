@@ -83,3 +83,4 @@ pub fn eval(input: &str) -> Vec<serde_json::Value> {
     lines
 }
 pub mod gltf_doc;
+pub mod mutate;
