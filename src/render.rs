@@ -134,6 +134,9 @@ pub struct RunStats {
     pub no_samples: u64,
     pub raster_triangles: u64,
     pub pixels_shaded: u64,
+    /// Samples of blended surfaces shaded and composited (see
+    /// [`specula_raster::frame::FrameStats::blended_samples`]).
+    pub blended_samples: u64,
     /// Shadow-map depth passes per frame.
     pub shadow_passes: u32,
     /// One entry per repeat.
@@ -323,6 +326,7 @@ fn run_stats(
         no_samples: c.no_samples,
         raster_triangles: s.raster_triangles,
         pixels_shaded: s.pixels_shaded,
+        blended_samples: s.blended_samples,
         shadow_passes: s.shadow_passes,
         mpixels_per_s: target.pixel_count() as f64 / (median(&frame_ms) * 1e3),
         frame_ms,
@@ -362,6 +366,9 @@ impl RunStats {
             self.no_samples
         );
         s += &format!("pixels shaded: {}\n", self.pixels_shaded);
+        if self.blended_samples > 0 {
+            s += &format!("blended samples shaded: {}\n", self.blended_samples);
+        }
         s += "pass times (ms, median over frames):\n";
         for (name, v) in [
             ("vertex", col(|t| t.vertex)),

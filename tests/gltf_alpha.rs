@@ -390,6 +390,15 @@ fn stacked_blended_quads_composite_back_to_front_in_any_file_order() {
         );
     }
     assert!(both > 1000, "{both}");
+    // Each quad's samples are shaded once where it is in front of the
+    // backdrop: the pixels its opaque twin changes.
+    let changed = |img: &[[f32; 3]]| (0..SIZE * SIZE).filter(|&i| img[i] != without[i]).count();
+    let s = scene_of(&stacked(), "");
+    let r = specula::render::render_scene(&s, &RenderSettings::from_scene(&s), 0.0).unwrap();
+    assert_eq!(
+        r.stats.blended_samples as usize,
+        changed(&far_opaque) + changed(&near_opaque)
+    );
 }
 
 /// A horizontal mesh (normal +y) at height `h`: `xz` corners with uvs.

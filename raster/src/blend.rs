@@ -49,7 +49,9 @@ fn centroid_depth(ctx: &ResolveContext, tri: u32) -> f32 {
     (centroid - ctx.view.eye).dot(ctx.view.forward)
 }
 
-/// Composites tile `t`'s blended triangles over its colour (module docs).
+/// Composites tile `t`'s blended triangles over its colour (module docs);
+/// returns how many samples were shaded and composited (a sample under k
+/// blended surfaces counts k times).
 ///
 /// # Safety
 /// The caller hands tile `t` to this call alone (see [`TileWriter`]).
@@ -59,9 +61,9 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
     v: &Visibility,
     t: usize,
     color: &[TileWriter<'_, f32>; 3],
-) {
+) -> u64 {
     let Some(blended) = v.blended.get(t).filter(|b| !b.is_empty()) else {
-        return;
+        return 0;
     };
     let scene = ctx.scene;
     let env = ShadeEnv {
@@ -84,6 +86,7 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
     let (tx, ty) = (tx as i32, ty as i32);
     let depth = &v.vis.depth[t * TILE_PIXELS..(t + 1) * TILE_PIXELS];
     let lane_bits = (1u32 << R::LANES) - 1;
+    let mut shaded = 0u64;
     for (_, id, rt) in order {
         let (_, m) = ctx.ids.look_up(id, &scene.tri_material);
         let material = &scene.materials[m as usize];
@@ -112,6 +115,7 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
             let at = (y - ty) as usize * TILE + (gx - tx) as usize;
             let d_old = f32x8::load(&depth[at..at + 8]);
             let front = mask & Real::gt(z, d_old).bits();
+            shaded += u64::from(front.count_ones());
             // SAFETY: tile t is this call's alone (the function's contract).
             let rows = unsafe {
                 let [r, g, b] = color;
@@ -170,4 +174,5 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
             }
         });
     }
+    shaded
 }

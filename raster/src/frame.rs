@@ -46,6 +46,9 @@ pub struct FrameStats {
     pub raster_triangles: u64,
     /// Pixels (samples) covered by a triangle and shaded.
     pub pixels_shaded: u64,
+    /// Samples of blended (alphaMode BLEND) surfaces shaded and composited
+    /// over the opaque frame: a sample under k of them counts k times.
+    pub blended_samples: u64,
     /// Shadow-map depth passes drawn (a cube map is 6).
     pub shadow_passes: u32,
 }
@@ -574,25 +577,29 @@ fn shade_impl(
             }
         })
         .sum();
+    stats.blended_samples = 0;
     if blend::any(v) {
         let color = [
             TileWriter::new(&mut buffers.color.r, target),
             TileWriter::new(&mut buffers.color.g, target),
             TileWriter::new(&mut buffers.color.b, target),
         ];
-        (0..target.tile_count()).into_par_iter().for_each(|tile| {
-            // SAFETY: each tile index goes to one call; tiles are disjoint.
-            unsafe {
-                match path {
-                    ShadePath::Simd => {
-                        blend::composite_tile::<f32x8>(&ctx, target, v, tile, &color)
-                    }
-                    ShadePath::Scalar => {
-                        blend::composite_tile::<f32>(&ctx, target, v, tile, &color)
+        stats.blended_samples = (0..target.tile_count())
+            .into_par_iter()
+            .map(|tile| {
+                // SAFETY: each tile index goes to one call; tiles are disjoint.
+                unsafe {
+                    match path {
+                        ShadePath::Simd => {
+                            blend::composite_tile::<f32x8>(&ctx, target, v, tile, &color)
+                        }
+                        ShadePath::Scalar => {
+                            blend::composite_tile::<f32>(&ctx, target, v, tile, &color)
+                        }
                     }
                 }
-            }
-        });
+            })
+            .sum();
     }
     stats.pixels_shaded = covered;
     stats.times.shade = ms_since(t);
