@@ -433,10 +433,12 @@ fn sh9_irradiance(map: &Equirect) -> [[f32; 3]; 9] {
     std::array::from_fn(|k| acc[k].map(|a| (a * band[k]) as f32))
 }
 
-/// Side of the sharpest prefiltered level: half the source's width, a
-/// power of two in 16..=1024.
-fn level0_size(width: usize) -> usize {
-    (width / 2).next_power_of_two().clamp(16, 1024)
+/// Side of the sharpest prefiltered level: the source's angular
+/// resolution, half its width or its height, whichever is smaller (they
+/// agree for a 2:1 map; a map of another shape has no more detail than
+/// its coarser axis), as a power of two in 16..=1024.
+fn level0_size(width: usize, height: usize) -> usize {
+    (width / 2).min(height).next_power_of_two().clamp(16, 1024)
 }
 
 /// The prefiltered chain of `map` (module docs).
@@ -448,7 +450,7 @@ fn prefilter(map: &Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLev
         mips.push(next);
     }
     let sizes: Vec<usize> = (0..PREFILTER_LEVELS)
-        .map(|k| (level0_size(map.width) >> k).max(16))
+        .map(|k| (level0_size(map.width, map.height) >> k).max(16))
         .collect();
     let total: u64 = sizes.iter().map(|&n| n as u64).sum();
     let done = std::sync::atomic::AtomicU64::new(0);
@@ -586,6 +588,36 @@ mod tests {
         let d = uv_to_dir(0.5, 0.5);
         assert!((d[2] + 1.0).abs() < 1e-12);
         assert!((uv_to_dir(0.3, 0.0)[1] - 1.0).abs() < 1e-12);
+    }
+
+    /// Level 0 follows the source's coarser axis: a wide, short map (a
+    /// shape the EXR display window allows) gets the chain its eight rows
+    /// support, not one sized by its width, and still prefilters a uniform
+    /// radiance to itself.
+    #[test]
+    fn level_zero_follows_the_coarser_axis() {
+        let sides = |w: usize, h: usize| {
+            let source = Equirect {
+                width: w,
+                height: h,
+                texels: vec![[0.25, 0.5, 1.0]; w * h],
+            };
+            let mut m = EnvMap::new(source, 1.0, 0.0, true, IblMethod::SplitSum).unwrap();
+            m.prepare(&|_, _| {});
+            let (_, levels) = m.derived();
+            for (n, planes) in &levels {
+                for (c, want) in [0.25f32, 0.5, 1.0].into_iter().enumerate() {
+                    assert!(
+                        planes[c].iter().all(|t| (t - want).abs() <= 1e-5 * want),
+                        "{w}×{h}, level of side {n}, channel {c}"
+                    );
+                }
+            }
+            levels.iter().map(|(n, _)| *n).collect::<Vec<_>>()
+        };
+        assert_eq!(sides(8976, 8), [16; PREFILTER_LEVELS]);
+        assert_eq!(sides(128, 64), [64, 32, 16, 16, 16, 16]);
+        assert_eq!(sides(64, 128), [32, 16, 16, 16, 16, 16]);
     }
 
     /// A uniform map: every level and the irradiance give its radiance.
