@@ -10,7 +10,7 @@ use common::gltf_doc::{png_rgba_uri, Buf};
 use serde_json::{json, Value};
 use specula::render::RenderSettings;
 use specula::scene::LoadedScene;
-use specula_raster::ShadePath;
+use specula_raster::{AlphaMode, ShadePath};
 
 /// Pixels per side of the renders.
 const SIZE: usize = 64;
@@ -209,6 +209,22 @@ fn a_mask_below_its_cutoff_vanishes_and_above_it_is_opaque() {
             "alpha {alpha} ≥ cutoff: the quad must be opaque"
         );
         assert!(px != without);
+        // A constant alpha at or above the cutoff leaves the material
+        // opaque (no per-sample test); a texture's alpha keeps the mask.
+        let modes = |m: Value, image| {
+            let s = scene_of(&[(quad(m, image, None), at)], "");
+            s.data
+                .materials
+                .iter()
+                .map(|m| m.alpha_mode())
+                .collect::<Vec<_>>()
+        };
+        let m = unlit([0.9, 0.5, 0.1, alpha], "MASK", cutoff, false);
+        assert!(modes(m, None).iter().all(Option::is_none));
+        let m = unlit([0.9, 0.5, 0.1, alpha], "MASK", cutoff, true);
+        assert!(modes(m, Some(disk_image(8, 0.3)))
+            .iter()
+            .any(|m| matches!(m, Some(AlphaMode::Mask { .. }))));
     }
 }
 

@@ -109,6 +109,13 @@ impl MaterialAlpha {
         self.map.is_some() || self.vertex_alpha
     }
 
+    /// The alpha of every fragment when nothing per pixel feeds it (no map
+    /// with an alpha channel, no vertex alpha): the factor.
+    pub fn constant(&self) -> Option<f32> {
+        let map_alpha = self.map.as_ref().is_some_and(|m| m.texture.channels() >= 4);
+        (!map_alpha && !self.vertex_alpha).then_some(self.factor)
+    }
+
     /// factor × map alpha × vertex alpha per lane (module docs).
     #[inline(always)]
     pub fn alpha<R: Real>(&self, i: &AlphaInputs<R>) -> R {

@@ -262,8 +262,16 @@ impl Material {
         }
     }
 
-    /// This material masked or blended by `alpha`.
+    /// This material masked or blended by `alpha`. A mask whose alpha is
+    /// a constant at or above its cutoff covers every sample: the material
+    /// stays opaque, so its triangles skip the per-sample test.
     pub fn with_alpha(mut self, alpha: crate::alpha::MaterialAlpha) -> Material {
+        if let (crate::alpha::AlphaMode::Mask { cutoff }, Some(a)) = (alpha.mode, alpha.constant())
+        {
+            if a >= cutoff {
+                return self;
+            }
+        }
         self.alpha = Some(Arc::new(alpha));
         self
     }
