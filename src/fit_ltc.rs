@@ -27,8 +27,8 @@ use argmin::core::{CostFunction, Error, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use rayon::prelude::*;
 use specula_core::ltc::ggx::{Cell, N, X_AXIS, Y_AXIS};
-use specula_core::ltc::small_light::{self, Scene};
 use specula_core::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
+use specula_core::small_light::{self, Scene};
 use specula_core::table::Table2;
 use specula_core::{Brdf, V3};
 use std::f64::consts::PI;
@@ -354,7 +354,7 @@ pub struct Options {
 }
 
 /// The per-pixel error under a small light and the view sweep's kinks of
-/// `table` (specula_core::ltc::small_light), one line per roughness.
+/// `table` (specula_core::small_light), one line per roughness.
 pub fn check_lines(table: &Table2<6>) -> Vec<String> {
     let alphas = [0.2, 0.3, 0.4, 0.5];
     let y_hi = (1.0 - 85f64.to_radians().cos()).sqrt();

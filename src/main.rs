@@ -49,7 +49,7 @@ enum Command {
     /// format in core/src/ltc/coat.rs).
     FitLtcCoat(FitLtcCoatArgs),
     /// Build the committed Kulla-Conty E tables (core/data/kc_tables.bin;
-    /// format in core/src/kc_tables.rs).
+    /// format in core/src/kulla_conty/committed.rs).
     KcTables(KcTablesArgs),
     /// Compare a test image with a reference: PSNR, errors, FLIP, a heat map;
     /// exit status 0 pass, 1 a --fail-above/--fail-below bound crossed, 2 error.

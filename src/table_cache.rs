@@ -1,6 +1,6 @@
 //! The user's table cache: Kulla–Conty E tables (core::kulla_conty) kept
 //! between runs. The common ones (GGX, Beckmann, GTR at the γ nodes) are
-//! committed in core (kc_tables.rs) and never reach it; GTR with γ
+//! committed in core (kulla_conty/committed.rs) and never reach it; GTR with γ
 //! outside the γ axis builds a table per γ (~0.6 s), which the cache
 //! keeps so that it is paid once per machine, not once per run.
 //!
@@ -59,20 +59,20 @@ impl TableStore for DirStore {
 }
 
 /// `specula kc-tables`: builds the tables core commits
-/// (core/src/kc_tables.rs) and writes the file to `out`.
+/// (core/src/kulla_conty/committed.rs) and writes the file to `out`.
 pub fn write_committed(out: &std::path::Path) -> Result<(), String> {
     crate::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
-    let total = specula_core::kc_tables::committed_tables().len() as u64;
+    let total = specula_core::kulla_conty::committed::committed_tables().len() as u64;
     let progress = crate::progress::Progress::new("kc-tables", "tables", total, true);
-    let tables = specula_core::kc_tables::build_all_reporting(&mut || progress.inc());
+    let tables = specula_core::kulla_conty::committed::build_all_reporting(&mut || progress.inc());
     progress.finish();
     let comments = vec![
         format!("written by `specula kc-tables --output {}`", out.display()),
         "Kulla-Conty E(mu, alpha), F = 1; mu: 64 nodes (j/63)^2; sqrt(alpha): 32 nodes k/31 (alpha floored at ALPHA_MIN)".into(),
         "GTR at gamma = 2^(-2 + 9 k / 27), k = 0..27, with GGX's and with the exact Lambda; names as KcTable::store_name".into(),
     ];
-    let bytes = specula_core::kc_tables::encode(&tables, &comments);
+    let bytes = specula_core::kulla_conty::committed::encode(&tables, &comments);
     let sink = crate::output_plan::Output {
         flag: "--output".into(),
         path: out.to_path_buf(),

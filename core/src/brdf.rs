@@ -31,7 +31,6 @@
 //!    polygon ([`Brdf::polygon_local`], where the model has one).
 
 use crate::light::PolygonLocal;
-use crate::models::{Disney, Gltf, Lambert, MetallicRoughness, Microfacet};
 use crate::real::{Mask, Real};
 use crate::vec3::{Rgb, V3};
 
@@ -404,78 +403,10 @@ pub trait Brdf: Send + Sync {
     }
 }
 
-/// A material model, chosen at run time. Adding a model means adding a variant
-/// here and a `Brdf` impl; the rasterizer only sees [`BrdfVisitor`].
-#[derive(Clone, Debug, PartialEq)]
-// A scene holds a handful of materials, each built once: the size of the
-// largest variant (microfacet's tables) costs nothing worth a box.
-#[allow(clippy::large_enum_variant)]
-pub enum Model {
-    Lambert(Lambert),
-    MetallicRoughness(MetallicRoughness),
-    Microfacet(Microfacet),
-    Disney(Disney),
-    Gltf(Gltf),
-}
-
 /// Code generic over the model: `Model::visit` calls `visit` with the concrete
 /// BRDF type, so the per-light loop inside is monomorphized per model and has
 /// no dispatch of its own.
 pub trait BrdfVisitor {
     type Output;
     fn visit<B: Brdf>(self, brdf: &B) -> Self::Output;
-}
-
-impl Model {
-    #[inline(always)]
-    pub fn visit<V: BrdfVisitor>(&self, v: V) -> V::Output {
-        match self {
-            Model::Lambert(m) => v.visit(m),
-            Model::MetallicRoughness(m) => v.visit(m),
-            Model::Microfacet(m) => v.visit(m),
-            Model::Disney(m) => v.visit(m),
-            Model::Gltf(m) => v.visit(m),
-        }
-    }
-
-    /// The BRDF value f(wi, wo) for one direction pair (any precision),
-    /// directions in the frame's space.
-    pub fn f_in<R: Real>(&self, frame: &ShadingFrame<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        struct F<'a, R: Real>(&'a ShadingFrame<R>, V3<R>, V3<R>);
-        impl<R: Real> BrdfVisitor for F<'_, R> {
-            type Output = Rgb<R>;
-            fn visit<B: Brdf>(self, b: &B) -> Rgb<R> {
-                b.f_in(self.0, self.1, self.2)
-            }
-        }
-        self.visit(F(frame, wi, wo))
-    }
-
-    /// [`Model::f_in`] around unit normal `n`, for isotropic use.
-    pub fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        self.f_in(&ShadingFrame::from_normal(n), wi, wo)
-    }
-
-    /// Whether the model integrates polygon lights.
-    pub fn polygon_lights(&self) -> bool {
-        struct P;
-        impl BrdfVisitor for P {
-            type Output = bool;
-            fn visit<B: Brdf>(self, _: &B) -> bool {
-                B::POLYGON_LIGHTS
-            }
-        }
-        self.visit(P)
-    }
-
-    /// The model's name as scene files write it.
-    pub fn name(&self) -> &'static str {
-        match self {
-            Model::Lambert(_) => "lambert",
-            Model::MetallicRoughness(_) => "metallic_roughness",
-            Model::Microfacet(_) => "microfacet",
-            Model::Disney(_) => "disney",
-            Model::Gltf(_) => "gltf",
-        }
-    }
 }

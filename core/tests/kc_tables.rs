@@ -1,7 +1,7 @@
 //! The committed Kulla–Conty tables (core/data/kc_tables.bin) against a
 //! fresh build of the same tables by the code that made them.
 
-use specula_core::kc_tables::{committed, committed_tables, decode, encode};
+use specula_core::kulla_conty::committed::{committed, committed_tables, decode, encode};
 use specula_core::kulla_conty::{gamma_node, KcTable, N_ALPHA, N_MU};
 use specula_core::models::microfacet::{Ndf, Smith};
 

@@ -11,9 +11,9 @@ mod common;
 use common::{facing_square, poly, polygons, quantile, v};
 use specula_core::ltc::ggx::{decode, encode, table, Cell, N};
 use specula_core::ltc::reference::{integrate_polygon, Tolerance};
-use specula_core::ltc::small_light::{self, PixelError, Scene};
 use specula_core::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
 use specula_core::models::MetallicRoughness;
+use specula_core::small_light::{self, PixelError, Scene};
 use specula_core::{Brdf, V3};
 
 fn ggx(alpha: f32, f0: [f32; 3]) -> Microfacet {
@@ -276,7 +276,7 @@ fn metallic_roughness_through_the_ltc_against_the_reference() {
     assert!(quantile(&errs, 0.9) < 0.025 && quantile(&errs, 1.0) < 0.16);
 }
 
-/// The per-pixel error under a small light (ltc/small_light.rs: a 0.3 ×
+/// The per-pixel error under a small light (core/src/small_light.rs: a 0.3 ×
 /// 0.3 quad at distance 1 over a sphere and a floor) for α 0.2–0.5,
 /// against the reference quadrature.
 #[test]

@@ -21,7 +21,7 @@
 //!
 //! **Measured error**: core/tests/ltc_ggx.rs measures the table against
 //! the reference as a fraction of n over many polygons and views, and per
-//! pixel under a small light (ltc/small_light.rs); the figures are in
+//! pixel under a small light (small_light.rs); the figures are in
 //! docs/accuracy.md.
 //!
 //! **Magnitude and Fresnel.** n(α, μo) = ∫ f cos θi dωi with F = 1 and

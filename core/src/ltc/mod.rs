@@ -11,6 +11,6 @@ mod file;
 pub mod ggx;
 mod polygon;
 pub mod reference;
-pub mod small_light;
 
+pub(crate) use polygon::form_factor_signed_mapped;
 pub use polygon::{form_factor, form_factor_signed, sided};

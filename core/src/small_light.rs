@@ -25,8 +25,8 @@
 //! row's midpoint (the stencil stays inside the row).
 
 use crate::ltc::ggx::{LtcGgx, Y_AXIS};
-use crate::ltc::polygon::{form_factor_signed_mapped, sided};
 use crate::ltc::reference::{integrate_polygon, Tolerance};
+use crate::ltc::{form_factor_signed_mapped, sided};
 use crate::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
 use crate::table::Table2;
 use crate::vec3::V3;

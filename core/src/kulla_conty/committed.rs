@@ -29,7 +29,7 @@
 //! [`GAMMA_AXIS`]: crate::kulla_conty::GAMMA_AXIS
 //! [`KcTable::store_name`]: crate::kulla_conty::KcTable::store_name
 
-use crate::kulla_conty::{gamma_node, KcTable, N_ALPHA, N_GAMMA, N_MU};
+use super::{gamma_node, KcTable, N_ALPHA, N_GAMMA, N_MU};
 use crate::masking::Smith;
 use crate::ndf::Ndf;
 use std::collections::HashMap;
@@ -39,7 +39,7 @@ use std::sync::OnceLock;
 pub(crate) const MAGIC: &str = "specula-kc 1";
 
 /// The committed file.
-static DATA: &[u8] = include_bytes!("../data/kc_tables.bin");
+static DATA: &[u8] = include_bytes!("../../data/kc_tables.bin");
 
 /// Values per table.
 const LEN: usize = N_MU * N_ALPHA;

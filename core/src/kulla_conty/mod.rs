@@ -53,9 +53,11 @@
 //!
 //! **Where tables come from.** GGX, Beckmann and the GTR γ nodes (with
 //! GGX's and with the exact Λ) are committed (`core/data/kc_tables.bin`,
-//! kc_tables.rs), so no run builds them; GTR off the γ axis gets its
+//! [`committed`]), so no run builds them; GTR off the γ axis gets its
 //! table built on first use and kept in the [`TableStore`] the CLI
 //! installs (the user's cache folder).
+
+pub mod committed;
 
 use crate::brdf::ALPHA_MIN;
 use crate::fresnel::Fresnel;
@@ -251,12 +253,12 @@ impl KcTable {
         KcTable::build(ndf, smith, exact_gtr).values()
     }
 
-    /// The committed table (kc_tables.rs) when there is one, else the
+    /// The committed table ([`committed`]) when there is one, else the
     /// store's when it holds a valid one (the right length, finite
     /// values), else built and saved there.
     fn load_or_build(ndf: Ndf, smith: Smith, key: TableKey) -> KcTable {
         let name = table_name(key);
-        if let Some(v) = crate::kc_tables::committed().get(&name) {
+        if let Some(v) = committed::committed().get(&name) {
             return KcTable::from_values(v);
         }
         let store = STORE.get();
