@@ -24,7 +24,7 @@ use specula_core::light::{
     MAX_POLYGON_VERTICES,
 };
 use specula_core::ltc::reference::polygon_reference_lanes;
-use specula_core::{Brdf, BrdfVisitor, Mask, Model, Real, Rgb, ShadingFrame, V3};
+use specula_core::{Brdf, BrdfVisitor, LaneParams, Mask, Model, Real, Rgb, ShadingFrame, V3};
 
 /// A model under the scene's lights, its parameters filled per pixel by
 /// its maps.
@@ -90,16 +90,23 @@ impl Lit {
 /// surface gives a large finite value instead of inf·0 = NaN.
 const MIN_DIST2: f64 = 1e-8;
 
-/// The parameters of `brdf` at a packet (its constants, then its maps),
-/// and what they determine before the view is known.
+/// The parameters of `brdf` at a packet (its constants, then its maps;
+/// a clearcoat normal map's normal in the packet's local `frame`), and
+/// what they determine before the view is known.
 #[inline(always)]
 fn pixel_at<B: Brdf, R: Real>(
     brdf: &B,
     maps: &ParamMaps,
     input: &ShadeInput<R>,
+    frame: &ShadingFrame<R>,
 ) -> (B::Params<R>, B::Pixel<R>) {
     let mut params = brdf.params();
     maps.fill(input, &mut params);
+    if let Some(n) = maps.coat_normal(input, frame) {
+        if let Some(c) = params.coat_normal_mut() {
+            *c = n;
+        }
+    }
     (params, brdf.pixel(&params))
 }
 
@@ -111,10 +118,11 @@ struct LightLoop<'a, 'b, R: Real> {
 }
 
 impl<R: Real> LightLoop<'_, '_, R> {
-    /// Every light on one packet whose parameters determined `pixel`.
+    /// Every light on one packet whose parameters determined `pixel`, in
+    /// its local `frame` ([`ParamMaps::frame`]).
     #[inline(always)]
-    fn shade<B: Brdf>(self, brdf: &B, pixel: &B::Pixel<R>) -> Rgb<R> {
-        let (frag, frame) = (self.input.frag, &self.maps.frame(self.input));
+    fn shade<B: Brdf>(self, brdf: &B, pixel: &B::Pixel<R>, frame: &ShadingFrame<R>) -> Rgb<R> {
+        let frag = self.input.frag;
         let prepared = brdf.prepare_with(pixel, frame.to_local(frag.wo));
         let mut acc = Rgb::zero();
         let mut rest = self.env.lights;
@@ -170,8 +178,9 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
 
     #[inline(always)]
     fn visit<B: Brdf>(self, brdf: &B) -> Rgb<R> {
-        let (_, pixel) = pixel_at(brdf, self.maps, self.input);
-        self.shade(brdf, &pixel)
+        let frame = self.maps.frame(self.input);
+        let (_, pixel) = pixel_at(brdf, self.maps, self.input, &frame);
+        self.shade(brdf, &pixel, &frame)
     }
 }
 
@@ -214,7 +223,7 @@ fn env_reference<B: Brdf, R: Real>(
     samples: u32,
 ) -> Rgb<R> {
     let (frag, frame) = (input.frag, &maps.frame(input));
-    let (params, _) = pixel_at(brdf, maps, input);
+    let (params, _) = pixel_at(brdf, maps, input, frame);
     let wo = frame.to_local(frag.wo);
     let mut out = [[0.0f32; 8]; 3];
     for i in 0..R::LANES {
@@ -365,7 +374,7 @@ fn lights_from_polygon<B: Brdf, R: Real>(
     delta: bool,
 ) -> Rgb<R> {
     let (frag, frame) = (input.frag, &maps.frame(input));
-    let (params, pixel) = pixel_at(brdf, maps, input);
+    let (params, pixel) = pixel_at(brdf, maps, input, frame);
     let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
     let mut poly = PolygonLocal {
         vertices: [V3::zero(); MAX_POLYGON_VERTICES],
@@ -421,7 +430,7 @@ fn shadowed_lights<B: Brdf, R: Real>(
     shadows: &ShadowMaps,
 ) -> Rgb<R> {
     let (frag, frame) = (input.frag, &maps.frame(input));
-    let (_, pixel) = pixel_at(brdf, maps, input);
+    let (_, pixel) = pixel_at(brdf, maps, input, frame);
     let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
     let mut acc = Rgb::zero();
     let mut polygons = false;
@@ -512,13 +521,14 @@ impl PacketShader for Lit {
             fn visit<B: Brdf>(self, brdf: &B) {
                 let pixel = brdf.pixel(&brdf.params());
                 for (input, out) in ShadeInput::batch(self.frags, self.lanes).zip(self.out) {
+                    let frame = self.maps.frame(&input);
                     *out = LightLoop {
                         input: &input,
                         env: self.env,
                         maps: self.maps,
                         emissive: self.emissive,
                     }
-                    .shade(brdf, &pixel);
+                    .shade(brdf, &pixel, &frame);
                 }
             }
         }
