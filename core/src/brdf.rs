@@ -292,7 +292,8 @@ pub trait LaneParams<R: Real>: Copy {
     }
 
     /// The clearcoat's unit normal in the local shading frame (+Z: the
-    /// base's normal), which a clearcoat normal map sets.
+    /// base's normal), which the material's normal maps set where they
+    /// make the two differ.
     #[inline(always)]
     fn coat_normal_mut(&mut self) -> Option<&mut V3<R>> {
         None

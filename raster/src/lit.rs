@@ -48,8 +48,17 @@ impl Lit {
     }
 
     /// The model with parameters from `maps`; an error names the first map
-    /// whose parameter the model does not have.
+    /// whose parameter the model does not have. A `gltf` model whose maps
+    /// make its clearcoat's normal differ from the base's (a clearcoat
+    /// normal map, or a base normal map, which the coat does not take:
+    /// maps.rs) reads the coat's normal per lane.
     pub fn with_maps(model: Model, maps: ParamMaps) -> Result<Lit, String> {
+        let model = match model {
+            Model::Gltf(g) if maps.normal.is_some() || maps.has_coat_normal_map() => {
+                Model::Gltf(g.with_coat_normal())
+            }
+            m => m,
+        };
         struct Check<'a>(&'a ParamMaps);
         impl BrdfVisitor for Check<'_> {
             type Output = Option<&'static str>;
@@ -102,8 +111,8 @@ fn pixel_at<B: Brdf, R: Real>(
 ) -> (B::Params<R>, B::Pixel<R>) {
     let mut params = brdf.params();
     maps.fill(input, &mut params);
-    if let Some(n) = maps.coat_normal(input, frame) {
-        if let Some(c) = params.coat_normal_mut() {
+    if let Some(c) = params.coat_normal_mut() {
+        if let Some(n) = maps.coat_normal(input, frame) {
             *c = n;
         }
     }

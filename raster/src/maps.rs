@@ -34,7 +34,11 @@
 //!   weight, `clearcoat_roughness` G its perceptual roughness (linear);
 //!   `clearcoat_normal` is a normal map read as `normal` is (same
 //!   tangent frame, its own scale) that gives the coat its own normal,
-//!   handed to the model in the local frame the base's normal map made;
+//!   handed to the model in the local frame the base's normal map made.
+//!   Without it the coat's normal is the surface's, unmapped even where
+//!   `normal` bends the base's (the extension: "no normal mapping is
+//!   applied to the clear coat layer, even if normal mapping is applied
+//!   to the base material"): [`ParamMaps::coat_normal`];
 //! - KHR_materials_sheen: `sheen_color` RGB multiplies the sheen colour
 //!   (sRGB texels), `sheen_roughness` A its perceptual roughness
 //!   (linear).
@@ -360,19 +364,35 @@ impl ParamMaps {
         }
     }
 
-    /// The clearcoat's normal from its normal map, in the local frame
-    /// `frame` (the one [`ParamMaps::frame`] made for this packet);
-    /// `None` without a clearcoat normal map (module docs).
+    /// The material has a clearcoat normal map.
+    pub fn has_coat_normal_map(&self) -> bool {
+        self.layers
+            .as_ref()
+            .is_some_and(|l| l.clearcoat_normal.is_some())
+    }
+
+    /// The clearcoat's normal in the local frame `frame` (the one
+    /// [`ParamMaps::frame`] made for this packet), where the maps make it
+    /// differ from the base's: its own normal map's, else the surface's
+    /// unmapped normal under a base normal map (module docs); `None`
+    /// where the coat's normal is the base's.
     #[inline(always)]
     pub fn coat_normal<R: Real>(
         &self,
         input: &ShadeInput<R>,
         frame: &ShadingFrame<R>,
     ) -> Option<V3<R>> {
-        let nm = self.layers.as_ref()?.clearcoat_normal.as_ref()?;
         input.surface?;
-        let n = bent_normal(nm, input, &input.frame());
-        Some(frame.to_local(n))
+        let surface = input.frame();
+        match self
+            .layers
+            .as_ref()
+            .and_then(|l| l.clearcoat_normal.as_ref())
+        {
+            Some(nm) => Some(frame.to_local(bent_normal(nm, input, &surface))),
+            None if self.normal.is_some() => Some(frame.to_local(surface.n)),
+            None => None,
+        }
     }
 
     /// The factor of the uniform environment term per lane:

@@ -632,7 +632,7 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// KHR_materials_specular, _clearcoat and _sheen, each checked as the
 /// scene field of the same snake_case name is, and their textures as
 /// [`LayerMaps`] (the clearcoat normal map giving the coat its own
-/// normal: [`Gltf::with_coat_normal`]); the base colour texture
+/// normal; without one the coat's normal is unmapped); the base colour texture
 /// through [`ParamMaps::base_color`] (its sampler kept; uvs from the set it
 /// names, chosen where the mesh is built), the metallic-roughness,
 /// normal (with its scale), occlusion (with its strength) and emissive
@@ -739,11 +739,7 @@ pub fn scene_material(
         |i| format!("materials[{i}]"),
     );
     let params = desc.params().map_err(|e| format!("{at}: {e}"))?;
-    let gltf = Gltf::new(params);
-    let model = Model::Gltf(match m.clearcoat_textures.normal_texture {
-        Some(_) => gltf.with_coat_normal(),
-        None => gltf,
-    });
+    let model = Model::Gltf(Gltf::new(params));
     let mut maps = ParamMaps {
         vertex_color,
         ..Default::default()

@@ -42,9 +42,11 @@
 //! f = (1 − c F_c) f_under + c F_c specular_brdf(α_c), with c = clearcoat,
 //! α_c = clearcoat_roughness², F_c = 0.04 + 0.96 (1 − |V·N_c|)⁵ (IOR 1.5,
 //! by the view and the coat's normal N_c, not the half vector). N_c is the
-//! base normal unless the material has a clearcoat normal map
-//! ([`Gltf::with_coat_normal`]): then N_c is a lane parameter (a unit
-//! vector in the local frame, whose +Z is the base's normal), and the
+//! base normal unless the material's normal maps make them differ (a
+//! clearcoat normal map; or a base normal map, which the coat does not
+//! take, as the extension says) ([`Gltf::with_coat_normal`]): then N_c is
+//! a lane parameter (a unit vector in the local frame, whose +Z is the
+//! base's normal), and the
 //! coat's lobe takes its cosines, its half-vector angle and F_c against
 //! N_c (`dv_ggx_correlated_about`), while the base keeps its own normal.
 //! The coat's lobe then receives light by its own cosine N_c·L, as
@@ -187,8 +189,9 @@ impl Gltf {
     }
 
     /// The clearcoat reads its own normal from the lane parameters
-    /// ([`GltfLaneParams::coat_normal`], set by a clearcoat normal map)
-    /// instead of the base's; no effect without a clearcoat layer.
+    /// ([`GltfLaneParams::coat_normal`], set where the material's normal
+    /// maps make it differ from the base's) instead of the base's; no
+    /// effect without a clearcoat layer.
     pub fn with_coat_normal(mut self) -> Gltf {
         self.coat_normal = self.coat;
         self
@@ -226,7 +229,7 @@ pub struct GltfLaneParams<R: Real> {
     /// Perceptual.
     pub sheen_roughness: R,
     /// The clearcoat's unit normal in the local frame; +Z (the base's
-    /// normal) unless a clearcoat normal map sets it. Read only by
+    /// normal) unless the material's maps set it. Read only by
     /// materials [`Gltf::with_coat_normal`].
     pub coat_normal: V3<R>,
 }
