@@ -100,8 +100,9 @@ impl Lit {
 const MIN_DIST2: f64 = 1e-8;
 
 /// The parameters of `brdf` at a packet (its constants, then its maps;
-/// a clearcoat normal map's normal in the packet's local `frame`), and
-/// what they determine before the view is known.
+/// the clearcoat's normal in the packet's local `frame` where the maps
+/// set it: [`ParamMaps::coat_normal`]), and what they determine before
+/// the view is known.
 #[inline(always)]
 fn pixel_at<B: Brdf, R: Real>(
     brdf: &B,
