@@ -72,7 +72,7 @@ pub(crate) const ALPHA_MIN: f32 = 1e-3;
 
 /// Smallest cosine the models divide by: directions at or below the horizon
 /// are masked out by `above`, and this floor only keeps those lanes finite.
-const COS_FLOOR: f64 = 1e-7;
+pub(crate) const COS_FLOOR: f64 = 1e-7;
 
 /// An orthonormal frame per lane: tangent `t` (+X of the local frame),
 /// bitangent `b` (+Y) and normal `n` (+Z), right-handed (b = n × t).
@@ -260,6 +260,55 @@ pub trait LaneParams<R: Real>: Copy {
     #[inline(always)]
     fn scale_roughness(&mut self, _g: R) -> bool {
         false
+    }
+
+    /// The specular weight (KHR_materials_specular's specularFactor),
+    /// which a specular map's alpha multiplies.
+    #[inline(always)]
+    fn specular_mut(&mut self) -> Option<&mut R> {
+        None
+    }
+
+    /// The specular colour (KHR_materials_specular's
+    /// specularColorFactor), which a specular colour map multiplies.
+    #[inline(always)]
+    fn specular_color_mut(&mut self) -> Option<&mut Rgb<R>> {
+        None
+    }
+
+    /// The clearcoat weight, which a clearcoat map's red channel
+    /// multiplies.
+    #[inline(always)]
+    fn clearcoat_mut(&mut self) -> Option<&mut R> {
+        None
+    }
+
+    /// The clearcoat's perceptual roughness, which a clearcoat roughness
+    /// map's green channel multiplies.
+    #[inline(always)]
+    fn clearcoat_roughness_mut(&mut self) -> Option<&mut R> {
+        None
+    }
+
+    /// The clearcoat's unit normal in the local shading frame (+Z: the
+    /// base's normal), which the material's normal maps set where they
+    /// make the two differ.
+    #[inline(always)]
+    fn coat_normal_mut(&mut self) -> Option<&mut V3<R>> {
+        None
+    }
+
+    /// The sheen colour, which a sheen colour map multiplies.
+    #[inline(always)]
+    fn sheen_color_mut(&mut self) -> Option<&mut Rgb<R>> {
+        None
+    }
+
+    /// The sheen's perceptual roughness, which a sheen roughness map's
+    /// alpha multiplies.
+    #[inline(always)]
+    fn sheen_roughness_mut(&mut self) -> Option<&mut R> {
+        None
     }
 }
 

@@ -91,6 +91,30 @@ pub(crate) fn dv_ggx_correlated<R: Real>(
     (a2 * R::splat(0.5 * std::f64::consts::FRAC_1_PI)) * (len2 * len2) / (u * u * smith)
 }
 
+/// [`dv_ggx_correlated`] about a unit normal `n` other than +Z (a
+/// clearcoat's own normal): s_z becomes n·s and s_x² + s_y² becomes
+/// |n × s|² (a sum of squares, so no cancellation at the peak either);
+/// `cos_i`, `cos_o` and the roots are the cosines against `n`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn dv_ggx_correlated_about<R: Real>(
+    alpha: R,
+    n: V3<R>,
+    s: V3<R>,
+    len2: R,
+    cos_i: R,
+    cos_o: R,
+    s_i: R,
+    s_o: R,
+) -> R {
+    let a2 = alpha * alpha;
+    let nz = n.dot(s);
+    let c = n.cross(s);
+    let u = (nz * a2).mul_add(nz, c.length_squared());
+    let smith = cos_o.mul_add(s_i, cos_i * s_o);
+    (a2 * R::splat(0.5 * std::f64::consts::FRAC_1_PI)) * (len2 * len2) / (u * u * smith)
+}
+
 /// Smith Λ for Beckmann [Walter07, eq. 25; Heitz14, eq. 83]: with
 /// a = 1 / (α tan θ) = cos θ / (α sin θ),
 ///

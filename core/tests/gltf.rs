@@ -450,6 +450,7 @@ fn f32x8_lanes_are_eight_materials() {
                 clearcoat_roughness: g(&|p| p.clearcoat_roughness),
                 sheen_color: rgb_lanes(&std::array::from_fn(|l| mats[l].sheen_color)),
                 sheen_roughness: g(&|p| p.sheen_roughness),
+                coat_normal: V3::new(f32x8::ZERO, f32x8::ZERO, f32x8::ONE),
             };
             let wi: [Vec3; 8] = std::array::from_fn(|_| random_dir(&mut rng));
             let wo: [Vec3; 8] = std::array::from_fn(|_| random_dir(&mut rng));
@@ -783,4 +784,265 @@ fn polygon_lights_against_the_reference() {
     );
     eprintln!("gltf polygon LTC / albedo: median {p50:.4}, p90 {p90:.4}, max {max:.4}");
     assert!(p90 < 0.03 && max < 0.15, "p90 {p90}, max {max}");
+}
+
+/// Coordinates of `x` in an orthonormal frame around unit `n` (any
+/// tangent: the clearcoat lobe is isotropic), by Gram–Schmidt.
+fn in_frame_of(n: Vec3, x: Vec3) -> Vec3 {
+    let a = if n[0].abs() < 0.9 {
+        [1.0, 0.0, 0.0]
+    } else {
+        [0.0, 1.0, 0.0]
+    };
+    let d = dot(a, n);
+    let t = normalize([a[0] - d * n[0], a[1] - d * n[1], a[2] - d * n[2]]);
+    let b = [
+        n[1] * t[2] - n[2] * t[1],
+        n[2] * t[0] - n[0] * t[2],
+        n[0] * t[1] - n[1] * t[0],
+    ];
+    [dot(x, t), dot(x, b), dot(x, n)]
+}
+
+/// KHR_materials_clearcoat with its clearcoatNormalTexture's normal `nc`
+/// (unit, local; the base keeps +Z): the base material of [`oracle`]
+/// under the coat, the coat's specular_brdf(α_c) about `nc` and
+/// F_c = 0.04 + 0.96 (1 − V·N_c)⁵, the coat lobe receiving light by its
+/// own cosine N_c·L (as the sample viewer shades it) and zero below N_c's
+/// horizon. Returned as f, so with the coat lobe times (N_c·L)/(N·L).
+fn oracle_coat_normal(p: &GltfParams, nc: Vec3, l: Vec3, v: Vec3, e: &SheenE) -> Vec3 {
+    if l[2] <= 0.0 || v[2] <= 0.0 {
+        return [0.0; 3];
+    }
+    let under = oracle(
+        &GltfParams {
+            clearcoat: 0.0,
+            ..p.clone()
+        },
+        l,
+        v,
+        e,
+    );
+    let cc = p.clearcoat as f64;
+    let fc = 0.04 + 0.96 * (1.0 - dot(v, nc)).powi(5);
+    let ca = ((p.clearcoat_roughness as f64).powi(2)).max(1e-3);
+    let ncl = dot(nc, l);
+    let coat = if ncl > 0.0 {
+        specular_brdf(ca, in_frame_of(nc, l), in_frame_of(nc, v)) * ncl / l[2]
+    } else {
+        0.0
+    };
+    under.map(|u| u * (1.0 - cc * fc) + coat * cc * fc)
+}
+
+/// A unit coat normal tilted by up to `max_deg` from +Z, facing `v` by at
+/// least 0.02 (what the normal map guarantees).
+fn random_coat_normal(rng: &mut impl Rng, max_deg: f64, v: Vec3) -> Vec3 {
+    loop {
+        let t = rng.random_range(0.0..max_deg).to_radians();
+        let phi = rng.random_range(0.0..2.0 * PI);
+        let n = [t.sin() * phi.cos(), t.sin() * phi.sin(), t.cos()];
+        if dot(n, v) >= 0.02 {
+            return n;
+        }
+    }
+}
+
+/// The f64 model of `p` with the coat normal `nc`, prepared at `wo`.
+fn with_coat_normal(p: &GltfParams, nc: Vec3) -> (Gltf, GltfLaneParams<f64>) {
+    let m = Gltf::new(p.clone()).with_coat_normal();
+    let mut lp = m.params::<f64>();
+    lp.coat_normal = v3(nc);
+    (m, lp)
+}
+
+/// A clearcoat with its own normal: f of the f64 model against the
+/// oracle above, for every layer, normals up to 60° off the base's.
+#[test]
+fn coat_normal_matches_the_oracle() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(25);
+    let table = SheenTable::get();
+    let given = |mu: f64, r: f64| table.e(mu, r);
+    let mut worst = 0.0f64;
+    for layers in all_layers().into_iter().filter(|l| l.coat) {
+        for _ in 0..200 {
+            let p = random_params(&mut rng, layers, GltfFresnel::Normative);
+            let (l, v) = (random_dir(&mut rng), random_dir(&mut rng));
+            let nc = random_coat_normal(&mut rng, 60.0, v);
+            let (m, lp) = with_coat_normal(&p, nc);
+            assert!(m.has_coat_normal());
+            let pr = m.prepare_with(&m.pixel(&lp), v3(v));
+            let got = rgb(m.f_local(&pr, v3(l)));
+            let want = oracle_coat_normal(&p, nc, l, v, &SheenE::Given(&given));
+            for c in 0..3 {
+                worst = worst.max(rel(got[c], want[c]));
+            }
+        }
+    }
+    eprintln!("coat normal: worst relative {worst:e}");
+    assert!(worst < 1e-9, "{worst:e}");
+    // At N_c = +Z the coat normal path is the plain coat's.
+    let p = GltfParams {
+        clearcoat: 0.7,
+        clearcoat_roughness: 0.3,
+        ..GltfParams::default()
+    };
+    let (m, lp) = with_coat_normal(&p, [0.0, 0.0, 1.0]);
+    let plain = Gltf::new(p);
+    for _ in 0..50 {
+        let (l, v) = (v3(random_dir(&mut rng)), v3(random_dir(&mut rng)));
+        let a = rgb(m.f_local(&m.prepare_with(&m.pixel(&lp), v), l));
+        let b = rgb(plain.f_local(&plain.prepare::<f64>(v), l));
+        for c in 0..3 {
+            assert!(rel(a[c], b[c]) < 1e-12, "{a:?} vs {b:?}");
+        }
+    }
+}
+
+/// f32x8 packets whose lanes have different coat normals and materials:
+/// f against the oracle, the albedo and the polygon integral against each
+/// lane's material alone in f64.
+#[test]
+fn coat_normal_lanes_are_eight_materials() {
+    let mut rng = rand::rngs::StdRng::seed_from_u64(26);
+    let table = SheenTable::get();
+    let given = |mu: f64, r: f64| table.e(mu, r);
+    let (mut worst_f, mut worst_albedo, mut worst_poly) = (0.0f64, 0.0f64, 0.0f64);
+    let shell = Gltf::new(GltfParams {
+        clearcoat: 0.5,
+        sheen_color: [0.5; 3],
+        ..GltfParams::default()
+    })
+    .with_coat_normal();
+    for round in 0..150 {
+        let layers = Layers {
+            specular_ext: true,
+            sheen: round % 3 != 0,
+            coat: true,
+        };
+        let mats: [GltfParams; 8] = std::array::from_fn(|_| {
+            let mut p = random_params(&mut rng, layers, GltfFresnel::Normative);
+            p.ior = 1.5;
+            p
+        });
+        let wi: [Vec3; 8] = std::array::from_fn(|_| random_dir(&mut rng));
+        // Directions and normals as f32 holds them.
+        let r = |d: Vec3| normalize(d.map(|x| x as f32 as f64));
+        let wo: [Vec3; 8] = std::array::from_fn(|_| r(random_dir(&mut rng)));
+        let nc: [Vec3; 8] = std::array::from_fn(|l| r(random_coat_normal(&mut rng, 50.0, wo[l])));
+        let g = |f: &dyn Fn(&GltfParams) -> f32| lanes(|l| f(&mats[l]));
+        let dir = |d: &[Vec3; 8]| {
+            V3::new(
+                lanes(|l| d[l][0] as f32),
+                lanes(|l| d[l][1] as f32),
+                lanes(|l| d[l][2] as f32),
+            )
+        };
+        let params = GltfLaneParams {
+            base_color: rgb_lanes(&std::array::from_fn(|l| mats[l].base_color)),
+            metallic: g(&|p| p.metallic),
+            roughness: g(&|p| p.roughness),
+            specular: g(&|p| p.specular),
+            specular_color: rgb_lanes(&std::array::from_fn(|l| mats[l].specular_color)),
+            clearcoat: g(&|p| p.clearcoat),
+            clearcoat_roughness: g(&|p| p.clearcoat_roughness),
+            sheen_color: rgb_lanes(&std::array::from_fn(|l| mats[l].sheen_color)),
+            sheen_roughness: g(&|p| p.sheen_roughness),
+            coat_normal: dir(&nc),
+        };
+        let p = shell.prepare_with(&shell.pixel(&params), dir(&wo));
+        let f = shell.f_local(&p, dir(&wi));
+        let albedo = shell.albedo_local(&p);
+        let poly = shell.polygon_local_with(&p, &shell.prepare_polygons(&p), &quad_x8());
+        for l in 0..8 {
+            let i = r(wi[l]);
+            let want = oracle_coat_normal(&mats[l], nc[l], i, wo[l], &SheenE::Given(&given));
+            let (alone, lp) = with_coat_normal(&mats[l], nc[l]);
+            let pa = alone.prepare_with(&alone.pixel(&lp), v3(wo[l]));
+            let want_albedo = rgb(alone.albedo_local(&pa));
+            let want_poly =
+                rgb(alone.polygon_local_with(&pa, &alone.prepare_polygons(&pa), &quad(true)));
+            for c in 0..3 {
+                let pick = |v: Rgb<f32x8>| [v.x, v.y, v.z][c].lane(l);
+                worst_f = worst_f.max(rel(pick(f), want[c]));
+                worst_albedo = worst_albedo.max(rel(pick(albedo), want_albedo[c]));
+                worst_poly = worst_poly.max(rel(pick(poly), want_poly[c]));
+            }
+        }
+    }
+    eprintln!(
+        "coat normal lanes, worst relative: f {worst_f:e}, albedo {worst_albedo:e}, polygon {worst_poly:e}"
+    );
+    assert!(worst_f < 1e-3, "f vs the oracle: {worst_f:e}");
+    assert!(worst_albedo < 1e-4, "albedo: {worst_albedo:e}");
+    assert!(worst_poly < 1e-3, "polygon: {worst_poly:e}");
+}
+
+/// With a coat normal tilted up to 30°: the coat's LTC, looked up in a
+/// frame around N_c, against the reference quadrature of the model's own
+/// f, as a fraction of the albedo (as `polygon_lights_against_the_reference`);
+/// and the albedo against numeric integration, where the coat's part is
+/// tabulated at V·N_c over N_c's whole hemisphere while f stops at the
+/// base's horizon.
+#[test]
+fn coat_normal_polygons_and_albedo_against_the_reference() {
+    use specula_core::ltc::reference::{integrate_polygon, Tolerance};
+    let mut rng = rand::rngs::StdRng::seed_from_u64(27);
+    let (mut errs, mut worst_albedo) = (Vec::new(), 0.0f64);
+    for roughness in [0.3f32, 0.7] {
+        for coat_roughness in [0.2f32, 0.5] {
+            let p = GltfParams {
+                base_color: [0.8, 0.5, 0.3],
+                metallic: 0.0,
+                roughness,
+                clearcoat: 1.0,
+                clearcoat_roughness: coat_roughness,
+                ..GltfParams::default()
+            };
+            for deg in [0.0f64, 30.0, 60.0] {
+                let wo = view(deg.to_radians().cos());
+                let nc = random_coat_normal(&mut rng, 30.0, [wo.x, wo.y, wo.z]);
+                let (m, lp) = with_coat_normal(&p, nc);
+                let pr = m.prepare_with(&m.pixel(&lp), wo);
+                let albedo = rgb(m.albedo_local(&pr));
+                let f = |wi: V3<f64>| rgb(m.f_cos_local(&pr, wi));
+                for (_, q) in common::polygons(deg.to_radians()) {
+                    let got = rgb(m.polygon_local(&pr, &common::poly(&q, false)));
+                    let want = integrate_polygon(&q, false, &f, Tolerance::FINE).value;
+                    for c in 0..3 {
+                        errs.push((got[c] - want[c]).abs() / albedo[c]);
+                    }
+                }
+                if coat_roughness >= 0.5 {
+                    let n_phi = 128;
+                    let rule = specula_core::quadrature::GaussLegendre::new(128);
+                    let mut want = [0.0; 3];
+                    for k in 0..n_phi {
+                        let phi = 2.0 * PI * (k as f64 + 0.5) / n_phi as f64;
+                        for (x, w) in rule.nodes_weights() {
+                            let t = 0.5 * (x + 1.0);
+                            let mu = t * t;
+                            let s = (1.0 - mu * mu).max(0.0).sqrt();
+                            let wi = V3::new(s * phi.cos(), s * phi.sin(), mu);
+                            let fc = f(wi);
+                            let weight = 2.0 * t * 0.5 * w * 2.0 * PI / n_phi as f64;
+                            for c in 0..3 {
+                                want[c] += fc[c] * weight;
+                            }
+                        }
+                    }
+                    for c in 0..3 {
+                        worst_albedo = worst_albedo.max((albedo[c] - want[c]).abs());
+                    }
+                }
+            }
+        }
+    }
+    errs.sort_by(f64::total_cmp);
+    let (p90, max) = (common::quantile(&errs, 0.9), *errs.last().unwrap());
+    eprintln!(
+        "coat normal: polygon LTC / albedo p90 {p90:.4}, max {max:.4}; albedo worst absolute {worst_albedo:.4}"
+    );
+    assert!(p90 < 0.01 && max < 0.05, "p90 {p90}, max {max}");
+    assert!(worst_albedo < 5e-3, "albedo {worst_albedo}");
 }

@@ -24,7 +24,7 @@ use specula_core::light::{
     MAX_POLYGON_VERTICES,
 };
 use specula_core::ltc::reference::polygon_reference_lanes;
-use specula_core::{Brdf, BrdfVisitor, Mask, Model, Real, Rgb, ShadingFrame, V3};
+use specula_core::{Brdf, BrdfVisitor, LaneParams, Mask, Model, Real, Rgb, ShadingFrame, V3};
 
 /// A model under the scene's lights, its parameters filled per pixel by
 /// its maps.
@@ -48,8 +48,17 @@ impl Lit {
     }
 
     /// The model with parameters from `maps`; an error names the first map
-    /// whose parameter the model does not have.
+    /// whose parameter the model does not have. A `gltf` model whose maps
+    /// make its clearcoat's normal differ from the base's (a clearcoat
+    /// normal map, or a base normal map, which the coat does not take:
+    /// maps.rs) reads the coat's normal per lane.
     pub fn with_maps(model: Model, maps: ParamMaps) -> Result<Lit, String> {
+        let model = match model {
+            Model::Gltf(g) if maps.normal.is_some() || maps.has_coat_normal_map() => {
+                Model::Gltf(g.with_coat_normal())
+            }
+            m => m,
+        };
         struct Check<'a>(&'a ParamMaps);
         impl BrdfVisitor for Check<'_> {
             type Output = Option<&'static str>;
@@ -90,16 +99,24 @@ impl Lit {
 /// surface gives a large finite value instead of inf·0 = NaN.
 const MIN_DIST2: f64 = 1e-8;
 
-/// The parameters of `brdf` at a packet (its constants, then its maps),
-/// and what they determine before the view is known.
+/// The parameters of `brdf` at a packet (its constants, then its maps;
+/// the clearcoat's normal in the packet's local `frame` where the maps
+/// set it: [`ParamMaps::coat_normal`]), and what they determine before
+/// the view is known.
 #[inline(always)]
 fn pixel_at<B: Brdf, R: Real>(
     brdf: &B,
     maps: &ParamMaps,
     input: &ShadeInput<R>,
+    frame: &ShadingFrame<R>,
 ) -> (B::Params<R>, B::Pixel<R>) {
     let mut params = brdf.params();
     maps.fill(input, &mut params);
+    if let Some(c) = params.coat_normal_mut() {
+        if let Some(n) = maps.coat_normal(input, frame) {
+            *c = n;
+        }
+    }
     (params, brdf.pixel(&params))
 }
 
@@ -111,10 +128,11 @@ struct LightLoop<'a, 'b, R: Real> {
 }
 
 impl<R: Real> LightLoop<'_, '_, R> {
-    /// Every light on one packet whose parameters determined `pixel`.
+    /// Every light on one packet whose parameters determined `pixel`, in
+    /// its local `frame` ([`ParamMaps::frame`]).
     #[inline(always)]
-    fn shade<B: Brdf>(self, brdf: &B, pixel: &B::Pixel<R>) -> Rgb<R> {
-        let (frag, frame) = (self.input.frag, &self.maps.frame(self.input));
+    fn shade<B: Brdf>(self, brdf: &B, pixel: &B::Pixel<R>, frame: &ShadingFrame<R>) -> Rgb<R> {
+        let frag = self.input.frag;
         let prepared = brdf.prepare_with(pixel, frame.to_local(frag.wo));
         let mut acc = Rgb::zero();
         let mut rest = self.env.lights;
@@ -170,8 +188,9 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
 
     #[inline(always)]
     fn visit<B: Brdf>(self, brdf: &B) -> Rgb<R> {
-        let (_, pixel) = pixel_at(brdf, self.maps, self.input);
-        self.shade(brdf, &pixel)
+        let frame = self.maps.frame(self.input);
+        let (_, pixel) = pixel_at(brdf, self.maps, self.input, &frame);
+        self.shade(brdf, &pixel, &frame)
     }
 }
 
@@ -214,7 +233,7 @@ fn env_reference<B: Brdf, R: Real>(
     samples: u32,
 ) -> Rgb<R> {
     let (frag, frame) = (input.frag, &maps.frame(input));
-    let (params, _) = pixel_at(brdf, maps, input);
+    let (params, _) = pixel_at(brdf, maps, input, frame);
     let wo = frame.to_local(frag.wo);
     let mut out = [[0.0f32; 8]; 3];
     for i in 0..R::LANES {
@@ -365,7 +384,7 @@ fn lights_from_polygon<B: Brdf, R: Real>(
     delta: bool,
 ) -> Rgb<R> {
     let (frag, frame) = (input.frag, &maps.frame(input));
-    let (params, pixel) = pixel_at(brdf, maps, input);
+    let (params, pixel) = pixel_at(brdf, maps, input, frame);
     let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
     let mut poly = PolygonLocal {
         vertices: [V3::zero(); MAX_POLYGON_VERTICES],
@@ -421,7 +440,7 @@ fn shadowed_lights<B: Brdf, R: Real>(
     shadows: &ShadowMaps,
 ) -> Rgb<R> {
     let (frag, frame) = (input.frag, &maps.frame(input));
-    let (_, pixel) = pixel_at(brdf, maps, input);
+    let (_, pixel) = pixel_at(brdf, maps, input, frame);
     let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
     let mut acc = Rgb::zero();
     let mut polygons = false;
@@ -512,13 +531,14 @@ impl PacketShader for Lit {
             fn visit<B: Brdf>(self, brdf: &B) {
                 let pixel = brdf.pixel(&brdf.params());
                 for (input, out) in ShadeInput::batch(self.frags, self.lanes).zip(self.out) {
+                    let frame = self.maps.frame(&input);
                     *out = LightLoop {
                         input: &input,
                         env: self.env,
                         maps: self.maps,
                         emissive: self.emissive,
                     }
-                    .shade(brdf, &pixel);
+                    .shade(brdf, &pixel, &frame);
                 }
             }
         }

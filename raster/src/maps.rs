@@ -26,6 +26,23 @@
 //! - `vertex_color` (not a texture): the mesh's interpolated vertex
 //!   colour multiplies the base colour.
 //!
+//! and the textures of glTF's material extensions ([`LayerMaps`]), each
+//! multiplying its factor as the extension defines it:
+//! - KHR_materials_specular: `specular` A multiplies the specular weight
+//!   (linear), `specular_color` RGB the specular colour (sRGB texels);
+//! - KHR_materials_clearcoat: `clearcoat` R multiplies the clearcoat
+//!   weight, `clearcoat_roughness` G its perceptual roughness (linear);
+//!   `clearcoat_normal` is a normal map read as `normal` is (same
+//!   tangent frame, its own scale) that gives the coat its own normal,
+//!   handed to the model in the local frame the base's normal map made.
+//!   Without it the coat's normal is the surface's, unmapped even where
+//!   `normal` bends the base's (the extension: "no normal mapping is
+//!   applied to the clear coat layer, even if normal mapping is applied
+//!   to the base material"): [`ParamMaps::coat_normal`];
+//! - KHR_materials_sheen: `sheen_color` RGB multiplies the sheen colour
+//!   (sRGB texels), `sheen_roughness` A its perceptual roughness
+//!   (linear).
+//!
 //! Each map may move its texture over the surface by a [`UvTransform`]
 //! (glTF's KHR_texture_transform): the uv and its screen derivatives are
 //! transformed before the lookup, so the filter's footprint follows. The
@@ -90,19 +107,38 @@ impl ColorMap {
     #[inline(always)]
     pub fn sample<R: Real>(&self, input: &ShadeInput<R>) -> Rgb<R> {
         match input.surface {
-            Some(s) => {
-                let [r, g, b] = match &self.transform {
-                    None => self.texture.sample(&self.sampler, s.uv, s.duv_dx, s.duv_dy),
-                    Some(t) => self.texture.sample(
-                        &self.sampler,
-                        t.apply(s.uv),
-                        t.apply_vector(s.duv_dx),
-                        t.apply_vector(s.duv_dy),
-                    ),
-                };
+            Some(_) => {
+                let [r, g, b] = self.sample_channels(input);
                 V3::new(r, g, b)
             }
             None => Rgb::splat(R::ONE),
+        }
+    }
+
+    /// The map's alpha (its fourth channel: the texture must have four)
+    /// at the packet's uv; one where the shader got no surface.
+    #[inline(always)]
+    pub fn sample_alpha<R: Real>(&self, input: &ShadeInput<R>) -> R {
+        match input.surface {
+            Some(_) => self.sample_channels::<R, 4>(input)[3],
+            None => R::ONE,
+        }
+    }
+
+    /// The first `C` channels at the packet's uv (a surface is required).
+    #[inline(always)]
+    fn sample_channels<R: Real, const C: usize>(&self, input: &ShadeInput<R>) -> [R; C] {
+        let Some(s) = input.surface else {
+            return [R::ONE; C];
+        };
+        match &self.transform {
+            None => self.texture.sample(&self.sampler, s.uv, s.duv_dx, s.duv_dy),
+            Some(t) => self.texture.sample(
+                &self.sampler,
+                t.apply(s.uv),
+                t.apply_vector(s.duv_dx),
+                t.apply_vector(s.duv_dy),
+            ),
         }
     }
 }
@@ -124,6 +160,106 @@ pub struct OcclusionMap {
     pub strength: f32,
 }
 
+/// The textures of glTF's material extensions (module docs), each
+/// optional. `specular` and `sheen_roughness` are read in their alpha:
+/// their textures have four channels.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LayerMaps {
+    pub specular: Option<ColorMap>,
+    pub specular_color: Option<ColorMap>,
+    pub clearcoat: Option<ColorMap>,
+    pub clearcoat_roughness: Option<ColorMap>,
+    pub clearcoat_normal: Option<NormalMap>,
+    pub sheen_color: Option<ColorMap>,
+    pub sheen_roughness: Option<ColorMap>,
+}
+
+impl LayerMaps {
+    fn maps_mut(&mut self) -> impl Iterator<Item = &mut ColorMap> {
+        [
+            self.specular.as_mut(),
+            self.specular_color.as_mut(),
+            self.clearcoat.as_mut(),
+            self.clearcoat_roughness.as_mut(),
+            self.clearcoat_normal.as_mut().map(|n| &mut n.map),
+            self.sheen_color.as_mut(),
+            self.sheen_roughness.as_mut(),
+        ]
+        .into_iter()
+        .flatten()
+    }
+
+    /// The name of the first map whose slot `params` lacks (glTF's
+    /// names), or `None`.
+    fn unsupported<R: Real, P: LaneParams<R>>(&self, params: &mut P) -> Option<&'static str> {
+        let checks: [(&'static str, bool, bool); 7] = [
+            (
+                "specularTexture",
+                self.specular.is_some(),
+                params.specular_mut().is_some(),
+            ),
+            (
+                "specularColorTexture",
+                self.specular_color.is_some(),
+                params.specular_color_mut().is_some(),
+            ),
+            (
+                "clearcoatTexture",
+                self.clearcoat.is_some(),
+                params.clearcoat_mut().is_some(),
+            ),
+            (
+                "clearcoatRoughnessTexture",
+                self.clearcoat_roughness.is_some(),
+                params.clearcoat_roughness_mut().is_some(),
+            ),
+            (
+                "clearcoatNormalTexture",
+                self.clearcoat_normal.is_some(),
+                params.coat_normal_mut().is_some(),
+            ),
+            (
+                "sheenColorTexture",
+                self.sheen_color.is_some(),
+                params.sheen_color_mut().is_some(),
+            ),
+            (
+                "sheenRoughnessTexture",
+                self.sheen_roughness.is_some(),
+                params.sheen_roughness_mut().is_some(),
+            ),
+        ];
+        checks
+            .into_iter()
+            .find(|(_, map, slot)| *map && !*slot)
+            .map(|(name, _, _)| name)
+    }
+
+    /// Multiplies the slots that have maps (module docs), per lane.
+    #[inline(always)]
+    fn fill<R: Real, P: LaneParams<R>>(&self, input: &ShadeInput<R>, params: &mut P) {
+        if let (Some(map), Some(k)) = (&self.specular, params.specular_mut()) {
+            *k *= map.sample_alpha(input);
+        }
+        if let (Some(map), Some(c)) = (&self.specular_color, params.specular_color_mut()) {
+            *c = c.mul_elem(map.sample(input));
+        }
+        if let (Some(map), Some(c)) = (&self.clearcoat, params.clearcoat_mut()) {
+            *c *= map.sample(input).x;
+        }
+        if let (Some(map), Some(r)) = (&self.clearcoat_roughness, params.clearcoat_roughness_mut())
+        {
+            *r *= map.sample(input).y;
+        }
+        if let (Some(map), Some(c)) = (&self.sheen_color, params.sheen_color_mut()) {
+            *c = c.mul_elem(map.sample(input));
+        }
+        if let (Some(map), Some(r)) = (&self.sheen_roughness, params.sheen_roughness_mut()) {
+            *r *= map.sample_alpha(input);
+        }
+    }
+}
+
 /// The maps of one material, each optional (module docs).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct ParamMaps {
@@ -138,6 +274,8 @@ pub struct ParamMaps {
     /// The surface's vertex colour ([`crate::fragment::Surface::color`])
     /// multiplies the base colour (glTF's COLOR_0).
     pub vertex_color: bool,
+    /// The material extensions' textures; `None` when it has none.
+    pub layers: Option<Box<LayerMaps>>,
 }
 
 /// Smallest n·wo a normal-mapped shading normal is allowed: the same
@@ -153,6 +291,7 @@ impl ParamMaps {
             && self.occlusion.is_none()
             && self.emissive.is_none()
             && !self.vertex_color
+            && self.layers.is_none()
     }
 
     /// Every map, mutably (to set their samplers at once).
@@ -166,6 +305,7 @@ impl ParamMaps {
         ]
         .into_iter()
         .flatten()
+        .chain(self.layers.iter_mut().flat_map(|l| l.maps_mut()))
     }
 
     /// Every map's sampler filter set to `filter` (a render that must
@@ -193,7 +333,9 @@ impl ParamMaps {
         {
             return Some("metallic_roughness_texture");
         }
-        None
+        self.layers
+            .as_ref()
+            .and_then(|l| l.unsupported(&mut params))
     }
 
     /// Overwrites the slots of `params` that have maps, per lane, at the
@@ -216,6 +358,40 @@ impl ParamMaps {
                 *m *= t.z;
             }
             params.scale_roughness(t.y);
+        }
+        if let Some(layers) = &self.layers {
+            layers.fill(input, params);
+        }
+    }
+
+    /// The material has a clearcoat normal map.
+    pub fn has_coat_normal_map(&self) -> bool {
+        self.layers
+            .as_ref()
+            .is_some_and(|l| l.clearcoat_normal.is_some())
+    }
+
+    /// The clearcoat's normal in the local frame `frame` (the one
+    /// [`ParamMaps::frame`] made for this packet), where the maps make it
+    /// differ from the base's: its own normal map's, else the surface's
+    /// unmapped normal under a base normal map (module docs); `None`
+    /// where the coat's normal is the base's.
+    #[inline(always)]
+    pub fn coat_normal<R: Real>(
+        &self,
+        input: &ShadeInput<R>,
+        frame: &ShadingFrame<R>,
+    ) -> Option<V3<R>> {
+        input.surface?;
+        let surface = input.frame();
+        match self
+            .layers
+            .as_ref()
+            .and_then(|l| l.clearcoat_normal.as_ref())
+        {
+            Some(nm) => Some(frame.to_local(bent_normal(nm, input, &surface))),
+            None if self.normal.is_some() => Some(frame.to_local(surface.n)),
+            None => None,
         }
     }
 
@@ -240,25 +416,32 @@ impl ParamMaps {
         let (Some(nm), Some(_)) = (&self.normal, input.surface) else {
             return base;
         };
-        let t = nm.map.sample(input);
-        let s = R::splat(nm.scale as f64);
-        let two = R::splat(2.0);
-        let m = V3::new(
-            t.x.mul_add(two, -R::ONE) * s,
-            t.y.mul_add(two, -R::ONE) * s,
-            t.z.mul_add(two, -R::ONE),
-        );
-        // A texel of (½, ½, ½) or a zero scale with blue ½ gives m = 0:
-        // such a lane keeps the surface normal.
-        let n = (base.t * m.x + base.b * m.y + base.n * m.z).normalize_or(base.n);
-        let wo = input.frag.wo;
-        let cos_v = n.dot(wo);
-        let min_cos = R::splat(MIN_COS_VIEW);
-        let away = cos_v.lt(min_cos);
-        let n = V3::select(away, (n - wo * (cos_v - min_cos)).normalize_or(wo), n);
+        let n = bent_normal(nm, input, &base);
         let any = ShadingFrame::from_normal(n);
         let tan = (base.t - n * n.dot(base.t)).normalize_or(any.t);
         let bit = (base.b - n * n.dot(base.b) - tan * tan.dot(base.b)).normalize_or(n.cross(tan));
         ShadingFrame { t: tan, b: bit, n }
     }
+}
+
+/// The unit world normal a normal map gives in the surface's frame `base`
+/// (module docs), kept at n·wo ≥ 0.02 like the resolve's.
+#[inline(always)]
+fn bent_normal<R: Real>(nm: &NormalMap, input: &ShadeInput<R>, base: &ShadingFrame<R>) -> V3<R> {
+    let t = nm.map.sample(input);
+    let s = R::splat(nm.scale as f64);
+    let two = R::splat(2.0);
+    let m = V3::new(
+        t.x.mul_add(two, -R::ONE) * s,
+        t.y.mul_add(two, -R::ONE) * s,
+        t.z.mul_add(two, -R::ONE),
+    );
+    // A texel of (½, ½, ½) or a zero scale with blue ½ gives m = 0:
+    // such a lane keeps the surface normal.
+    let n = (base.t * m.x + base.b * m.y + base.n * m.z).normalize_or(base.n);
+    let wo = input.frag.wo;
+    let cos_v = n.dot(wo);
+    let min_cos = R::splat(MIN_COS_VIEW);
+    let away = cos_v.lt(min_cos);
+    V3::select(away, (n - wo * (cos_v - min_cos)).normalize_or(wo), n)
 }

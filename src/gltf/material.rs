@@ -12,7 +12,7 @@ use gltf::json;
 use json::validation::Checked;
 use specula_core::models::Gltf;
 use specula_core::Model;
-use specula_raster::maps::{ColorMap, NormalMap, OcclusionMap, ParamMaps, UvTransform};
+use specula_raster::maps::{ColorMap, LayerMaps, NormalMap, OcclusionMap, ParamMaps, UvTransform};
 use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
 use specula_raster::{Lit, Material, MaterialAlpha, UnlitBase};
 use std::collections::BTreeMap;
@@ -102,6 +102,24 @@ pub struct Specular {
     pub color_texture: Option<TextureRef>,
 }
 
+/// The textures of KHR_materials_clearcoat (its factors are read where
+/// the scene material is made, from `other_extensions`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ClearcoatTextures {
+    pub texture: Option<TextureRef>,
+    pub roughness_texture: Option<TextureRef>,
+    /// With its `scale`.
+    pub normal_texture: Option<TextureRef>,
+}
+
+/// The textures of KHR_materials_sheen (its factors are read where the
+/// scene material is made, from `other_extensions`).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SheenTextures {
+    pub color_texture: Option<TextureRef>,
+    pub roughness_texture: Option<TextureRef>,
+}
+
 /// KHR_materials_transmission.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Transmission {
@@ -147,6 +165,10 @@ pub struct GltfMaterial {
     pub transmission: Option<Transmission>,
     pub volume: Option<Volume>,
     pub specular_glossiness: Option<SpecularGlossiness>,
+    /// KHR_materials_clearcoat's textures (none without the extension).
+    pub clearcoat_textures: ClearcoatTextures,
+    /// KHR_materials_sheen's textures (none without the extension).
+    pub sheen_textures: SheenTextures,
     /// Every other material extension (KHR_materials_clearcoat, _sheen,
     /// _iridescence, _anisotropy, …), by name, as its JSON object.
     pub other_extensions: BTreeMap<String, serde_json::Value>,
@@ -176,14 +198,18 @@ impl GltfMaterial {
             transmission: None,
             volume: None,
             specular_glossiness: None,
+            clearcoat_textures: ClearcoatTextures::default(),
+            sheen_textures: SheenTextures::default(),
             other_extensions: BTreeMap::new(),
         }
     }
 
-    /// Every texture the material refers to.
     /// The uv set the rendered maps read: that of the first of base
     /// colour, metallic-roughness, normal, occlusion and emissive textures
-    /// the material has (KHR_texture_transform's override included).
+    /// the material has, else of the first rendered extension texture
+    /// (specular, specular colour, clearcoat, clearcoat roughness,
+    /// clearcoat normal, sheen colour, sheen roughness), with
+    /// KHR_texture_transform's override.
     pub fn uv_set(&self) -> Option<u32> {
         [
             &self.base_color_texture,
@@ -194,6 +220,7 @@ impl GltfMaterial {
         ]
         .into_iter()
         .flatten()
+        .chain(self.layer_textures())
         .next()
         .map(|t| {
             t.transform
@@ -203,6 +230,25 @@ impl GltfMaterial {
         })
     }
 
+    /// The rendered extension textures, in [`GltfMaterial::uv_set`]'s
+    /// order.
+    fn layer_textures(&self) -> impl Iterator<Item = &TextureRef> {
+        let (c, sh) = (&self.clearcoat_textures, &self.sheen_textures);
+        let spec = self.specular.as_ref();
+        [
+            spec.and_then(|s| s.texture.as_ref()),
+            spec.and_then(|s| s.color_texture.as_ref()),
+            c.texture.as_ref(),
+            c.roughness_texture.as_ref(),
+            c.normal_texture.as_ref(),
+            sh.color_texture.as_ref(),
+            sh.roughness_texture.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+    }
+
+    /// Every texture the material refers to.
     pub fn textures(&self) -> Vec<&TextureRef> {
         let mut t: Vec<&TextureRef> = [
             &self.base_color_texture,
@@ -214,9 +260,7 @@ impl GltfMaterial {
         .into_iter()
         .flatten()
         .collect();
-        if let Some(s) = &self.specular {
-            t.extend(s.texture.iter().chain(&s.color_texture));
-        }
+        t.extend(self.layer_textures());
         if let Some(s) = &self.transmission {
             t.extend(&s.texture);
         }
@@ -348,6 +392,52 @@ fn info(
             )
         })
         .transpose()
+}
+
+/// The textureInfo `key` of an extension's JSON object `ext` (at JSON
+/// path `p`), if it has one.
+fn extension_info(
+    root: &json::Root,
+    p: &str,
+    ext: &serde_json::Value,
+    key: &str,
+) -> Result<Option<TextureRef>, String> {
+    let Some(v) = ext.get(key) else {
+        return Ok(None);
+    };
+    let at = format!("{p}.{key}");
+    let i: json::texture::Info =
+        serde_json::from_value(v.clone()).map_err(|e| format!("{at}: {e}"))?;
+    info(root, at, &Some(i))
+}
+
+/// The normalTextureInfo `key` (with its scale) of an extension's JSON
+/// object `ext` (at JSON path `p`), if it has one.
+fn extension_normal(
+    root: &json::Root,
+    p: &str,
+    ext: &serde_json::Value,
+    key: &str,
+) -> Result<Option<TextureRef>, String> {
+    let Some(v) = ext.get(key) else {
+        return Ok(None);
+    };
+    let at = format!("{p}.{key}");
+    let n: json::material::NormalTexture =
+        serde_json::from_value(v.clone()).map_err(|e| format!("{at}: {e}"))?;
+    if !n.scale.is_finite() {
+        return Err(format!("{at}.scale: must be finite, got {}", n.scale));
+    }
+    texture_ref(
+        root,
+        at,
+        n.index,
+        n.tex_coord,
+        None,
+        n.extensions.as_ref().map(|e| &e.others),
+        n.scale,
+    )
+    .map(Some)
 }
 
 /// Reads `materials[i]` completely.
@@ -486,6 +576,21 @@ pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial,
             .iter()
             .map(|(k, v)| (k.clone(), v.clone()))
             .collect();
+        if let Some(c) = e.others.get("KHR_materials_clearcoat") {
+            let p = format!("{ext}.KHR_materials_clearcoat");
+            out.clearcoat_textures = ClearcoatTextures {
+                texture: extension_info(root, &p, c, "clearcoatTexture")?,
+                roughness_texture: extension_info(root, &p, c, "clearcoatRoughnessTexture")?,
+                normal_texture: extension_normal(root, &p, c, "clearcoatNormalTexture")?,
+            };
+        }
+        if let Some(c) = e.others.get("KHR_materials_sheen") {
+            let p = format!("{ext}.KHR_materials_sheen");
+            out.sheen_textures = SheenTextures {
+                color_texture: extension_info(root, &p, c, "sheenColorTexture")?,
+                roughness_texture: extension_info(root, &p, c, "sheenRoughnessTexture")?,
+            };
+        }
     }
     check_factors(&at, &out)?;
     Ok(out)
@@ -525,7 +630,9 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
 /// base colour factor's RGB, the metallic and
 /// roughness factors, KHR_materials_ior, the factors of
 /// KHR_materials_specular, _clearcoat and _sheen, each checked as the
-/// scene field of the same snake_case name is; the base colour texture
+/// scene field of the same snake_case name is, and their textures as
+/// [`LayerMaps`] (the clearcoat normal map giving the coat its own
+/// normal; without one the coat's normal is unmapped); the base colour texture
 /// through [`ParamMaps::base_color`] (its sampler kept; uvs from the set it
 /// names, chosen where the mesh is built), the metallic-roughness,
 /// normal (with its scale), occlusion (with its strength) and emissive
@@ -549,20 +656,14 @@ pub fn scene_material(
             missing.push(what.to_string());
         }
     };
-    note(
-        "specularTexture / specularColorTexture",
-        m.specular
-            .as_ref()
-            .is_some_and(|s| s.texture.is_some() || s.color_texture.is_some()),
-    );
     note("KHR_materials_transmission", m.transmission.is_some());
     note("KHR_materials_volume", m.volume.is_some());
     note(
         "KHR_materials_pbrSpecularGlossiness",
         m.specular_glossiness.is_some(),
     );
-    // Clearcoat and sheen factors are rendered by the gltf model; their
-    // textures (and the clearcoat's normal map) are not yet.
+    // Clearcoat and sheen are rendered by the gltf model: their factors
+    // read here, their textures (read with the material) as maps.
     let ext = |name: &str| m.other_extensions.get(name);
     let number = |v: Option<&serde_json::Value>, key: &str, default: f32| {
         v.and_then(|o| o.get(key))
@@ -581,11 +682,22 @@ pub fn scene_material(
     for (name, keys) in [
         (
             "KHR_materials_clearcoat",
-            &["clearcoatFactor", "clearcoatRoughnessFactor"][..],
+            &[
+                "clearcoatFactor",
+                "clearcoatRoughnessFactor",
+                "clearcoatTexture",
+                "clearcoatRoughnessTexture",
+                "clearcoatNormalTexture",
+            ][..],
         ),
         (
             "KHR_materials_sheen",
-            &["sheenColorFactor", "sheenRoughnessFactor"][..],
+            &[
+                "sheenColorFactor",
+                "sheenRoughnessFactor",
+                "sheenColorTexture",
+                "sheenRoughnessTexture",
+            ][..],
         ),
     ] {
         if let Some(serde_json::Value::Object(o)) = ext(name) {
@@ -697,6 +809,39 @@ pub fn scene_material(
     }
     if let Some(t) = &m.emissive_texture {
         maps.emissive = Some(load(t, Encoding::Srgb, 3)?);
+    }
+    // The extensions' textures, each multiplying its factor (maps.rs):
+    // specular and sheen roughness in their alpha, the colours sRGB.
+    let mut layers = LayerMaps::default();
+    if let Some(s) = &m.specular {
+        if let Some(t) = &s.texture {
+            layers.specular = Some(load(t, Encoding::Linear, 4)?);
+        }
+        if let Some(t) = &s.color_texture {
+            layers.specular_color = Some(load(t, Encoding::Srgb, 3)?);
+        }
+    }
+    let (c, sh) = (&m.clearcoat_textures, &m.sheen_textures);
+    if let Some(t) = &c.texture {
+        layers.clearcoat = Some(load(t, Encoding::Linear, 3)?);
+    }
+    if let Some(t) = &c.roughness_texture {
+        layers.clearcoat_roughness = Some(load(t, Encoding::Linear, 3)?);
+    }
+    if let Some(t) = &c.normal_texture {
+        layers.clearcoat_normal = Some(NormalMap {
+            map: load(t, Encoding::Linear, 3)?,
+            scale: t.scale,
+        });
+    }
+    if let Some(t) = &sh.color_texture {
+        layers.sheen_color = Some(load(t, Encoding::Srgb, 3)?);
+    }
+    if let Some(t) = &sh.roughness_texture {
+        layers.sheen_roughness = Some(load(t, Encoding::Linear, 4)?);
+    }
+    if layers != LayerMaps::default() {
+        maps.layers = Some(Box::new(layers));
     }
     sets.dedup();
     if sets.len() > 1 {

@@ -244,6 +244,7 @@ impl MaterialDesc {
             emissive: load("emissive_texture", m.emissive_texture, Encoding::Srgb)?,
             // Scene materials do not read vertex colours (OBJ has none).
             vertex_color: false,
+            layers: None,
         };
         Ok((maps, m.emissive))
     }

@@ -137,7 +137,8 @@ impl SceneBuilder<'_> {
                     self.materials.textured.insert(id);
                     textured[k] = Some(set);
                 }
-                if desc.normal_texture.is_some() {
+                if desc.normal_texture.is_some() || desc.clearcoat_textures.normal_texture.is_some()
+                {
                     self.materials.normal_mapped.insert(id);
                 }
                 self.materials.list.push(built);

@@ -42,7 +42,7 @@
 //!   near the normal, 1 − μo/2 near grazing), so grazing views get as many
 //!   nodes as any others.
 
-use crate::brdf::ALPHA_MIN;
+use crate::brdf::{ShadingFrame, ALPHA_MIN};
 use crate::light::PolygonLocal;
 use crate::ltc::polygon::{form_factor_pair_signed, form_factor_signed_mapped, sided};
 use crate::real::Real;
@@ -167,6 +167,21 @@ impl<R: Real> LtcGgx<R> {
             rz: V3::new(m20 * c, m20 * s, m22),
             n,
             n_w,
+        }
+    }
+
+    /// The same lookup for vertices given in an outer frame in which
+    /// `frame` (its axes in outer coordinates) is the lobe's local frame:
+    /// each row r becomes r.x t + r.y b + r.z n, so [`LtcGgx::map`] of an
+    /// outer vertex equals the map of its coordinates in `frame`.
+    #[inline(always)]
+    pub(crate) fn in_frame(self, frame: &ShadingFrame<R>) -> LtcGgx<R> {
+        let row = |r: V3<R>| frame.t * r.x + frame.b * r.y + frame.n * r.z;
+        LtcGgx {
+            rx: row(self.rx),
+            ry: row(self.ry),
+            rz: row(self.rz),
+            ..self
         }
     }
 

@@ -42,16 +42,27 @@
 //! f = (1 − c F_c) f_under + c F_c specular_brdf(α_c), with c = clearcoat,
 //! α_c = clearcoat_roughness², F_c = 0.04 + 0.96 (1 − |V·N_c|)⁵ (IOR 1.5,
 //! by the view and the coat's normal N_c, not the half vector). N_c is the
-//! base normal here (no clearcoat normal map yet): [`GltfPrepared`] keeps
-//! the coat's view cosine and Smith root apart from the base's, the seam a
-//! coat normal fills.
+//! base normal unless the material's normal maps make them differ (a
+//! clearcoat normal map; or a base normal map, which the coat does not
+//! take, as the extension says) ([`Gltf::with_coat_normal`]): then N_c is
+//! a lane parameter (a unit vector in the local frame, whose +Z is the
+//! base's normal), and the
+//! coat's lobe takes its cosines, its half-vector angle and F_c against
+//! N_c (`dv_ggx_correlated_about`), while the base keeps its own normal.
+//! The coat's lobe then receives light by its own cosine N_c·L, as
+//! Khronos's sample viewer and Filament shade it (the base by N·L): f
+//! carries the ratio (N_c·L)/(N·L) on that lobe, since whoever lights f
+//! multiplies it by N·L. The whole f is still zero where wi or wo is
+//! below the base's horizon, and the coat's lobe where wi is below N_c's.
 //!
 //! The clearcoat term depends on μo alone and is not reciprocal, as the
 //! extension says; the rest is.
 //!
 //! **Layers per material.** Sheen and clearcoat are material switches:
 //! a layer whose factor is 0 in the material is off in every lane (a glTF
-//! texture multiplies its factor), and the kernels skip it.
+//! texture multiplies its factor), and the kernels skip it; so is the
+//! coat's own normal, which materials without a clearcoat normal map do
+//! not pay for.
 //!
 //! **Lights.** Point and directional lights evaluate f. The uniform
 //! environment uses the directional albedo: the specular and diffuse lobes
@@ -67,20 +78,24 @@
 //! bounds the error, docs/accuracy.md gives it. Polygon lights: the GGX LTC
 //! (ltc/ggx.rs) per lobe at its α (specular; clearcoat times c F_c(μo)),
 //! the diffuse lobe as its albedo at μo times the form factor (as
-//! `metallic_roughness`); sheen has no LTC here, and materials with sheen
+//! `metallic_roughness`); the coat's LTC is looked up in a frame around
+//! N_c (`LtcGgx::in_frame`); sheen has no LTC here, and materials with sheen
 //! are refused under polygon lights where the scene loads.
 //!
 //! **Lane parameters** ([`GltfLaneParams`]): every factor a glTF texture
 //! can modulate (base colour, metallic, roughness, specular, specular
-//! colour, clearcoat, clearcoat roughness, sheen colour, sheen roughness).
-//! The IOR and the Fresnel option are the material's.
+//! colour, clearcoat, clearcoat roughness, sheen colour, sheen roughness),
+//! and the coat's normal. The IOR and the Fresnel option are the
+//! material's.
 
 use crate::albedo_tables::AlbedoTables;
-use crate::brdf::{Brdf, EnvLobes, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
+use crate::brdf::{
+    Brdf, EnvLobes, HalfAngles, LaneParams, Outgoing, ShadingFrame, ALPHA_MIN, COS_FLOOR,
+};
 use crate::fresnel::{schlick_weight, schlick_weight_half};
 use crate::light::PolygonLocal;
 use crate::ltc::ggx::LtcGgx;
-use crate::masking::{dv_ggx_correlated, smith_ggx_root};
+use crate::masking::{dv_ggx_correlated, dv_ggx_correlated_about, smith_ggx_root};
 use crate::real::Real;
 use crate::sheen::{d_charlie, lambda_sheen, sheen_alpha, v_charlie, SheenTable};
 use crate::vec3::{Rgb, V3};
@@ -156,6 +171,8 @@ pub struct Gltf {
     r0: f64,
     sheen: bool,
     coat: bool,
+    /// The coat has its own normal per lane ([`Gltf::with_coat_normal`]).
+    coat_normal: bool,
 }
 
 impl Gltf {
@@ -166,8 +183,23 @@ impl Gltf {
             r0: r0_of_ior(params.ior as f64),
             sheen: params.sheen_color.iter().any(|c| *c > 0.0),
             coat: params.clearcoat > 0.0,
+            coat_normal: false,
             params,
         }
+    }
+
+    /// The clearcoat reads its own normal from the lane parameters
+    /// ([`GltfLaneParams::coat_normal`], set where the material's normal
+    /// maps make it differ from the base's) instead of the base's; no
+    /// effect without a clearcoat layer.
+    pub fn with_coat_normal(mut self) -> Gltf {
+        self.coat_normal = self.coat;
+        self
+    }
+
+    /// The clearcoat has its own normal ([`Gltf::with_coat_normal`]).
+    pub fn has_coat_normal(&self) -> bool {
+        self.coat_normal
     }
 
     /// The material has a sheen layer (some sheen colour above 0).
@@ -196,6 +228,10 @@ pub struct GltfLaneParams<R: Real> {
     pub sheen_color: Rgb<R>,
     /// Perceptual.
     pub sheen_roughness: R,
+    /// The clearcoat's unit normal in the local frame; +Z (the base's
+    /// normal) unless the material's maps set it. Read only by
+    /// materials [`Gltf::with_coat_normal`].
+    pub coat_normal: V3<R>,
 }
 
 impl<R: Real> LaneParams<R> for GltfLaneParams<R> {
@@ -216,6 +252,41 @@ impl<R: Real> LaneParams<R> for GltfLaneParams<R> {
     fn scale_roughness(&mut self, g: R) -> bool {
         self.roughness *= g;
         true
+    }
+
+    #[inline(always)]
+    fn specular_mut(&mut self) -> Option<&mut R> {
+        Some(&mut self.specular)
+    }
+
+    #[inline(always)]
+    fn specular_color_mut(&mut self) -> Option<&mut Rgb<R>> {
+        Some(&mut self.specular_color)
+    }
+
+    #[inline(always)]
+    fn clearcoat_mut(&mut self) -> Option<&mut R> {
+        Some(&mut self.clearcoat)
+    }
+
+    #[inline(always)]
+    fn clearcoat_roughness_mut(&mut self) -> Option<&mut R> {
+        Some(&mut self.clearcoat_roughness)
+    }
+
+    #[inline(always)]
+    fn coat_normal_mut(&mut self) -> Option<&mut V3<R>> {
+        Some(&mut self.coat_normal)
+    }
+
+    #[inline(always)]
+    fn sheen_color_mut(&mut self) -> Option<&mut Rgb<R>> {
+        Some(&mut self.sheen_color)
+    }
+
+    #[inline(always)]
+    fn sheen_roughness_mut(&mut self) -> Option<&mut R> {
+        Some(&mut self.sheen_roughness)
     }
 }
 
@@ -240,6 +311,9 @@ pub struct GltfPixel<R: Real> {
     pub sheen_max: R,
     pub sheen_alpha: R,
     pub sheen_roughness: R,
+    /// The coat's unit normal in the local frame (read only with
+    /// [`Gltf::with_coat_normal`]).
+    pub coat_normal: V3<R>,
 }
 
 /// A pixel's BRDF once the view is known.
@@ -249,8 +323,8 @@ pub struct GltfPrepared<R: Real> {
     pub px: GltfPixel<R>,
     /// √(α² + (1 − α²) μo²) of the base (masking.rs).
     pub smith_root_o: R,
-    /// The coat's view cosine |V·N_c| (N_c = N here), its Smith root, and
-    /// its layer weight c F_c(μo); zero without a coat.
+    /// The coat's view cosine V·N_c (floored like μo), its Smith root, and
+    /// its layer weight c F_c; zero without a coat.
     pub coat_cos_o: R,
     pub coat_smith_root_o: R,
     pub coat_weight: R,
@@ -260,9 +334,11 @@ pub struct GltfPrepared<R: Real> {
 }
 
 impl Gltf {
-    /// f from the half-vector quantities of the pixel's view and a light.
+    /// f from the half-vector quantities of the pixel's view and a light
+    /// (`wi` the light's unit local direction, read only by a coat with
+    /// its own normal).
     #[inline(always)]
-    fn f_half<R: Real>(&self, p: &GltfPrepared<R>, h: HalfAngles<R>) -> Rgb<R> {
+    fn f_half<R: Real>(&self, p: &GltfPrepared<R>, h: HalfAngles<R>, wi: V3<R>) -> Rgb<R> {
         let px = &p.px;
         let HalfAngles {
             cos_i,
@@ -302,15 +378,36 @@ impl Gltf {
             f = px.sheen_color * dv_s + f * scale;
         }
         if self.coat {
-            let dv_c = dv_ggx_correlated(
-                px.coat_alpha,
-                s,
-                len2,
-                cos_i,
-                p.coat_cos_o,
-                smith_ggx_root(px.coat_alpha, cos_i),
-                p.coat_smith_root_o,
-            );
+            let dv_c = if self.coat_normal {
+                // The coat's lobe about N_c, times (N_c·L)/(N·L) (module
+                // docs); zero where wi is below the coat's horizon (wo is
+                // above it: the map keeps V·N_c ≥ 0.02, as the base normal
+                // map does).
+                let n = px.coat_normal;
+                let c = n.dot(wi);
+                let cos_i_c = c.max(R::splat(COS_FLOOR));
+                let dv = dv_ggx_correlated_about(
+                    px.coat_alpha,
+                    n,
+                    s,
+                    len2,
+                    cos_i_c,
+                    p.coat_cos_o,
+                    smith_ggx_root(px.coat_alpha, cos_i_c),
+                    p.coat_smith_root_o,
+                );
+                R::select(c.gt(R::ZERO), dv * (cos_i_c / cos_i), R::ZERO)
+            } else {
+                dv_ggx_correlated(
+                    px.coat_alpha,
+                    s,
+                    len2,
+                    cos_i,
+                    p.coat_cos_o,
+                    smith_ggx_root(px.coat_alpha, cos_i),
+                    p.coat_smith_root_o,
+                )
+            };
             f = f * (R::ONE - p.coat_weight) + Rgb::splat(p.coat_weight * dv_c);
         }
         Rgb::select(above, f, Rgb::zero())
@@ -342,6 +439,7 @@ impl Brdf for Gltf {
             clearcoat_roughness: R::splat(p.clearcoat_roughness as f64),
             sheen_color: Rgb::from_f32(p.sheen_color),
             sheen_roughness: R::splat(p.sheen_roughness as f64),
+            coat_normal: V3::new(R::ZERO, R::ZERO, R::ONE),
         }
     }
 
@@ -357,6 +455,7 @@ impl Brdf for Gltf {
             clearcoat_roughness: p.clearcoat_roughness.lane(i),
             sheen_color: p.sheen_color.lane(i),
             sheen_roughness: p.sheen_roughness.lane(i),
+            coat_normal: p.coat_normal.lane(i),
         }
     }
 
@@ -394,6 +493,7 @@ impl Brdf for Gltf {
             sheen_max: max3(l.sheen_color),
             sheen_alpha: sheen_alpha(l.sheen_roughness),
             sheen_roughness: l.sheen_roughness,
+            coat_normal: l.coat_normal,
         }
     }
 
@@ -411,11 +511,16 @@ impl Brdf for Gltf {
             o,
         };
         if self.coat {
-            // The coat's normal is the base's (module docs): its view
-            // cosine is μo.
-            p.coat_cos_o = o.cos_o;
-            p.coat_smith_root_o = smith_ggx_root(px.coat_alpha, o.cos_o);
-            let fc = R::splat(1.0 - COAT_F0).mul_add(schlick_weight(o.cos_o), R::splat(COAT_F0));
+            // Without its own normal the coat's is the base's (module
+            // docs): its view cosine is μo.
+            p.coat_cos_o = if self.coat_normal {
+                px.coat_normal.dot(wo).max(R::splat(COS_FLOOR))
+            } else {
+                o.cos_o
+            };
+            p.coat_smith_root_o = smith_ggx_root(px.coat_alpha, p.coat_cos_o);
+            let fc =
+                R::splat(1.0 - COAT_F0).mul_add(schlick_weight(p.coat_cos_o), R::splat(COAT_F0));
             p.coat_weight = px.clearcoat * fc;
         }
         if self.sheen {
@@ -427,12 +532,12 @@ impl Brdf for Gltf {
 
     #[inline(always)]
     fn f_local<R: Real>(&self, p: &GltfPrepared<R>, wi: V3<R>) -> Rgb<R> {
-        self.f_half(p, HalfAngles::new(wi, &p.o))
+        self.f_half(p, HalfAngles::new(wi, &p.o), wi)
     }
 
     #[inline(always)]
     fn f_local_scaled<R: Real>(&self, p: &GltfPrepared<R>, v: V3<R>, inv_len: R) -> Rgb<R> {
-        self.f_half(p, HalfAngles::scaled(v, inv_len, &p.o))
+        self.f_half(p, HalfAngles::scaled(v, inv_len, &p.o), v * inv_len)
     }
 
     /// Split sum per lobe (module docs, "Lights").
@@ -513,7 +618,14 @@ impl Brdf for Gltf {
             px.diffuse.z * diff(px.g0.z, px.g90.z),
         ) * under;
         let coat = self.coat.then(|| {
-            let l = LtcGgx::new(px.coat_alpha, o.wo);
+            let l = if self.coat_normal {
+                // Looked up in a frame around N_c, then composed with it
+                // so that it maps the vertices' base-local coordinates.
+                let frame = ShadingFrame::from_normal(px.coat_normal);
+                LtcGgx::new(px.coat_alpha, frame.to_local(o.wo)).in_frame(&frame)
+            } else {
+                LtcGgx::new(px.coat_alpha, o.wo)
+            };
             let k = R::select(o.above, p.coat_weight * l.n, R::ZERO);
             (l, k)
         });
