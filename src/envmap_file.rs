@@ -14,8 +14,9 @@
 //!   [`specula_raster::envmap::MAX_TEXEL`] (and +inf) become that
 //!   (envmap.rs), so every derived sum stays finite.
 //!
-//! The derived data (prefiltered chain and SH irradiance) is kept in the
-//! table cache (table_cache.rs), keyed by a hash of the file's bytes and
+//! The derived data (the sun taken out of the map, the prefiltered chain
+//! and SH irradiance of the rest: raster's envmap_sun.rs and envmap.rs)
+//! is kept in the table cache (table_cache.rs), keyed by a hash of the file's bytes and
 //! the settings it depends on.
 
 use specula_raster::envmap::{EnvMap, Equirect, IblMethod, PREFILTER_LEVELS};
@@ -155,8 +156,9 @@ fn cache_key(bytes: &[u8], intensity: f32) -> String {
     format!("envmap-v2-{hex}")
 }
 
-/// Layout of a cached file (f32 little-endian): the 27 SH values, then
-/// per level its side and its three planes.
+/// Layout of a cached file (f32 little-endian): the 27 SH values, a flag
+/// (1: the map has a sun) and the sun's 7 values (zeros without one),
+/// then per level its side and its three planes.
 fn load_cached(key: &str) -> Option<specula_raster::envmap::Derived> {
     let dir = crate::table_cache::cache_dir()?;
     let bytes = std::fs::read(dir.join(format!("{key}.f32"))).ok()?;
@@ -167,11 +169,16 @@ fn load_cached(key: &str) -> Option<specula_raster::envmap::Derived> {
         .chunks_exact(4)
         .map(|b| f32::from_le_bytes([b[0], b[1], b[2], b[3]]))
         .collect();
-    if v.iter().any(|x| !x.is_finite()) || v.len() < 27 {
+    if v.iter().any(|x| !x.is_finite()) || v.len() < 35 {
         return None;
     }
     let sh = std::array::from_fn(|k| [v[3 * k], v[3 * k + 1], v[3 * k + 2]]);
-    let mut at = 27;
+    let sun = match v[27] {
+        0.0 => None,
+        1.0 => Some(specula_raster::envmap_sun::Sun::from_values(&v[28..35])?),
+        _ => return None,
+    };
+    let mut at = 35;
     let mut levels = Vec::new();
     for _ in 0..PREFILTER_LEVELS {
         let n = *v.get(at)? as usize;
@@ -182,15 +189,17 @@ fn load_cached(key: &str) -> Option<specula_raster::envmap::Derived> {
         at += 3 * len;
         levels.push((n, rgb));
     }
-    (at == v.len()).then_some((sh, levels))
+    (at == v.len()).then_some((sh, levels, sun))
 }
 
 fn store_cached(key: &str, map: &EnvMap) {
     let Some(dir) = crate::table_cache::cache_dir() else {
         return;
     };
-    let (sh, levels) = map.derived();
+    let (sh, levels, sun) = map.derived();
     let mut v: Vec<f32> = sh.iter().flatten().copied().collect();
+    v.push(if sun.is_some() { 1.0 } else { 0.0 });
+    v.extend_from_slice(&sun.map_or([0.0; 7], |s| s.to_values()));
     for (n, rgb) in &levels {
         v.push(*n as f32);
         for p in rgb {

@@ -190,7 +190,7 @@ pub fn envmap(data: &[u8]) -> Result<(), String> {
         panic!("texel {t} outside [0, {MAX_TEXEL}]: decoded texels must be clamped");
     }
     map.prepare(&|_, _| {});
-    let (sh, levels) = map.derived();
+    let (sh, levels, _) = map.derived();
     assert!(
         sh.iter().flatten().all(|c| c.is_finite()),
         "SH irradiance not finite: {sh:?}"

@@ -15,11 +15,16 @@
 //!   importance sampled, each sample read from the source mip whose texel
 //!   matches the sample's solid angle \[Colbert07\]; stored as octahedral
 //!   maps (planar f32 per channel) so a packet reads them with gathers;
+//! - a compact, very bright source (a sun) taken out of the map
+//!   ([`crate::envmap_sun`]): the prefiltered chain and the SH are made
+//!   of the map without it, and it is shaded as a light
+//!   ([`EnvMap::sun`]); the background and the reference keep it;
 //! - the irradiance in nine spherical harmonics \[Ramamoorthi01\], as
 //!   E(n)/π: the radiance a white Lambertian surface reflects;
 //! - the luminance distribution for sampling the map in the reference
 //!   ([`crate::envmap_sample`]).
 
+use crate::envmap_sun::Sun;
 use specula_core::{Mask, Real, Rgb, V3};
 
 /// How a map lights surfaces.
@@ -197,8 +202,49 @@ impl OctLevel {
 }
 
 /// The derived data of a map as plain values (the disk cache's form):
-/// the SH coefficients, and each prefiltered level's side and planes.
-pub type Derived = ([[f32; 3]; 9], Vec<(usize, [Vec<f32>; 3])>);
+/// the SH coefficients, each prefiltered level's side and planes, and the
+/// source taken out of the map, if any.
+pub type Derived = ([[f32; 3]; 9], Vec<(usize, [Vec<f32>; 3])>, Option<Sun>);
+
+/// The sun taken out of a map, as a distant light in the world.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SunLight {
+    /// Unit direction from the scene toward it.
+    pub to_light: [f32; 3],
+    /// Irradiance on a surface facing it: L · Ω.
+    pub irradiance: [f32; 3],
+    /// Its mean radiance L.
+    pub radiance: [f32; 3],
+    /// sin² of its angular radius ρ, from Ω = 2π(1 − cos ρ).
+    pub sin2_radius: f32,
+}
+
+/// The clamped cosine of a uniform disk of angular radius ρ whose centre
+/// is at cos θ from the normal, as a factor of its irradiance when it
+/// faces the surface: ∫disk max(0, cos) dω / (π sin²ρ). It is max(0, cos θ)
+/// while the disk is wholly above or below the horizon (cos² θ > sin² ρ);
+/// across it, with x = √(1/sin²ρ − 1), y = −x cos θ / sin θ \[Lagarde14\]:
+/// ((cos θ acos y − x sin θ √(1 − y²)) sin²ρ + atan(sin θ √(1 − y²) / x)) / (π sin²ρ).
+#[inline(always)]
+pub fn disk_cos_factor<R: Real>(cos_theta: R, sin2_radius: f32) -> R {
+    let s2 = R::splat(sin2_radius as f64);
+    let whole = cos_theta.max(R::ZERO);
+    let sin_theta = (R::ONE - cos_theta * cos_theta)
+        .max(R::ZERO)
+        .sqrt()
+        .max(R::splat(1e-7));
+    let x = (R::splat(1.0 / sin2_radius as f64 - 1.0))
+        .max(R::ZERO)
+        .sqrt();
+    // |y| ≤ 1 where the partial form is selected; clamped for the others.
+    let y = (-x * cos_theta / sin_theta).clamp(-R::ONE, R::ONE);
+    let root = (R::ONE - y * y).max(R::ZERO).sqrt();
+    let sq = sin_theta * root;
+    let acos_y = root.atan2(y);
+    let partial =
+        ((cos_theta * acos_y - x * sq) * s2 + sq.atan2(x)) / (R::splat(std::f64::consts::PI) * s2);
+    R::select((cos_theta * cos_theta).gt(s2), whole, partial.max(R::ZERO))
+}
 
 /// A loaded environment map and its derived data.
 #[derive(Clone, Debug)]
@@ -210,9 +256,13 @@ pub struct EnvMap {
     /// Whether the map is seen where no surface is.
     pub visible: bool,
     pub method: IblMethod,
-    /// E(n)/π in nine SH coefficients per channel (map frame).
+    /// E(n)/π in nine SH coefficients per channel (map frame), without
+    /// the sun.
     sh: [[f32; 3]; 9],
+    /// The prefiltered chain, without the sun.
     levels: Vec<OctLevel>,
+    /// The source taken out of the map for the SH and the chain.
+    sun: Option<Sun>,
     /// The luminance distribution for the reference (empty until
     /// prepared, or for an all-black map).
     pub(crate) sampler: crate::envmap_sample::EnvSampler,
@@ -265,6 +315,7 @@ impl EnvMap {
             method,
             sh: [[0.0; 3]; 9],
             levels: Vec::new(),
+            sun: None,
             sampler: Default::default(),
         })
     }
@@ -284,8 +335,13 @@ impl EnvMap {
     /// Builds the derived data; `progress(done, total)` is called as the
     /// prefiltered levels are made (rows of work).
     pub fn prepare(&mut self, progress: &(dyn Fn(u64, u64) + Sync)) {
-        self.sh = sh9_irradiance(&self.source);
-        self.levels = prefilter(&self.source, progress);
+        let (sun, lit) = match crate::envmap_sun::extract_sun(&self.source) {
+            Some((sun, lit)) => (Some(sun), lit),
+            None => (None, self.source.clone()),
+        };
+        self.sun = sun;
+        self.sh = sh9_irradiance(&lit);
+        self.levels = prefilter(lit, progress);
         self.sampler = crate::envmap_sample::EnvSampler::new(&self.source);
     }
 
@@ -296,12 +352,12 @@ impl EnvMap {
             .iter()
             .map(|l| (l.size, l.rgb.clone()))
             .collect();
-        (self.sh, levels)
+        (self.sh, levels, self.sun)
     }
 
     /// Installs derived data read back from the cache (as
     /// [`EnvMap::derived`] gave it); false if its shape is wrong.
-    pub fn set_derived(&mut self, (sh, levels): Derived) -> bool {
+    pub fn set_derived(&mut self, (sh, levels, sun): Derived) -> bool {
         if levels.len() != PREFILTER_LEVELS
             || levels
                 .iter()
@@ -310,6 +366,7 @@ impl EnvMap {
             return false;
         }
         self.sh = sh;
+        self.sun = sun;
         self.levels = levels
             .into_iter()
             .map(|(size, rgb)| OctLevel { size, rgb })
@@ -340,10 +397,46 @@ impl EnvMap {
         self.source.bilinear(u, v)
     }
 
+    /// The source taken out of the map, if any (map frame).
+    pub fn sun(&self) -> Option<&Sun> {
+        self.sun.as_ref()
+    }
+
+    /// The sun as a light in the world, if the map has one.
+    #[inline]
+    pub fn sun_world(&self) -> Option<SunLight> {
+        self.sun.map(|s| {
+            let cos_r = 1.0 - s.solid_angle as f64 / std::f64::consts::TAU;
+            SunLight {
+                to_light: self.to_world(s.direction.map(f64::from)).map(|x| x as f32),
+                irradiance: s.irradiance(),
+                radiance: s.radiance,
+                sin2_radius: (1.0 - cos_r * cos_r) as f32,
+            }
+        })
+    }
+
     /// E(n)/π at world unit normal `n`: the radiance a white Lambertian
-    /// surface reflects. SH ringing below zero is clamped.
+    /// surface reflects, the sun's part (E_sun times the disk's
+    /// [`disk_cos_factor`], over π) included.
     #[inline(always)]
     pub fn irradiance_over_pi<R: Real>(&self, n: V3<R>) -> Rgb<R> {
+        let sky = self.sky_irradiance_over_pi(n);
+        match self.sun_world() {
+            Some(sun) => {
+                let cos = n.dot(V3::from_f32(sun.to_light));
+                let k =
+                    disk_cos_factor(cos, sun.sin2_radius) * R::splat(std::f64::consts::FRAC_1_PI);
+                V3::from_f32(sun.irradiance).mul_elem_add(V3::splat(k), sky)
+            }
+            None => sky,
+        }
+    }
+
+    /// [`EnvMap::irradiance_over_pi`] without the sun: the SH alone. SH
+    /// ringing below zero is clamped.
+    #[inline(always)]
+    pub fn sky_irradiance_over_pi<R: Real>(&self, n: V3<R>) -> Rgb<R> {
         let d = self.to_map(n);
         let y = sh9_basis(d);
         let ch = |c: usize| {
@@ -442,13 +535,14 @@ fn level0_size(width: usize, height: usize) -> usize {
 }
 
 /// The prefiltered chain of `map` (module docs).
-fn prefilter(map: &Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLevel> {
+fn prefilter(map: Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLevel> {
     use rayon::prelude::*;
-    let mut mips = vec![map.clone()];
+    let mut mips = vec![map];
     while mips.last().is_some_and(|m| m.width > 1 || m.height > 1) {
         let next = mips.last().map(Equirect::half).unwrap_or_default();
         mips.push(next);
     }
+    let map = &mips[0];
     let sizes: Vec<usize> = (0..PREFILTER_LEVELS)
         .map(|k| (level0_size(map.width, map.height) >> k).max(16))
         .collect();
@@ -604,7 +698,7 @@ mod tests {
             };
             let mut m = EnvMap::new(source, 1.0, 0.0, true, IblMethod::SplitSum).unwrap();
             m.prepare(&|_, _| {});
-            let (_, levels) = m.derived();
+            let (_, levels, _) = m.derived();
             for (n, planes) in &levels {
                 for (c, want) in [0.25f32, 0.5, 1.0].into_iter().enumerate() {
                     assert!(
@@ -618,6 +712,42 @@ mod tests {
         assert_eq!(sides(8976, 8), [16; PREFILTER_LEVELS]);
         assert_eq!(sides(128, 64), [64, 32, 16, 16, 16, 16]);
         assert_eq!(sides(64, 128), [32, 16, 16, 16, 16, 16]);
+    }
+
+    /// The disk's clamped cosine against midpoint quadrature over the
+    /// disk (polar grid about its centre), from wholly above to wholly
+    /// below the horizon.
+    #[test]
+    fn disk_cos_factor_matches_quadrature() {
+        let rho = 0.2f64;
+        let s2 = rho.sin().powi(2);
+        for k in 0..=40 {
+            let theta = (90.0 - 15.0 + 30.0 * k as f64 / 40.0).to_radians();
+            let c = V3::new(theta.sin(), 0.0, theta.cos());
+            let (u, v) = (
+                V3::new(theta.cos(), 0.0, -theta.sin()),
+                V3::new(0.0, 1.0, 0.0),
+            );
+            let (nr, np) = (400, 400);
+            let mut sum = 0.0;
+            for i in 0..nr {
+                let a = (i as f64 + 0.5) / nr as f64 * rho;
+                for j in 0..np {
+                    let p = (j as f64 + 0.5) / np as f64 * std::f64::consts::TAU;
+                    let d = c * a.cos() + u * (a.sin() * p.cos()) + v * (a.sin() * p.sin());
+                    sum += d.z.max(0.0)
+                        * a.sin()
+                        * (rho / nr as f64)
+                        * (std::f64::consts::TAU / np as f64);
+                }
+            }
+            let want = sum / (std::f64::consts::PI * s2);
+            let got = disk_cos_factor(theta.cos(), s2 as f32);
+            assert!(
+                (got - want).abs() < 2e-3 * (1.0 - rho.cos()).max(want),
+                "θ {theta}: {got} vs {want}"
+            );
+        }
     }
 
     /// A uniform map: every level and the irradiance give its radiance.

@@ -24,6 +24,7 @@ pub mod camera;
 pub mod clip;
 pub mod envmap;
 pub mod envmap_sample;
+pub mod envmap_sun;
 mod fixed;
 mod fragment;
 pub mod frame;

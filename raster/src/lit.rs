@@ -12,7 +12,7 @@
 //! A normal map bends the local frame all of this is computed in
 //! ([`ParamMaps::frame`]).
 
-use crate::envmap::{EnvMap, IblMethod};
+use crate::envmap::{disk_cos_factor, EnvMap, IblMethod};
 use crate::envmap_sample::{reference_radiance, seed_of};
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
@@ -162,7 +162,7 @@ impl<R: Real> LightLoop<'_, '_, R> {
         }
         if let Some(map) = self.env.env_map {
             let env = match map.method {
-                IblMethod::SplitSum => env_split_sum(brdf, &prepared, frame.n, frag.wo, map),
+                IblMethod::SplitSum => env_split_sum(brdf, &prepared, frame, frag.wo, map),
                 IblMethod::Reference { samples } => {
                     env_reference(brdf, self.maps, self.input, map, samples)
                 }
@@ -196,18 +196,23 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
 
 /// The environment map's light by the split sum: the model's diffuse
 /// albedo times E(n)/π, its glossy albedo times the prefiltered radiance
-/// around the mirror direction at its roughness. `n` is the unit shading
-/// normal and `wo` the unit view direction, in world space.
+/// around the mirror direction at its roughness (both without the sun),
+/// plus the sun taken out of the map as a distant light through the
+/// model's BRDF: f(wi, wo) · E_sun toward the sun's centroid times the
+/// disk's clamped cosine ([`disk_cos_factor`]), at most L_sun · ρ(wo).
+/// `frame` is the shading frame (world space, unit normal) and `wo` the
+/// unit view direction in world space.
 #[inline(always)]
 pub fn env_split_sum<B: Brdf, R: Real>(
     brdf: &B,
     prepared: &B::Prepared<R>,
-    n: V3<R>,
+    frame: &ShadingFrame<R>,
     wo: V3<R>,
     map: &EnvMap,
 ) -> Rgb<R> {
+    let n = frame.n;
     let lobes = brdf.env_lobes(prepared);
-    let e = map.irradiance_over_pi(n);
+    let e = map.sky_irradiance_over_pi(n);
     let mut out = lobes.diffuse.mul_elem(e);
     let s = lobes.specular;
     if (s.x.gt(R::ZERO) | s.y.gt(R::ZERO) | s.z.gt(R::ZERO)).any() {
@@ -216,6 +221,22 @@ pub fn env_split_sum<B: Brdf, R: Real>(
         out = lobes
             .specular
             .mul_elem_add(map.prefiltered(r, lobes.roughness), out);
+    }
+    if let Some(sun) = map.sun_world() {
+        let wi = frame.to_local(V3::from_f32(sun.to_light));
+        // The disk's clamped cosine (it may straddle the horizon), and f
+        // toward its centre lifted just above the horizon.
+        let k = disk_cos_factor(wi.z, sun.sin2_radius);
+        let wi_above = V3::new(wi.x, wi.y, wi.z.max(R::splat(1e-4))).normalize();
+        let part = brdf
+            .f_local(prepared, wi_above)
+            .mul_elem(V3::from_f32(sun.irradiance) * k);
+        // ∫ over the disk of f cos θi L ≤ L ρ(wo): a lobe narrower than
+        // the disk, whose value at the centre times Ω overshoots it, is
+        // cut to the disk's radiance times the albedo (a mirror's exact
+        // value when it reflects the disk).
+        let cap = (lobes.diffuse + lobes.specular).mul_elem(V3::from_f32(sun.radiance));
+        out += Rgb::new(part.x.min(cap.x), part.y.min(cap.y), part.z.min(cap.z));
     }
     out
 }
