@@ -3,7 +3,7 @@
 //! PCSS and maps too large for f32 gather indices lane by lane.
 
 use super::settings::ShadowFilter;
-use super::{Face, LightShadow};
+use super::{Face, LightShadow, Pick};
 use glam::Vec3;
 use specula_core::{Mask, Real, V3};
 
@@ -65,6 +65,9 @@ impl LightShadow {
     /// Per face, the mask of the `lanes` whose point it sees (a lane with
     /// a non-finite point goes to face 0, whose lookup gives it 1).
     fn face_masks<R: Real>(&self, p: &V3<R>, lanes: u32) -> [u32; 6] {
+        if let (Pick::Cube(c), false) = (&self.pick, R::EXACT) {
+            return cube_face_masks(p, *c, lanes);
+        }
         let mut masks = [0u32; 6];
         for i in (0..R::LANES).filter(|i| lanes & (1 << i) != 0) {
             let q = Vec3::new(p.x.lane(i) as f32, p.y.lane(i) as f32, p.z.lane(i) as f32);
@@ -132,6 +135,32 @@ impl LightShadow {
         };
         R::select(use_map, f, R::ONE)
     }
+}
+
+/// [`LightShadow::face_index`] of a cube around `c` on all lanes at once,
+/// as masks: the same comparisons in f32 (lanes of f32 are the scalar
+/// pick's own values; not for f64 lanes, which it rounds to f32 first).
+#[inline(always)]
+fn cube_face_masks<R: Real>(p: &V3<R>, c: Vec3, lanes: u32) -> [u32; 6] {
+    let k = |x: f32| R::splat(x as f64);
+    let d = V3::new(p.x - k(c.x), p.y - k(c.y), p.z - k(c.z));
+    let a = V3::new(d.x.abs(), d.y.abs(), d.z.abs());
+    let finite = p.x.is_finite() & p.y.is_finite() & p.z.is_finite();
+    let on_x = a.x.ge(a.y) & a.x.ge(a.z);
+    let on_y = !on_x & a.y.ge(a.z);
+    let on_z = !(on_x | on_y);
+    let neg = |v: R| v.lt(R::ZERO);
+    // A lane with a non-finite point goes to face 0, as `face_masks` does.
+    let bits = |m: R::Mask| m.bits() & lanes;
+    let pos_x = bits(!finite | (on_x & !neg(d.x)));
+    [
+        pos_x,
+        bits(finite & on_x & neg(d.x)),
+        bits(finite & on_y & !neg(d.y)),
+        bits(finite & on_y & neg(d.y)),
+        bits(finite & on_z & !neg(d.z)),
+        bits(finite & on_z & neg(d.z)),
+    ]
 }
 
 /// Largest map side whose texel indices (up to side² − 1) are exact in
