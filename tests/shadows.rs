@@ -462,7 +462,8 @@ shadow_map_size = 2048
 
 /// The 8-lane lookup gives each lane the scalar lookup's bits when the
 /// lanes spread over a directional light's cascades and a point light's
-/// cube faces (hard and PCF), and for PCSS (lane by lane).
+/// cube faces (hard and PCF), for PCF radii that take each of its paths
+/// (depth blocks, texel grid, taps), and for PCSS (lane by lane).
 #[test]
 #[allow(clippy::needless_range_loop)]
 fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
@@ -474,14 +475,20 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
         rng ^= rng << 17;
         (rng >> 40) as f32 / (1u64 << 24) as f32
     };
+    // PCF radii: 1.5 (the default) and 1 and 0.5 read a texel grid once,
+    // 0.75 and 0 their taps; all first try the depth blocks.
     let cases = [
-        ("shadows_cascades.toml", 0, 4, "hard"),
-        ("shadows_cascades.toml", 0, 3, "pcf"),
-        ("shadows_cascades.toml", 0, 2, "pcss"),
-        ("shadows.toml", 2, 1, "hard"),
-        ("shadows.toml", 2, 1, "pcf"),
+        ("shadows_cascades.toml", 0, 4, "hard", 1.5),
+        ("shadows_cascades.toml", 0, 3, "pcf", 1.5),
+        ("shadows_cascades.toml", 0, 2, "pcss", 1.5),
+        ("shadows.toml", 2, 1, "hard", 1.5),
+        ("shadows.toml", 2, 1, "pcf", 1.5),
+        ("shadows.toml", 0, 1, "pcf", 1.0),
+        ("shadows.toml", 0, 1, "pcf", 0.5),
+        ("shadows.toml", 1, 1, "pcf", 0.75),
+        ("shadows.toml", 1, 1, "pcf", 0.0),
     ];
-    for (file, k, cascades, filter) in cases {
+    for (file, k, cascades, filter, radius) in cases {
         let mut s = specula::scene::load_scene(&common::fixtures().join("scenes").join(file))
             .expect("fixture scene");
         let light = s.data.lights[k].clone();
@@ -489,6 +496,7 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
         let mut settings = s.data.shadows[k].expect("a shadowed light");
         settings.cascades = cascades;
         settings.map_size = 256;
+        settings.filter_radius = radius;
         settings.filter = match filter {
             "hard" => specula_raster::shadow::ShadowFilter::Hard,
             "pcf" => specula_raster::shadow::ShadowFilter::Pcf,
@@ -535,11 +543,14 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
                 assert_eq!(
                     (got.lane(l) as f32).to_bits(),
                     want.to_bits(),
-                    "{file} light {k}, {cascades} cascades, {filter}: lane {l}"
+                    "{file} light {k}, {cascades} cascades, {filter} {radius}: lane {l}"
                 );
             }
         }
-        assert!(shadowed > 100, "{file} {filter}: some points in shadow");
+        assert!(
+            shadowed > 100,
+            "{file} {filter} {radius}: some points in shadow"
+        );
         assert_eq!(ls.faces(), if k == 2 { 6 } else { cascades as usize });
     }
 }

@@ -475,7 +475,7 @@ fn shadowed_lights<B: Brdf, R: Real>(
                 let part = add_delta_light(brdf, prepared, frag, frame, light, Rgb::zero());
                 let n = frag.n;
                 part.mul_elem_add(
-                    V3::splat(shadow.visibility_lanes(&frag.p, &n, input.lanes)),
+                    V3::splat(shadow.visibility_where(&part, &frag.p, &n, input.lanes)),
                     acc,
                 )
             }
@@ -499,7 +499,7 @@ fn shadowed_lights<B: Brdf, R: Real>(
         let part = lights_from_polygon(brdf, maps, input, std::slice::from_ref(light), false);
         acc = match shadows.light(k) {
             Some(shadow) => part.mul_elem_add(
-                V3::splat(shadow.visibility_lanes(&frag.p, &frag.n, input.lanes)),
+                V3::splat(shadow.visibility_where(&part, &frag.p, &frag.n, input.lanes)),
                 acc,
             ),
             None => acc + part,

@@ -3,11 +3,27 @@
 //! PCSS and maps too large for f32 gather indices lane by lane.
 
 use super::settings::ShadowFilter;
-use super::{Face, LightShadow};
+use super::{Face, LightShadow, Pick};
 use glam::Vec3;
-use specula_core::{Real, V3};
+use specula_core::{Mask, Real, V3};
 
 impl LightShadow {
+    /// [`LightShadow::visibility_lanes`] for a light whose part at each
+    /// lane is `part`, looked up only where `part` is not zero (1
+    /// elsewhere): a factor is finite and in [0, 1], so there
+    /// `part` × factor and `part` × 1 are the same zero, and lanes a light
+    /// does not reach (outside a spot's cone, facing away) cost nothing.
+    #[inline(always)]
+    pub fn visibility_where<R: Real>(&self, part: &V3<R>, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
+        let reached =
+            part.x.abs().gt(R::ZERO) | part.y.abs().gt(R::ZERO) | part.z.abs().gt(R::ZERO);
+        let lanes = lanes & reached.bits();
+        if lanes == 0 {
+            return R::ONE;
+        }
+        self.visibility_lanes(p, n, lanes)
+    }
+
     /// [`LightShadow::visibility`] of each lane of `p`, `n` in `lanes`
     /// (1 elsewhere), bit for bit. Hard and PCF lookups on maps small
     /// enough for exact f32 gather indices run on all lanes at once
@@ -49,6 +65,9 @@ impl LightShadow {
     /// Per face, the mask of the `lanes` whose point it sees (a lane with
     /// a non-finite point goes to face 0, whose lookup gives it 1).
     fn face_masks<R: Real>(&self, p: &V3<R>, lanes: u32) -> [u32; 6] {
+        if let (Pick::Cube(c), false) = (&self.pick, R::EXACT) {
+            return cube_face_masks(p, *c, lanes);
+        }
         let mut masks = [0u32; 6];
         for i in (0..R::LANES).filter(|i| lanes & (1 << i) != 0) {
             let q = Vec3::new(p.x.lane(i) as f32, p.y.lane(i) as f32, p.z.lane(i) as f32);
@@ -107,10 +126,41 @@ impl LightShadow {
         );
         let f = match s.filter {
             ShadowFilter::Hard => face.lit_lanes(round_lanes(u), round_lanes(v), d),
-            _ => face.pcf_lanes(u, v, d, s.filter_radius),
+            _ => match face.pcf_decided(u, v, d, s.filter_radius, use_map) {
+                Some(f) => f,
+                None => face
+                    .pcf_grid(u, v, d, s.filter_radius, use_map)
+                    .unwrap_or_else(|| face.pcf_lanes(u, v, d, s.filter_radius)),
+            },
         };
         R::select(use_map, f, R::ONE)
     }
+}
+
+/// [`LightShadow::face_index`] of a cube around `c` on all lanes at once,
+/// as masks: the same comparisons in f32 (lanes of f32 are the scalar
+/// pick's own values; not for f64 lanes, which it rounds to f32 first).
+#[inline(always)]
+fn cube_face_masks<R: Real>(p: &V3<R>, c: Vec3, lanes: u32) -> [u32; 6] {
+    let k = |x: f32| R::splat(x as f64);
+    let d = V3::new(p.x - k(c.x), p.y - k(c.y), p.z - k(c.z));
+    let a = V3::new(d.x.abs(), d.y.abs(), d.z.abs());
+    let finite = p.x.is_finite() & p.y.is_finite() & p.z.is_finite();
+    let on_x = a.x.ge(a.y) & a.x.ge(a.z);
+    let on_y = !on_x & a.y.ge(a.z);
+    let on_z = !(on_x | on_y);
+    let neg = |v: R| v.lt(R::ZERO);
+    // A lane with a non-finite point goes to face 0, as `face_masks` does.
+    let bits = |m: R::Mask| m.bits() & lanes;
+    let pos_x = bits(!finite | (on_x & !neg(d.x)));
+    [
+        pos_x,
+        bits(finite & on_x & neg(d.x)),
+        bits(finite & on_y & !neg(d.y)),
+        bits(finite & on_y & neg(d.y)),
+        bits(finite & on_z & !neg(d.z)),
+        bits(finite & on_z & neg(d.z)),
+    ]
 }
 
 /// Largest map side whose texel indices (up to side² − 1) are exact in
@@ -154,6 +204,129 @@ impl Face {
         let top = self.lit_lanes(x0, y0, d) * (R::ONE - fx) + self.lit_lanes(x1, y0, d) * fx;
         let bottom = self.lit_lanes(x0, y1, d) * (R::ONE - fx) + self.lit_lanes(x1, y1, d) * fx;
         top * (R::ONE - fy) + bottom * fy
+    }
+
+    /// [`Face::pcf`] of every lane in `lanes` without reading its taps,
+    /// when each such lane is wholly lit or wholly shadowed: `Some(1)`
+    /// where `d` is at most the nearest depth of the 2 × 2 blocks that
+    /// hold every texel its taps read ([`DepthBlocks`](super::DepthBlocks)), `Some(0)` where
+    /// it is beyond the farthest; `None` when a lane is neither (or the
+    /// face has no blocks), and the taps decide.
+    ///
+    /// Exact, so the same bits as [`Face::pcf_lanes`]: all comparisons 0
+    /// give 0; all 1 give 1, since every bilinear weight pair
+    /// fl(1 − x) + x rounds to 1 for 0 ≤ x ≤ 1 (fl(1 − x) is exact for
+    /// x ≥ ½; below, its error is at most a quarter ulp of 1, which the
+    /// sum rounds away), and 9 × 1 / 9 = 1.
+    #[inline(always)]
+    fn pcf_decided<R: Real>(&self, u: R, v: R, d: R, radius: f32, lanes: R::Mask) -> Option<R> {
+        let b = self.blocks.as_ref()?;
+        let last = R::splat((self.size - 1) as f64);
+        let side = R::splat(b.side as f64);
+        let two_sides = R::splat((2 * b.side - 1) as f64);
+        // The taps' texels along one axis: from the lowest tap's x0 to the
+        // highest tap's x0 + 1, computed as `pcf_lanes` computes them,
+        // then clamped as `at` clamps. The first block that holds the
+        // lowest, and whether the next block also holds the highest.
+        let span = |t: R| {
+            let first = (t + R::splat(-radius as f64)).floor().clamp(R::ZERO, last);
+            let end = ((t + R::splat(radius as f64)).floor() + R::ONE).clamp(R::ZERO, last);
+            let block = (first / side).floor();
+            (block, end.le(block * side + two_sides))
+        };
+        let (bx, fits_x) = span(u);
+        let (by, fits_y) = span(v);
+        let i = by * R::splat(b.count as f64) + bx;
+        let fits = fits_x & fits_y;
+        let lit = fits & d.le(R::gather(&b.near, i));
+        let dark = fits & d.gt(R::gather(&b.far, i));
+        (!lanes | lit | dark)
+            .all()
+            .then(|| R::select(lit, R::ONE, R::ZERO))
+    }
+
+    /// [`Face::pcf_lanes`] reading each texel once, when the lanes in
+    /// `lanes` share the taps' layout: 2r a whole number k ≤ 3 of texels,
+    /// so that the taps at u − r, u and u + r start at texels x, x + ⌊r⌋
+    /// or x + ⌊r⌋ + 1 (per lane) and x + k, inside a grid of k + 2 texels
+    /// from x = ⌊u − r⌋ (both axes; the default radius 1.5 reads 5 × 5
+    /// texels instead of 9 × 4). Each tap's comparisons are picked from
+    /// the grid's, and its weights and the sum are `pcf_lanes`'s, so the
+    /// bits are the same. `None` when a lane's taps fall otherwise (an
+    /// addition rounded across a texel edge) or for other radii: then the
+    /// taps read alone.
+    #[inline(always)]
+    fn pcf_grid<R: Real>(&self, u: R, v: R, d: R, radius: f32, lanes: R::Mask) -> Option<R> {
+        match (2.0 * radius, radius.floor()) {
+            (3.0, 1.0) => self.pcf_grid_k::<R, 3, 1>(u, v, d, radius, lanes),
+            (2.0, 1.0) => self.pcf_grid_k::<R, 2, 1>(u, v, d, radius, lanes),
+            (1.0, 0.0) => self.pcf_grid_k::<R, 1, 0>(u, v, d, radius, lanes),
+            _ => None,
+        }
+    }
+
+    /// [`Face::pcf_grid`] for 2r = `K`, ⌊r⌋ = `M`.
+    #[inline(always)]
+    fn pcf_grid_k<R: Real, const K: usize, const M: usize>(
+        &self,
+        u: R,
+        v: R,
+        d: R,
+        radius: f32,
+        lanes: R::Mask,
+    ) -> Option<R> {
+        const MAX: usize = 5;
+        // Per axis: the taps' coordinates as `pcf_lanes` adds them, the
+        // grid's first texel, and which lanes' middle tap starts one on.
+        let axis = |t: R| {
+            let taps = [-1.0f32, 0.0, 1.0].map(|i| t + R::splat((i * radius) as f64));
+            let first = taps[0].floor();
+            let (mid, end) = (taps[1].floor() - first, taps[2].floor() - first);
+            let (m, k) = (R::splat(M as f64), R::splat(K as f64));
+            let laid = end.le(k) & end.ge(k) & mid.ge(m) & mid.le(m + R::ONE);
+            (taps, first, mid.gt(m), laid)
+        };
+        let (tu, x, mx, laid_x) = axis(u);
+        let (tv, y, my, laid_y) = axis(v);
+        if !(!lanes | (laid_x & laid_y)).all() {
+            return None;
+        }
+        // The grid's comparisons, lit[row][column], its texels clamped as
+        // `at` clamps them.
+        let last = R::splat((self.size - 1) as f64);
+        let size = R::splat(self.size as f64);
+        let cols: [R; MAX] = std::array::from_fn(|i| (x + R::splat(i as f64)).clamp(R::ZERO, last));
+        let mut lit = [[R::ZERO; MAX]; MAX];
+        for (j, row) in lit.iter_mut().enumerate().take(K + 2) {
+            let base = (y + R::splat(j as f64)).clamp(R::ZERO, last) * size;
+            for (l, &c) in row.iter_mut().zip(&cols).take(K + 2) {
+                *l = R::select(d.le(R::gather(&self.depth, base + c)), R::ONE, R::ZERO);
+            }
+        }
+        // Tap t's texel t0 + e along an axis, t0 = 0, M or M + 1, K.
+        let pick = |a: &[R; MAX], t: usize, mid: R::Mask, e: usize| match t {
+            0 => a[e],
+            1 => R::select(mid, a[M + 1 + e], a[M + e]),
+            _ => a[K + e],
+        };
+        // Per tap across and its texel e: that column of every row.
+        let cols: [[[R; MAX]; 2]; 3] = std::array::from_fn(|ti| {
+            std::array::from_fn(|e| std::array::from_fn(|j| pick(&lit[j], ti, mx, e)))
+        });
+        let mut sum = R::ZERO;
+        for (tj, &tv) in tv.iter().enumerate() {
+            for (ti, &tu) in tu.iter().enumerate() {
+                // `compare_bilinear_lanes` on the grid's comparisons.
+                let (fx, fy) = (tu - tu.floor(), tv - tv.floor());
+                let [c0, c1] = &cols[ti];
+                let (l00, l10) = (pick(c0, tj, my, 0), pick(c1, tj, my, 0));
+                let (l01, l11) = (pick(c0, tj, my, 1), pick(c1, tj, my, 1));
+                let top = l00 * (R::ONE - fx) + l10 * fx;
+                let bottom = l01 * (R::ONE - fx) + l11 * fx;
+                sum += top * (R::ONE - fy) + bottom * fy;
+            }
+        }
+        Some(sum / R::splat(9.0))
     }
 
     /// [`Face::pcf`] per lane.

@@ -60,6 +60,23 @@ struct Face {
     /// Orthographic: NDC depth = 1 − (depth − near) / span.
     near: f32,
     span: f32,
+    /// PCF lights: the depth bounds that decide wholly lit and wholly
+    /// shadowed lookups without their taps (`lanes.rs`).
+    blocks: Option<DepthBlocks>,
+}
+
+/// A face's nearest and farthest depth over every 2 × 2 blocks of
+/// `side` × `side` texels, row-major by the first block: `near[j·count +
+/// i]` is the least depth of the texels of blocks i..=i+1 across and
+/// j..=j+1 down (cut to the map). A PCF lookup reads texels spanning at
+/// most `side` + 1 along each axis, which two blocks hold.
+#[derive(Clone, Debug, Default)]
+struct DepthBlocks {
+    side: u32,
+    /// Blocks along each axis.
+    count: u32,
+    near: Vec<f32>,
+    far: Vec<f32>,
 }
 
 /// A shadowed light's maps for one frame.
@@ -153,11 +170,13 @@ impl ShadowMaps {
             let mut faces = faces;
             for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
                 new.depth = old.depth;
+                new.blocks = old.blocks;
             }
+            let block_side = settings.pcf_block_side();
             ls.faces = faces;
             ls.passes.resize_with(ls.faces.len(), || None);
             for (face, pass) in ls.faces.iter_mut().zip(&mut ls.passes) {
-                render_face(scene, face, pass, stats);
+                render_face(scene, face, pass, block_side, stats);
             }
             self.any = true;
         }

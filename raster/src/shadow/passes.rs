@@ -7,11 +7,11 @@
 
 use super::cascades::cascade_splits;
 use super::settings::ShadowSettings;
-use super::{Face, Pick};
+use super::{DepthBlocks, Face, Pick};
 use crate::camera::{Camera, View};
 use crate::frame::{depth_pass, FrameStats, Visibility};
 use crate::scene::SceneData;
-use crate::target::Target;
+use crate::target::{Target, TILE};
 use glam::{Mat4, Vec3, Vec4};
 use rayon::prelude::*;
 use specula_core::light::Light;
@@ -243,6 +243,7 @@ fn directional_face(
         perspective: false,
         near,
         span,
+        blocks: None,
     }
 }
 
@@ -270,14 +271,17 @@ fn perspective_face(s: &ShadowSettings, pos: Vec3, axis: Vec3, tan_half: f32, b:
         perspective: true,
         near,
         span: 0.0,
+        blocks: None,
     }
 }
 
-/// Draws `face`'s depth pass and keeps its linear depth, row-major.
+/// Draws `face`'s depth pass and keeps its linear depth, row-major, and
+/// with `block_side` its depth bounds over blocks of that side.
 pub(super) fn render_face(
     scene: &SceneData,
     face: &mut Face,
     pass: &mut Option<Visibility>,
+    block_side: Option<u32>,
     stats: &mut FrameStats,
 ) {
     let target = Target::new(face.size, face.size).expect("map size checked at load");
@@ -289,17 +293,85 @@ pub(super) fn render_face(
         .par_chunks_mut(n)
         .enumerate()
         .for_each(|(y, row)| {
-            for (x, d) in row.iter_mut().enumerate() {
-                let z = v.vis.depth[target.index(x as u32, y as u32)];
-                *d = if z <= 0.0 {
-                    f32::INFINITY
-                } else if perspective {
-                    near / z
+            // The row's runs of up to a tile's width lie together in the
+            // tile-major buffer.
+            for (t, run) in row.chunks_mut(TILE).enumerate() {
+                let start = target.index((t * TILE) as u32, y as u32);
+                let z = &v.vis.depth[start..start + run.len()];
+                if perspective {
+                    for (d, &z) in run.iter_mut().zip(z) {
+                        *d = if z <= 0.0 { f32::INFINITY } else { near / z };
+                    }
                 } else {
-                    near + (1.0 - z) * span
-                };
+                    for (d, &z) in run.iter_mut().zip(z) {
+                        *d = if z <= 0.0 {
+                            f32::INFINITY
+                        } else {
+                            near + (1.0 - z) * span
+                        };
+                    }
+                }
             }
         });
+    match block_side {
+        Some(side) => {
+            let mut blocks = face.blocks.take().unwrap_or_default();
+            blocks.fill(&face.depth, n, side);
+            face.blocks = Some(blocks);
+        }
+        None => face.blocks = None,
+    }
+}
+
+impl DepthBlocks {
+    /// The bounds of the `n` × `n` row-major `depth` over blocks of
+    /// `side` texels (the buffers of an earlier frame refilled).
+    fn fill(&mut self, depth: &[f32], n: usize, side: u32) {
+        let b = side as usize;
+        let m = n.div_ceil(b);
+        self.side = side;
+        self.count = m as u32;
+        self.near.clear();
+        self.near.resize(m * m, f32::INFINITY);
+        self.far.clear();
+        self.far.resize(m * m, f32::NEG_INFINITY);
+        // Each block's own bounds, a row of blocks per task.
+        self.near
+            .par_chunks_mut(m)
+            .zip(self.far.par_chunks_mut(m))
+            .enumerate()
+            .for_each(|(j, (near, far))| {
+                for row in depth[j * b * n..((j + 1) * b).min(n) * n].chunks_exact(n) {
+                    for ((lo, hi), texels) in near.iter_mut().zip(far.iter_mut()).zip(row.chunks(b))
+                    {
+                        for &z in texels {
+                            *lo = lo.min(z);
+                            *hi = hi.max(z);
+                        }
+                    }
+                }
+            });
+        // Then over each block and its neighbours right and down (in
+        // place: each entry reads ones not yet overwritten).
+        sweep(&mut self.near, m, f32::min);
+        sweep(&mut self.far, m, f32::max);
+    }
+}
+
+/// `v` (m × m, row-major) replaced by `pick` over each entry and its
+/// neighbours right, down and diagonal (where they exist), in place.
+fn sweep(v: &mut [f32], m: usize, pick: fn(f32, f32) -> f32) {
+    for row in v.chunks_exact_mut(m) {
+        for i in 0..m - 1 {
+            row[i] = pick(row[i], row[i + 1]);
+        }
+    }
+    for j in 0..m - 1 {
+        let (top, rest) = v[j * m..].split_at_mut(m);
+        for (a, b) in top.iter_mut().zip(&rest[..m]) {
+            *a = pick(*a, *b);
+        }
+    }
 }
 
 #[cfg(test)]
