@@ -190,7 +190,18 @@ pub fn envmap(data: &[u8]) -> Result<(), String> {
         panic!("texel {t} outside [0, {MAX_TEXEL}]: decoded texels must be clamped");
     }
     map.prepare(&|_, _| {});
-    let (sh, levels, _) = map.derived();
+    let (sh, levels, sun) = map.derived();
+    if let Some(sun) = sun {
+        let d = sun.direction;
+        let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        assert!(
+            (len - 1.0).abs() < 1e-3
+                && sun.solid_angle.is_finite()
+                && sun.solid_angle > 0.0
+                && sun.irradiance().iter().all(|c| c.is_finite() && *c >= 0.0),
+            "the extracted sun is not a finite light: {sun:?}"
+        );
+    }
     assert!(
         sh.iter().flatten().all(|c| c.is_finite()),
         "SH irradiance not finite: {sh:?}"
