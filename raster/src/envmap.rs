@@ -263,6 +263,9 @@ pub struct EnvMap {
     levels: Vec<OctLevel>,
     /// The source taken out of the map for the SH and the chain.
     sun: Option<Sun>,
+    /// `sun` in the world (rotated, its radius from its solid angle),
+    /// made once where `sun` is set, read per packet.
+    sun_light: Option<SunLight>,
     /// The luminance distribution for the reference (empty until
     /// prepared, or for an all-black map).
     pub(crate) sampler: crate::envmap_sample::EnvSampler,
@@ -316,6 +319,7 @@ impl EnvMap {
             sh: [[0.0; 3]; 9],
             levels: Vec::new(),
             sun: None,
+            sun_light: None,
             sampler: Default::default(),
         })
     }
@@ -339,7 +343,7 @@ impl EnvMap {
             Some((sun, lit)) => (Some(sun), lit),
             None => (None, self.source.clone()),
         };
-        self.sun = sun;
+        self.set_sun(sun);
         self.sh = sh9_irradiance(&lit);
         self.levels = prefilter(lit, progress);
         self.sampler = crate::envmap_sample::EnvSampler::new(&self.source);
@@ -366,7 +370,7 @@ impl EnvMap {
             return false;
         }
         self.sh = sh;
-        self.sun = sun;
+        self.set_sun(sun);
         self.levels = levels
             .into_iter()
             .map(|(size, rgb)| OctLevel { size, rgb })
@@ -402,10 +406,10 @@ impl EnvMap {
         self.sun.as_ref()
     }
 
-    /// The sun as a light in the world, if the map has one.
-    #[inline]
-    pub fn sun_world(&self) -> Option<SunLight> {
-        self.sun.map(|s| {
+    /// Sets the source taken out of the map and its light in the world.
+    fn set_sun(&mut self, sun: Option<Sun>) {
+        self.sun = sun;
+        self.sun_light = sun.map(|s| {
             let cos_r = 1.0 - s.solid_angle as f64 / std::f64::consts::TAU;
             SunLight {
                 to_light: self.to_world(s.direction.map(f64::from)).map(|x| x as f32),
@@ -413,7 +417,13 @@ impl EnvMap {
                 radiance: s.radiance,
                 sin2_radius: (1.0 - cos_r * cos_r) as f32,
             }
-        })
+        });
+    }
+
+    /// The sun as a light in the world, if the map has one.
+    #[inline(always)]
+    pub fn sun_world(&self) -> Option<SunLight> {
+        self.sun_light
     }
 
     /// E(n)/π at world unit normal `n`: the radiance a white Lambertian
