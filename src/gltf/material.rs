@@ -394,6 +394,21 @@ fn info(
         .transpose()
 }
 
+/// The field `key` of an extension's JSON object `ext` (at JSON path
+/// `p`) read as `T`, with its JSON path; `None` when it is absent.
+fn extension_field<T: serde::de::DeserializeOwned>(
+    p: &str,
+    ext: &serde_json::Value,
+    key: &str,
+) -> Result<Option<(String, T)>, String> {
+    let Some(v) = ext.get(key) else {
+        return Ok(None);
+    };
+    let at = format!("{p}.{key}");
+    let t = serde_json::from_value(v.clone()).map_err(|e| format!("{at}: {e}"))?;
+    Ok(Some((at, t)))
+}
+
 /// The textureInfo `key` of an extension's JSON object `ext` (at JSON
 /// path `p`), if it has one.
 fn extension_info(
@@ -402,13 +417,10 @@ fn extension_info(
     ext: &serde_json::Value,
     key: &str,
 ) -> Result<Option<TextureRef>, String> {
-    let Some(v) = ext.get(key) else {
-        return Ok(None);
-    };
-    let at = format!("{p}.{key}");
-    let i: json::texture::Info =
-        serde_json::from_value(v.clone()).map_err(|e| format!("{at}: {e}"))?;
-    info(root, at, &Some(i))
+    match extension_field::<json::texture::Info>(p, ext, key)? {
+        Some((at, i)) => info(root, at, &Some(i)),
+        None => Ok(None),
+    }
 }
 
 /// The normalTextureInfo `key` (with its scale) of an extension's JSON
@@ -419,12 +431,9 @@ fn extension_normal(
     ext: &serde_json::Value,
     key: &str,
 ) -> Result<Option<TextureRef>, String> {
-    let Some(v) = ext.get(key) else {
+    let Some((at, n)) = extension_field::<json::material::NormalTexture>(p, ext, key)? else {
         return Ok(None);
     };
-    let at = format!("{p}.{key}");
-    let n: json::material::NormalTexture =
-        serde_json::from_value(v.clone()).map_err(|e| format!("{at}: {e}"))?;
     if !n.scale.is_finite() {
         return Err(format!("{at}.scale: must be finite, got {}", n.scale));
     }
