@@ -516,29 +516,36 @@ fn the_generated_sun_is_taken_out() {
             [c.x, c.y, c.z]
         }
     }
-    let split = white.visit(Both(&map, frame, wo));
-    let runs = 16;
-    let est: Vec<[f64; 3]> = (0..runs)
-        .map(|seed| {
-            white.visit(Reference {
-                map: &map,
-                wo,
-                frame,
-                samples: 256,
-                seed: seed * 7919 + 3,
-            })
-        })
-        .collect();
-    for c in 0..3 {
-        let mean = est.iter().map(|e| e[c]).sum::<f64>() / runs as f64;
-        let var = est.iter().map(|e| (e[c] - mean).powi(2)).sum::<f64>() / (runs as f64 - 1.0);
-        let se = (var / runs as f64).sqrt();
-        assert!(
-            (split[c] - mean).abs() <= 0.03 * mean + 4.0 * se,
-            "channel {c}: split sum {} vs reference {mean} ± {se}",
-            split[c]
-        );
-    }
+    // The split sum of `m` at (frame, wo) against 16 reference runs of
+    // 256 samples: within `rel` of their mean plus 4 standard errors.
+    let check =
+        |m: &Model, frame: ShadingFrame<f64>, wo: V3<f64>, seed: u64, rel: f64, what: &str| {
+            let split = m.visit(Both(&map, frame, wo));
+            let runs = 16;
+            let est: Vec<[f64; 3]> = (0..runs)
+                .map(|k| {
+                    m.visit(Reference {
+                        map: &map,
+                        wo,
+                        frame,
+                        samples: 256,
+                        seed: k * 7919 + seed,
+                    })
+                })
+                .collect();
+            for c in 0..3 {
+                let mean = est.iter().map(|e| e[c]).sum::<f64>() / runs as f64;
+                let var =
+                    est.iter().map(|e| (e[c] - mean).powi(2)).sum::<f64>() / (runs as f64 - 1.0);
+                let se = (var / runs as f64).sqrt();
+                assert!(
+                    (split[c] - mean).abs() <= rel * mean + 4.0 * se,
+                    "{what}channel {c}: split sum {} vs reference {mean} ± {se}",
+                    split[c]
+                );
+            }
+        };
+    check(&white, frame, wo, 3, 0.03, "");
     // A near-mirror metal reflecting the sun's centre: its lobe is far
     // narrower than the disk, so the reference is about F · L_sun; the
     // sun's f cos θi · E at the centre alone would be ~50 times that, the
@@ -547,30 +554,14 @@ fn the_generated_sun_is_taken_out() {
         r#"{"model": "metallic_roughness", "base_color": [0.9, 0.7, 0.5], "roughness": 0.05, "metallic": 1.0}"#,
     );
     let n = V3::new(d[0], d[1], d[2]);
-    let frame = ShadingFrame::from_normal(n);
-    let wo = V3::new(0.0, 0.0, 1.0);
-    let split = mirror.visit(Both(&map, frame, wo));
-    let est: Vec<[f64; 3]> = (0..runs)
-        .map(|seed| {
-            mirror.visit(Reference {
-                map: &map,
-                wo,
-                frame,
-                samples: 256,
-                seed: seed * 7919 + 5,
-            })
-        })
-        .collect();
-    for c in 0..3 {
-        let mean = est.iter().map(|e| e[c]).sum::<f64>() / runs as f64;
-        let var = est.iter().map(|e| (e[c] - mean).powi(2)).sum::<f64>() / (runs as f64 - 1.0);
-        let se = (var / runs as f64).sqrt();
-        assert!(
-            (split[c] - mean).abs() <= 0.05 * mean + 4.0 * se,
-            "mirror channel {c}: split sum {} vs reference {mean} ± {se}",
-            split[c]
-        );
-    }
+    check(
+        &mirror,
+        ShadingFrame::from_normal(n),
+        V3::new(0.0, 0.0, 1.0),
+        5,
+        0.05,
+        "mirror ",
+    );
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/env");
     let bytes = std::fs::read(root.join("royal_esplanade_1k.hdr")).unwrap();
     let esplanade = specula::envmap_file::decode_equirect("esplanade", &bytes).unwrap();
