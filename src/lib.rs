@@ -23,6 +23,7 @@ pub mod lines;
 pub mod material_desc;
 pub mod memory;
 pub mod mesh;
+mod mesh_cache;
 pub mod objcheck;
 pub mod output_plan;
 pub mod polygon_light;

@@ -205,6 +205,12 @@ fn triangulate(mesh: &tobj::Mesh, out: &mut Vec<[u32; 3]>, base: u32) {
     }
 }
 
+/// One MTL file's materials, from bytes [`crate::objcheck::check_mtl`]
+/// accepted.
+pub(crate) fn load_mtl(bytes: &[u8]) -> tobj::MTLLoadResult {
+    tobj::load_mtl_buf(&mut crate::objcheck::strip_bom(bytes))
+}
+
 /// Finds the line a tobj error most likely refers to, for the message: the
 /// first line of the kind the error names that does not parse.
 fn locate_obj_error(text: &str, err: tobj::LoadError) -> Option<usize> {
@@ -263,11 +269,50 @@ fn locate_obj_error(text: &str, err: tobj::LoadError) -> Option<usize> {
 }
 
 /// Loads an OBJ (and the MTL files it names, through `read`) from its bytes.
-/// `path` is used for messages and to resolve `mtllib` names.
+/// `path` is used for messages and to resolve `mtllib` names. Large files
+/// go through the mesh cache (mesh_cache.rs) in the table cache folder.
 pub fn load_obj(
     path: &Path,
     bytes: &[u8],
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<MeshData, String> {
+    let cache =
+        crate::table_cache::cache_dir().filter(|_| bytes.len() >= crate::mesh_cache::MIN_OBJ_BYTES);
+    Ok(load_obj_cached(path, bytes, read, cache.as_deref())?.0)
+}
+
+/// [`load_obj`] with the mesh cache in `cache` (None: no cache), and
+/// whether the mesh came from it.
+pub(crate) fn load_obj_cached(
+    path: &Path,
+    bytes: &[u8],
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    cache: Option<&Path>,
+) -> Result<(MeshData, bool), String> {
+    let key = cache.map(|_| crate::mesh_cache::key(path, bytes));
+    if let (Some(dir), Some(key)) = (cache, &key) {
+        if let Some(m) = crate::mesh_cache::load(dir, key, path, read) {
+            return Ok((m, true));
+        }
+    }
+    let mut mtls = Vec::new();
+    let m = parse_obj(path, bytes, read, &mut mtls)?;
+    if let (Some(dir), Some(key), Some(mtls)) =
+        (cache, &key, mtls.into_iter().collect::<Option<Vec<_>>>())
+    {
+        crate::mesh_cache::store(dir, key, &m, &mtls);
+    }
+    Ok((m, false))
+}
+
+/// The OBJ parse behind [`load_obj`]. `mtls` receives, per MTL file asked
+/// for, its name as the OBJ gives it and a hash of the bytes read, or None
+/// where it could not be read or checked.
+fn parse_obj(
+    path: &Path,
+    bytes: &[u8],
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    mtls: &mut Vec<Option<crate::mesh_cache::MtlSource>>,
 ) -> Result<MeshData, String> {
     // tobj reports errors without a line and can panic on bad indices:
     // check every line first; faces it would mishandle are blanked out.
@@ -300,19 +345,27 @@ pub fn load_obj(
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let mtl_errors = std::cell::RefCell::new(Vec::new());
     let mtl_files = std::cell::RefCell::new(Vec::new());
+    let mtl_sources = std::cell::RefCell::new(Vec::new());
     let loaded = tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &opts, |mtl: &Path| {
         let p = dir.join(mtl);
         mtl_files.borrow_mut().push(p.clone());
         match read(&p) {
             // tobj panics on some malformed MTL lines: check first.
             Ok(b) => match crate::objcheck::check_mtl(&p, &b) {
-                Ok(()) => tobj::load_mtl_buf(&mut crate::objcheck::strip_bom(&b)),
+                Ok(()) => {
+                    mtl_sources
+                        .borrow_mut()
+                        .push(crate::mesh_cache::MtlSource::new(mtl, &b));
+                    load_mtl(&b)
+                }
                 Err(e) => {
+                    mtl_sources.borrow_mut().push(None);
                     mtl_errors.borrow_mut().push(e);
                     Err(tobj::LoadError::MaterialParseError)
                 }
             },
             Err(e) => {
+                mtl_sources.borrow_mut().push(None);
                 mtl_errors
                     .borrow_mut()
                     .push(format!("{}: {e}", p.display()));
@@ -349,6 +402,7 @@ pub fn load_obj(
             ));
         }
     }
+    *mtls = mtl_sources.into_inner();
     let mut m = MeshData {
         material_names: materials.iter().map(|mt| Some(mt.name.clone())).collect(),
         mtl: materials,

@@ -2,7 +2,9 @@
 //! between runs. The common ones (GGX, Beckmann, GTR at the γ nodes) are
 //! committed in core (kulla_conty/committed.rs) and never reach it; GTR with γ
 //! outside the γ axis builds a table per γ (~0.6 s), which the cache
-//! keeps so that it is paid once per machine, not once per run.
+//! keeps so that it is paid once per machine, not once per run. The same
+//! folder holds prefiltered environment maps (envmap_file.rs) and parsed
+//! OBJ meshes (mesh_cache.rs), each under its own file names.
 //!
 //! Folder: `$SPECULA_CACHE_DIR` when set (empty: no cache), else
 //! `specula` in the user's cache folder as `dirs::cache_dir` finds it (on

@@ -1,0 +1,414 @@
+//! Parsed OBJ meshes kept between runs, so that a large OBJ is parsed once
+//! per machine, not once per run (tobj's text parse dominates the time from
+//! process start to image for the benchmark scene).
+//!
+//! One file per mesh in the table cache folder (table_cache.rs, which says
+//! where it is and how to turn it off), `mesh-<key>.bin`, the key a SHA-256
+//! of the format's version, the OBJ's path as given (messages carry it) and
+//! its bytes. The file holds the [`MeshData`] the parse made, except the MTL
+//! materials: it lists the MTL files the OBJ named, each with a SHA-256 of
+//! its bytes, and a hit re-reads them, checks the hashes and parses them
+//! again (they are small), so an edited MTL is a miss. Only parses whose
+//! every MTL file was read and checked are kept.
+//!
+//! A file that is short, inconsistent (lengths, indices out of range) or
+//! of another version is a miss and is rewritten; files are written to a
+//! temporary file and renamed into place, so a reader never sees half a
+//! file. The cache is an optimisation only: any I/O error leaves the mesh
+//! parsed in memory, silently. Deleting the folder is always safe.
+
+use crate::mesh::MeshData;
+use glam::{Vec2, Vec3};
+use sha2::{Digest, Sha256};
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// OBJ files smaller than this are parsed every time (they parse in a few
+/// milliseconds; caching them would only fill the folder).
+pub(crate) const MIN_OBJ_BYTES: usize = 1 << 20;
+
+/// The file format's version; part of the key.
+const VERSION: &[u8] = b"specula-mesh-v1";
+
+/// An MTL file an OBJ named: the name as the `mtllib` line gives it
+/// (resolved against the OBJ's folder) and the hash of its bytes.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct MtlSource {
+    name: String,
+    hash: [u8; 32],
+}
+
+impl MtlSource {
+    /// None when the name is not UTF-8 (such a mesh is not cached).
+    pub(crate) fn new(name: &Path, bytes: &[u8]) -> Option<MtlSource> {
+        Some(MtlSource {
+            name: name.to_str()?.to_string(),
+            hash: Sha256::digest(bytes).into(),
+        })
+    }
+}
+
+/// The cache key of an OBJ at `path` with `bytes`.
+pub(crate) fn key(path: &Path, bytes: &[u8]) -> String {
+    let mut h = Sha256::new();
+    let path = path.as_os_str().as_encoded_bytes();
+    for part in [VERSION, path] {
+        h.update((part.len() as u64).to_le_bytes());
+        h.update(part);
+    }
+    h.update(bytes);
+    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+}
+
+fn file(dir: &Path, key: &str) -> PathBuf {
+    dir.join(format!("mesh-{key}.bin"))
+}
+
+/// The cached mesh of `key`, with its MTL materials read again through
+/// `read` (relative to `path`'s folder), or None on any miss.
+pub(crate) fn load(
+    dir: &Path,
+    key: &str,
+    path: &Path,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Option<MeshData> {
+    let bytes = std::fs::read(file(dir, key)).ok()?;
+    let (mut mesh, mtls) = decode(&bytes)?;
+    let obj_dir = path.parent().unwrap_or(Path::new(""));
+    for src in &mtls {
+        let p = obj_dir.join(&src.name);
+        let b = read(&p).ok()?;
+        if MtlSource::new(Path::new(&src.name), &b).as_ref() != Some(src) {
+            return None;
+        }
+        crate::objcheck::check_mtl(&p, &b).ok()?;
+        let (mut materials, _) = crate::mesh::load_mtl(&b).ok()?;
+        mesh.mtl.append(&mut materials);
+        mesh.mtl_files.push(p);
+    }
+    // The names the parse took from the materials, then "none".
+    let names = mesh.mtl.iter().map(|m| Some(m.name.clone()));
+    if !names.chain([None]).eq(mesh.material_names.iter().cloned()) {
+        return None;
+    }
+    Some(mesh)
+}
+
+/// Writes `mesh` (parsed with the MTL files `mtls`) under `key`.
+pub(crate) fn store(dir: &Path, key: &str, mesh: &MeshData, mtls: &[MtlSource]) {
+    let bytes = encode(mesh, mtls);
+    let write = || -> std::io::Result<()> {
+        std::fs::create_dir_all(dir)?;
+        let mut tmp = tempfile::NamedTempFile::new_in(dir)?;
+        tmp.write_all(&bytes)?;
+        tmp.persist(file(dir, key)).map_err(|e| e.error)?;
+        Ok(())
+    };
+    let _ = write();
+}
+
+const MAGIC: &[u8; 8] = b"SPCMESH1";
+
+fn encode(m: &MeshData, mtls: &[MtlSource]) -> Vec<u8> {
+    let mut w =
+        Vec::with_capacity(64 + m.positions.len() * 32 + m.uvs.len() * 8 + m.triangles.len() * 16);
+    let u32_ = |w: &mut Vec<u8>, v: usize| w.extend_from_slice(&(v as u32).to_le_bytes());
+    let str_ = |w: &mut Vec<u8>, s: &str| {
+        u32_(w, s.len());
+        w.extend_from_slice(s.as_bytes());
+    };
+    let f32s =
+        |w: &mut Vec<u8>, v: &[f32]| v.iter().for_each(|x| w.extend_from_slice(&x.to_le_bytes()));
+    w.extend_from_slice(MAGIC);
+    u32_(&mut w, mtls.len());
+    for s in mtls {
+        str_(&mut w, &s.name);
+        w.extend_from_slice(&s.hash);
+    }
+    u32_(&mut w, m.positions.len());
+    m.positions.iter().for_each(|p| f32s(&mut w, &p.to_array()));
+    m.normals.iter().for_each(|n| f32s(&mut w, &n.to_array()));
+    u32_(&mut w, m.uvs.len());
+    m.uvs.iter().for_each(|t| f32s(&mut w, &t.to_array()));
+    u32_(&mut w, m.triangles.len());
+    for t in &m.triangles {
+        t.iter().for_each(|&i| u32_(&mut w, i as usize));
+    }
+    m.tri_material
+        .iter()
+        .for_each(|&i| u32_(&mut w, i as usize));
+    u32_(&mut w, m.material_names.len());
+    for n in &m.material_names {
+        match n {
+            Some(n) => {
+                w.push(1);
+                str_(&mut w, n);
+            }
+            None => w.push(0),
+        }
+    }
+    u32_(&mut w, m.warnings.len());
+    m.warnings.iter().for_each(|s| str_(&mut w, s));
+    w
+}
+
+/// Bounds-checked reading of [`encode`]'s layout.
+struct Reader<'a> {
+    rest: &'a [u8],
+}
+
+impl<'a> Reader<'a> {
+    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
+        if n > self.rest.len() {
+            return None;
+        }
+        let (a, b) = self.rest.split_at(n);
+        self.rest = b;
+        Some(a)
+    }
+    fn u32(&mut self) -> Option<u32> {
+        Some(u32::from_le_bytes(self.take(4)?.try_into().ok()?))
+    }
+    /// A count of items of `size` bytes each, no more than the bytes left.
+    fn count(&mut self, size: usize) -> Option<usize> {
+        let n = self.u32()? as usize;
+        (n.checked_mul(size)? <= self.rest.len()).then_some(n)
+    }
+    fn string(&mut self) -> Option<String> {
+        let n = self.count(1)?;
+        String::from_utf8(self.take(n)?.to_vec()).ok()
+    }
+    fn f32s<const N: usize>(&mut self, n: usize) -> Option<Vec<[f32; N]>> {
+        let b = self.take(n.checked_mul(4 * N)?)?;
+        Some(
+            b.chunks_exact(4 * N)
+                .map(|c| {
+                    std::array::from_fn(|k| {
+                        f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap())
+                    })
+                })
+                .collect(),
+        )
+    }
+    fn u32s<const N: usize>(&mut self, n: usize) -> Option<Vec<[u32; N]>> {
+        let b = self.take(n.checked_mul(4 * N)?)?;
+        Some(
+            b.chunks_exact(4 * N)
+                .map(|c| {
+                    std::array::from_fn(|k| {
+                        u32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap())
+                    })
+                })
+                .collect(),
+        )
+    }
+}
+
+fn decode(bytes: &[u8]) -> Option<(MeshData, Vec<MtlSource>)> {
+    let mut r = Reader { rest: bytes };
+    if r.take(MAGIC.len())? != MAGIC {
+        return None;
+    }
+    let n_mtl = r.count(4 + 32)?;
+    let mut mtls = Vec::with_capacity(n_mtl);
+    for _ in 0..n_mtl {
+        let name = r.string()?;
+        let hash = r.take(32)?.try_into().ok()?;
+        mtls.push(MtlSource { name, hash });
+    }
+    let n = r.count(24)?;
+    let positions = r.f32s::<3>(n)?.into_iter().map(Vec3::from_array).collect();
+    let normals = r.f32s::<3>(n)?.into_iter().map(Vec3::from_array).collect();
+    let n_uv = r.count(8)?;
+    if n_uv != 0 && n_uv != n {
+        return None;
+    }
+    let uvs = r
+        .f32s::<2>(n_uv)?
+        .into_iter()
+        .map(Vec2::from_array)
+        .collect();
+    let n_tri = r.count(16)?;
+    let triangles: Vec<[u32; 3]> = r.u32s::<3>(n_tri)?;
+    let tri_material: Vec<u32> = r.u32s::<1>(n_tri)?.into_iter().map(|[i]| i).collect();
+    let n_names = r.count(1)?;
+    let mut material_names = Vec::with_capacity(n_names);
+    for _ in 0..n_names {
+        material_names.push(match r.take(1)?[0] {
+            0 => None,
+            1 => Some(r.string()?),
+            _ => return None,
+        });
+    }
+    let n_warn = r.count(4)?;
+    let warnings = (0..n_warn)
+        .map(|_| r.string())
+        .collect::<Option<Vec<_>>>()?;
+    let in_range = triangles.iter().flatten().all(|&i| (i as usize) < n)
+        && tri_material.iter().all(|&i| (i as usize) < n_names);
+    if !r.rest.is_empty() || !in_range {
+        return None;
+    }
+    let mesh = MeshData {
+        positions,
+        normals,
+        uvs,
+        triangles,
+        tri_material,
+        material_names,
+        warnings,
+        ..MeshData::default()
+    };
+    Some((mesh, mtls))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::mesh::load_obj_cached;
+    use std::collections::HashMap;
+    use std::fmt::Write as _;
+
+    /// An OBJ of `n` × `n` quads (two materials in alternate rows, uvs,
+    /// no normals so the parse computes them, one polyline for a warning)
+    /// and its MTL file.
+    fn grid(n: usize) -> (Vec<u8>, Vec<u8>) {
+        let mut s = String::from("mtllib grid.mtl\n");
+        for j in 0..=n {
+            for i in 0..=n {
+                let (x, y) = (i as f32 / n as f32, j as f32 / n as f32);
+                let z = (x * 7.0).sin() * (y * 5.0).cos() * 0.1;
+                writeln!(s, "v {x} {y} {z}\nvt {x} {y}").unwrap();
+            }
+        }
+        s.push_str("l 1 2\n");
+        let at = |i: usize, j: usize| j * (n + 1) + i + 1;
+        for j in 0..n {
+            writeln!(s, "usemtl {}", if j % 2 == 0 { "red" } else { "blue" }).unwrap();
+            for i in 0..n {
+                let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+                writeln!(s, "f {a}/{a} {b}/{b} {c}/{c} {d}/{d}").unwrap();
+            }
+        }
+        let mtl = b"newmtl red\nKd 0.8 0.1 0.1\nnewmtl blue\nKd 0.1 0.1 0.8\n".to_vec();
+        (s.into_bytes(), mtl)
+    }
+
+    type Files = std::cell::RefCell<HashMap<PathBuf, Vec<u8>>>;
+
+    fn reader(files: &Files) -> impl Fn(&Path) -> std::io::Result<Vec<u8>> + '_ {
+        move |p: &Path| {
+            files
+                .borrow()
+                .get(p)
+                .cloned()
+                .ok_or_else(|| std::io::Error::new(std::io::ErrorKind::NotFound, "absent"))
+        }
+    }
+
+    /// Everything a mesh holds, tobj's materials included.
+    fn all(m: &MeshData) -> String {
+        format!("{m:?}")
+    }
+
+    #[test]
+    fn a_cached_mesh_is_the_parsed_one_and_an_edited_mtl_is_a_miss() {
+        let dir = tempfile::tempdir().unwrap();
+        let (obj, mtl) = grid(40);
+        let path = Path::new("scenes/grid.obj");
+        let files: Files = Default::default();
+        files
+            .borrow_mut()
+            .insert(PathBuf::from("scenes/grid.mtl"), mtl);
+        let read = reader(&files);
+
+        let (parsed, hit) = load_obj_cached(path, &obj, &read, Some(dir.path())).unwrap();
+        assert!(!hit);
+        assert_eq!(parsed.triangles.len(), 2 * 40 * 40);
+        assert_eq!(parsed.mtl.len(), 2);
+        assert_eq!(parsed.warnings.len(), 1, "{:?}", parsed.warnings);
+        let (cached, hit) = load_obj_cached(path, &obj, &read, Some(dir.path())).unwrap();
+        assert!(hit, "second load is a hit");
+        assert_eq!(all(&cached), all(&parsed));
+
+        // The same bytes under another name: its own entry (messages name it).
+        let other = Path::new("scenes/copy.obj");
+        let (_, hit) = load_obj_cached(other, &obj, &read, Some(dir.path())).unwrap();
+        assert!(!hit);
+
+        // An edited MTL: a miss, and the new colour.
+        let edited = b"newmtl red\nKd 0.2 0.9 0.1\nnewmtl blue\nKd 0.1 0.1 0.8\n".to_vec();
+        files
+            .borrow_mut()
+            .insert(PathBuf::from("scenes/grid.mtl"), edited);
+        let (m, hit) = load_obj_cached(path, &obj, &read, Some(dir.path())).unwrap();
+        assert!(!hit);
+        assert_eq!(m.mtl[0].diffuse, Some([0.2, 0.9, 0.1]));
+        let (m2, hit) = load_obj_cached(path, &obj, &read, Some(dir.path())).unwrap();
+        assert!(hit);
+        assert_eq!(all(&m2), all(&m));
+
+        // A missing MTL: not a hit, and the parse's own error or warning.
+        files.borrow_mut().clear();
+        let uncached = load_obj_cached(path, &obj, &read, None).map(|(m, _)| all(&m));
+        let got = load_obj_cached(path, &obj, &read, Some(dir.path()));
+        assert!(!matches!(got, Ok((_, true))));
+        assert_eq!(got.map(|(m, _)| all(&m)), uncached);
+    }
+
+    #[test]
+    fn a_damaged_cache_file_is_a_miss_and_is_rewritten() {
+        let dir = tempfile::tempdir().unwrap();
+        let (obj, mtl) = grid(12);
+        let path = Path::new("g/grid.obj");
+        let files: Files = Default::default();
+        files.borrow_mut().insert(PathBuf::from("g/grid.mtl"), mtl);
+        let read = reader(&files);
+        let (parsed, _) = load_obj_cached(path, &obj, &read, Some(dir.path())).unwrap();
+        let cache_file = file(dir.path(), &key(path, &obj));
+        let good = std::fs::read(&cache_file).unwrap();
+
+        let mut damaged = Vec::new();
+        // Cut short at several places, a triangle index out of range, a
+        // count far beyond the file, a trailing byte.
+        for cut in [0, 7, 100, good.len() / 2, good.len() - 1] {
+            damaged.push(good[..cut].to_vec());
+        }
+        let tri_at = good.len() - parsed_tail_len(&parsed) - 12 * parsed.triangles.len();
+        let first = parsed.triangles[0][0].to_le_bytes();
+        assert_eq!(good[tri_at..tri_at + 4], first, "layout of the test's damage");
+        let mut bad_index = good.clone();
+        bad_index[tri_at..tri_at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
+        damaged.push(bad_index);
+        let mut huge = good.clone();
+        huge[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
+        damaged.push(huge);
+        let mut trailing = good.clone();
+        trailing.push(0);
+        damaged.push(trailing);
+
+        for (k, bytes) in damaged.iter().enumerate() {
+            std::fs::write(&cache_file, bytes).unwrap();
+            let (m, hit) = load_obj_cached(path, &obj, &read, Some(dir.path())).unwrap();
+            assert!(!hit, "damage {k} read as a hit");
+            assert_eq!(all(&m), all(&parsed), "damage {k}");
+            assert_eq!(
+                std::fs::read(&cache_file).unwrap(),
+                good,
+                "damage {k}: rewritten"
+            );
+        }
+    }
+
+    /// Bytes after the triangles' corner indices in [`encode`]'s layout
+    /// (their materials, the names, the warnings).
+    fn parsed_tail_len(m: &MeshData) -> usize {
+        let names: usize = m
+            .material_names
+            .iter()
+            .map(|n| 1 + n.as_ref().map_or(0, |n| 4 + n.len()))
+            .sum();
+        let warnings: usize = m.warnings.iter().map(|w| 4 + w.len()).sum();
+        4 * m.tri_material.len() + 4 + names + 4 + warnings
+    }
+}
