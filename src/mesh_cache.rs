@@ -376,7 +376,11 @@ mod tests {
         }
         let tri_at = good.len() - parsed_tail_len(&parsed) - 12 * parsed.triangles.len();
         let first = parsed.triangles[0][0].to_le_bytes();
-        assert_eq!(good[tri_at..tri_at + 4], first, "layout of the test's damage");
+        assert_eq!(
+            good[tri_at..tri_at + 4],
+            first,
+            "layout of the test's damage"
+        );
         let mut bad_index = good.clone();
         bad_index[tri_at..tri_at + 4].copy_from_slice(&u32::MAX.to_le_bytes());
         damaged.push(bad_index);
