@@ -268,51 +268,33 @@ fn locate_obj_error(text: &str, err: tobj::LoadError) -> Option<usize> {
     None
 }
 
-/// Loads an OBJ (and the MTL files it names, through `read`) from its bytes.
-/// `path` is used for messages and to resolve `mtllib` names. Large files
-/// go through the mesh cache (mesh_cache.rs) in the table cache folder.
-pub fn load_obj(
-    path: &Path,
-    bytes: &[u8],
-    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Result<MeshData, String> {
-    let cache =
-        crate::table_cache::cache_dir().filter(|_| bytes.len() >= crate::mesh_cache::MIN_OBJ_BYTES);
-    Ok(load_obj_cached(path, bytes, read, cache.as_deref())?.0)
+/// An MTL file an OBJ named, as the mesh cache (mesh_cache.rs) checks
+/// it on a hit: the name as the `mtllib` line gives it
+/// (resolved against the OBJ's folder) and the hash of its bytes.
+#[derive(Clone, Debug, PartialEq)]
+pub(crate) struct MtlSource {
+    pub(crate) name: String,
+    pub(crate) hash: [u8; 32],
 }
 
-/// [`load_obj`] with the mesh cache in `cache` (None: no cache), and
-/// whether the mesh came from it.
-pub(crate) fn load_obj_cached(
-    path: &Path,
-    bytes: &[u8],
-    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-    cache: Option<&Path>,
-) -> Result<(MeshData, bool), String> {
-    let key = cache.map(|_| crate::mesh_cache::key(path, bytes));
-    if let (Some(dir), Some(key)) = (cache, &key) {
-        if let Some(m) = crate::mesh_cache::load(dir, key, path, read) {
-            return Ok((m, true));
-        }
+impl MtlSource {
+    /// None when the name is not UTF-8 (such a mesh is not cached).
+    pub(crate) fn new(name: &Path, bytes: &[u8]) -> Option<MtlSource> {
+        Some(MtlSource {
+            name: name.to_str()?.to_string(),
+            hash: <sha2::Sha256 as sha2::Digest>::digest(bytes).into(),
+        })
     }
-    let mut mtls = Vec::new();
-    let m = parse_obj(path, bytes, read, &mut mtls)?;
-    if let (Some(dir), Some(key), Some(mtls)) =
-        (cache, &key, mtls.into_iter().collect::<Option<Vec<_>>>())
-    {
-        crate::mesh_cache::store(dir, key, &m, &mtls);
-    }
-    Ok((m, false))
 }
 
-/// The OBJ parse behind [`load_obj`]. `mtls` receives, per MTL file asked
+/// The OBJ parse behind the mesh cache's `load_obj`. `mtls` receives, per MTL file asked
 /// for, its name as the OBJ gives it and a hash of the bytes read, or None
 /// where it could not be read or checked.
-fn parse_obj(
+pub(crate) fn parse_obj(
     path: &Path,
     bytes: &[u8],
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-    mtls: &mut Vec<Option<crate::mesh_cache::MtlSource>>,
+    mtls: &mut Vec<Option<MtlSource>>,
 ) -> Result<MeshData, String> {
     // tobj reports errors without a line and can panic on bad indices:
     // check every line first; faces it would mishandle are blanked out.
@@ -353,9 +335,7 @@ fn parse_obj(
             // tobj panics on some malformed MTL lines: check first.
             Ok(b) => match crate::objcheck::check_mtl(&p, &b) {
                 Ok(()) => {
-                    mtl_sources
-                        .borrow_mut()
-                        .push(crate::mesh_cache::MtlSource::new(mtl, &b));
+                    mtl_sources.borrow_mut().push(MtlSource::new(mtl, &b));
                     load_mtl(&b)
                 }
                 Err(e) => {
@@ -465,6 +445,15 @@ fn parse_obj(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The parse alone (these OBJs are far below the mesh cache's size).
+    fn load_obj(
+        path: &Path,
+        bytes: &[u8],
+        read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    ) -> Result<MeshData, String> {
+        parse_obj(path, bytes, read, &mut Vec::new())
+    }
 
     /// Sum over triangles of (signed area × outward direction) = 0 for a
     /// closed surface, and the triangles must face outward: check with the

@@ -17,7 +17,7 @@
 //! file. The cache is an optimisation only: any I/O error leaves the mesh
 //! parsed in memory, silently. Deleting the folder is always safe.
 
-use crate::mesh::MeshData;
+use crate::mesh::{MeshData, MtlSource};
 use glam::{Vec2, Vec3};
 use sha2::{Digest, Sha256};
 use std::io::Write;
@@ -30,22 +30,40 @@ pub(crate) const MIN_OBJ_BYTES: usize = 1 << 20;
 /// The file format's version; part of the key.
 const VERSION: &[u8] = b"specula-mesh-v1";
 
-/// An MTL file an OBJ named: the name as the `mtllib` line gives it
-/// (resolved against the OBJ's folder) and the hash of its bytes.
-#[derive(Clone, Debug, PartialEq)]
-pub(crate) struct MtlSource {
-    name: String,
-    hash: [u8; 32],
+/// Loads an OBJ (and the MTL files it names, through `read`) from its bytes.
+/// `path` is used for messages and to resolve `mtllib` names. Large files
+/// go through the mesh cache (this module) in the table cache folder.
+pub fn load_obj(
+    path: &Path,
+    bytes: &[u8],
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Result<MeshData, String> {
+    let cache = crate::table_cache::cache_dir().filter(|_| bytes.len() >= MIN_OBJ_BYTES);
+    Ok(load_obj_cached(path, bytes, read, cache.as_deref())?.0)
 }
 
-impl MtlSource {
-    /// None when the name is not UTF-8 (such a mesh is not cached).
-    pub(crate) fn new(name: &Path, bytes: &[u8]) -> Option<MtlSource> {
-        Some(MtlSource {
-            name: name.to_str()?.to_string(),
-            hash: Sha256::digest(bytes).into(),
-        })
+/// [`load_obj`] with the mesh cache in `cache` (None: no cache), and
+/// whether the mesh came from it.
+pub(crate) fn load_obj_cached(
+    path: &Path,
+    bytes: &[u8],
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    cache: Option<&Path>,
+) -> Result<(MeshData, bool), String> {
+    let key = cache.map(|_| key(path, bytes));
+    if let (Some(dir), Some(key)) = (cache, &key) {
+        if let Some(m) = load(dir, key, path, read) {
+            return Ok((m, true));
+        }
     }
+    let mut mtls = Vec::new();
+    let m = crate::mesh::parse_obj(path, bytes, read, &mut mtls)?;
+    if let (Some(dir), Some(key), Some(mtls)) =
+        (cache, &key, mtls.into_iter().collect::<Option<Vec<_>>>())
+    {
+        store(dir, key, &m, &mtls);
+    }
+    Ok((m, false))
 }
 
 /// The cache key of an OBJ at `path` with `bytes`.
@@ -265,7 +283,6 @@ fn decode(bytes: &[u8]) -> Option<(MeshData, Vec<MtlSource>)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::mesh::load_obj_cached;
     use std::collections::HashMap;
     use std::fmt::Write as _;
 

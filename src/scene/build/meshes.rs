@@ -7,7 +7,7 @@ use super::placement::{place_mesh, Placement};
 use super::shapes::{build_cube, build_plane, build_sphere, check_one_shape};
 use super::{BuildError, SceneBuilder};
 use crate::memory;
-use crate::mesh::{self, MeshData};
+use crate::mesh::MeshData;
 use glam::Vec3;
 use std::path::Path;
 
@@ -113,9 +113,11 @@ impl SceneBuilder<'_> {
         )
         .map_err(BuildError::Memory)?;
         self.inputs.push(p.to_path_buf());
-        let m = mesh::load_obj(p, &bytes, self.read).map_err(|message| BuildError::Part {
-            field: format!("{field}.obj"),
-            message,
+        let m = crate::mesh_cache::load_obj(p, &bytes, self.read).map_err(|message| {
+            BuildError::Part {
+                field: format!("{field}.obj"),
+                message,
+            }
         })?;
         self.inputs.extend(m.mtl_files.iter().cloned());
         self.warnings.extend(m.warnings.iter().cloned());
