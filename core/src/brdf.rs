@@ -34,7 +34,7 @@ use crate::light::PolygonLocal;
 use crate::real::{Mask, Real};
 use crate::vec3::{Rgb, V3};
 
-/// A directional albedo in two parts for environment maps
+/// A directional albedo in parts for environment maps
 /// ([`Brdf::env_lobes`]).
 #[derive(Clone, Copy, Debug)]
 pub struct EnvLobes<R: Real> {
@@ -43,13 +43,25 @@ pub struct EnvLobes<R: Real> {
     /// Albedo of the glossy part, lit by the GGX-prefiltered radiance
     /// around the mirror direction at `roughness`.
     pub specular: Rgb<R>,
-    /// Perceptual roughness of the glossy part (α = roughness²).
+    /// Perceptual roughness of the GGX lobe that stands in for the glossy
+    /// part (α = roughness²): the model's own for GGX lobes, the GGX
+    /// equivalent of another NDF's (ggx_equivalent.rs).
     pub roughness: R,
+    /// Albedo of a clearcoat (grey: its Fresnel depends on the view
+    /// alone), lit by the prefiltered radiance around the mirror direction
+    /// about `coat_normal` at `coat_roughness`; zero for models without one.
+    pub coat: R,
+    /// Perceptual roughness of the coat's GGX lobe.
+    pub coat_roughness: R,
+    /// The coat's unit normal in the local frame (+Z, the base's normal,
+    /// unless the coat has its own).
+    pub coat_normal: V3<R>,
 }
 
 impl<R: Real> EnvLobes<R> {
     /// `total` (the directional albedo) split into `diffuse`, capped per
-    /// channel at `total`, and the rest as the glossy part at `roughness`.
+    /// channel at `total`, and the rest as the glossy part at `roughness`;
+    /// no coat.
     #[inline(always)]
     pub(crate) fn split(total: Rgb<R>, diffuse: Rgb<R>, roughness: R) -> EnvLobes<R> {
         let diffuse = Rgb::new(
@@ -57,11 +69,38 @@ impl<R: Real> EnvLobes<R> {
             diffuse.y.min(total.y),
             diffuse.z.min(total.z),
         );
+        EnvLobes::new(diffuse, total - diffuse, roughness)
+    }
+
+    /// The two parts as given; no coat.
+    #[inline(always)]
+    pub(crate) fn new(diffuse: Rgb<R>, specular: Rgb<R>, roughness: R) -> EnvLobes<R> {
         EnvLobes {
             diffuse,
-            specular: total - diffuse,
+            specular,
             roughness,
+            coat: R::ZERO,
+            coat_roughness: R::ONE,
+            coat_normal: V3::new(R::ZERO, R::ZERO, R::ONE),
         }
+    }
+
+    /// The parts with a clearcoat of albedo `coat` at `roughness` about
+    /// the local unit `normal`.
+    #[inline(always)]
+    pub(crate) fn with_coat(self, coat: R, roughness: R, normal: V3<R>) -> EnvLobes<R> {
+        EnvLobes {
+            coat,
+            coat_roughness: roughness,
+            coat_normal: normal,
+            ..self
+        }
+    }
+
+    /// The whole directional albedo: the parts' sum.
+    #[inline(always)]
+    pub fn total(&self) -> Rgb<R> {
+        self.diffuse + self.specular + Rgb::splat(self.coat)
     }
 }
 
@@ -381,18 +420,15 @@ pub trait Brdf: Send + Sync {
     fn albedo_local<R: Real>(&self, p: &Self::Prepared<R>) -> Rgb<R>;
 
     /// [`Brdf::albedo_local`] split for light from an environment map:
-    /// the part lit by the irradiance around the normal and the part lit
-    /// by the radiance around the mirror direction (split sum). The two
-    /// albedos add up to [`Brdf::albedo_local`], so a uniform map gives
+    /// the part lit by the irradiance around the normal, the part lit
+    /// by the radiance around the mirror direction, and a clearcoat's part
+    /// around its own mirror direction (split sum). The albedos add up to
+    /// [`Brdf::albedo_local`], so a uniform map gives
     /// the uniform environment's value. By default all of it is the
     /// diffuse part; models with a glossy lobe say how they split.
     #[inline(always)]
     fn env_lobes<R: Real>(&self, p: &Self::Prepared<R>) -> EnvLobes<R> {
-        EnvLobes {
-            diffuse: self.albedo_local(p),
-            specular: Rgb::zero(),
-            roughness: R::ONE,
-        }
+        EnvLobes::new(self.albedo_local(p), Rgb::zero(), R::ONE)
     }
 
     /// ∫ over the polygon of f(wi, wo) cos θi dωi: the reflected radiance

@@ -459,8 +459,9 @@ impl EnvMap {
         Rgb::new(ch(0), ch(1), ch(2))
     }
 
-    /// The prefiltered radiance around world unit direction `r` at
-    /// perceptual `roughness` (linear between the two nearest levels).
+    /// The prefiltered radiance around world direction `r` (of any
+    /// nonzero length) at perceptual `roughness` (linear between the two
+    /// nearest levels).
     #[inline(always)]
     pub fn prefiltered<R: Real>(&self, r: V3<R>, roughness: R) -> Rgb<R> {
         let (s, t) = oct_encode(self.to_map(r));

@@ -3,9 +3,10 @@
 //! importance sampling \[Veach95\] as one mixture density: half the samples
 //! from the map's luminance (texel probability ∝ luminance · sin θ, uniform
 //! within the texel), half from the BRDF (GGX visible normals \[Heitz18\]
-//! at the model's glossy α for the share of its glossy albedo, cosine
-//! otherwise). Each sample is weighted by f cos θi L / p_mix(wi), which is
-//! the balance heuristic over the three strategies. The map is read as a
+//! at the model's glossy α for the share of its glossy albedo, at the
+//! coat's α about the coat's normal for the share of a clearcoat's,
+//! cosine otherwise). Each sample is weighted by f cos θi L / p_mix(wi), which is
+//! the balance heuristic over the strategies. The map is read as a
 //! piecewise-constant function (each texel's radiance over its solid
 //! angle). Random numbers come from a counter-based hash of the pixel's
 //! position and the sample index, so an image does not depend on the
@@ -210,15 +211,32 @@ pub fn reference_radiance<B: Brdf>(
     seed: u64,
 ) -> [f64; 3] {
     let lum = |c: specula_core::Rgb<f64>| 0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z;
+    let above = wo.z > 0.0;
+    // The BRDF strategies' shares by the lobes' albedos: cosine for the
+    // diffuse part, GGX visible normals at the glossy α about the normal,
+    // and at the coat's α about the coat's normal (in its own frame). A
+    // strategy that cannot sample (the view below its horizon) gives its
+    // share to the cosine.
+    let coat_frame = ShadingFrame::from_normal(lobes.coat_normal);
+    let wo_coat = coat_frame.to_local(wo);
     let (ld, ls) = (lum(lobes.diffuse).max(0.0), lum(lobes.specular).max(0.0));
-    let glossy = if ld + ls > 0.0 { ls / (ld + ls) } else { 0.0 };
+    let lc = lobes.coat.max(0.0);
+    let ls = if above { ls } else { 0.0 };
+    let lc = if above && wo_coat.z > 0.0 { lc } else { 0.0 };
+    let sum_l = ld + ls + lc;
+    let (glossy, coat) = if sum_l > 0.0 {
+        (ls / sum_l, lc / sum_l)
+    } else {
+        (0.0, 0.0)
+    };
     let alpha = (lobes.roughness * lobes.roughness).max(1e-3);
+    let alpha_c = (lobes.coat_roughness * lobes.coat_roughness).max(1e-3);
     let env_share = if map.sampler.is_empty() { 0.0 } else { 0.5 };
     let to_world = |w: V3<f64>| frame.t * w.x + frame.b * w.y + frame.n * w.z;
     let to_local = |w: V3<f64>| V3::new(w.dot(frame.t), w.dot(frame.b), w.dot(frame.n));
+    let from_coat = |w: V3<f64>| coat_frame.t * w.x + coat_frame.b * w.y + coat_frame.n * w.z;
     let mut rng = Counter { seed, n: 0 };
     let mut sum = [0.0f64; 3];
-    let above = wo.z > 0.0;
     for _ in 0..samples {
         let pick = rng.next();
         let u = [rng.next(), rng.next(), rng.next(), rng.next()];
@@ -227,9 +245,13 @@ pub fn reference_radiance<B: Brdf>(
             let w = map.to_world(m);
             (to_local(V3::new(w[0], w[1], w[2])), m)
         } else {
-            let local = if above && (pick - env_share) < (1.0 - env_share) * glossy {
+            let b = (pick - env_share) / (1.0 - env_share);
+            let local = if b < glossy {
                 let h = sample_vndf(wo, alpha, u[0], u[1]);
                 h * (2.0 * wo.dot(h)) - wo
+            } else if b < glossy + coat {
+                let h = sample_vndf(wo_coat, alpha_c, u[0], u[1]);
+                from_coat(h * (2.0 * wo_coat.dot(h)) - wo_coat)
             } else {
                 cosine_hemisphere(u[0], u[1])
             };
@@ -241,9 +263,13 @@ pub fn reference_radiance<B: Brdf>(
         if wi.z <= 0.0 {
             continue;
         }
-        let mut p = (1.0 - env_share) * (1.0 - glossy) * wi.z / PI;
-        if above && glossy > 0.0 {
+        let mut p = (1.0 - env_share) * (1.0 - glossy - coat) * wi.z / PI;
+        if glossy > 0.0 {
             p += (1.0 - env_share) * glossy * pdf_vndf(wo, wi, alpha);
+        }
+        if coat > 0.0 {
+            let wi_coat = coat_frame.to_local(wi);
+            p += (1.0 - env_share) * coat * pdf_vndf(wo_coat, wi_coat, alpha_c);
         }
         if env_share > 0.0 {
             p += env_share * map.sampler.pdf(wi_map);

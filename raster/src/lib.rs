@@ -54,7 +54,7 @@ pub use frame::{
     visibility_into, Frame, FrameStats, PassTimes, ShadePath, Visibility,
 };
 pub use geometry::{Cull, FrameContext, GeometryPass, Project, VertexStage};
-pub use lit::{env_split_sum, Lit};
+pub use lit::{env_split_sum, prefilter_direction, Lit};
 pub use scene::SceneData;
 pub use shader::{Material, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};

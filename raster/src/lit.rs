@@ -196,7 +196,10 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
 
 /// The environment map's light by the split sum: the model's diffuse
 /// albedo times E(n)/π, its glossy albedo times the prefiltered radiance
-/// around the mirror direction at its roughness (both without the sun),
+/// around the mirror direction at its roughness, a clearcoat's albedo
+/// times the prefiltered radiance around the mirror direction about the
+/// coat's normal at the coat's roughness (all without the sun; each
+/// read along its lobe's dominant direction: [`prefilter_direction`]),
 /// plus the sun taken out of the map as a distant light through the
 /// model's BRDF: f(wi, wo) · E_sun toward the sun's centroid times the
 /// disk's clamped cosine ([`disk_cos_factor`]), at most L_sun · ρ(wo).
@@ -216,11 +219,17 @@ pub fn env_split_sum<B: Brdf, R: Real>(
     let mut out = lobes.diffuse.mul_elem(e);
     let s = lobes.specular;
     if (s.x.gt(R::ZERO) | s.y.gt(R::ZERO) | s.z.gt(R::ZERO)).any() {
-        // The mirror of wo about the shading normal, in world space.
-        let r = n * (R::splat(2.0) * n.dot(wo)) - wo;
+        let r = prefilter_direction(n, wo, lobes.roughness);
         out = lobes
             .specular
             .mul_elem_add(map.prefiltered(r, lobes.roughness), out);
+    }
+    if lobes.coat.gt(R::ZERO).any() {
+        // The coat's own lobe, about its normal (in world space).
+        let c = lobes.coat_normal;
+        let nc = frame.t * c.x + frame.b * c.y + frame.n * c.z;
+        let r = prefilter_direction(nc, wo, lobes.coat_roughness);
+        out += map.prefiltered(r, lobes.coat_roughness) * lobes.coat;
     }
     if let Some(sun) = map.sun_world() {
         let wi = frame.to_local(V3::from_f32(sun.to_light));
@@ -235,10 +244,31 @@ pub fn env_split_sum<B: Brdf, R: Real>(
         // the disk, whose value at the centre times Ω overshoots it, is
         // cut to the disk's radiance times the albedo (a mirror's exact
         // value when it reflects the disk).
-        let cap = (lobes.diffuse + lobes.specular).mul_elem(V3::from_f32(sun.radiance));
+        let cap = lobes.total().mul_elem(V3::from_f32(sun.radiance));
         out += Rgb::new(part.x.min(cap.x), part.y.min(cap.y), part.z.min(cap.z));
     }
     out
+}
+
+/// Where the prefiltered chain is read for a GGX lobe at perceptual
+/// `roughness` about unit normal `n` seen from unit `wo` (world space):
+/// the lobe's dominant direction \[Lagarde14, listing 22\], the mirror
+/// direction r of wo about n pulled toward n as α grows,
+/// lerp(n, r, s (√s + α)) with s = 1 − α. The prefiltered chain is made
+/// with n = v = r, so its lobe is centred on r; the true lobe leans
+/// toward the normal (its Fresnel and masking, and the horizon, cut the
+/// side away from it), more the rougher it is: at α = 1 it is read along
+/// n. Chosen over the other fits tried by the split sum's error against
+/// the Monte Carlo reference (docs/accuracy.md, "Split sum against
+/// reference"). Not unit length: the octahedral lookup divides by its
+/// own norm.
+#[inline(always)]
+pub fn prefilter_direction<R: Real>(n: V3<R>, wo: V3<R>, roughness: R) -> V3<R> {
+    let r = n * (R::splat(2.0) * n.dot(wo)) - wo;
+    let alpha = roughness * roughness;
+    let s = (R::ONE - alpha).clamp(R::ZERO, R::ONE);
+    let t = s * (s.sqrt() + alpha);
+    (r - n).mul_add(t, n)
 }
 
 /// The environment map's light by the Monte Carlo reference

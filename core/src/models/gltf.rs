@@ -412,6 +412,46 @@ impl Gltf {
         }
         Rgb::select(above, f, Rgb::zero())
     }
+
+    /// The directional albedo in two layers: what is under the coat
+    /// (specular, diffuse and sheen, before the coat's transmission) and
+    /// the coat's own c F_c (A + B)(α_c, V·N_c); not masked by the horizon.
+    #[inline(always)]
+    fn albedo_layers<R: Real>(&self, p: &GltfPrepared<R>) -> (Rgb<R>, R) {
+        let (o, px) = (&p.o, &p.px);
+        let mu = o.wo.z.max(R::ZERO);
+        let tables = AlbedoTables::get();
+        let t = tables.ggx_schlick(px.alpha, mu);
+        // ∫ F_s DV μi = F0 A + F90 B; ∫ (1 − G) μi/π = 1 − G0 (1 − C) − G90 C.
+        let spec = |f0: R| f0.mul_add(t.a, px.f90 * t.b);
+        let diff = |g0: R, g90: R| R::ONE - g0.mul_add(R::ONE - t.c, g90 * t.c);
+        let specular = Rgb::new(spec(px.f0.x), spec(px.f0.y), spec(px.f0.z));
+        let diffuse = Rgb::new(
+            px.diffuse.x * diff(px.g0.x, px.g90.x),
+            px.diffuse.y * diff(px.g0.y, px.g90.y),
+            px.diffuse.z * diff(px.g0.z, px.g90.z),
+        );
+        let mut e = specular + diffuse;
+        if self.sheen {
+            let t = SheenTable::get();
+            let scale = (R::ONE - px.sheen_max * p.sheen_e_o).max(R::ZERO);
+            // What the scaling takes beyond its view-only form: K for a
+            // Lambertian lobe, and for the specular lobe K times α (its
+            // spread: none for a mirror, about Lambertian's at α = 1).
+            let k = px.sheen_max * t.k(mu, px.sheen_roughness);
+            let lost = (diffuse + specular * px.alpha) * k;
+            let b = e * scale - lost;
+            let b = Rgb::new(b.x.max(R::ZERO), b.y.max(R::ZERO), b.z.max(R::ZERO));
+            e = px.sheen_color * p.sheen_e_o + b;
+        }
+        let coat = if self.coat {
+            let tc = tables.ggx_schlick(px.coat_alpha, p.coat_cos_o.min(R::ONE));
+            p.coat_weight * (tc.a + tc.b)
+        } else {
+            R::ZERO
+        };
+        (e, coat)
+    }
 }
 
 #[inline(always)]
@@ -543,58 +583,47 @@ impl Brdf for Gltf {
     /// Split sum per lobe (module docs, "Lights").
     #[inline(always)]
     fn albedo_local<R: Real>(&self, p: &GltfPrepared<R>) -> Rgb<R> {
-        let (o, px) = (&p.o, &p.px);
-        let mu = o.wo.z.max(R::ZERO);
-        let tables = AlbedoTables::get();
-        let t = tables.ggx_schlick(px.alpha, mu);
-        // ∫ F_s DV μi = F0 A + F90 B; ∫ (1 − G) μi/π = 1 − G0 (1 − C) − G90 C.
-        let spec = |f0: R| f0.mul_add(t.a, px.f90 * t.b);
-        let diff = |g0: R, g90: R| R::ONE - g0.mul_add(R::ONE - t.c, g90 * t.c);
-        let specular = Rgb::new(spec(px.f0.x), spec(px.f0.y), spec(px.f0.z));
-        let diffuse = Rgb::new(
-            px.diffuse.x * diff(px.g0.x, px.g90.x),
-            px.diffuse.y * diff(px.g0.y, px.g90.y),
-            px.diffuse.z * diff(px.g0.z, px.g90.z),
-        );
-        let mut e = specular + diffuse;
-        if self.sheen {
-            let t = SheenTable::get();
-            let scale = (R::ONE - px.sheen_max * p.sheen_e_o).max(R::ZERO);
-            // What the scaling takes beyond its view-only form: K for a
-            // Lambertian lobe, and for the specular lobe K times α (its
-            // spread: none for a mirror, about Lambertian's at α = 1).
-            let k = px.sheen_max * t.k(mu, px.sheen_roughness);
-            let lost = (diffuse + specular * px.alpha) * k;
-            let b = e * scale - lost;
-            let b = Rgb::new(b.x.max(R::ZERO), b.y.max(R::ZERO), b.z.max(R::ZERO));
-            e = px.sheen_color * p.sheen_e_o + b;
-        }
-        if self.coat {
-            let tc = tables.ggx_schlick(px.coat_alpha, p.coat_cos_o.min(R::ONE));
-            e = e * (R::ONE - p.coat_weight) + Rgb::splat(p.coat_weight * (tc.a + tc.b));
-        }
-        Rgb::select(o.above, e, Rgb::zero())
+        let (under, coat) = self.albedo_layers(p);
+        let e = under * (R::ONE - p.coat_weight) + Rgb::splat(coat);
+        Rgb::select(p.o.above, e, Rgb::zero())
     }
 
-    /// The diffuse lobe's albedo (1 − G)·ρd on the irradiance (scaled by
-    /// the coat's transmission where there is a coat); the rest of the
-    /// albedo (specular, sheen, coat) on the GGX lobe at the base's α.
+    /// The diffuse lobe's albedo (1 − G)·ρd on the irradiance, the rest of
+    /// what is under the coat (specular, sheen) on the GGX lobe at the
+    /// base's α around the base's mirror direction, both times the coat's
+    /// transmission 1 − c F_c; the coat's albedo c F_c (A + B)(α_c) on the
+    /// GGX lobe at α_c around the mirror direction about the coat's normal.
     #[inline(always)]
     fn env_lobes<R: Real>(&self, p: &GltfPrepared<R>) -> EnvLobes<R> {
         let px = &p.px;
         let t = AlbedoTables::get().ggx_schlick(px.alpha, p.o.wo.z.max(R::ZERO));
         let diff = |g0: R, g90: R| R::ONE - g0.mul_add(R::ONE - t.c, g90 * t.c);
-        let mut diffuse = Rgb::new(
+        let diffuse = Rgb::new(
             px.diffuse.x * diff(px.g0.x, px.g90.x),
             px.diffuse.y * diff(px.g0.y, px.g90.y),
             px.diffuse.z * diff(px.g0.z, px.g90.z),
         );
-        if self.coat {
-            diffuse = diffuse * (R::ONE - p.coat_weight);
+        let (under, coat) = self.albedo_layers(p);
+        let k = R::ONE - p.coat_weight;
+        let above = p.o.above;
+        let lobes = EnvLobes::split(
+            Rgb::select(above, under * k, Rgb::zero()),
+            Rgb::select(above, diffuse * k, Rgb::zero()),
+            px.alpha.sqrt(),
+        );
+        if !self.coat {
+            return lobes;
         }
-        let total = self.albedo_local(p);
-        let diffuse = Rgb::select(p.o.above, diffuse, Rgb::zero());
-        EnvLobes::split(total, diffuse, px.alpha.sqrt())
+        let normal = if self.coat_normal {
+            px.coat_normal
+        } else {
+            V3::new(R::ZERO, R::ZERO, R::ONE)
+        };
+        lobes.with_coat(
+            R::select(above, coat, R::ZERO),
+            px.coat_alpha.sqrt(),
+            normal,
+        )
     }
 
     /// The LTC lookups and the lobes' albedo factors (zero where the view

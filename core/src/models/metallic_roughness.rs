@@ -246,11 +246,11 @@ impl Brdf for MetallicRoughness {
     #[inline(always)]
     fn env_lobes<R: Real>(&self, p: &MetallicRoughnessPrepared<R>) -> EnvLobes<R> {
         let (spec, diff) = split_sum_terms(p);
-        EnvLobes {
-            diffuse: Rgb::select(p.o.above, diff, Rgb::zero()),
-            specular: Rgb::select(p.o.above, spec, Rgb::zero()),
-            roughness: p.px.alpha.sqrt(),
-        }
+        EnvLobes::new(
+            Rgb::select(p.o.above, diff, Rgb::zero()),
+            Rgb::select(p.o.above, spec, Rgb::zero()),
+            p.px.alpha.sqrt(),
+        )
     }
 
     /// The GGX LTC lookup and the split sum's C(μo), with the factors of

@@ -24,6 +24,7 @@ pub use crate::ndf::Ndf;
 pub use crate::specular_lobe::MicrofacetParams;
 
 use crate::brdf::{Brdf, EnvLobes, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
+use crate::ggx_equivalent::ggx_equivalent_alpha;
 use crate::kulla_conty::{color_factor, f_avg, slice_for, KcColor, KcSlice};
 use crate::light::PolygonLocal;
 use crate::ltc::ggx::LtcGgx;
@@ -46,6 +47,9 @@ const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Linear, Nodes::Ends);
 pub struct Microfacet {
     pub params: MicrofacetParams,
     albedo: AlbedoTable,
+    /// The perceptual roughness of the GGX lobe that stands in for the
+    /// specular lobe under environment maps (ggx_equivalent.rs).
+    env_roughness: f32,
     /// Kulla–Conty compensation, when enabled.
     kc: Option<Compensation>,
 }
@@ -106,6 +110,7 @@ impl Microfacet {
             })
         });
         Microfacet {
+            env_roughness: env_roughness(&params),
             params,
             albedo: AlbedoTable { e },
             kc,
@@ -117,6 +122,7 @@ impl Microfacet {
     pub fn new_without_table(params: MicrofacetParams, kc: Option<KcColor>) -> Microfacet {
         Microfacet {
             kc: kc.map(|mode| Compensation::new(&params, mode)),
+            env_roughness: env_roughness(&params),
             params,
             albedo: AlbedoTable {
                 e: Table1::from_nodes(MU_AXIS, vec![[0.0; 3]; N_MU]),
@@ -128,6 +134,11 @@ impl Microfacet {
     pub fn albedo_at(&self, mu_o: f32) -> [f32; 3] {
         self.albedo.e.lookup(mu_o)
     }
+}
+
+/// √ of the GGX α equivalent to the material's NDF at its α.
+fn env_roughness(params: &MicrofacetParams) -> f32 {
+    ggx_equivalent_alpha(params.ndf, params.alpha as f64).sqrt() as f32
 }
 
 /// The microfacet model's parameters per lane (module docs).
@@ -218,8 +229,8 @@ impl Brdf for Microfacet {
 
     /// ρd and the compensation lobe's albedo F_ms (1 − E(μo)) on the
     /// irradiance (both spread like a Lambertian lobe); the rest on the
-    /// GGX lobe at the material's α, whatever its NDF (Beckmann and GTR
-    /// are prefiltered as GGX of the same α).
+    /// GGX lobe at the material's α, or for Beckmann and GTR at the GGX α
+    /// whose normals spread like theirs (ggx_equivalent.rs).
     #[inline(always)]
     fn env_lobes<R: Real>(&self, p: &MicrofacetPrepared<R>) -> EnvLobes<R> {
         let total = self.albedo_local(p);
@@ -228,7 +239,7 @@ impl Brdf for Microfacet {
             diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
         }
         let diffuse = Rgb::select(p.o.above, diffuse, Rgb::zero());
-        EnvLobes::split(total, diffuse, R::splat(self.params.alpha as f64).sqrt())
+        EnvLobes::split(total, diffuse, R::splat(self.env_roughness as f64))
     }
 
     /// The GGX LTC lookup at this α and the view, with the factors of

@@ -7,8 +7,9 @@ use super::*;
 impl Disney {
     /// The albedo of the lobes that do not depend on the view's azimuth
     /// (diffuse + sheen, clearcoat, the compensation lobe's exact
-    /// factor · (1 − E(μo))), per channel, at μo.
-    pub(super) fn isotropic_albedo(&self, mu_o: f64) -> [f64; 3] {
+    /// factor · (1 − E(μo))), per channel, at μo; and the clearcoat's
+    /// part of it (grey).
+    pub(super) fn isotropic_albedo(&self, mu_o: f64) -> ([f64; 3], f64) {
         let wo = azimuth_dir(mu_o, 1.0);
         let p = self.prepare(wo);
         let diffuse = self.albedo_quadrature(&p, Lobe::Diffuse);
@@ -20,7 +21,10 @@ impl Disney {
         let ms = self.kc.as_ref().map_or([0.0; 3], |k| {
             k.factor.map(|f| f as f64 * (1.0 - k.slice.e_at(mu_o)))
         });
-        core::array::from_fn(|c| diffuse[c] + coat[c] + ms[c])
+        (
+            core::array::from_fn(|c| diffuse[c] + coat[c] + ms[c]),
+            coat[0],
+        )
     }
 
     /// Single-scattering specular albedo at a local wo (compensation lobe

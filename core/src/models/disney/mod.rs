@@ -103,6 +103,15 @@
 //! - Compensation: its lobe as its albedo factor · (1 − E(μo)) times the
 //!   form factor, like `microfacet`'s.
 //!
+//! **Environment maps** (split sum, [`Brdf::env_lobes`]): the diffuse
+//! lobes and the compensation lobe on the irradiance, as for polygon
+//! lights; the clearcoat's albedo (its own μo table, from the same
+//! quadrature as ρ(wo)) on the prefiltered GGX chain at the GGX α whose
+//! normals spread like GTR1's (√α_r, ggx_equivalent.rs) about the normal;
+//! the rest of ρ(wo), the specular lobe's, on the chain at √(αx αy). The
+//! clearcoat is added to the base, not layered over it, so nothing under
+//! it is attenuated (as for lights).
+//!
 //! **Lane parameters** ([`DisneyLaneParams`]): the lobes' colours
 //! ((1 − metallic) C_d / π, the sheen colour, C_spec0) and the diffuse
 //! lobes' roughness and subsurface, as the kernels read them. No texture
@@ -116,9 +125,10 @@
 //! 0/0.5/1, clearcoat 0/1, sheen 0/1: median 0.17 %, p90 3.2 %, max 47 %
 //! of the directional albedo (isotropic lobes: p90 2.1 %, max 10.9 %).
 
-use crate::brdf::{Brdf, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
+use crate::brdf::{Brdf, EnvLobes, HalfAngles, LaneParams, Outgoing, ALPHA_MIN};
 use crate::diffuse::{f_subsurface_burley, fd_burley, sheen_burley};
 use crate::fresnel::{f_schlick, schlick_weight};
+use crate::ggx_equivalent::ggx_equivalent_alpha;
 use crate::kulla_conty::KcColor;
 use crate::light::PolygonLocal;
 use crate::ltc::coat::{self, LtcCoat, ALPHA_HI, ALPHA_LO};
@@ -252,6 +262,11 @@ struct Derived {
     /// ln α of the clearcoat, where its LTC table is read (ltc/coat.rs),
     /// α clamped into the table's [0.001, 0.1] (a material's own range).
     coat_ln_alpha: f64,
+    /// Perceptual roughness of the GGX lobes that stand in for the
+    /// specular lobe (at √(αx αy)) and for the clearcoat's GTR1 (its GGX
+    /// equivalent, ggx_equivalent.rs) under environment maps.
+    env_roughness: f64,
+    coat_env_roughness: f64,
 }
 
 impl Derived {
@@ -271,6 +286,9 @@ impl Derived {
             clearcoat_weight: 0.25 * p.clearcoat as f64,
             spec_ltc_alpha: (alpha_x * alpha_y).sqrt(),
             coat_ln_alpha: p.clearcoat_alpha().clamp(ALPHA_LO, ALPHA_HI).ln(),
+            env_roughness: (alpha_x * alpha_y).sqrt().min(1.0).sqrt(),
+            coat_env_roughness: ggx_equivalent_alpha(Ndf::Gtr { gamma: 1.0 }, p.clearcoat_alpha())
+                .sqrt(),
         }
     }
 }
@@ -296,6 +314,9 @@ pub struct Disney {
     kc: Option<Compensation>,
     /// ρ(wo) per channel over (μo, cos²φo); zeros when built without it.
     albedo: Table2<3>,
+    /// The clearcoat lobe's share of ρ(wo) over μo (it does not depend on
+    /// the view's azimuth); zeros when built without the albedo table.
+    coat_albedo: Table1<1>,
 }
 
 /// A Disney material's parameters per lane (module docs, "Lane
@@ -357,16 +378,17 @@ impl Disney {
         };
         let phi_axis = Axis::new(phi_nodes, 0.0, 1.0, Warp::Linear, Nodes::Ends);
         // The φ-independent lobes once per μ, the specular lobe per node.
-        let iso: Vec<[f64; 3]> = (0..N_MU)
+        let iso: Vec<([f64; 3], f64)> = (0..N_MU)
             .map(|i| m.isotropic_albedo(MU_AXIS.node(i)))
             .collect();
+        m.coat_albedo = Table1::from_nodes(MU_AXIS, iso.iter().map(|i| [i.1 as f32]).collect());
         let rows = (0..phi_nodes)
             .map(|j| {
                 (0..N_MU)
                     .map(|i| {
                         let wo = azimuth_dir(MU_AXIS.node(i), phi_axis.node(j));
                         let s = m.specular_albedo(wo);
-                        core::array::from_fn(|c| (iso[i][c] + s[c]) as f32)
+                        core::array::from_fn(|c| (iso[i].0[c] + s[c]) as f32)
                     })
                     .collect()
             })
@@ -412,6 +434,7 @@ impl Disney {
             d,
             kc,
             albedo: Table2::from_rows(MU_AXIS, phi, vec![vec![[0.0; 3]; N_MU]; 2]),
+            coat_albedo: Table1::from_nodes(MU_AXIS, vec![[0.0]; N_MU]),
         }
     }
 
@@ -588,5 +611,38 @@ impl Brdf for Disney {
         let c2 = wo.x * wo.x / xy2.max(R::splat(1e-30));
         let [r, g, b] = self.albedo.lookup(wo.z, c2);
         Rgb::select(p.o.above, Rgb::new(r, g, b), Rgb::zero())
+    }
+
+    /// The diffuse lobes' albedo (diffuse, subsurface blend, sheen) and
+    /// the compensation lobe's on the irradiance, as for polygon lights;
+    /// the clearcoat's (from its own μo table) on the GGX lobe equivalent
+    /// to its GTR1 about the normal; the rest of ρ(wo), the specular
+    /// lobe's, on the GGX lobe at √(αx αy).
+    #[inline(always)]
+    fn env_lobes<R: Real>(&self, p: &DisneyPrepared<R>) -> EnvLobes<R> {
+        let (o, above) = (&p.o, p.o.above);
+        let total = self.albedo_local(p);
+        let mut diffuse = diffuse_albedo_of(&p.lanes, o.cos_o.min(R::ONE));
+        if let Some(k) = &self.kc {
+            diffuse += Rgb::from_f32(k.factor) * p.one_minus_e_o;
+        }
+        let diffuse = Rgb::select(above, diffuse, Rgb::zero());
+        // A material constant: the branch is the same in every lane.
+        if self.d.clearcoat_weight <= 0.0 {
+            return EnvLobes::split(total, diffuse, R::splat(self.d.env_roughness));
+        }
+        let [coat] = self.coat_albedo.lookup(o.wo.z.max(R::ZERO));
+        let coat = R::select(above, coat.max(R::ZERO), R::ZERO);
+        let under = total - Rgb::splat(coat);
+        let under = Rgb::new(
+            under.x.max(R::ZERO),
+            under.y.max(R::ZERO),
+            under.z.max(R::ZERO),
+        );
+        EnvLobes::split(under, diffuse, R::splat(self.d.env_roughness)).with_coat(
+            coat,
+            R::splat(self.d.coat_env_roughness),
+            V3::new(R::ZERO, R::ZERO, R::ONE),
+        )
     }
 }
