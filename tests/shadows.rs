@@ -554,3 +554,65 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
         assert_eq!(ls.faces(), if k == 2 { 6 } else { cascades as usize });
     }
 }
+
+/// The depth-only passes (depth planes alone, outside triangles skipped
+/// before setup) give every texel of every map the bits of the camera
+/// pass's full setup: a directional light's map and its cascades, a spot
+/// light's, a point light's cube and a polygon light's, at a map size of
+/// whole tiles and one that cuts them, and again from the buffers of the
+/// frame before.
+#[test]
+fn depth_only_maps_match_the_full_setup_bit_for_bit() {
+    use specula_raster::shadow::{DepthSetup, ShadowMaps};
+    let cases = [
+        ("shadows.toml", None),
+        ("shadows.toml", Some(3)),
+        ("shadows_cascades.toml", Some(4)),
+        ("shadows_area.toml", None),
+    ];
+    for (file, cascades) in cases {
+        for size in [256, 1000] {
+            let mut s = specula::scene::load_scene(&common::fixtures().join("scenes").join(file))
+                .expect("fixture scene");
+            for st in s.data.shadows.iter_mut().flatten() {
+                st.map_size = size;
+                if let Some(c) = cascades {
+                    st.cascades = c;
+                }
+            }
+            let view = s.data.camera.view(320, 180);
+            let render = |maps: &mut ShadowMaps, setup| {
+                maps.render_with(&s.data, &view, setup, &mut FrameStats::default());
+            };
+            let mut full = ShadowMaps::default();
+            render(&mut full, DepthSetup::Full);
+            let mut fast = ShadowMaps::default();
+            for frame in 0..2 {
+                render(&mut fast, DepthSetup::DepthOnly);
+                let mut lights = 0;
+                for k in 0..s.data.lights.len() {
+                    let (Some(a), Some(b)) = (full.light(k), fast.light(k)) else {
+                        assert!(full.light(k).is_none() && fast.light(k).is_none());
+                        continue;
+                    };
+                    lights += 1;
+                    assert_eq!(a.faces(), b.faces(), "{file} light {k}");
+                    for i in 0..a.faces() {
+                        let ((na, da), (nb, db)) = (a.depth(i), b.depth(i));
+                        assert_eq!((na, da.len()), (nb, db.len()));
+                        let drawn = da.iter().filter(|d| d.is_finite()).count();
+                        assert!(drawn > 0 || a.faces() == 6, "{file} light {k} face {i}");
+                        let differ = (da.iter().zip(db))
+                            .filter(|(x, y)| x.to_bits() != y.to_bits())
+                            .count();
+                        assert_eq!(
+                            differ, 0,
+                            "{file} size {size} frame {frame} light {k} face {i}: texels differ"
+                        );
+                    }
+                }
+                assert!(lights > 0, "{file}: some shadowed light");
+            }
+        }
+    }
+}

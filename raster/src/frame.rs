@@ -16,7 +16,7 @@ use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
 use crate::scan::{rasterize_tile, rasterize_tile_alpha, AlphaScan};
 use crate::scene::SceneData;
-use crate::setup::{RasterTri, SetupContext, SetupCounts, TriPlanes};
+use crate::setup::{DepthPlanes, RasterTri, SetupContext, SetupCounts, TriPlanes};
 use crate::setup_x4::{Vertices4, LANES};
 use crate::shading_pass::{shade_tile, ShadeTargets};
 use crate::shadow::ShadowMaps;
@@ -62,17 +62,21 @@ pub struct Visibility {
     /// only ones the visibility buffer can name).
     pub planes: Vec<TriPlanes>,
     pub view: View,
-    clip: Vec<[f32; 4]>,
+    pub(crate) clip: Vec<[f32; 4]>,
     /// Setup's and binning's output per chunk, kept for the next frame's
     /// geometry passes to refill (see [`BinnedChunk::bin`]).
-    chunks: Vec<BinnedChunk>,
+    pub(crate) chunks: Vec<BinnedChunk>,
+    /// A depth-only pass's planes per source triangle and its vertices'
+    /// outcodes (`depth_pass.rs`); empty elsewhere.
+    pub(crate) depth_planes: Vec<DepthPlanes>,
+    pub(crate) outcodes: Vec<u8>,
     /// Block depth bounds after the first pass, for the later ones, and
     /// each tile's part of them, taken in the first pass's raster sweep.
     occluder: DepthBounds,
     tile_bounds: Vec<TileMinima>,
     /// The frames' instances of the scene's vertex stages, each beside the
     /// stage it was made from (held, so its address names it).
-    stages: Vec<(Arc<dyn VertexStage>, Box<dyn VertexStage>)>,
+    pub(crate) stages: Vec<(Arc<dyn VertexStage>, Box<dyn VertexStage>)>,
     /// The shadowed lights' maps of this frame (shadow.rs).
     pub shadows: ShadowMaps,
     /// Per tile, the blended triangles of the first pass that touch it,
@@ -92,7 +96,7 @@ impl Visibility {
 
     /// The index in `stages` of the instance of `stage` this run of
     /// frames uses (made on first use).
-    fn stage_index(&mut self, stage: &Arc<dyn VertexStage>) -> usize {
+    pub(crate) fn stage_index(&mut self, stage: &Arc<dyn VertexStage>) -> usize {
         match self.stages.iter().position(|(s, _)| Arc::ptr_eq(s, stage)) {
             Some(i) => i,
             None => {
@@ -103,88 +107,36 @@ impl Visibility {
     }
 }
 
-fn ms_since(t: Instant) -> f64 {
+pub(crate) fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
 /// Every geometry pass of the scene into one visibility buffer, in the
 /// calling rayon pool.
 pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) -> Visibility {
-    let mut v = Visibility {
-        vis: VisBuffer::new(target),
-        planes: Vec::new(),
-        view: scene.camera.view(target.width, target.height),
-        clip: Vec::new(),
-        chunks: Vec::new(),
-        occluder: DepthBounds::default(),
-        tile_bounds: Vec::new(),
-        stages: Vec::new(),
-        shadows: ShadowMaps::default(),
-        blended: Vec::new(),
-    };
+    let mut v = Visibility::empty(target, scene.camera.view(target.width, target.height));
     visibility_into(scene, target, &mut v, stats);
     v
 }
 
-/// A depth-only pass of the scene's main triangles seen through
-/// `view_proj` (both faces drawn) into `target`, in `out` (made on first
-/// use, reused after); its geometry time goes to `stats.times.shadow`.
-pub(crate) fn depth_pass<'a>(
-    scene: &SceneData,
-    target: &Target,
-    view_proj: glam::Mat4,
-    out: &'a mut Option<Visibility>,
-    stats: &mut FrameStats,
-) -> &'a Visibility {
-    let view = View {
-        view_proj,
-        eye: glam::Vec3::ZERO,
-        right: glam::Vec3::X,
-        up: glam::Vec3::Y,
-        forward: glam::Vec3::NEG_Z,
-        tan_x: 1.0,
-        tan_y: 1.0,
-        width: target.width as f32,
-        height: target.height as f32,
-    };
-    let v = out.get_or_insert_with(|| Visibility {
-        vis: VisBuffer::new(target),
-        planes: Vec::new(),
-        view: view.clone(),
-        clip: Vec::new(),
-        chunks: Vec::new(),
-        occluder: DepthBounds::default(),
-        tile_bounds: Vec::new(),
-        stages: Vec::new(),
-        shadows: ShadowMaps::default(),
-        blended: Vec::new(),
-    });
-    if v.vis.id.len() != target.buffer_len() {
-        v.vis = VisBuffer::new(target);
+impl Visibility {
+    /// Buffers for `target` seen through `view`, nothing drawn yet.
+    pub(crate) fn empty(target: &Target, view: View) -> Visibility {
+        Visibility {
+            vis: VisBuffer::new(target),
+            planes: Vec::new(),
+            view,
+            clip: Vec::new(),
+            chunks: Vec::new(),
+            depth_planes: Vec::new(),
+            outcodes: Vec::new(),
+            occluder: DepthBounds::default(),
+            tile_bounds: Vec::new(),
+            stages: Vec::new(),
+            shadows: ShadowMaps::default(),
+            blended: Vec::new(),
+        }
     }
-    v.view = view;
-    let triangles = scene.geometry.first().map_or(0..0, |p| p.triangles.clone());
-    let stage = match v.stages.first() {
-        Some((s, _)) => s.clone(),
-        None => Arc::new(crate::geometry::Project),
-    };
-    let pass = GeometryPass {
-        name: "shadow".into(),
-        vertex: stage,
-        cull: Cull::None,
-        triangles,
-        id_base: 0,
-        material: None,
-    };
-    v.planes
-        .resize(pass.ids().end as usize, TriPlanes::default());
-    let mut own = FrameStats::default();
-    // The first pass of its buffer: it clears it and tests against nothing.
-    geometry_pass(scene, target, &pass, 0, false, &mut true, v, &mut own, true);
-    let t = own.times;
-    stats.times.shadow += t.vertex + t.setup + t.bin + t.raster;
-    stats.shadow_passes += 1;
-    v
 }
 
 /// [`visibility`] into the buffers of an earlier frame of the same target.
@@ -252,7 +204,7 @@ pub fn visibility_into(
 /// alpha-tested per sample; blended ones draw nothing, and the camera's
 /// first pass (not a `shadow` map's) keeps them per tile for blend.rs.
 #[allow(clippy::too_many_arguments)]
-fn geometry_pass(
+pub(crate) fn geometry_pass(
     scene: &SceneData,
     target: &Target,
     pass: &GeometryPass,

@@ -22,6 +22,7 @@ mod blend;
 pub mod buffers;
 pub mod camera;
 pub mod clip;
+mod depth_pass;
 pub mod envmap;
 pub mod envmap_sample;
 pub mod envmap_sun;
@@ -70,6 +71,8 @@ pub mod fuzzing {
     pub use crate::fixed::{pixel_centre, snap, SUBPIXEL_ONE};
     pub use crate::occlusion::DepthBounds;
     pub use crate::scan::{covered_groups, rasterize_tile, scan_triangle};
-    pub use crate::setup::{RasterTri, RectCoverage, SetupContext, SetupCounts, TriPlanes};
+    pub use crate::setup::{
+        DepthPlanes, RasterTri, RectCoverage, SetupContext, SetupCounts, SetupPlanes, TriPlanes,
+    };
     pub use crate::setup_x4::LANES;
 }

@@ -6,7 +6,7 @@ use crate::bin::BinnedChunk;
 use crate::buffers::prefetch;
 use crate::geometry::IdMap;
 use crate::scene::SceneData;
-use crate::setup::{RasterTri, RectCoverage, TriPlanes};
+use crate::setup::{DepthPlanes, RasterTri, RectCoverage, SetupPlanes, TriPlanes};
 use crate::target::{Target, TILE, TILE_PIXELS};
 use specula_core::Real;
 use wide::{f32x8, i32x8, u32x8};
@@ -26,6 +26,22 @@ pub fn rasterize_tile(
     let (tx, ty) = target.tile_origin(t);
     for_each_triangle(t, chunks, planes, |rt, p| {
         scan_triangle(rt, p, tx as i32, ty as i32, depth, ids)
+    });
+}
+
+/// [`rasterize_tile`] of a depth-only pass (a shadow map's): the same
+/// depth, no ids written.
+pub(crate) fn rasterize_tile_depth(
+    target: &Target,
+    t: usize,
+    chunks: &[BinnedChunk],
+    planes: &[DepthPlanes],
+    depth: &mut [f32],
+) {
+    let depth: &mut [f32; TILE_PIXELS] = depth.try_into().expect("a tile of depth");
+    let (tx, ty) = target.tile_origin(t);
+    for_each_triangle(t, chunks, planes, |rt, p| {
+        depth_test_groups(rt, p, tx as i32, ty as i32, depth, |_, _| {});
     });
 }
 
@@ -71,11 +87,11 @@ pub(crate) fn rasterize_tile_alpha(
 /// Calls `scan(rt, planes)` for every triangle binned to tile `t`, in
 /// scene order.
 #[inline(always)]
-fn for_each_triangle(
+fn for_each_triangle<P>(
     t: usize,
     chunks: &[BinnedChunk],
-    planes: &[TriPlanes],
-    mut scan: impl FnMut(&RasterTri, &TriPlanes),
+    planes: &[P],
+    mut scan: impl FnMut(&RasterTri, &P),
 ) {
     for chunk in chunks {
         let items = chunk.tile_items(t);
@@ -229,6 +245,26 @@ pub fn scan_triangle(
     depth: &mut [f32; TILE_PIXELS],
     ids: &mut [u32; TILE_PIXELS],
 ) {
+    let id = u32x8::splat(rt.tri);
+    depth_test_groups(rt, planes, tx, ty, depth, |at, pass| {
+        let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");
+        let m: u32x8 = bytemuck::cast(pass);
+        ids[at..at + 8].copy_from_slice(&m.select(id, u32x8::new(old)).to_array());
+    });
+}
+
+/// The depth test and write of [`scan_triangle`]: `passed(at, pass)` is
+/// called for each group of 8 at tile offset `at` where some sample
+/// passed (the lanes of `pass`), after their depth is written.
+#[inline(always)]
+fn depth_test_groups<P: SetupPlanes>(
+    rt: &RasterTri,
+    planes: &P,
+    tx: i32,
+    ty: i32,
+    depth: &mut [f32; TILE_PIXELS],
+    mut passed: impl FnMut(usize, <f32x8 as Real>::Mask),
+) {
     let [bx0, by0, bx1, by1] = rt.bbox;
     let bounds = [
         bx0.max(tx),
@@ -236,9 +272,7 @@ pub fn scan_triangle(
         by0.max(ty),
         by1.min(ty + TILE as i32),
     ];
-    let [za, zb, zc] = planes.z;
-    let [ox, oy] = planes.origin;
-    let id = u32x8::splat(rt.tri);
+    let ([za, zb, zc], [ox, oy]) = planes.depth();
     let za8 = f32x8::splat(za);
     let lane_x = f32x8::lane_index() + f32x8::splat(0.5 - ox);
     // Groups are aligned to the tile, so loads never cross a row.
@@ -255,9 +289,7 @@ pub fn scan_triangle(
         let pass = f32x8::mask_from_bits(mask) & z.gt(d_old);
         if pass.any() {
             pass.select(z, d_old).store(&mut depth[at..at + 8]);
-            let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");
-            let m: u32x8 = bytemuck::cast(pass);
-            ids[at..at + 8].copy_from_slice(&m.select(id, u32x8::new(old)).to_array());
+            passed(at, pass);
         }
     });
 }

@@ -96,6 +96,53 @@ impl TriPlanes {
     }
 }
 
+/// What a depth-only pass (a shadow map's) keeps of a triangle's
+/// [`TriPlanes`]: the depth plane and its origin, a third of the bytes,
+/// so its setup writes and its scan reads less.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DepthPlanes {
+    pub origin: [f32; 2],
+    /// NDC depth z/w, as `TriPlanes::z`.
+    pub z: [f32; 3],
+}
+
+/// The planes a setup writes per triangle: all of them ([`TriPlanes`]),
+/// or only depth ([`DepthPlanes`]). Setup computes every plane either
+/// way (each is bounded, see `SetupContext::setup`, and the depth plane
+/// is formed from the barycentric ones), so a triangle gets the same
+/// depth bits and is dropped or kept alike in both; the depth-only form
+/// skips storing (and the compiler computing) what nothing reads.
+pub trait SetupPlanes: Copy + Default + Send + Sync {
+    fn from_planes(p: TriPlanes) -> Self;
+    /// The depth plane and its origin.
+    fn depth(&self) -> ([f32; 3], [f32; 2]);
+}
+
+impl SetupPlanes for TriPlanes {
+    #[inline(always)]
+    fn from_planes(p: TriPlanes) -> Self {
+        p
+    }
+    #[inline(always)]
+    fn depth(&self) -> ([f32; 3], [f32; 2]) {
+        (self.z, self.origin)
+    }
+}
+
+impl SetupPlanes for DepthPlanes {
+    #[inline(always)]
+    fn from_planes(p: TriPlanes) -> Self {
+        DepthPlanes {
+            origin: p.origin,
+            z: p.z,
+        }
+    }
+    #[inline(always)]
+    fn depth(&self) -> ([f32; 3], [f32; 2]) {
+        (self.z, self.origin)
+    }
+}
+
 /// Largest clip-space coordinate magnitude accepted (2⁵⁰ ≈ 1.1e15). Beyond
 /// it an f32 position's spacing exceeds 1e8 units: such a vertex (1e30, say)
 /// carries no usable position, so its triangle is skipped and counted like a
@@ -164,6 +211,21 @@ fn ceil_px(n: i64) -> i64 {
 
 /// Frustum outcode: one bit per plane the vertex is outside of.
 fn outcode(v: &ClipVertex) -> u8 {
+    let [x, y, z, w] = *v;
+    (x < -w) as u8
+        | ((x > w) as u8) << 1
+        | ((y < -w) as u8) << 2
+        | ((y > w) as u8) << 3
+        | ((z > w) as u8) << 4
+        | ((z < 0.0) as u8) << 5
+}
+
+/// [`outcode`] of an f32 clip-space vertex: the same bits (widening to
+/// f64 is exact, and so are negation and comparison in either width).
+/// Setup culls a triangle as outside when its three vertices share a bit,
+/// so a depth pass may skip such triangles before setup (`frame.rs`).
+#[inline(always)]
+pub(crate) fn outcode_f32(v: &[f32; 4]) -> u8 {
     let [x, y, z, w] = *v;
     (x < -w) as u8
         | ((x > w) as u8) << 1

@@ -24,7 +24,7 @@ use crate::fixed::{GUARD_BAND_PX, SUBPIXEL_HALF, SUBPIXEL_ONE};
 use crate::geometry::Cull;
 use crate::occlusion::{block_index, DepthBounds, HI_OFFSET, LO_OFFSET};
 use crate::setup::{
-    Edge, RasterTri, SetupContext, SetupCounts, SmallEdges, TriPlanes, MAX_CLIP_COORD,
+    Edge, RasterTri, SetupContext, SetupCounts, SetupPlanes, SmallEdges, TriPlanes, MAX_CLIP_COORD,
     MAX_PLANE_VALUE, SMALL_PX,
 };
 use wide::f64x4;
@@ -219,15 +219,16 @@ impl SetupContext {
 
     /// [`SetupContext::setup_x4_occluded`] of vertices already in
     /// structure-of-arrays form (`Vertices4::gather` reads them straight
-    /// from a clip-position array, as the frame does).
+    /// from a clip-position array, as the frame does), keeping all planes
+    /// ([`TriPlanes`]) or only depth's ([`crate::setup::DepthPlanes`]).
     #[allow(clippy::too_many_arguments)]
-    pub fn setup_x4_vertices(
+    pub fn setup_x4_vertices<P: SetupPlanes>(
         &self,
         first: u32,
         v: &Vertices4,
         cull: [Cull; LANES],
         occluder: Option<&DepthBounds>,
-        planes: &mut [TriPlanes; LANES],
+        planes: &mut [P; LANES],
         out: &mut Vec<RasterTri>,
         counts: &mut SetupCounts,
     ) {
@@ -406,7 +407,7 @@ impl SetupContext {
             if !bit(finite, t) {
                 hit(0);
                 if let Some(p) = self.setup(first + t as u32, v.lane(t), cull[t], out, counts) {
-                    planes[t] = p;
+                    planes[t] = P::from_planes(p);
                 }
                 continue;
             }
@@ -438,14 +439,14 @@ impl SetupContext {
             counts.drawn += 1;
             hit(3);
             let lane3 = |p: &[[f32; 4]; 3]| [p[0][t], p[1][t], p[2][t]];
-            planes[t] = TriPlanes {
+            planes[t] = P::from_planes(TriPlanes {
                 origin: [ox[t], oy[t]],
                 k1: lane3(&k1),
                 k2: lane3(&k2),
                 ks: lane3(&ks),
                 z: lane3(&zp),
                 facing: if bit(positive, t) { 1.0 } else { -1.0 },
-            };
+            });
         }
     }
 
@@ -453,14 +454,14 @@ impl SetupContext {
     /// the scalar path.
     #[allow(clippy::too_many_arguments)]
     #[inline(always)]
-    fn finish_lane(
+    fn finish_lane<P: SetupPlanes>(
         &self,
         lane: Lane,
         first: u32,
         t: usize,
         v: &Vertices4,
         cull: [Cull; LANES],
-        plane: &mut TriPlanes,
+        plane: &mut P,
         out: &mut Vec<RasterTri>,
         counts: &mut SetupCounts,
     ) {
@@ -482,7 +483,7 @@ impl SetupContext {
             Lane::Scalar | Lane::Fast => {
                 hit(0);
                 if let Some(p) = self.setup(first + t as u32, v.lane(t), cull[t], out, counts) {
-                    *plane = p;
+                    *plane = P::from_planes(p);
                 }
             }
         }

@@ -1,6 +1,6 @@
 //! Shadow maps: per shadowed light, depth-only passes of the scene through
-//! the light's view (the same setup, binning and scan as the camera's
-//! passes, `frame::depth_pass`), and the per-lane lookups the light loop
+//! the light's view (the camera passes' setup, binning and scan keeping
+//! depth alone, `depth_pass.rs`), and the per-lane lookups the light loop
 //! multiplies a light's contribution by.
 //!
 //! A directional light gets one orthographic map, fitted across its
@@ -31,6 +31,7 @@ mod passes;
 mod pixels;
 mod settings;
 
+pub use crate::depth_pass::DepthSetup;
 pub use cascades::{cascade_splits, CASCADE_LAMBDA, MAX_CASCADES};
 pub use passes::polygon_light_size;
 pub use pixels::{pixel_shadows, PixelShadow};
@@ -146,6 +147,18 @@ impl ShadowMaps {
     /// Renders every shadowed light's maps of `scene` for the camera's
     /// `view`; `stats.times.shadow` gets their time.
     pub fn render(&mut self, scene: &SceneData, view: &View, stats: &mut FrameStats) {
+        self.render_with(scene, view, DepthSetup::default(), stats);
+    }
+
+    /// [`ShadowMaps::render`] with the depth passes' `setup` chosen (the
+    /// tests compare the two).
+    pub fn render_with(
+        &mut self,
+        scene: &SceneData,
+        view: &View,
+        setup: DepthSetup,
+        stats: &mut FrameStats,
+    ) {
         self.lights.resize_with(scene.lights.len(), || None);
         self.any = false;
         let Some(bounds) = Bounds::of(scene) else {
@@ -176,7 +189,7 @@ impl ShadowMaps {
             ls.faces = faces;
             ls.passes.resize_with(ls.faces.len(), || None);
             for (face, pass) in ls.faces.iter_mut().zip(&mut ls.passes) {
-                render_face(scene, face, pass, block_side, stats);
+                render_face(scene, face, pass, block_side, setup, stats);
             }
             self.any = true;
         }
@@ -187,5 +200,11 @@ impl LightShadow {
     /// Maps this light renders (a cube's faces, cascades, or one).
     pub fn faces(&self) -> usize {
         self.faces.len()
+    }
+
+    /// Face `i`'s map: its side and its row-major linear depth (infinity
+    /// where nothing was drawn).
+    pub fn depth(&self, i: usize) -> (u32, &[f32]) {
+        (self.faces[i].size, &self.faces[i].depth)
     }
 }

@@ -2,14 +2,15 @@
 //! (or one per cascade) for a directional light, fitted to the scene's
 //! bounds cut to the camera's view; one perspective map for a spot light;
 //! a cube of six for a point light and for a polygon light (from its
-//! centre). Each face is drawn by `frame::depth_pass` and kept as linear
+//! centre). Each face is drawn by `depth_pass::depth_pass` and kept as linear
 //! depth.
 
 use super::cascades::cascade_splits;
 use super::settings::ShadowSettings;
 use super::{DepthBlocks, Face, Pick};
 use crate::camera::{Camera, View};
-use crate::frame::{depth_pass, FrameStats, Visibility};
+use crate::depth_pass::{depth_pass, DepthSetup};
+use crate::frame::{FrameStats, Visibility};
 use crate::scene::SceneData;
 use crate::target::{Target, TILE};
 use glam::{Mat4, Vec3, Vec4};
@@ -282,10 +283,11 @@ pub(super) fn render_face(
     face: &mut Face,
     pass: &mut Option<Visibility>,
     block_side: Option<u32>,
+    setup: DepthSetup,
     stats: &mut FrameStats,
 ) {
     let target = Target::new(face.size, face.size).expect("map size checked at load");
-    let v = depth_pass(scene, &target, face.clip, pass, stats);
+    let v = depth_pass(scene, &target, face.clip, setup, pass, stats);
     let n = face.size as usize;
     face.depth.resize(n * n, 0.0);
     let (perspective, near, span) = (face.perspective, face.near, face.span);

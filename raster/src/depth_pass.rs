@@ -1,0 +1,227 @@
+//! Depth-only passes (a shadow map's): the scene's main triangles, both
+//! faces, through a light's view-projection into a depth buffer, by the
+//! camera pass's vertex stage, setup, binning and scan, keeping only what
+//! depth needs.
+//!
+//! Two cuts against the camera's pass (`frame::geometry_pass`), neither
+//! changing a depth bit (`tests/shadows.rs` compares every texel of each
+//! light kind's maps against the full pass):
+//! - setup keeps each triangle's depth plane alone ([`DepthPlanes`]: 20
+//!   bytes a triangle written and read back by the scan, not 60), and the
+//!   scan writes no ids;
+//! - triangles whose three vertices lie beyond one plane of the light's
+//!   frustum (setup's own outside test, on outcodes taken once a vertex)
+//!   skip setup four at a time, before their vertices are gathered.
+//!
+//! A scene with masked or blended materials takes the full pass: its
+//! alpha test reads the barycentric planes.
+
+use crate::bin::{BinnedChunk, CHUNK};
+use crate::camera::View;
+use crate::clip::GuardBand;
+use crate::frame::{geometry_pass, ms_since, FrameStats, Visibility};
+use crate::geometry::{Cull, FrameContext, GeometryPass};
+use crate::scan::{rasterize_tile_depth, AlphaScan};
+use crate::scene::SceneData;
+use crate::setup::{outcode_f32, DepthPlanes, SetupContext, SetupCounts, TriPlanes};
+use crate::setup_x4::{Vertices4, LANES};
+use crate::target::{Target, VisBuffer, TILE_PIXELS};
+use rayon::prelude::*;
+use std::sync::Arc;
+use std::time::Instant;
+
+/// Which setup a depth pass runs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum DepthSetup {
+    /// Depth planes only, outside triangles skipped before setup (the
+    /// default; scenes with alpha materials still take `Full`).
+    #[default]
+    DepthOnly,
+    /// The camera pass's setup and scan, every plane and id: the
+    /// reference the depth-only pass is tested against.
+    Full,
+}
+
+/// A depth-only pass of the scene's main triangles seen through
+/// `view_proj` (both faces drawn) into `target`, in `out` (made on first
+/// use, reused after); its geometry time goes to `stats.times.shadow`.
+pub(crate) fn depth_pass<'a>(
+    scene: &SceneData,
+    target: &Target,
+    view_proj: glam::Mat4,
+    setup: DepthSetup,
+    out: &'a mut Option<Visibility>,
+    stats: &mut FrameStats,
+) -> &'a Visibility {
+    let view = View {
+        view_proj,
+        eye: glam::Vec3::ZERO,
+        right: glam::Vec3::X,
+        up: glam::Vec3::Y,
+        forward: glam::Vec3::NEG_Z,
+        tan_x: 1.0,
+        tan_y: 1.0,
+        width: target.width as f32,
+        height: target.height as f32,
+    };
+    let v = out.get_or_insert_with(|| Visibility::empty(target, view.clone()));
+    if v.vis.id.len() != target.buffer_len() {
+        v.vis = VisBuffer::new(target);
+    }
+    v.view = view;
+    let triangles = scene.geometry.first().map_or(0..0, |p| p.triangles.clone());
+    let stage = match v.stages.first() {
+        Some((s, _)) => s.clone(),
+        None => Arc::new(crate::geometry::Project),
+    };
+    let pass = GeometryPass {
+        name: "shadow".into(),
+        vertex: stage,
+        cull: Cull::None,
+        triangles,
+        id_base: 0,
+        material: None,
+    };
+    let mut own = FrameStats::default();
+    if setup == DepthSetup::Full || AlphaScan::new(scene, false).is_some() {
+        v.planes
+            .resize(pass.ids().end as usize, TriPlanes::default());
+        // The first pass of its buffer: it clears it and tests against nothing.
+        geometry_pass(scene, target, &pass, 0, false, &mut true, v, &mut own, true);
+    } else {
+        depth_only_pass(scene, target, &pass, v, &mut own);
+    }
+    let t = own.times;
+    stats.times.shadow += t.vertex + t.setup + t.bin + t.raster;
+    stats.shadow_passes += 1;
+    v
+}
+
+/// `geometry_pass` of a first pass with `Cull::None` and no alpha
+/// materials, keeping depth alone (see the module doc).
+fn depth_only_pass(
+    scene: &SceneData,
+    target: &Target,
+    pass: &GeometryPass,
+    out: &mut Visibility,
+    stats: &mut FrameStats,
+) {
+    let t = Instant::now();
+    let stage = out.stage_index(&pass.vertex);
+    out.clip.clear();
+    let frame = FrameContext {
+        view: &out.view,
+        ssaa: target.ssaa,
+    };
+    out.stages[stage]
+        .1
+        .clip_positions(&frame, scene, &mut out.clip);
+    assert_eq!(
+        out.clip.len(),
+        scene.positions.len(),
+        "vertex stage of pass {:?}: one position per vertex",
+        pass.name
+    );
+    let clip = &out.clip;
+    out.outcodes.resize(clip.len(), 0);
+    out.outcodes
+        .par_chunks_mut(CHUNK)
+        .zip(clip.par_chunks(CHUNK))
+        .for_each(|(codes, clip)| {
+            for (c, p) in codes.iter_mut().zip(clip) {
+                *c = outcode_f32(p);
+            }
+        });
+    let outcodes = &out.outcodes;
+    stats.times.vertex += ms_since(t);
+
+    let t = Instant::now();
+    let ctx = SetupContext {
+        width: target.width,
+        height: target.height,
+        guard: GuardBand::for_image(target.width, target.height),
+    };
+    let range = pass.triangles.start as usize..pass.triangles.end as usize;
+    let ids = pass.ids();
+    out.depth_planes
+        .resize(ids.end as usize, DepthPlanes::default());
+    let n_chunks = range.len().div_ceil(CHUNK);
+    if out.chunks.len() < n_chunks {
+        out.chunks.resize_with(n_chunks, BinnedChunk::default);
+    }
+    let chunks = &mut out.chunks[..n_chunks];
+    let set_up: Vec<(SetupCounts, f64)> = scene.triangles[range.clone()]
+        .par_chunks(CHUNK)
+        .zip(out.depth_planes[ids.start as usize..ids.end as usize].par_chunks_mut(CHUNK))
+        .zip(chunks.par_iter_mut())
+        .enumerate()
+        .map(|(c, ((tris, planes), chunk))| {
+            let raster = &mut chunk.tris;
+            raster.clear();
+            let mut counts = SetupCounts::default();
+            let base = c * CHUNK;
+            let id = |i: usize| ids.start as u32 + (base + i) as u32;
+            // Setup's trivial reject: all three vertices beyond one plane.
+            let outside = |&[a, b, c]: &[u32; 3]| {
+                outcodes[a as usize] & outcodes[b as usize] & outcodes[c as usize] != 0
+            };
+            let quads = tris.len() / LANES * LANES;
+            for (q, (tris4, planes4)) in tris[..quads]
+                .chunks_exact(LANES)
+                .zip(planes[..quads].chunks_exact_mut(LANES))
+                .enumerate()
+            {
+                if tris4.iter().all(outside) {
+                    counts.triangles += LANES as u64;
+                    counts.culled_outside += LANES as u64;
+                    continue;
+                }
+                let v = Vertices4::gather(clip, tris4.try_into().expect("chunks of LANES"));
+                let planes4 = planes4.try_into().expect("chunks of LANES");
+                ctx.setup_x4_vertices(
+                    id(q * LANES),
+                    &v,
+                    [Cull::None; LANES],
+                    None,
+                    planes4,
+                    raster,
+                    &mut counts,
+                );
+            }
+            for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
+                let v = tri.map(|k| clip[k as usize]);
+                if let Some(p) = ctx.setup(id(i), v, Cull::None, raster, &mut counts) {
+                    *plane = DepthPlanes {
+                        origin: p.origin,
+                        z: p.z,
+                    };
+                }
+            }
+            let tb = Instant::now();
+            chunk.bin(target);
+            (counts, ms_since(tb))
+        })
+        .collect();
+    let total = ms_since(t);
+    let busy: f64 = set_up.iter().map(|(_, b)| b).sum();
+    let bin = (busy / rayon::current_num_threads() as f64).min(total);
+    stats.times.setup += total - bin;
+    stats.times.bin += bin;
+    for ((c, _), chunk) in set_up.iter().zip(chunks.iter()) {
+        stats.counts.add(c);
+        stats.raster_triangles += chunk.tris.len() as u64;
+    }
+    let chunks = &*chunks;
+
+    let t = Instant::now();
+    let planes = &out.depth_planes;
+    out.vis
+        .depth
+        .par_chunks_mut(TILE_PIXELS)
+        .enumerate()
+        .for_each(|(tile, depth)| {
+            depth.fill(0.0);
+            rasterize_tile_depth(target, tile, chunks, planes, depth);
+        });
+    stats.times.raster += ms_since(t);
+}
