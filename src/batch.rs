@@ -102,6 +102,84 @@ impl Record {
     }
 }
 
+/// What can go wrong in a batch run: its arguments, its manifest, a
+/// scene's file, load, render or image, and the outputs. Messages name
+/// the file (and line, for the manifest).
+#[derive(Debug, thiserror::Error)]
+pub enum BatchError {
+    /// A `--shard` that is not `I/N` with 0 ≤ I < N.
+    #[error("--shard {0}: expected I/N with 0 ≤ I < N (e.g. 0/4)")]
+    Shard(String),
+    /// `--jobs 0`.
+    #[error("--jobs must be at least 1")]
+    Jobs,
+    /// The output folder cannot be made.
+    #[error("-o {}: cannot create the folder: {source}", .path.display())]
+    OutputFolder {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A manifest that cannot be read.
+    #[error("{}: {source}", .path.display())]
+    ReadManifest {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A manifest line that is not a record.
+    #[error("{}: line {line}: {source}", .path.display())]
+    ManifestLine {
+        path: PathBuf,
+        line: usize,
+        source: serde_json::Error,
+    },
+    /// A record that cannot be written as JSON.
+    #[error("{0}")]
+    ManifestJson(serde_json::Error),
+    /// A scene file whose stem is not UTF-8 text.
+    #[error("{}: a scene file needs a UTF-8 name", .path.display())]
+    SceneName { path: PathBuf },
+    /// Two scene files whose images would have the same name.
+    #[error("{} and {} are both named {name:?}: their images would have the same name", .first.display(), .second.display())]
+    SameName {
+        first: PathBuf,
+        second: PathBuf,
+        name: String,
+    },
+    /// A scene file that cannot be read.
+    #[error("{}: cannot read: {source}", .path.display())]
+    ReadScene {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A scene file that is not UTF-8 text.
+    #[error("{}: not UTF-8 text", .path.display())]
+    NotUtf8 { path: PathBuf },
+    /// A scene that does not load (its message names the file).
+    #[error(transparent)]
+    Scene(#[from] crate::scene::SceneError),
+    /// A scene that cannot be rendered at its settings (the renderer's
+    /// message).
+    #[error("{}: {source}", .path.display())]
+    Render {
+        path: PathBuf,
+        source: crate::render::RenderError,
+    },
+    /// An image that cannot be encoded.
+    #[error(transparent)]
+    Image(#[from] crate::image_file::ImageFileError),
+    /// An output that cannot be planned or written.
+    #[error(transparent)]
+    Output(#[from] crate::output_plan::OutputError),
+}
+
+/// The seam for the callers whose errors are still `String`s: `?` turns
+/// the error into its message.
+impl From<BatchError> for String {
+    fn from(e: BatchError) -> String {
+        e.to_string()
+    }
+}
+
 /// SHA-256 of `bytes` in lower-case hex.
 pub fn sha256_hex(bytes: &[u8]) -> String {
     Sha256::digest(bytes)
@@ -111,8 +189,8 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
 }
 
 /// `I/N` → (I, N), 0 ≤ I < N.
-pub fn parse_shard(s: &str) -> Result<(usize, usize), String> {
-    let bad = || format!("--shard {s}: expected I/N with 0 ≤ I < N (e.g. 0/4)");
+pub fn parse_shard(s: &str) -> Result<(usize, usize), BatchError> {
+    let bad = || BatchError::Shard(s.to_string());
     let (i, n) = s.split_once('/').ok_or_else(bad)?;
     let (i, n): (usize, usize) = (
         i.trim().parse().map_err(|_| bad())?,
@@ -133,13 +211,20 @@ pub fn manifest_name(shard: Option<(usize, usize)>) -> String {
 }
 
 /// Reads a manifest; errors name the file and line.
-pub fn read_manifest(path: &Path) -> Result<Vec<Record>, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn read_manifest(path: &Path) -> Result<Vec<Record>, BatchError> {
+    let text = std::fs::read_to_string(path).map_err(|source| BatchError::ReadManifest {
+        path: path.to_path_buf(),
+        source,
+    })?;
     text.lines()
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(i, l)| {
-            serde_json::from_str(l).map_err(|e| format!("{}: line {}: {e}", path.display(), i + 1))
+            serde_json::from_str(l).map_err(|source| BatchError::ManifestLine {
+                path: path.to_path_buf(),
+                line: i + 1,
+                source,
+            })
         })
         .collect()
 }
@@ -148,21 +233,21 @@ pub fn read_manifest(path: &Path) -> Result<Vec<Record>, String> {
 pub fn scene_list(
     scenes: &[PathBuf],
     shard: Option<(usize, usize)>,
-) -> Result<Vec<(String, PathBuf)>, String> {
+) -> Result<Vec<(String, PathBuf)>, BatchError> {
     let mut named: Vec<(String, PathBuf)> = Vec::new();
     for p in scenes {
         let name = p
             .file_stem()
             .and_then(|s| s.to_str())
             .filter(|s| !s.is_empty())
-            .ok_or_else(|| format!("{}: a scene file needs a UTF-8 name", p.display()))?
+            .ok_or_else(|| BatchError::SceneName { path: p.clone() })?
             .to_string();
         if let Some((_, q)) = named.iter().find(|(n, _)| *n == name) {
-            return Err(format!(
-                "{} and {} are both named {name:?}: their images would have the same name",
-                q.display(),
-                p.display()
-            ));
+            return Err(BatchError::SameName {
+                first: q.clone(),
+                second: p.clone(),
+                name,
+            });
         }
         named.push((name, p.clone()));
     }
@@ -194,11 +279,19 @@ fn still_current(rec: &Record, path: &Path, settings: &Record, out_dir: &Path) -
 }
 
 /// Loads and renders one scene, writes its image; the record.
-fn render_one(name: &str, path: &Path, a: &BatchArgs, threads: usize) -> Result<Record, String> {
-    let text_bytes =
-        std::fs::read(path).map_err(|e| format!("{}: cannot read: {e}", path.display()))?;
-    let text = String::from_utf8(text_bytes.clone())
-        .map_err(|_| format!("{}: not UTF-8 text", path.display()))?;
+fn render_one(
+    name: &str,
+    path: &Path,
+    a: &BatchArgs,
+    threads: usize,
+) -> Result<Record, BatchError> {
+    let text_bytes = std::fs::read(path).map_err(|source| BatchError::ReadScene {
+        path: path.to_path_buf(),
+        source,
+    })?;
+    let text = String::from_utf8(text_bytes.clone()).map_err(|_| BatchError::NotUtf8 {
+        path: path.to_path_buf(),
+    })?;
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let read_log: Mutex<Vec<InputFile>> = Mutex::new(vec![InputFile {
         path: path.to_string_lossy().into_owned(),
@@ -218,7 +311,7 @@ fn render_one(name: &str, path: &Path, a: &BatchArgs, threads: usize) -> Result<
         Ok(bytes)
     };
     let t = Instant::now();
-    let scene = load_scene_str(path, &text, &read).map_err(|e| e.to_string())?;
+    let scene = load_scene_str(path, &text, &read)?;
     let load_ms = t.elapsed().as_secs_f64() * 1e3;
     let mut settings = RenderSettings::from_scene(&scene);
     settings.width = a.width.unwrap_or(settings.width);
@@ -230,11 +323,12 @@ fn render_one(name: &str, path: &Path, a: &BatchArgs, threads: usize) -> Result<
     } else {
         ShadePath::Simd
     };
-    settings
-        .target()
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut r =
-        render_scene(&scene, &settings, load_ms).map_err(|e| format!("{}: {e}", path.display()))?;
+    let render = |source| BatchError::Render {
+        path: path.to_path_buf(),
+        source,
+    };
+    settings.target().map_err(render)?;
+    let mut r = render_scene(&scene, &settings, load_ms).map_err(render)?;
     let png = crate::image_file::encode_ldr(
         r.width,
         r.height,
@@ -268,30 +362,33 @@ pub struct BatchOutcome {
     pub rendered: Vec<String>,
     pub skipped: Vec<String>,
     /// (scene, error).
-    pub failed: Vec<(String, String)>,
+    pub failed: Vec<(String, BatchError)>,
     pub manifest: PathBuf,
 }
 
-fn write_manifest(path: &Path, records: &[Record]) -> Result<(), String> {
+fn write_manifest(path: &Path, records: &[Record]) -> Result<(), BatchError> {
     let mut text = String::new();
     for r in records {
-        text += &serde_json::to_string(r).map_err(|e| e.to_string())?;
+        text += &serde_json::to_string(r).map_err(BatchError::ManifestJson)?;
         text += "\n";
     }
     let plan = crate::output_plan::plan(&[("manifest", path)], &[], None)?;
-    plan[0].write(text.as_bytes())
+    plan[0].write(text.as_bytes())?;
+    Ok(())
 }
 
 /// Runs a batch: renders what is not current, writes the manifest after
 /// every scene (so an interrupted run resumes where it stopped).
-pub fn run(a: &BatchArgs, progress: bool) -> Result<BatchOutcome, String> {
+pub fn run(a: &BatchArgs, progress: bool) -> Result<BatchOutcome, BatchError> {
     let shard = a.shard.as_deref().map(parse_shard).transpose()?;
     if a.jobs == 0 {
-        return Err("--jobs must be at least 1".into());
+        return Err(BatchError::Jobs);
     }
     let list = scene_list(&a.scenes, shard)?;
-    std::fs::create_dir_all(&a.output)
-        .map_err(|e| format!("-o {}: cannot create the folder: {e}", a.output.display()))?;
+    std::fs::create_dir_all(&a.output).map_err(|source| BatchError::OutputFolder {
+        path: a.output.clone(),
+        source,
+    })?;
     let manifest = a.output.join(manifest_name(shard));
     let previous = if manifest.exists() {
         read_manifest(&manifest)?
@@ -347,7 +444,7 @@ pub fn run(a: &BatchArgs, progress: bool) -> Result<BatchOutcome, String> {
             .expect("the template parses"),
     );
     let next = AtomicUsize::new(0);
-    let failed: Mutex<Vec<(usize, String)>> = Mutex::new(Vec::new());
+    let failed: Mutex<Vec<(usize, BatchError)>> = Mutex::new(Vec::new());
     let write_lock = Mutex::new(());
     std::thread::scope(|s| {
         for _ in 0..jobs {
@@ -382,7 +479,7 @@ pub fn run(a: &BatchArgs, progress: bool) -> Result<BatchOutcome, String> {
     let done: Vec<Record> = records.iter().flatten().cloned().collect();
     write_manifest(&manifest, &done)?;
     let mut failed = failed.into_inner().expect("no panic holds the lock");
-    failed.sort();
+    failed.sort_by_key(|(k, _)| *k);
     out.failed = failed
         .into_iter()
         .map(|(k, e)| (list[k].0.clone(), e))
@@ -420,9 +517,14 @@ mod tests {
 
     #[test]
     fn shard_syntax_is_checked() {
-        assert_eq!(parse_shard("1/4"), Ok((1, 4)));
+        assert_eq!(parse_shard("1/4").unwrap(), (1, 4));
         for bad in ["4/4", "1", "a/2", "0/0", "-1/2"] {
-            assert!(parse_shard(bad).is_err(), "{bad}");
+            let e = parse_shard(bad).unwrap_err();
+            assert!(matches!(&e, BatchError::Shard(s) if s == bad), "{bad}: {e}");
+            assert_eq!(
+                e.to_string(),
+                format!("--shard {bad}: expected I/N with 0 ≤ I < N (e.g. 0/4)")
+            );
         }
     }
 
@@ -430,6 +532,11 @@ mod tests {
     fn equal_stems_are_refused() {
         let scenes = [PathBuf::from("a/x.toml"), PathBuf::from("b/x.toml")];
         let e = scene_list(&scenes, None).unwrap_err();
+        assert!(
+            matches!(&e, BatchError::SameName { name, .. } if name == "x"),
+            "{e}"
+        );
+        let e = e.to_string();
         assert!(e.contains("a/x.toml") && e.contains("b/x.toml"), "{e}");
     }
 

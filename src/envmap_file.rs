@@ -22,6 +22,67 @@
 use specula_raster::envmap::{EnvMap, Equirect, IblMethod, PREFILTER_LEVELS};
 use std::io::Cursor;
 
+/// An environment map file refused; each message starts with the name
+/// the caller gave the file.
+#[derive(Debug, thiserror::Error)]
+pub enum EnvMapError {
+    /// The bytes cannot be sniffed for a format.
+    #[error("{name}: {source}")]
+    Sniff {
+        name: String,
+        source: std::io::Error,
+    },
+    /// An image, but not of linear radiance.
+    #[error("{name}: a {format:?} image; an environment map is a Radiance HDR (.hdr) or OpenEXR (.exr) file of linear radiance")]
+    NotRadiance {
+        name: String,
+        format: image::ImageFormat,
+    },
+    /// No image format recognised.
+    #[error("{name}: not a Radiance HDR (.hdr) or OpenEXR (.exr) file")]
+    Unknown { name: String },
+    /// The header cannot be read.
+    #[error("{name}: cannot read the header: {source}")]
+    Header {
+        name: String,
+        source: image::ImageError,
+    },
+    /// Fewer than 2×2 texels.
+    #[error("{name}: the map is {width}×{height}: an environment map needs at least 2×2 texels")]
+    TooSmall {
+        name: String,
+        width: u32,
+        height: u32,
+    },
+    /// A side above [`MAX_SIDE`].
+    #[error("{name}: the header says {width}×{height}: an environment map is at most {MAX_SIDE} texels on a side")]
+    TooLarge {
+        name: String,
+        width: u32,
+        height: u32,
+    },
+    /// The memory budget refused the map (the message names the file).
+    #[error(transparent)]
+    Memory(#[from] crate::memory::OverBudget),
+    /// A truncated or corrupt file (the decoder's message).
+    #[error("{name}: {source}")]
+    Decode {
+        name: String,
+        source: image::ImageError,
+    },
+    /// The decoded texels refused as a map (its message).
+    #[error("{name}: {message}")]
+    Map { name: String, message: String },
+}
+
+/// The seam for the callers whose errors are still `String`s: `?` turns
+/// the error into its message.
+impl From<EnvMapError> for String {
+    fn from(e: EnvMapError) -> String {
+        e.to_string()
+    }
+}
+
 /// Largest side of a map: 32768 texels.
 pub const MAX_SIDE: u32 = 32768;
 
@@ -48,37 +109,48 @@ pub struct EnvSettings {
 }
 
 /// Decodes an environment map file's bytes (`name` in messages).
-pub fn decode_equirect(name: &str, bytes: &[u8]) -> Result<Equirect, String> {
+pub fn decode_equirect(name: &str, bytes: &[u8]) -> Result<Equirect, EnvMapError> {
     let reader = || {
         image::ImageReader::new(Cursor::new(bytes))
             .with_guessed_format()
-            .map_err(|e| format!("{name}: {e}"))
+            .map_err(|source| EnvMapError::Sniff {
+                name: name.to_string(),
+                source,
+            })
     };
     match reader()?.format() {
         Some(image::ImageFormat::Hdr | image::ImageFormat::OpenExr) => {}
-        Some(f) => {
-            return Err(format!(
-                "{name}: a {f:?} image; an environment map is a Radiance HDR (.hdr) or OpenEXR (.exr) file of linear radiance"
-            ))
+        Some(format) => {
+            return Err(EnvMapError::NotRadiance {
+                name: name.to_string(),
+                format,
+            })
         }
         None => {
-            return Err(format!(
-                "{name}: not a Radiance HDR (.hdr) or OpenEXR (.exr) file"
-            ))
+            return Err(EnvMapError::Unknown {
+                name: name.to_string(),
+            })
         }
     }
     let (w, h) = reader()?
         .into_dimensions()
-        .map_err(|e| format!("{name}: cannot read the header: {e}"))?;
+        .map_err(|source| EnvMapError::Header {
+            name: name.to_string(),
+            source,
+        })?;
     if w < 2 || h < 2 {
-        return Err(format!(
-            "{name}: the map is {w}×{h}: an environment map needs at least 2×2 texels"
-        ));
+        return Err(EnvMapError::TooSmall {
+            name: name.to_string(),
+            width: w,
+            height: h,
+        });
     }
     if w > MAX_SIDE || h > MAX_SIDE {
-        return Err(format!(
-            "{name}: the header says {w}×{h}: an environment map is at most {MAX_SIDE} texels on a side"
-        ));
+        return Err(EnvMapError::TooLarge {
+            name: name.to_string(),
+            width: w,
+            height: h,
+        });
     }
     crate::memory::reserve(
         &format!("environment map {name} ({w}×{h})"),
@@ -88,7 +160,10 @@ pub fn decode_equirect(name: &str, bytes: &[u8]) -> Result<Equirect, String> {
     r.no_limits();
     let img = r
         .decode()
-        .map_err(|e| format!("{name}: {e}"))?
+        .map_err(|source| EnvMapError::Decode {
+            name: name.to_string(),
+            source,
+        })?
         .into_rgb32f();
     let (w, h) = (img.width() as usize, img.height() as usize);
     let texels = img
@@ -106,16 +181,20 @@ pub fn decode_equirect(name: &str, bytes: &[u8]) -> Result<Equirect, String> {
 /// The map from a file's bytes (decoded and checked by
 /// [`decode_equirect`], texels clamped and scaled by the settings), its
 /// derived data not yet built ([`EnvMap::prepare`]).
-pub fn new_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, String> {
+pub fn new_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, EnvMapError> {
     let source = decode_equirect(name, bytes)?;
-    EnvMap::new(source, s.intensity, s.rotate_deg, s.visible, s.method)
-        .map_err(|e| format!("{name}: {e}"))
+    EnvMap::new(source, s.intensity, s.rotate_deg, s.visible, s.method).map_err(|message| {
+        EnvMapError::Map {
+            name: name.to_string(),
+            message,
+        }
+    })
 }
 
 /// The map from a file's bytes with its derived data: from the table
 /// cache when it holds them, else built (with a progress bar on stderr
 /// for maps of a million texels and more) and stored there.
-pub fn load_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, String> {
+pub fn load_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, EnvMapError> {
     let mut map = new_env_map(name, bytes, s)?;
     let texels = map.source.width * map.source.height;
     let key = cache_key(bytes, s.intensity);

@@ -5,6 +5,48 @@
 use image::{ImageFormat, Rgb32FImage, RgbImage};
 use std::path::Path;
 
+/// An image that cannot be encoded, or an id file that cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum ImageFileError {
+    /// Pixels that are not `width × height` of the format's channels.
+    #[error("image buffer has the wrong size")]
+    WrongSize,
+    /// The encoder refused (its message).
+    #[error("cannot encode {format:?}: {source}")]
+    Encode {
+        format: ImageFormat,
+        source: image::ImageError,
+    },
+    /// Where the bytes were to go refused them (its message names the
+    /// file).
+    #[error(transparent)]
+    Output(#[from] crate::output_plan::OutputError),
+    /// An id file that cannot be read.
+    #[error("{}: {source}", .path.display())]
+    Read {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    /// A file that does not start with [`ID_MAGIC`].
+    #[error("{}: not a specula id file", .path.display())]
+    NotIds { path: std::path::PathBuf },
+    /// An id file whose length is not its header's size.
+    #[error("{}: size does not match {width}×{height}", .path.display())]
+    IdsSize {
+        path: std::path::PathBuf,
+        width: u32,
+        height: u32,
+    },
+}
+
+/// The seam for the callers whose errors are still `String`s: `?` turns
+/// the error into its message.
+impl From<ImageFileError> for String {
+    fn from(e: ImageFileError) -> String {
+        e.to_string()
+    }
+}
+
 /// Magic of the raw triangle-id AOV; see `write_ids`.
 pub const ID_MAGIC: &[u8; 8] = b"SPCLID01";
 
@@ -20,14 +62,14 @@ pub fn encode_ldr(
     height: u32,
     rgb8: Vec<u8>,
     format: ImageFormat,
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, ImageFileError> {
     use image::codecs::{pnm, tga};
     use image::{ExtendedColorType, ImageEncoder};
     let expected = width as u64 * height as u64 * 3;
     if rgb8.len() as u64 != expected {
-        return Err("image buffer has the wrong size".into());
+        return Err(ImageFileError::WrongSize);
     }
-    let fail = |e: image::ImageError| format!("cannot encode {format:?}: {e}");
+    let fail = |source| ImageFileError::Encode { format, source };
     let mut bytes = Vec::new();
     match format {
         ImageFormat::Pnm => pnm::PnmEncoder::new(&mut bytes)
@@ -39,8 +81,7 @@ pub fn encode_ldr(
             .write_image(&rgb8, width, height, ExtendedColorType::Rgb8)
             .map_err(fail)?,
         _ => {
-            let img =
-                RgbImage::from_raw(width, height, rgb8).ok_or("image buffer has the wrong size")?;
+            let img = RgbImage::from_raw(width, height, rgb8).ok_or(ImageFileError::WrongSize)?;
             img.write_to(&mut std::io::Cursor::new(&mut bytes), format)
                 .map_err(fail)?;
         }
@@ -54,13 +95,12 @@ pub fn encode_hdr(
     height: u32,
     rgb: &[[f32; 3]],
     format: ImageFormat,
-) -> Result<Vec<u8>, String> {
+) -> Result<Vec<u8>, ImageFileError> {
     let flat: Vec<f32> = rgb.iter().flatten().copied().collect();
-    let img =
-        Rgb32FImage::from_raw(width, height, flat).ok_or("image buffer has the wrong size")?;
+    let img = Rgb32FImage::from_raw(width, height, flat).ok_or(ImageFileError::WrongSize)?;
     let mut bytes = std::io::Cursor::new(Vec::new());
     img.write_to(&mut bytes, format)
-        .map_err(|e| format!("cannot encode {format:?}: {e}"))?;
+        .map_err(|source| ImageFileError::Encode { format, source })?;
     Ok(bytes.into_inner())
 }
 
@@ -70,21 +110,33 @@ pub fn is_hdr(format: ImageFormat) -> bool {
 }
 
 /// Writes `bytes` to `path` as [`crate::output_plan`] resolves it.
-fn write_path(path: &Path, bytes: &[u8]) -> Result<(), String> {
-    let sink = crate::output_plan::resolve(path, false)?;
+fn write_path(path: &Path, bytes: &[u8]) -> Result<(), ImageFileError> {
+    let sink =
+        crate::output_plan::resolve(path, false).map_err(crate::output_plan::OutputError::from)?;
     crate::output_plan::Output {
         flag: String::new(),
         path: path.to_path_buf(),
         sink,
     }
-    .write(bytes)
+    .write(bytes)?;
+    Ok(())
 }
 
-pub fn write_png(path: &Path, width: u32, height: u32, rgb8: Vec<u8>) -> Result<(), String> {
+pub fn write_png(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb8: Vec<u8>,
+) -> Result<(), ImageFileError> {
     write_path(path, &encode_ldr(width, height, rgb8, ImageFormat::Png)?)
 }
 
-pub fn write_exr(path: &Path, width: u32, height: u32, rgb: &[[f32; 3]]) -> Result<(), String> {
+pub fn write_exr(
+    path: &Path,
+    width: u32,
+    height: u32,
+    rgb: &[[f32; 3]],
+) -> Result<(), ImageFileError> {
     write_path(path, &encode_hdr(width, height, rgb, ImageFormat::OpenExr)?)
 }
 
@@ -102,20 +154,29 @@ pub fn encode_ids(width: u32, height: u32, ids: &[u32]) -> Vec<u8> {
     bytes
 }
 
-pub fn write_ids(path: &Path, width: u32, height: u32, ids: &[u32]) -> Result<(), String> {
+pub fn write_ids(path: &Path, width: u32, height: u32, ids: &[u32]) -> Result<(), ImageFileError> {
     write_path(path, &encode_ids(width, height, ids))
 }
 
 /// Reads an id AOV written by [`write_ids`]: (width, height, ids).
-pub fn read_ids(path: &Path) -> Result<(u32, u32, Vec<u32>), String> {
-    let b = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+pub fn read_ids(path: &Path) -> Result<(u32, u32, Vec<u32>), ImageFileError> {
+    let b = std::fs::read(path).map_err(|source| ImageFileError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
     if b.len() < 16 || &b[..8] != ID_MAGIC {
-        return Err(format!("{}: not a specula id file", path.display()));
+        return Err(ImageFileError::NotIds {
+            path: path.to_path_buf(),
+        });
     }
     let w = u32::from_le_bytes(b[8..12].try_into().expect("4 bytes"));
     let h = u32::from_le_bytes(b[12..16].try_into().expect("4 bytes"));
     if b.len() as u64 != 16 + 4 * w as u64 * h as u64 {
-        return Err(format!("{}: size does not match {w}×{h}", path.display()));
+        return Err(ImageFileError::IdsSize {
+            path: path.to_path_buf(),
+            width: w,
+            height: h,
+        });
     }
     let ids = b[16..]
         .chunks_exact(4)

@@ -45,19 +45,43 @@ pub fn reset_reserved() {
     RESERVED.store(BASE_BYTES, Ordering::Relaxed);
 }
 
+/// A reservation the budget refused: what asked, for how many bytes, on
+/// top of how many already planned, against which limit.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error(
+    "{what} needs about {} of memory, and with what is already planned ({}) that exceeds the limit of {} (set it with --max-memory)",
+    show(*.bytes),
+    show(*.planned),
+    show(*.limit)
+)]
+pub struct OverBudget {
+    pub what: String,
+    pub bytes: u64,
+    pub planned: u64,
+    pub limit: u64,
+}
+
+/// The seam for the callers whose errors are still `String`s: `?` turns
+/// the refusal into its message.
+impl From<OverBudget> for String {
+    fn from(e: OverBudget) -> String {
+        e.to_string()
+    }
+}
+
 /// Counts `bytes` against the budget, or refuses them naming `what`.
-pub fn reserve(what: &str, bytes: u64) -> Result<(), String> {
+pub fn reserve(what: &str, bytes: u64) -> Result<(), OverBudget> {
     let limit = LIMIT.load(Ordering::Relaxed);
     let before = RESERVED.fetch_add(bytes, Ordering::Relaxed);
     let after = before.saturating_add(bytes);
     if after > limit {
         RESERVED.fetch_sub(bytes, Ordering::Relaxed);
-        return Err(format!(
-            "{what} needs about {} of memory, and with what is already planned ({}) that exceeds the limit of {} (set it with --max-memory)",
-            show(bytes),
-            show(before),
-            show(limit)
-        ));
+        return Err(OverBudget {
+            what: what.to_string(),
+            bytes,
+            planned: before,
+            limit,
+        });
     }
     Ok(())
 }
@@ -100,9 +124,20 @@ pub fn default_limit() -> u64 {
     }
 }
 
+/// A `--max-memory` value that is not a size (the text as given).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SizeError {
+    #[error("{0:?}: unknown unit (K, M, G, T)")]
+    UnknownUnit(String),
+    #[error("{0:?}: not a size (e.g. 4G, 512M, 1000000)")]
+    NotASize(String),
+    #[error("{0:?}: must be a positive size")]
+    NotPositive(String),
+}
+
 /// Parses a size: bytes, or a number with K, M, G or T (powers of 1024,
 /// an optional trailing B or iB).
-pub fn parse_size(s: &str) -> Result<u64, String> {
+pub fn parse_size(s: &str) -> Result<u64, SizeError> {
     let t = s.trim();
     let t = t
         .strip_suffix("iB")
@@ -115,7 +150,7 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
                 'M' => 20,
                 'G' => 30,
                 'T' => 40,
-                _ => return Err(format!("{s:?}: unknown unit (K, M, G, T)")),
+                _ => return Err(SizeError::UnknownUnit(s.to_string())),
             };
             (&t[..t.len() - 1], shift)
         }
@@ -124,9 +159,9 @@ pub fn parse_size(s: &str) -> Result<u64, String> {
     let v: f64 = num
         .trim()
         .parse()
-        .map_err(|_| format!("{s:?}: not a size (e.g. 4G, 512M, 1000000)"))?;
+        .map_err(|_| SizeError::NotASize(s.to_string()))?;
     if !(v.is_finite() && v > 0.0) {
-        return Err(format!("{s:?}: must be a positive size"));
+        return Err(SizeError::NotPositive(s.to_string()));
     }
     Ok((v * (1u64 << shift) as f64).min(u64::MAX as f64) as u64)
 }
@@ -159,5 +194,44 @@ mod tests {
         assert!(parse_size("-1G").is_err());
         assert!(parse_size("4X").is_err());
         assert_eq!(show(3 << 29), "1.5 GB");
+    }
+
+    /// Each refusal is its own kind, and prints the text the CLI always
+    /// printed for it.
+    #[test]
+    fn size_errors_name_the_text_given() {
+        assert_eq!(parse_size("4X"), Err(SizeError::UnknownUnit("4X".into())));
+        assert_eq!(
+            parse_size("4X").unwrap_err().to_string(),
+            "\"4X\": unknown unit (K, M, G, T)"
+        );
+        assert_eq!(
+            parse_size("lots"),
+            Err(SizeError::UnknownUnit("lots".into()))
+        );
+        assert_eq!(
+            parse_size("1.2.3").unwrap_err().to_string(),
+            "\"1.2.3\": not a size (e.g. 4G, 512M, 1000000)"
+        );
+        assert_eq!(
+            parse_size("0").unwrap_err().to_string(),
+            "\"0\": must be a positive size"
+        );
+    }
+
+    /// A refusal carries the sizes it compared and prints them in units.
+    #[test]
+    fn over_budget_prints_its_sizes() {
+        let e = OverBudget {
+            what: "a mesh".into(),
+            bytes: 3 << 29,
+            planned: 1 << 20,
+            limit: u64::MAX,
+        };
+        assert_eq!(
+            e.to_string(),
+            "a mesh needs about 1.5 GB of memory, and with what is already planned (1.0 MB) \
+             that exceeds the limit of no limit (set it with --max-memory)"
+        );
     }
 }

@@ -16,6 +16,127 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
+/// Why a path cannot take an output (each message starts with the path).
+#[derive(Debug, thiserror::Error)]
+pub enum ResolveError {
+    /// `-` for an output that cannot go to standard output.
+    #[error("-: standard output is only available for the main image (-o -)")]
+    StdoutNotAllowed,
+    /// A path without a file name (`..`, `/`).
+    #[error("{}: not a file path", .path.display())]
+    NotAFilePath { path: PathBuf },
+    /// The file system refused to describe the path (its message).
+    #[error("{}: {source}", .path.display())]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A new file whose folder is something else.
+    #[error("{}: {} is not a folder", .path.display(), .folder.display())]
+    FolderNotAFolder { path: PathBuf, folder: PathBuf },
+    /// A new file whose folder cannot be reached.
+    #[error("{}: cannot write into {}: {source}", .path.display(), .folder.display())]
+    FolderUnusable {
+        path: PathBuf,
+        folder: PathBuf,
+        source: std::io::Error,
+    },
+    /// A symbolic link whose target cannot be resolved.
+    #[error("{}: a symbolic link whose target cannot be used: {source}", .path.display())]
+    BadLink {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A folder.
+    #[error("{}: is a folder", .path.display())]
+    IsAFolder { path: PathBuf },
+    /// A socket or another kind of file that is not written.
+    #[error("{}: not a regular file, device or pipe; refusing to write it", .path.display())]
+    NotWritable { path: PathBuf },
+}
+
+/// An output that cannot be planned or written; messages start with the
+/// flag that named it where one did.
+#[derive(Debug, thiserror::Error)]
+pub enum OutputError {
+    /// A path of a flag that cannot take an output (checked early).
+    #[error("{flag} {}: {source}", .path.display())]
+    Early {
+        flag: String,
+        path: PathBuf,
+        source: ResolveError,
+    },
+    /// A path of a flag that cannot take an output (planned).
+    #[error("{flag} {source}")]
+    Resolve { flag: String, source: ResolveError },
+    /// A path that cannot take an output (no flag to name).
+    #[error(transparent)]
+    Path(#[from] ResolveError),
+    /// A new file's folder that takes no file.
+    #[error("{flag} {}: cannot write into its folder: {source}", .path.display())]
+    FolderNotWritable {
+        flag: String,
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// An output that cannot be opened for writing, found before any work.
+    #[error("{flag} {}: cannot write: {source}", .path.display())]
+    NotWritable {
+        flag: String,
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// Writing (or putting in place) the bytes failed.
+    #[error("{}: cannot write: {source}", .path.display())]
+    Write {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// A file name without an extension, so no image format.
+    #[error("{flag} {}: no file extension to tell the image format (use .png or .exr)", .path.display())]
+    NoExtension { flag: String, path: PathBuf },
+    /// A PNM name other than `.ppm` / `.pnm`.
+    #[error("{flag} {}: .{extension} is not written (colour PNM images are .ppm)", .path.display())]
+    NotPpm {
+        flag: String,
+        path: PathBuf,
+        extension: String,
+    },
+    /// An extension of no format this build writes.
+    #[error("{flag} {}: cannot write {extension:?} images (writable: {})", .path.display(), writable_extensions().join(", "))]
+    Unwritable {
+        flag: String,
+        path: PathBuf,
+        extension: String,
+    },
+    /// An output that is one of the run's input files.
+    #[error("{flag} {}: is an input of this run; refusing to overwrite it", .path.display())]
+    IsInput { flag: String, path: PathBuf },
+    /// Two outputs that name the same file.
+    #[error("{flag} {}: the same file as {other_flag} {}; give each output its own path", .path.display(), .other_path.display())]
+    SameFile {
+        flag: String,
+        path: PathBuf,
+        other_flag: String,
+        other_path: PathBuf,
+    },
+}
+
+/// The seam for the callers whose errors are still `String`s: `?` turns
+/// the error into its message.
+impl From<OutputError> for String {
+    fn from(e: OutputError) -> String {
+        e.to_string()
+    }
+}
+
+/// The seam for the callers whose errors are still `String`s.
+impl From<ResolveError> for String {
+    fn from(e: ResolveError) -> String {
+        e.to_string()
+    }
+}
+
 /// Where one output's bytes go.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum Sink {
@@ -39,26 +160,44 @@ pub struct Output {
 /// Checks, before a long computation, that `path` can take its output:
 /// it resolves (a file in an existing folder, a device, a link to either)
 /// and its folder takes a new file (a temporary one, removed at once).
-pub fn check_early(flag: &str, path: &Path) -> Result<(), String> {
-    let fail = |e: String| format!("{flag} {}: {e}", path.display());
-    match resolve(path, false).map_err(fail)? {
+pub fn check_early(flag: &str, path: &Path) -> Result<(), OutputError> {
+    let sink = resolve(path, false).map_err(|source| OutputError::Early {
+        flag: flag.to_string(),
+        path: path.to_path_buf(),
+        source,
+    })?;
+    match sink {
         Sink::Atomic(p) => tempfile::NamedTempFile::new_in(folder(&p))
             .map(drop)
-            .map_err(|e| fail(format!("cannot write into its folder: {e}"))),
+            .map_err(|source| OutputError::FolderNotWritable {
+                flag: flag.to_string(),
+                path: path.to_path_buf(),
+                source,
+            }),
         Sink::Direct(p) => OpenOptions::new()
             .write(true)
             .open(&p)
             .map(drop)
-            .map_err(|e| fail(format!("cannot write: {e}"))),
+            .map_err(|source| OutputError::NotWritable {
+                flag: flag.to_string(),
+                path: path.to_path_buf(),
+                source,
+            }),
         Sink::Stdout => Ok(()),
     }
 }
 
 impl Output {
     /// Writes `bytes` to the output.
-    pub fn write(&self, bytes: &[u8]) -> Result<(), String> {
-        write_sink(&self.sink, bytes)
-            .map_err(|e| format!("{}: cannot write: {e}", self.path.display()))
+    pub fn write(&self, bytes: &[u8]) -> Result<(), OutputError> {
+        write_sink(&self.sink, bytes).map_err(|source| self.write_error(source))
+    }
+
+    fn write_error(&self, source: std::io::Error) -> OutputError {
+        OutputError::Write {
+            path: self.path.clone(),
+            source,
+        }
     }
 
     /// Writes `bytes` to a temporary file beside a regular file's
@@ -66,8 +205,8 @@ impl Output {
     /// standard output is written now. A run with several outputs stages
     /// them all before committing any, so a failure in one (a full disk)
     /// leaves every previous file as it was.
-    pub fn stage(&self, bytes: &[u8]) -> Result<Staged, String> {
-        let fail = |e: std::io::Error| format!("{}: cannot write: {e}", self.path.display());
+    pub fn stage(&self, bytes: &[u8]) -> Result<Staged, OutputError> {
+        let fail = |source| self.write_error(source);
         let file = match &self.sink {
             Sink::Atomic(p) => {
                 let mut temp = TempFile::create(p).map_err(fail)?;
@@ -87,14 +226,13 @@ impl Output {
 
     /// The image format its name asks for (`-`, devices and FIFOs without an
     /// extension get `default`); refuses names this build cannot write.
-    pub fn image_format(&self, default: ImageFormat) -> Result<ImageFormat, String> {
+    pub fn image_format(&self, default: ImageFormat) -> Result<ImageFormat, OutputError> {
         let Some(ext) = self.path.extension() else {
             return match self.sink {
-                Sink::Atomic(_) => Err(format!(
-                    "{} {}: no file extension to tell the image format (use .png or .exr)",
-                    self.flag,
-                    self.path.display()
-                )),
+                Sink::Atomic(_) => Err(OutputError::NoExtension {
+                    flag: self.flag.clone(),
+                    path: self.path.clone(),
+                }),
                 _ => Ok(default),
             };
         };
@@ -102,19 +240,19 @@ impl Output {
         match ImageFormat::from_extension(ext) {
             // The PNM family is written as a colour PPM (`P6`): a name that
             // promises a bitmap, a grey map or PAM would be a lie.
-            Some(ImageFormat::Pnm) if lower != "ppm" && lower != "pnm" => Err(format!(
-                "{} {}: .{lower} is not written (colour PNM images are .ppm)",
-                self.flag,
-                self.path.display()
-            )),
+            Some(ImageFormat::Pnm) if lower != "ppm" && lower != "pnm" => {
+                Err(OutputError::NotPpm {
+                    flag: self.flag.clone(),
+                    path: self.path.clone(),
+                    extension: lower,
+                })
+            }
             Some(f) if f.writing_enabled() => Ok(f),
-            _ => Err(format!(
-                "{} {}: cannot write {:?} images (writable: {})",
-                self.flag,
-                self.path.display(),
-                ext.to_string_lossy(),
-                writable_extensions().join(", ")
-            )),
+            _ => Err(OutputError::Unwritable {
+                flag: self.flag.clone(),
+                path: self.path.clone(),
+                extension: ext.to_string_lossy().into_owned(),
+            }),
         }
     }
 }
@@ -139,17 +277,22 @@ fn folder(path: &Path) -> &Path {
 }
 
 /// Resolves an output path to where its bytes will go.
-pub fn resolve(path: &Path, allow_stdout: bool) -> Result<Sink, String> {
-    let shown = path.display();
+pub fn resolve(path: &Path, allow_stdout: bool) -> Result<Sink, ResolveError> {
+    let io = |source| ResolveError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
     if path.as_os_str() == "-" {
         return if allow_stdout {
             Ok(Sink::Stdout)
         } else {
-            Err("-: standard output is only available for the main image (-o -)".into())
+            Err(ResolveError::StdoutNotAllowed)
         };
     }
     if path.file_name().is_none() {
-        return Err(format!("{shown}: not a file path"));
+        return Err(ResolveError::NotAFilePath {
+            path: path.to_path_buf(),
+        });
     }
     let meta = match std::fs::symlink_metadata(path) {
         Ok(m) => m,
@@ -157,15 +300,24 @@ pub fn resolve(path: &Path, allow_stdout: bool) -> Result<Sink, String> {
             let dir = folder(path);
             return match std::fs::metadata(dir) {
                 Ok(m) if m.is_dir() => {
-                    let dir = std::fs::canonicalize(dir)
-                        .map_err(|e| format!("{}: {e}", dir.display()))?;
+                    let dir = std::fs::canonicalize(dir).map_err(|source| ResolveError::Io {
+                        path: dir.to_path_buf(),
+                        source,
+                    })?;
                     Ok(Sink::Atomic(dir.join(path.file_name().expect("checked"))))
                 }
-                Ok(_) => Err(format!("{shown}: {} is not a folder", dir.display())),
-                Err(e) => Err(format!("{shown}: cannot write into {}: {e}", dir.display())),
+                Ok(_) => Err(ResolveError::FolderNotAFolder {
+                    path: path.to_path_buf(),
+                    folder: dir.to_path_buf(),
+                }),
+                Err(source) => Err(ResolveError::FolderUnusable {
+                    path: path.to_path_buf(),
+                    folder: dir.to_path_buf(),
+                    source,
+                }),
             };
         }
-        Err(e) => return Err(format!("{shown}: {e}")),
+        Err(e) => return Err(io(e)),
     };
     let ft = meta.file_type();
     if ft.is_symlink() {
@@ -175,16 +327,19 @@ pub fn resolve(path: &Path, allow_stdout: bool) -> Result<Sink, String> {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => link_target(path),
             r => r,
         }
-        .map_err(|e| format!("{shown}: a symbolic link whose target cannot be used: {e}"))?;
+        .map_err(|source| ResolveError::BadLink {
+            path: path.to_path_buf(),
+            source,
+        })?;
         return resolve(&target, false);
     }
     if ft.is_dir() {
-        return Err(format!("{shown}: is a folder"));
+        return Err(ResolveError::IsAFolder {
+            path: path.to_path_buf(),
+        });
     }
     if ft.is_file() {
-        return Ok(Sink::Atomic(
-            std::fs::canonicalize(path).map_err(|e| format!("{shown}: {e}"))?,
-        ));
+        return Ok(Sink::Atomic(std::fs::canonicalize(path).map_err(io)?));
     }
     #[cfg(unix)]
     {
@@ -193,9 +348,9 @@ pub fn resolve(path: &Path, allow_stdout: bool) -> Result<Sink, String> {
             return Ok(Sink::Direct(path.to_path_buf()));
         }
     }
-    Err(format!(
-        "{shown}: not a regular file, device or pipe; refusing to write it"
-    ))
+    Err(ResolveError::NotWritable {
+        path: path.to_path_buf(),
+    })
 }
 
 /// Where a chain of symbolic links ends when its last target does not
@@ -224,35 +379,42 @@ pub fn plan(
     outputs: &[(&str, &Path)],
     inputs: &[PathBuf],
     allow_stdout: Option<&str>,
-) -> Result<Vec<Output>, String> {
+) -> Result<Vec<Output>, OutputError> {
     let inputs: Vec<PathBuf> = inputs
         .iter()
         .filter_map(|p| std::fs::canonicalize(p).ok())
         .collect();
     let mut planned: Vec<Output> = Vec::new();
     for &(flag, path) in outputs {
-        let sink = resolve(path, allow_stdout == Some(flag)).map_err(|e| format!("{flag} {e}"))?;
+        let sink =
+            resolve(path, allow_stdout == Some(flag)).map_err(|source| OutputError::Resolve {
+                flag: flag.to_string(),
+                source,
+            })?;
         if let Sink::Direct(p) | Sink::Atomic(p) = &sink {
             let canon = std::fs::canonicalize(p).unwrap_or_else(|_| p.clone());
             if inputs.contains(&canon) {
-                return Err(format!(
-                    "{flag} {}: is an input of this run; refusing to overwrite it",
-                    path.display()
-                ));
+                return Err(OutputError::IsInput {
+                    flag: flag.to_string(),
+                    path: path.to_path_buf(),
+                });
             }
         }
         if let Some(prev) = planned.iter().find(|o| o.sink == sink) {
-            return Err(format!(
-                "{flag} {}: the same file as {} {}; give each output its own path",
-                path.display(),
-                prev.flag,
-                prev.path.display()
-            ));
+            return Err(OutputError::SameFile {
+                flag: flag.to_string(),
+                path: path.to_path_buf(),
+                other_flag: prev.flag.clone(),
+                other_path: prev.path.clone(),
+            });
         }
         if let Sink::Atomic(p) = &sink {
             // Fails now, not after rendering, if the folder takes no files.
-            TempFile::create(p)
-                .map_err(|e| format!("{flag} {}: cannot write: {e}", path.display()))?;
+            TempFile::create(p).map_err(|source| OutputError::NotWritable {
+                flag: flag.to_string(),
+                path: path.to_path_buf(),
+                source,
+            })?;
         }
         planned.push(Output {
             flag: flag.to_string(),
@@ -382,11 +544,12 @@ pub struct Staged {
 
 impl Staged {
     /// Puts the file in place.
-    pub fn commit(self) -> Result<(), String> {
+    pub fn commit(self) -> Result<(), OutputError> {
         match self.file {
-            Some((temp, dest)) => temp
-                .place(&dest)
-                .map_err(|e| format!("{}: cannot write: {e}", self.shown.display())),
+            Some((temp, dest)) => temp.place(&dest).map_err(|source| OutputError::Write {
+                path: self.shown,
+                source,
+            }),
             None => Ok(()),
         }
     }
@@ -395,7 +558,7 @@ impl Staged {
 /// Commits every staged output, in order. Each is a rename within its
 /// folder, so after the first the rest fail only if a folder changes
 /// underneath the run.
-pub fn commit_all(staged: Vec<Staged>) -> Result<(), String> {
+pub fn commit_all(staged: Vec<Staged>) -> Result<(), OutputError> {
     staged.into_iter().try_for_each(Staged::commit)
 }
 
@@ -469,6 +632,9 @@ mod tests {
             None,
         )
         .unwrap_err();
+        assert!(matches!(&e, OutputError::SameFile { flag, other_flag, .. }
+            if flag == "--exr" && other_flag == "-o"));
+        let e = e.to_string();
         assert!(
             e.contains("--exr") && e.contains("the same file as -o"),
             "{e}"
@@ -480,17 +646,30 @@ mod tests {
             None,
         )
         .unwrap_err();
-        assert!(e.contains("input"), "{e}");
+        assert!(matches!(e, OutputError::IsInput { .. }), "{e}");
+        assert!(e.to_string().contains("input"), "{e}");
         // A folder this test owns and never makes, so it is missing on
         // any machine.
         let missing = d.join("missing-folder").join("s.json");
-        let e = plan(&[("--stats-json", &missing)], &[], None).unwrap_err();
+        let e = plan(&[("--stats-json", &missing)], &[], None)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("--stats-json") && e.contains("missing-folder"),
             "{e}"
         );
         let e = plan(&[("-o", &d)], &[], None).unwrap_err();
-        assert!(e.contains("folder"), "{e}");
+        assert!(
+            matches!(
+                &e,
+                OutputError::Resolve {
+                    source: ResolveError::IsAFolder { .. },
+                    ..
+                }
+            ),
+            "{e}"
+        );
+        assert_eq!(e.to_string(), format!("-o {}: is a folder", d.display()));
         assert!(
             std::fs::read_dir(&d).unwrap().count() == 1,
             "the probe left nothing"

@@ -72,27 +72,66 @@ impl RenderSettings {
 
     /// The supersampled render target; checks sizes before anything is
     /// allocated.
-    pub fn target(&self) -> Result<Target, String> {
+    pub fn target(&self) -> Result<Target, RenderError> {
         if self.ssaa == 0 || self.ssaa > 16 {
-            return Err(format!(
-                "ssaa {} is out of range: it must be 1..=16",
-                self.ssaa
-            ));
+            return Err(RenderError::Ssaa(self.ssaa));
         }
         let w = self.width.checked_mul(self.ssaa);
         let h = self.height.checked_mul(self.ssaa);
         match (w, h) {
             (Some(w), Some(h)) if self.width > 0 && self.height > 0 => Target::new(w, h)
                 .map(|t| t.with_ssaa(self.ssaa))
-                .map_err(|e| e.to_string()),
-            _ => Err(format!(
-                "image size {}×{} with ssaa {} is out of range: width and height must be ≥ 1 and at most {} after supersampling",
-                self.width,
-                self.height,
-                self.ssaa,
-                specula_raster::target::MAX_DIM
-            )),
+                .map_err(RenderError::from),
+            _ => Err(RenderError::Size {
+                width: self.width,
+                height: self.height,
+                ssaa: self.ssaa,
+            }),
         }
+    }
+}
+
+/// Why a frame cannot be rendered at its settings, or an AOV taken from it.
+#[derive(Debug, thiserror::Error)]
+pub enum RenderError {
+    /// A supersampling factor outside 1..=16.
+    #[error("ssaa {0} is out of range: it must be 1..=16")]
+    Ssaa(u32),
+    /// An image side that is 0, or too large once supersampled.
+    #[error(
+        "image size {width}×{height} with ssaa {ssaa} is out of range: width and height must be ≥ 1 and at most {} after supersampling",
+        specula_raster::target::MAX_DIM
+    )]
+    Size { width: u32, height: u32, ssaa: u32 },
+    /// The render target refused its size (its message).
+    #[error(transparent)]
+    Target(#[from] specula_raster::target::TargetError),
+    /// `--threads 0`.
+    #[error("--threads must be at least 1")]
+    Threads,
+    /// The thread pool could not start.
+    #[error("cannot start worker threads: {0}")]
+    Pool(rayon::ThreadPoolBuildError),
+    /// `--repeat 0`.
+    #[error("--repeat must be at least 1")]
+    Repeat,
+    /// The post stages refused the frame (their message).
+    #[error("{0}")]
+    Post(String),
+    /// No frame was rendered.
+    #[error("no frame rendered")]
+    NoFrame,
+    /// An AOV whose buffer the frame does not hold (`depth`, `normal`,
+    /// `id`).
+    #[error("the {0} AOV needs the {0} buffer (BufferSet::{0})")]
+    MissingBuffer(&'static str),
+}
+
+/// The seam for the callers whose errors are still `String`s: `?` turns
+/// the error into its message.
+impl From<RenderError> for String {
+    fn from(e: RenderError) -> String {
+        e.to_string()
     }
 }
 
@@ -183,12 +222,12 @@ pub fn render_scene(
     scene: &LoadedScene,
     settings: &RenderSettings,
     load_ms: f64,
-) -> Result<Rendered, String> {
+) -> Result<Rendered, RenderError> {
     let target = settings.target()?;
     let mut pool = rayon::ThreadPoolBuilder::new();
     if let Some(n) = settings.threads {
         if n == 0 {
-            return Err("--threads must be at least 1".into());
+            return Err(RenderError::Threads);
         }
         // The frame's parallel work comes in tiles: threads beyond their
         // count (or the machine's cores, if more) would only be started
@@ -196,15 +235,14 @@ pub fn render_scene(
         let cores = std::thread::available_parallelism().map_or(1, |c| c.get());
         pool = pool.num_threads(n.min(target.tile_count().max(cores)));
     }
-    let pool = pool
-        .build()
-        .map_err(|e| format!("cannot start worker threads: {e}"))?;
+    let pool = pool.build().map_err(RenderError::Pool)?;
     if settings.repeat == 0 {
-        return Err("--repeat must be at least 1".into());
+        return Err(RenderError::Repeat);
     }
     let repeat = settings.repeat;
     let mut post = settings.post();
-    post.validate(target.width, target.height)?;
+    post.validate(target.width, target.height)
+        .map_err(RenderError::Post)?;
     let buffers = settings.buffers.union(post.buffers());
     let in_shading = settings.ldr_in_shading();
     pool.install(|| {
@@ -246,7 +284,9 @@ pub fn render_scene(
                     ),
                 };
                 let tp = Instant::now();
-                let out = post.run_reusing(&frame.buffers, recycled)?;
+                let out = post
+                    .run_reusing(&frame.buffers, recycled)
+                    .map_err(RenderError::Post)?;
                 (frame, out, tp.elapsed().as_secs_f64() * 1e3)
             };
             let total = t0.elapsed().as_secs_f64() * 1e3;
@@ -263,7 +303,7 @@ pub fn render_scene(
             });
             last = Some((out, frame));
         }
-        let (out, frame) = last.ok_or("no frame rendered")?;
+        let (out, frame) = last.ok_or(RenderError::NoFrame)?;
         let mut ldr = out.ldr.unwrap_or_default();
         // Labels are placed in the scene's own pixels; --width rescales.
         let scale = settings.width as f32 / scene.output.width.max(1) as f32;
@@ -409,30 +449,30 @@ impl RunStats {
 
 /// Linear view depth per sample (+inf where nothing is hit), row-major at
 /// the supersampled size; the frame must hold the depth buffer.
-pub fn depth_aov(frame: &Frame) -> Result<Vec<[f32; 3]>, String> {
+pub fn depth_aov(frame: &Frame) -> Result<Vec<[f32; 3]>, RenderError> {
     let d = &frame.buffers.depth;
     if d.is_empty() {
-        return Err("the depth AOV needs the depth buffer (BufferSet::depth)".into());
+        return Err(RenderError::MissingBuffer("depth"));
     }
     Ok(d.iter().map(|&v| [v; 3]).collect())
 }
 
 /// World-space shading normal per sample (0 where nothing is hit); the
 /// frame must hold the normal buffer.
-pub fn normal_aov(frame: &Frame) -> Result<Vec<[f32; 3]>, String> {
+pub fn normal_aov(frame: &Frame) -> Result<Vec<[f32; 3]>, RenderError> {
     let n = &frame.buffers.normal;
     if n.is_empty() {
-        return Err("the normal AOV needs the normal buffer (BufferSet::normal)".into());
+        return Err(RenderError::MissingBuffer("normal"));
     }
     Ok((0..n.len()).map(|i| n.get(i)).collect())
 }
 
 /// Visibility-buffer ids per sample, row-major; the frame must hold the id
 /// buffer.
-pub fn id_aov(frame: &Frame) -> Result<&[u32], String> {
+pub fn id_aov(frame: &Frame) -> Result<&[u32], RenderError> {
     let ids = &frame.buffers.id;
     if ids.is_empty() {
-        return Err("the id AOV needs the id buffer (BufferSet::id)".into());
+        return Err(RenderError::MissingBuffer("id"));
     }
     Ok(ids)
 }

@@ -6,8 +6,54 @@
 use crate::memory;
 use specula_raster::maps::ColorMap;
 use specula_raster::texture::{Encoding, Filter, Sampler, Texture, Wrap};
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+/// An image file that cannot become a texture; each message starts with
+/// the file (or the name the caller gave its bytes).
+#[derive(Debug, thiserror::Error)]
+pub enum TextureError {
+    /// The file cannot be read.
+    #[error("cannot read {}: {source}", .path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// The bytes are not an image this build decodes, or are corrupt.
+    #[error("{name}: {source}")]
+    Decode {
+        name: String,
+        source: image::ImageError,
+    },
+    /// The image's format cannot be guessed from its bytes.
+    #[error("{name}: {source}")]
+    Sniff {
+        name: String,
+        source: std::io::Error,
+    },
+    /// A size the texture cannot hold, or texels it refused (the
+    /// texture's message).
+    #[error("{name}: {message}")]
+    Texture { name: String, message: String },
+    /// The decoded image is not the size its header gave.
+    #[error("{name}: the image is empty or not {width}×{height}")]
+    Empty {
+        name: String,
+        width: usize,
+        height: usize,
+    },
+    /// The memory budget refused the texture (the message names the file).
+    #[error(transparent)]
+    Memory(#[from] memory::OverBudget),
+}
+
+/// The seam for the callers whose errors are still `String`s: `?` turns
+/// the error into its message.
+impl From<TextureError> for String {
+    fn from(e: TextureError) -> String {
+        e.to_string()
+    }
+}
 
 /// Supplies the files a material names (textures, tonal art maps),
 /// relative to the scene's folder.
@@ -15,7 +61,7 @@ pub type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
 
 /// Reads an sRGB colour image (alpha dropped) with its mip chain, sampled
 /// with repeat wrapping and trilinear filtering.
-pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, String> {
+pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, TextureError> {
     load_map(
         path,
         read,
@@ -33,14 +79,17 @@ pub fn load_map(
     read: ReadFile,
     encoding: Encoding,
     sampler: Sampler,
-) -> Result<ColorMap, String> {
-    let bytes = read(path).map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+) -> Result<ColorMap, TextureError> {
+    let bytes = read(path).map_err(|source| TextureError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
     decode_map(&path.display().to_string(), &bytes, encoding, sampler)
 }
 
 /// [`load_color_map`] from an image file's bytes; `name` says where they
 /// came from in messages.
-pub fn decode_color_map(name: &str, bytes: &[u8]) -> Result<ColorMap, String> {
+pub fn decode_color_map(name: &str, bytes: &[u8]) -> Result<ColorMap, TextureError> {
     decode_map(
         name,
         bytes,
@@ -59,17 +108,23 @@ pub const TEXEL_BYTES: u64 = 48;
 pub const TEXEL_BYTES_RGBA: u64 = 64;
 
 /// An image's width and height from its header, without decoding it.
-pub fn image_size(name: &str, bytes: &[u8]) -> Result<(u32, u32), String> {
+pub fn image_size(name: &str, bytes: &[u8]) -> Result<(u32, u32), TextureError> {
     image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
-        .map_err(|e| format!("{name}: {e}"))?
+        .map_err(|source| TextureError::Sniff {
+            name: name.to_string(),
+            source,
+        })?
         .into_dimensions()
-        .map_err(|e| format!("{name}: {e}"))
+        .map_err(|source| TextureError::Decode {
+            name: name.to_string(),
+            source,
+        })
 }
 
 /// Counts a `w`×`h` texture against the memory budget (`--max-memory`)
 /// before it is decoded, naming the file.
-pub fn reserve_texture(name: &str, (w, h): (u32, u32)) -> Result<(), String> {
+pub fn reserve_texture(name: &str, (w, h): (u32, u32)) -> Result<(), memory::OverBudget> {
     memory::reserve(
         &format!("{name} ({w}×{h})"),
         (w as u64 * h as u64).saturating_mul(TEXEL_BYTES),
@@ -84,7 +139,7 @@ pub fn decode_map(
     bytes: &[u8],
     encoding: Encoding,
     sampler: Sampler,
-) -> Result<ColorMap, String> {
+) -> Result<ColorMap, TextureError> {
     decode_map_channels(name, bytes, encoding, sampler, 3)
 }
 
@@ -97,11 +152,15 @@ pub fn decode_map_channels(
     encoding: Encoding,
     sampler: Sampler,
     channels: usize,
-) -> Result<ColorMap, String> {
+) -> Result<ColorMap, TextureError> {
     let channels = channels.clamp(3, 4);
     let (w, h) = image_size(name, bytes)?;
-    specula_raster::texture::check_mip_chain_size(w as usize, h as usize, channels)
-        .map_err(|e| format!("{name}: {e}"))?;
+    specula_raster::texture::check_mip_chain_size(w as usize, h as usize, channels).map_err(
+        |message| TextureError::Texture {
+            name: name.to_string(),
+            message,
+        },
+    )?;
     let per_texel = if channels == 4 {
         TEXEL_BYTES_RGBA
     } else {
@@ -111,7 +170,10 @@ pub fn decode_map_channels(
         &format!("{name} ({w}×{h})"),
         (w as u64 * h as u64).saturating_mul(per_texel),
     )?;
-    let img = image::load_from_memory(bytes).map_err(|e| format!("{name}: {e}"))?;
+    let img = image::load_from_memory(bytes).map_err(|source| TextureError::Decode {
+        name: name.to_string(),
+        source,
+    })?;
     let raw = if channels == 4 {
         img.to_rgba8().into_raw()
     } else {
@@ -119,14 +181,22 @@ pub fn decode_map_channels(
     };
     let (w, h) = (w as usize, h as usize);
     if w == 0 || h == 0 || raw.len() != w * h * channels {
-        return Err(format!("{name}: the image is empty or not {w}×{h}"));
+        return Err(TextureError::Empty {
+            name: name.to_string(),
+            width: w,
+            height: h,
+        });
     }
     let mut flipped = Vec::with_capacity(raw.len());
     for row in raw.chunks_exact(w * channels).rev() {
         flipped.extend_from_slice(row);
     }
-    let texture =
-        Texture::from_u8(w, h, channels, &flipped, encoding).map_err(|e| format!("{name}: {e}"))?;
+    let texture = Texture::from_u8(w, h, channels, &flipped, encoding).map_err(|message| {
+        TextureError::Texture {
+            name: name.to_string(),
+            message,
+        }
+    })?;
     Ok(ColorMap {
         texture: Arc::new(texture),
         sampler,

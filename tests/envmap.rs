@@ -5,7 +5,7 @@
 
 mod common;
 
-use specula::envmap_file::{decode_equirect, load_env_map, EnvSettings};
+use specula::envmap_file::{decode_equirect, load_env_map, EnvMapError, EnvSettings};
 use specula::render::{render_scene, RenderSettings};
 use specula::scene::{load_scene_str, LoadedScene};
 use specula_raster::envmap::{IblMethod, MAX_TEXEL};
@@ -100,6 +100,8 @@ fn render_hdr(scene: &LoadedScene) -> Vec<[f32; 3]> {
 fn truncated_hdr_is_an_error() {
     let bytes = hdr_bytes(64, 32, |i, j| [i as f32, j as f32, 1.0]);
     let e = decode_equirect("sky.hdr", &bytes[..bytes.len() / 2]).unwrap_err();
+    assert!(matches!(e, EnvMapError::Decode { .. }), "{e}");
+    let e = e.to_string();
     assert!(e.starts_with("sky.hdr: "), "{e}");
 }
 
@@ -109,21 +111,45 @@ fn a_png_is_not_an_environment_map() {
     let mut png = Cursor::new(Vec::new());
     img.write_to(&mut png, image::ImageFormat::Png).unwrap();
     let e = decode_equirect("sky.png", png.get_ref()).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            EnvMapError::NotRadiance {
+                format: image::ImageFormat::Png,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = e.to_string();
     assert!(e.contains("Radiance HDR") && e.contains("sky.png"), "{e}");
     let e = decode_equirect("noise.hdr", b"hello, not an image").unwrap_err();
-    assert!(e.contains("noise.hdr"), "{e}");
+    assert!(matches!(e, EnvMapError::Unknown { .. }), "{e}");
+    assert!(e.to_string().contains("noise.hdr"), "{e}");
 }
 
 #[test]
 fn one_by_one_is_refused() {
     let e = decode_equirect("dot.hdr", &hdr_bytes(1, 1, |_, _| [1.0; 3])).unwrap_err();
+    assert!(
+        matches!(
+            e,
+            EnvMapError::TooSmall {
+                width: 1,
+                height: 1,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = e.to_string();
     assert!(e.contains("1×1") && e.contains("2×2"), "{e}");
 }
 
 #[test]
 fn zero_height_header_is_refused() {
     let bytes = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 0 +X 16\n".to_vec();
-    let e = decode_equirect("flat.hdr", &bytes).unwrap_err();
+    let e = decode_equirect("flat.hdr", &bytes).unwrap_err().to_string();
     assert!(e.contains("flat.hdr"), "{e}");
 }
 
@@ -133,7 +159,22 @@ fn zero_height_header_is_refused() {
 fn huge_header_is_refused_before_decoding() {
     let bytes = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y 32768 +X 65536\n".to_vec();
     let e = decode_equirect("huge.hdr", &bytes).unwrap_err();
-    assert!(e.contains("65536") && e.contains("at most"), "{e}");
+    assert!(
+        matches!(
+            e,
+            EnvMapError::TooLarge {
+                width: 65536,
+                height: 32768,
+                ..
+            }
+        ),
+        "{e}"
+    );
+    let e = e.to_string();
+    assert_eq!(
+        e,
+        "huge.hdr: the header says 65536×32768: an environment map is at most 32768 texels on a side"
+    );
 }
 
 /// NaN and negative texels become 0, +inf and huge ones the documented

@@ -5,7 +5,9 @@
 //! no manifest (images another renderer wrote) is read by the reference's
 //! file names: REFDIR's `SCENE.png` against TESTDIR's `SCENE.png`.
 
-use super::{apply_bounds, compare, heatmap_png, load, Bound, DiffArgs, FlipSettings, Verdict};
+use super::{
+    apply_bounds, compare, heatmap_png, load, Bound, DiffArgs, DiffError, FlipSettings, Verdict,
+};
 use crate::batch::{read_manifest, Record};
 use std::path::{Path, PathBuf};
 
@@ -38,13 +40,16 @@ fn manifests(dir: &Path) -> Vec<PathBuf> {
 
 /// The records of a batch folder: `manifest.jsonl` when present, else every
 /// shard manifest; a scene listed twice is an error.
-pub fn folder_records(dir: &Path) -> Result<Vec<Record>, String> {
+pub fn folder_records(dir: &Path) -> Result<Vec<Record>, DiffError> {
     let whole = dir.join("manifest.jsonl");
     let files: Vec<PathBuf> = if whole.exists() {
         vec![whole]
     } else {
         let mut v: Vec<PathBuf> = std::fs::read_dir(dir)
-            .map_err(|e| format!("{}: {e}", dir.display()))?
+            .map_err(|source| DiffError::ReadFolder {
+                path: dir.to_path_buf(),
+                source,
+            })?
             .filter_map(|e| e.ok().map(|e| e.path()))
             .filter(|p| {
                 p.file_name()
@@ -56,20 +61,18 @@ pub fn folder_records(dir: &Path) -> Result<Vec<Record>, String> {
         v
     };
     if files.is_empty() {
-        return Err(format!(
-            "{}: no manifest.jsonl or manifest-I-of-N.jsonl (not a `specula batch` folder)",
-            dir.display()
-        ));
+        return Err(DiffError::NotBatchFolder {
+            path: dir.to_path_buf(),
+        });
     }
     let mut out: Vec<Record> = Vec::new();
     for f in files {
         for r in read_manifest(&f)? {
             if out.iter().any(|o| o.scene == r.scene) {
-                return Err(format!(
-                    "{}: scene {:?} is listed twice",
-                    f.display(),
-                    r.scene
-                ));
+                return Err(DiffError::SceneTwice {
+                    manifest: f,
+                    scene: r.scene,
+                });
             }
             out.push(r);
         }
@@ -85,7 +88,7 @@ struct Row {
     status: String,
 }
 
-pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Verdict, String> {
+pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Verdict, DiffError> {
     let refs = folder_records(&a.reference)?;
     let tests = if a.test.is_dir() && !has_manifest(&a.test) {
         // Images from another renderer: the reference's names.
@@ -94,13 +97,13 @@ pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Ver
         folder_records(&a.test)?
     };
     if a.mask.is_some() {
-        return Err(
-            "--mask: not with --dir (one mask cannot fit every scene); compare the pairs one by one, or give --ignore-background".into(),
-        );
+        return Err(DiffError::MaskWithDir);
     }
     if let Some(h) = &a.heatmap {
-        std::fs::create_dir_all(h)
-            .map_err(|e| format!("--heatmap {}: cannot create the folder: {e}", h.display()))?;
+        std::fs::create_dir_all(h).map_err(|source| DiffError::HeatmapFolder {
+            path: h.clone(),
+            source,
+        })?;
     }
     let mut rows = Vec::new();
     let mut reports = Vec::new();
@@ -151,10 +154,12 @@ pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Ver
                 continue;
             }
         };
-        let result = load::load(&a.reference.join(&r.output)).and_then(|ri| {
-            let ti = load::load(&a.test.join(&t.output))?;
-            compare(ri, ti, settings, None, a.ignore_background)
-        });
+        let result = load::load(&a.reference.join(&r.output))
+            .map_err(DiffError::from)
+            .and_then(|ri| {
+                let ti = load::load(&a.test.join(&t.output))?;
+                compare(ri, ti, settings, None, a.ignore_background)
+            });
         match result {
             Ok(mut rep) => {
                 apply_bounds(&mut rep, bounds);
@@ -228,13 +233,11 @@ pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Ver
         errors
     );
     if let Some(out) = json_plan.first() {
-        let json = serde_json::to_string_pretty(&reports).map_err(|e| e.to_string())?;
+        let json = serde_json::to_string_pretty(&reports).map_err(DiffError::Json)?;
         out.write(json.as_bytes())?;
     }
     if errors > 0 {
-        return Err(format!(
-            "{errors} scene(s) could not be compared (see the table)"
-        ));
+        return Err(DiffError::Uncompared(errors));
     }
     Ok(if failures > 0 {
         Verdict::Fail

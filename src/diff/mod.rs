@@ -6,12 +6,14 @@
 //! folders scene by scene (`dir.rs`).
 
 pub mod dir;
+mod error;
 pub mod flip;
 pub mod heatmap;
 pub mod load;
 pub mod magma;
 pub mod metrics;
 
+pub use error::DiffError;
 use load::{DiffImage, Encoding};
 use metrics::Metrics;
 use serde::Serialize;
@@ -75,27 +77,33 @@ pub struct Bound {
     pub value: f64,
 }
 
-fn parse_bounds(a: &DiffArgs) -> Result<Vec<Bound>, String> {
+fn parse_bounds(a: &DiffArgs) -> Result<Vec<Bound>, DiffError> {
     let mut out = Vec::new();
     for (flag, list, fails) in [
         ("--fail-above", &a.fail_above, Fails::Above),
         ("--fail-below", &a.fail_below, Fails::Below),
     ] {
         for s in list {
-            let (m, v) = s
-                .split_once('=')
-                .ok_or_else(|| format!("{flag} {s}: expected METRIC=VALUE"))?;
+            let (m, v) = s.split_once('=').ok_or_else(|| DiffError::BoundSyntax {
+                flag,
+                text: s.clone(),
+            })?;
             if !metrics::NAMES.contains(&m) {
-                return Err(format!(
-                    "{flag} {s}: unknown metric {m:?} (one of {})",
-                    metrics::NAMES.join(", ")
-                ));
+                return Err(DiffError::UnknownMetric {
+                    flag,
+                    text: s.clone(),
+                    metric: m.to_string(),
+                });
             }
             let value: f64 = v
                 .parse()
                 .ok()
                 .filter(|v: &f64| v.is_finite())
-                .ok_or_else(|| format!("{flag} {s}: {v:?} is not a finite number"))?;
+                .ok_or_else(|| DiffError::BoundValue {
+                    flag,
+                    text: s.clone(),
+                    value: v.to_string(),
+                })?;
             out.push(Bound {
                 metric: m.to_string(),
                 fails,
@@ -114,24 +122,22 @@ pub struct FlipSettings {
     pub curve: flip::ToneCurve,
 }
 
-fn parse_flip(a: &DiffArgs) -> Result<FlipSettings, String> {
+fn parse_flip(a: &DiffArgs) -> Result<FlipSettings, DiffError> {
     let ppd = a.ppd.unwrap_or_else(flip::default_ppd);
     if !(ppd.is_finite() && ppd > 0.0 && ppd <= 1000.0) {
-        return Err(format!("--ppd {ppd}: must be in (0, 1000]"));
+        return Err(DiffError::Ppd(ppd));
     }
     let curve = match a.tonemap.to_ascii_lowercase().as_str() {
         "aces" => flip::ToneCurve::Aces,
         "hable" => flip::ToneCurve::Hable,
         "reinhard" => flip::ToneCurve::Reinhard,
-        t => return Err(format!("--tonemap {t}: one of aces, hable, reinhard")),
+        t => return Err(DiffError::Tonemap(t.to_string())),
     };
     let exposures = match &a.exposures {
         None => None,
         Some(s) => {
             let parts: Vec<&str> = s.split(':').collect();
-            let bad = || {
-                format!("--exposures {s}: expected START:STOP or START:STOP:COUNT with START ≤ STOP and COUNT in 2..=64")
-            };
+            let bad = || DiffError::Exposures(s.clone());
             if parts.len() < 2 || parts.len() > 3 {
                 return Err(bad());
             }
@@ -188,7 +194,7 @@ pub fn compare(
     settings: FlipSettings,
     mask: Option<&Path>,
     ignore_background: bool,
-) -> Result<Report, String> {
+) -> Result<Report, DiffError> {
     load::check_pair(&r, &t)?;
     let (w, h) = (r.width, r.height);
     let (keep, compared) = match (mask, ignore_background) {
@@ -204,11 +210,10 @@ pub fn compare(
                 .map(|(a, b)| *a != [0.0; 3] || *b != [0.0; 3])
                 .collect();
             if !k.iter().any(|&b| b) {
-                return Err(format!(
-                    "--ignore-background: {} and {} are both entirely black: nothing to compare",
-                    r.path.display(),
-                    t.path.display()
-                ));
+                return Err(DiffError::BothBlack {
+                    reference: r.path.clone(),
+                    test: t.path.clone(),
+                });
             }
             (Some(k), "not black in both".to_string())
         }
@@ -231,8 +236,12 @@ pub fn compare(
         Encoding::Linear => {
             let e = match settings.exposures {
                 Some(e) => e,
-                None => flip::auto_exposures(&r.rgb, settings.curve)
-                    .map_err(|e| format!("{}: {e}", r.path.display()))?,
+                None => flip::auto_exposures(&r.rgb, settings.curve).map_err(|message| {
+                    DiffError::Exposure {
+                        path: r.path.clone(),
+                        message,
+                    }
+                })?,
             };
             (
                 flip::hdr_flip(&r.rgb, &t.rgb, w, h, settings.ppd, e, settings.curve),
@@ -375,8 +384,8 @@ pub fn summary(r: &Report) -> String {
 }
 
 /// The heat map PNG of a report.
-pub fn heatmap_png(r: &Report) -> Result<Vec<u8>, String> {
-    let (ri, ti) = r.images.as_ref().ok_or("the images were not kept")?;
+pub fn heatmap_png(r: &Report) -> Result<Vec<u8>, DiffError> {
+    let (ri, ti) = r.images.as_ref().ok_or(DiffError::NoImages)?;
     let label = format!("{}-FLIP", r.flip.to_uppercase());
     let (w, h, px) = heatmap::render(
         &ri.rgb,
@@ -387,7 +396,12 @@ pub fn heatmap_png(r: &Report) -> Result<Vec<u8>, String> {
         r.encoding,
         &label,
     );
-    crate::image_file::encode_ldr(w, h, px, image::ImageFormat::Png)
+    Ok(crate::image_file::encode_ldr(
+        w,
+        h,
+        px,
+        image::ImageFormat::Png,
+    )?)
 }
 
 /// Whether all bounds held.
@@ -399,7 +413,7 @@ pub enum Verdict {
 
 /// `specula diff` as the command line runs it: prints the summary, writes
 /// the requested files; `Err` is a usage or input error (exit status 2).
-pub fn run(a: &DiffArgs) -> Result<Verdict, String> {
+pub fn run(a: &DiffArgs) -> Result<Verdict, DiffError> {
     let bounds = parse_bounds(a)?;
     let settings = parse_flip(a)?;
     if a.dir {
@@ -420,7 +434,7 @@ pub fn run(a: &DiffArgs) -> Result<Verdict, String> {
         match o.flag.as_str() {
             "--heatmap" => o.write(&heatmap_png(&report)?)?,
             _ => {
-                let json = serde_json::to_string_pretty(&report).map_err(|e| e.to_string())?;
+                let json = serde_json::to_string_pretty(&report).map_err(DiffError::Json)?;
                 o.write(json.as_bytes())?
             }
         }

@@ -6,7 +6,7 @@
 //! length is checked before it is read, and every allocation is counted
 //! against the memory budget (`memory.rs`) first.
 
-use super::Ctx;
+use super::{Ctx, DataUriError, GltfError};
 use crate::memory;
 use base64::Engine;
 use gltf::json;
@@ -21,21 +21,20 @@ pub(super) struct Buffers {
 
 /// The payload of a `data:` URI (`data:[<mediatype>][;base64],<data>`);
 /// only base64 payloads carry binary data, so anything else is an error.
-pub(super) fn data_uri(uri: &str) -> Option<Result<Vec<u8>, String>> {
+pub(super) fn data_uri(uri: &str) -> Option<Result<Vec<u8>, DataUriError>> {
     let rest = uri.strip_prefix("data:")?;
     let Some((head, payload)) = rest.split_once(',') else {
-        return Some(Err("a data URI without a ',' before its payload".into()));
+        return Some(Err(DataUriError::NoComma));
     };
     if !head.ends_with(";base64") {
-        return Some(Err(format!(
-            "data URI {:?} is not base64 (\";base64,\" expected)",
-            crate::validate::truncate_echo(head, 60)
+        return Some(Err(DataUriError::NotBase64(
+            crate::validate::truncate_echo(head, 60).to_string(),
         )));
     }
     Some(
         base64::engine::general_purpose::STANDARD
             .decode(payload.trim())
-            .map_err(|e| format!("data URI: invalid base64: {e}")),
+            .map_err(DataUriError::Base64),
     )
 }
 
@@ -61,36 +60,45 @@ pub(super) fn uri_path(uri: &str) -> PathBuf {
 
 impl Buffers {
     /// Every buffer's bytes, at least `byteLength` of them.
-    pub(super) fn load(ctx: &mut Ctx, bin: Option<&[u8]>) -> Result<Buffers, String> {
+    pub(super) fn load(ctx: &mut Ctx, bin: Option<&[u8]>) -> Result<Buffers, GltfError> {
         let mut data = Vec::with_capacity(ctx.root.buffers.len());
         for (i, b) in ctx.root.buffers.iter().enumerate() {
             let at = format!("buffers[{i}]");
             let len = b.byte_length.0;
             memory::reserve(&format!("{at} ({len} bytes)"), len)?;
-            let bytes = match &b.uri {
-                None => match (i, bin) {
-                    (0, Some(bin)) => bin.to_vec(),
-                    _ => {
-                        return Err(format!(
-                            "{at}: no uri, and only the first buffer of a GLB file may use its BIN chunk"
-                        ))
-                    }
-                },
-                Some(uri) => match data_uri(uri) {
-                    Some(r) => r.map_err(|e| format!("{at}.uri: {e}"))?,
-                    None => {
-                        let p = ctx.dir.join(uri_path(uri));
-                        let bytes = (ctx.read)(&p)
-                            .map_err(|e| format!("{at}.uri: cannot read {}: {e}", p.display()))?;
-                        ctx.inputs.push(p);
-                        bytes
-                    }
-                },
-            };
+            let bytes =
+                match &b.uri {
+                    None => match (i, bin) {
+                        (0, Some(bin)) => bin.to_vec(),
+                        _ => return Err(GltfError::at(
+                            &at,
+                            "no uri, and only the first buffer of a GLB file may use its BIN chunk",
+                        )),
+                    },
+                    Some(uri) => match data_uri(uri) {
+                        Some(r) => r.map_err(|source| GltfError::DataUri {
+                            at: format!("{at}.uri"),
+                            source,
+                        })?,
+                        None => {
+                            let p = ctx.dir.join(uri_path(uri));
+                            let bytes = (ctx.read)(&p).map_err(|source| GltfError::Read {
+                                at: format!("{at}.uri"),
+                                path: p.clone(),
+                                source,
+                            })?;
+                            ctx.inputs.push(p);
+                            bytes
+                        }
+                    },
+                };
             if (bytes.len() as u64) < len {
-                return Err(format!(
-                    "{at}: byteLength is {len}, but only {} bytes are there",
-                    bytes.len()
+                return Err(GltfError::at(
+                    &at,
+                    format!(
+                        "byteLength is {len}, but only {} bytes are there",
+                        bytes.len()
+                    ),
                 ));
             }
             data.push(bytes);
@@ -104,15 +112,17 @@ impl Buffers {
         root: &json::Root,
         v: usize,
         at: &str,
-    ) -> Result<(&'a [u8], Option<usize>), String> {
+    ) -> Result<(&'a [u8], Option<usize>), GltfError> {
         let view = root
             .buffer_views
             .get(v)
-            .ok_or_else(|| format!("{at}: bufferView {v} does not exist"))?;
-        let buf = self
-            .data
-            .get(view.buffer.value())
-            .ok_or_else(|| format!("bufferViews[{v}].buffer: no buffer {}", view.buffer))?;
+            .ok_or_else(|| GltfError::at(at, format!("bufferView {v} does not exist")))?;
+        let buf = self.data.get(view.buffer.value()).ok_or_else(|| {
+            GltfError::at(
+                &format!("bufferViews[{v}].buffer"),
+                format!("no buffer {}", view.buffer),
+            )
+        })?;
         let start = view.byte_offset.map_or(0, |o| o.0);
         let end = start.checked_add(view.byte_length.0);
         let declared = root.buffers[view.buffer.value()].byte_length.0;
@@ -121,10 +131,13 @@ impl Buffers {
                 &buf[start as usize..end as usize],
                 view.byte_stride.map(|s| s.0),
             )),
-            _ => Err(format!(
-                "bufferViews[{v}]: bytes {start}..{} run past the end of buffers[{}] ({declared} bytes)",
-                start.saturating_add(view.byte_length.0),
-                view.buffer
+            _ => Err(GltfError::at(
+                &format!("bufferViews[{v}]"),
+                format!(
+                    "bytes {start}..{} run past the end of buffers[{}] ({declared} bytes)",
+                    start.saturating_add(view.byte_length.0),
+                    view.buffer
+                ),
             )),
         }
     }
@@ -197,19 +210,20 @@ pub(super) fn read_accessor(
     a: usize,
     at: &str,
     types: &[Type],
-) -> Result<Elements, String> {
+) -> Result<Elements, GltfError> {
     let acc = root
         .accessors
         .get(a)
-        .ok_or_else(|| format!("{at}: accessor {a} does not exist"))?;
+        .ok_or_else(|| GltfError::at(at, format!("accessor {a} does not exist")))?;
     let here = format!("accessors[{a}]");
     let (Checked::Valid(ty), Checked::Valid(ct)) = (acc.type_, acc.component_type) else {
-        return Err(format!("{here}: invalid type or componentType"));
+        return Err(GltfError::at(&here, "invalid type or componentType"));
     };
     let ct = ct.0;
     if !types.contains(&ty) {
-        return Err(format!(
-            "{at}: accessor {a} has type {ty:?}, expected one of {types:?}"
+        return Err(GltfError::at(
+            at,
+            format!("accessor {a} has type {ty:?}, expected one of {types:?}"),
         ));
     }
     let n = multiplicity(ty);
@@ -217,7 +231,12 @@ pub(super) fn read_accessor(
     let total = count
         .checked_mul(n as u64)
         .filter(|t| *t <= u32::MAX as u64)
-        .ok_or_else(|| format!("{here}.count: {count} elements is too many"))?;
+        .ok_or_else(|| {
+            GltfError::at(
+                &format!("{here}.count"),
+                format!("{count} elements is too many"),
+            )
+        })?;
     memory::reserve(
         &format!("{here} ({count} elements of {ty:?})"),
         total.saturating_mul(8),
@@ -230,8 +249,9 @@ pub(super) fn read_accessor(
         let (bytes, stride) = buffers.view(root, v.value(), &format!("{here}.bufferView"))?;
         let stride = stride.unwrap_or(elem);
         if stride < elem {
-            return Err(format!(
-                "bufferViews[{v}].byteStride: {stride} is less than the {elem} bytes of an element of {here}"
+            return Err(GltfError::at(
+                &format!("bufferViews[{v}].byteStride"),
+                format!("{stride} is less than the {elem} bytes of an element of {here}"),
             ));
         }
         let offset = acc.byte_offset.map_or(0, |o| o.0) as usize;
@@ -241,10 +261,7 @@ pub(super) fn read_accessor(
                 .and_then(|x| x.checked_add(offset))
                 .and_then(|x| x.checked_add(elem));
             if need.is_none_or(|need| need > bytes.len()) {
-                return Err(format!(
-                    "{here}: {count} elements from byte {offset} with stride {stride} run past the end of bufferViews[{v}] ({} bytes)",
-                    bytes.len()
-                ));
+                return Err(GltfError::at(&here, format!("{count} elements from byte {offset} with stride {stride} run past the end of bufferViews[{v}] ({} bytes)", bytes.len())));
             }
         }
         for (i, out) in values.chunks_exact_mut(n).enumerate() {
@@ -258,13 +275,17 @@ pub(super) fn read_accessor(
         let sp = format!("{here}.sparse");
         let m = s.count.0;
         if m > count as u64 {
-            return Err(format!(
-                "{sp}.count: {m} substitutions for {count} elements"
+            return Err(GltfError::at(
+                &format!("{sp}.count"),
+                format!("{m} substitutions for {count} elements"),
             ));
         }
         let m = m as usize;
         let Checked::Valid(ict) = s.indices.component_type else {
-            return Err(format!("{sp}.indices.componentType: invalid"));
+            return Err(GltfError::at(
+                &format!("{sp}.indices.componentType"),
+                "invalid",
+            ));
         };
         let ict = ict.0;
         let isize = component_size(ict);
@@ -275,8 +296,9 @@ pub(super) fn read_accessor(
         )?;
         let ioff = s.indices.byte_offset.0 as usize;
         if ioff.checked_add(m * isize).is_none_or(|e| e > ib.len()) {
-            return Err(format!(
-                "{sp}.indices: {m} indices from byte {ioff} run past the end of their buffer view"
+            return Err(GltfError::at(
+                &format!("{sp}.indices"),
+                format!("{m} indices from byte {ioff} run past the end of their buffer view"),
             ));
         }
         let (vb, _) = buffers.view(
@@ -286,15 +308,17 @@ pub(super) fn read_accessor(
         )?;
         let voff = s.values.byte_offset.0 as usize;
         if voff.checked_add(m * elem).is_none_or(|e| e > vb.len()) {
-            return Err(format!(
-                "{sp}.values: {m} elements from byte {voff} run past the end of their buffer view"
+            return Err(GltfError::at(
+                &format!("{sp}.values"),
+                format!("{m} elements from byte {voff} run past the end of their buffer view"),
             ));
         }
         for j in 0..m {
             let idx = component(&ib[ioff + j * isize..], ict, false) as usize;
             if idx >= count {
-                return Err(format!(
-                    "{sp}.indices[{j}]: {idx} is past the accessor's {count} elements"
+                return Err(GltfError::at(
+                    &format!("{sp}.indices[{j}]"),
+                    format!("{idx} is past the accessor's {count} elements"),
                 ));
             }
             for k in 0..n {

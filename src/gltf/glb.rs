@@ -3,6 +3,8 @@
 //! (length, type, data), each 4-byte aligned: first the JSON, then an
 //! optional BIN chunk. Every length is checked against the bytes present.
 
+use super::GltfError;
+
 /// `glTF` as a little-endian u32.
 pub(super) const MAGIC: &[u8; 4] = b"glTF";
 const CHUNK_JSON: u32 = 0x4E4F_534A;
@@ -21,63 +23,65 @@ fn u32_at(bytes: &[u8], at: usize) -> Option<u32> {
 
 /// Splits a GLB file into its chunks; the message says what is wrong
 /// (wrong magic, version, a length past the end of the file).
-pub(super) fn split(bytes: &[u8]) -> Result<Glb<'_>, String> {
+pub(super) fn split(bytes: &[u8]) -> Result<Glb<'_>, GltfError> {
     if bytes.len() < 12 {
-        return Err(format!(
-            "GLB: truncated: {} bytes, shorter than the 12-byte header",
+        return Err(GltfError::Glb(format!(
+            "truncated: {} bytes, shorter than the 12-byte header",
             bytes.len()
-        ));
+        )));
     }
     if &bytes[..4] != MAGIC {
-        return Err(format!(
-            "GLB: wrong magic {:?} (expected \"glTF\")",
+        return Err(GltfError::Glb(format!(
+            "wrong magic {:?} (expected \"glTF\")",
             String::from_utf8_lossy(&bytes[..4])
-        ));
+        )));
     }
     let version = u32_at(bytes, 4).unwrap_or(0);
     if version != 2 {
-        return Err(format!(
-            "GLB: header version {version}: only glTF 2 is read"
-        ));
+        return Err(GltfError::Glb(format!(
+            "header version {version}: only glTF 2 is read"
+        )));
     }
     let length = u32_at(bytes, 8).unwrap_or(0) as usize;
     if length > bytes.len() {
-        return Err(format!(
-            "GLB: truncated: the header gives a length of {length} bytes, the file has {}",
+        return Err(GltfError::Glb(format!(
+            "truncated: the header gives a length of {length} bytes, the file has {}",
             bytes.len()
-        ));
+        )));
     }
     let body = &bytes[..length];
     let mut at = 12usize;
     let mut chunks = Vec::new();
     while at < body.len() {
         let (Some(len), Some(kind)) = (u32_at(body, at), u32_at(body, at + 4)) else {
-            return Err(format!(
-                "GLB: truncated chunk header at byte {at} (of {length})"
-            ));
+            return Err(GltfError::Glb(format!(
+                "truncated chunk header at byte {at} (of {length})"
+            )));
         };
         let start = at + 8;
         let end = start
             .checked_add(len as usize)
             .filter(|e| *e <= body.len())
             .ok_or_else(|| {
-                format!(
-                    "GLB: truncated: chunk {} at byte {at} claims {len} bytes, {} remain",
+                GltfError::Glb(format!(
+                    "truncated: chunk {} at byte {at} claims {len} bytes, {} remain",
                     chunks.len(),
                     body.len().saturating_sub(start)
-                )
+                ))
             })?;
         chunks.push((kind, &body[start..end]));
         // Chunks are padded to 4 bytes.
         at = end.div_ceil(4) * 4;
     }
     let Some(&(kind, json)) = chunks.first() else {
-        return Err("GLB: no chunks (the JSON chunk is required)".into());
+        return Err(GltfError::Glb(
+            "no chunks (the JSON chunk is required)".into(),
+        ));
     };
     if kind != CHUNK_JSON {
-        return Err(format!(
-            "GLB: the first chunk has type {kind:#010x}, expected JSON ({CHUNK_JSON:#010x})"
-        ));
+        return Err(GltfError::Glb(format!(
+            "the first chunk has type {kind:#010x}, expected JSON ({CHUNK_JSON:#010x})"
+        )));
     }
     let bin = chunks
         .get(1)
@@ -123,14 +127,18 @@ mod tests {
         assert_eq!(g.json, b"{}  ");
         assert_eq!(g.bin, Some(&[1u8, 2, 3, 0][..]));
         for cut in [0, 5, 11, 13, 20, f.len() - 1] {
-            let e = split(&f[..cut]).err().expect("truncated");
+            let e = split(&f[..cut]).err().expect("truncated").to_string();
             assert!(e.contains("truncated"), "{cut}: {e}");
         }
         let mut bad = f.clone();
         bad[0] = b'x';
-        assert!(split(&bad).err().unwrap().contains("wrong magic"));
+        assert!(split(&bad)
+            .err()
+            .unwrap()
+            .to_string()
+            .contains("wrong magic"));
         let mut v1 = f.clone();
         v1[4] = 1;
-        assert!(split(&v1).err().unwrap().contains("version 1"));
+        assert!(split(&v1).err().unwrap().to_string().contains("version 1"));
     }
 }

@@ -3,6 +3,7 @@
 //! share it, its size counted against the memory budget before decoding.
 
 use super::buffers::{data_uri, uri_path, Buffers};
+use super::GltfError;
 use gltf::json;
 use specula_raster::maps::ColorMap;
 use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
@@ -39,14 +40,14 @@ impl<'a> Images<'a> {
     /// `images[i]` as an sRGB colour map (v = 0 at the bottom row, like
     /// every texture here; glTF's uvs are flipped to match where meshes
     /// are read).
-    pub fn color_map(&mut self, i: usize) -> Result<ColorMap, String> {
+    pub fn color_map(&mut self, i: usize) -> Result<ColorMap, GltfError> {
         self.map(i, Encoding::Srgb)
     }
 
     /// `images[i]` decoded as `encoding`: sRGB for colours (base colour,
     /// emission), linear for data (metallic-roughness, normal, occlusion).
     /// Each (image, encoding) is decoded once.
-    pub fn map(&mut self, i: usize, encoding: Encoding) -> Result<ColorMap, String> {
+    pub fn map(&mut self, i: usize, encoding: Encoding) -> Result<ColorMap, GltfError> {
         self.map_channels(i, encoding, 3)
     }
 
@@ -59,7 +60,7 @@ impl<'a> Images<'a> {
         i: usize,
         encoding: Encoding,
         channels: usize,
-    ) -> Result<ColorMap, String> {
+    ) -> Result<ColorMap, GltfError> {
         if let Some(m) = self.cache.get(&(i, encoding, channels)) {
             return Ok(m.clone());
         }
@@ -68,14 +69,20 @@ impl<'a> Images<'a> {
             .root
             .images
             .get(i)
-            .ok_or_else(|| format!("{at}: no such image"))?;
+            .ok_or_else(|| GltfError::at(&at, "no such image"))?;
         let bytes: Vec<u8> = match (&img.uri, img.buffer_view) {
             (Some(uri), _) => match data_uri(uri) {
-                Some(r) => r.map_err(|e| format!("{at}.uri: {e}"))?,
+                Some(r) => r.map_err(|source| GltfError::DataUri {
+                    at: format!("{at}.uri"),
+                    source,
+                })?,
                 None => {
                     let p = self.dir.join(uri_path(uri));
-                    let b = (self.read)(&p)
-                        .map_err(|e| format!("{at}.uri: cannot read {}: {e}", p.display()))?;
+                    let b = (self.read)(&p).map_err(|source| GltfError::Read {
+                        at: format!("{at}.uri"),
+                        path: p.clone(),
+                        source,
+                    })?;
                     self.inputs.push(p);
                     b
                 }
@@ -85,14 +92,14 @@ impl<'a> Images<'a> {
                 .view(self.root, v.value(), &format!("{at}.bufferView"))?
                 .0
                 .to_vec(),
-            (None, None) => return Err(format!("{at}: neither uri nor bufferView")),
+            (None, None) => return Err(GltfError::at(&at, "neither uri nor bufferView")),
         };
         let dims = image::ImageReader::new(std::io::Cursor::new(&bytes))
             .with_guessed_format()
             .ok()
             .and_then(|r| r.into_dimensions().ok());
         if dims.is_none() {
-            return Err(format!("{at}: not an image this build can decode"));
+            return Err(GltfError::at(&at, "not an image this build can decode"));
         }
         let sampler = Sampler::new(Wrap::Repeat, Filter::Trilinear);
         let map = crate::textures::decode_map_channels(&at, &bytes, encoding, sampler, channels)?;

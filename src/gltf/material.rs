@@ -7,6 +7,7 @@
 //! function alone.
 
 use super::images::Images;
+use super::GltfError;
 use crate::material_desc::GltfDesc;
 use gltf::json;
 use json::validation::Checked;
@@ -316,14 +317,17 @@ fn texture_ref(
     ext: Option<&json::extensions::texture::Info>,
     others: Option<&serde_json::Map<String, serde_json::Value>>,
     scale: f32,
-) -> Result<TextureRef, String> {
+) -> Result<TextureRef, GltfError> {
     let t = root
         .textures
         .get(index.value())
-        .ok_or_else(|| format!("{at}.index: no texture {index}"))?;
+        .ok_or_else(|| GltfError::at(&format!("{at}.index"), format!("no texture {index}")))?;
     let image = t.source.value();
     if image >= root.images.len() {
-        return Err(format!("textures[{index}].source: no image {image}"));
+        return Err(GltfError::at(
+            &format!("textures[{index}].source"),
+            format!("no image {image}"),
+        ));
     }
     let transform = ext
         .and_then(|e| e.texture_transform.as_ref())
@@ -339,8 +343,9 @@ fn texture_ref(
     };
     if let Some(t) = &transform {
         if !t.uv_transform().is_finite() {
-            return Err(format!(
-                "{at}.extensions.KHR_texture_transform: offset, rotation and scale must be finite, got {t:?}"
+            return Err(GltfError::at(
+                &format!("{at}.extensions.KHR_texture_transform"),
+                format!("offset, rotation and scale must be finite, got {t:?}"),
             ));
         }
     }
@@ -360,12 +365,15 @@ fn texture_ref(
 fn other_transform(
     at: &str,
     others: Option<&serde_json::Map<String, serde_json::Value>>,
-) -> Result<Option<TextureTransform>, String> {
+) -> Result<Option<TextureTransform>, GltfError> {
     let Some(v) = others.and_then(|o| o.get("KHR_texture_transform")) else {
         return Ok(None);
     };
     let t: json::extensions::texture::TextureTransform = serde_json::from_value(v.clone())
-        .map_err(|e| format!("{at}.extensions.KHR_texture_transform: {e}"))?;
+        .map_err(|source| GltfError::Json {
+            at: format!("{at}.extensions.KHR_texture_transform"),
+            source,
+        })?;
     Ok(Some(TextureTransform {
         offset: t.offset.0,
         rotation: t.rotation.0,
@@ -378,7 +386,7 @@ fn info(
     root: &json::Root,
     at: String,
     i: &Option<json::texture::Info>,
-) -> Result<Option<TextureRef>, String> {
+) -> Result<Option<TextureRef>, GltfError> {
     i.as_ref()
         .map(|i| {
             texture_ref(
@@ -400,12 +408,15 @@ fn extension_field<T: serde::de::DeserializeOwned>(
     p: &str,
     ext: &serde_json::Value,
     key: &str,
-) -> Result<Option<(String, T)>, String> {
+) -> Result<Option<(String, T)>, GltfError> {
     let Some(v) = ext.get(key) else {
         return Ok(None);
     };
     let at = format!("{p}.{key}");
-    let t = serde_json::from_value(v.clone()).map_err(|e| format!("{at}: {e}"))?;
+    let t = serde_json::from_value(v.clone()).map_err(|source| GltfError::Json {
+        at: at.clone(),
+        source,
+    })?;
     Ok(Some((at, t)))
 }
 
@@ -416,7 +427,7 @@ fn extension_info(
     p: &str,
     ext: &serde_json::Value,
     key: &str,
-) -> Result<Option<TextureRef>, String> {
+) -> Result<Option<TextureRef>, GltfError> {
     match extension_field::<json::texture::Info>(p, ext, key)? {
         Some((at, i)) => info(root, at, &Some(i)),
         None => Ok(None),
@@ -430,12 +441,15 @@ fn extension_normal(
     p: &str,
     ext: &serde_json::Value,
     key: &str,
-) -> Result<Option<TextureRef>, String> {
+) -> Result<Option<TextureRef>, GltfError> {
     let Some((at, n)) = extension_field::<json::material::NormalTexture>(p, ext, key)? else {
         return Ok(None);
     };
     if !n.scale.is_finite() {
-        return Err(format!("{at}.scale: must be finite, got {}", n.scale));
+        return Err(GltfError::at(
+            &format!("{at}.scale"),
+            format!("must be finite, got {}", n.scale),
+        ));
     }
     texture_ref(
         root,
@@ -450,7 +464,7 @@ fn extension_normal(
 }
 
 /// Reads `materials[i]` completely.
-pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial, String> {
+pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial, GltfError> {
     let m = &root.materials[i];
     let at = format!("materials[{i}]");
     let pbr = &m.pbr_metallic_roughness;
@@ -518,7 +532,7 @@ pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial,
         out.specular = e
             .specular
             .as_ref()
-            .map(|s| -> Result<Specular, String> {
+            .map(|s| -> Result<Specular, GltfError> {
                 let p = format!("{ext}.KHR_materials_specular");
                 Ok(Specular {
                     factor: s.specular_factor.0,
@@ -535,7 +549,7 @@ pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial,
         out.transmission = e
             .transmission
             .as_ref()
-            .map(|s| -> Result<Transmission, String> {
+            .map(|s| -> Result<Transmission, GltfError> {
                 Ok(Transmission {
                     factor: s.transmission_factor.0,
                     texture: info(
@@ -549,7 +563,7 @@ pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial,
         out.volume = e
             .volume
             .as_ref()
-            .map(|s| -> Result<Volume, String> {
+            .map(|s| -> Result<Volume, GltfError> {
                 Ok(Volume {
                     thickness_factor: s.thickness_factor.0,
                     thickness_texture: info(
@@ -565,7 +579,7 @@ pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial,
         out.specular_glossiness = e
             .pbr_specular_glossiness
             .as_ref()
-            .map(|s| -> Result<SpecularGlossiness, String> {
+            .map(|s| -> Result<SpecularGlossiness, GltfError> {
                 let p = format!("{ext}.KHR_materials_pbrSpecularGlossiness");
                 Ok(SpecularGlossiness {
                     diffuse_factor: s.diffuse_factor.0,
@@ -607,12 +621,15 @@ pub(super) fn read_material(root: &json::Root, i: usize) -> Result<GltfMaterial,
 
 /// Factors the spec bounds, checked so the scene material gets finite,
 /// in-range values.
-fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
+fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), GltfError> {
     let unit = |f: &str, v: f32| {
         if (0.0..=1.0).contains(&v) {
             Ok(())
         } else {
-            Err(format!("{at}.{f}: must be in [0, 1], got {v}"))
+            Err(GltfError::at(
+                &format!("{at}.{f}"),
+                format!("must be in [0, 1], got {v}"),
+            ))
         }
     };
     for (k, v) in m.base_color_factor.iter().enumerate() {
@@ -625,7 +642,10 @@ fn check_factors(at: &str, m: &GltfMaterial) -> Result<(), String> {
     }
     if let AlphaMode::Mask { cutoff } = m.alpha_mode {
         if !(cutoff >= 0.0 && cutoff.is_finite()) {
-            return Err(format!("{at}.alphaCutoff: must be ≥ 0, got {cutoff}"));
+            return Err(GltfError::at(
+                &format!("{at}.alphaCutoff"),
+                format!("must be ≥ 0, got {cutoff}"),
+            ));
         }
     }
     Ok(())
@@ -658,7 +678,7 @@ pub fn scene_material(
     m: &GltfMaterial,
     vertex_color: bool,
     images: &mut Images,
-) -> Result<(Material, Option<String>), String> {
+) -> Result<(Material, Option<String>), GltfError> {
     let mut missing: Vec<String> = Vec::new();
     let mut note = |what: &str, present: bool| {
         if present {
@@ -747,7 +767,10 @@ pub fn scene_material(
         || "the default material".to_string(),
         |i| format!("materials[{i}]"),
     );
-    let params = desc.params().map_err(|e| format!("{at}: {e}"))?;
+    let params = desc.params().map_err(|source| GltfError::Material {
+        at: at.clone(),
+        source: Box::new(source),
+    })?;
     let model = Model::Gltf(Gltf::new(params));
     let mut maps = ParamMaps {
         vertex_color,
@@ -763,10 +786,13 @@ pub fn scene_material(
     };
     let base_channels = if alpha_mode.is_some() { 4 } else { 3 };
     let mut load =
-        |t: &TextureRef, encoding: Encoding, channels: usize| -> Result<ColorMap, String> {
+        |t: &TextureRef, encoding: Encoding, channels: usize| -> Result<ColorMap, GltfError> {
             let mut map = images
                 .map_channels(t.image, encoding, channels)
-                .map_err(|e| format!("{}: {e}", t.at))?;
+                .map_err(|source| GltfError::Image {
+                    at: t.at.clone(),
+                    source: Box::new(source),
+                })?;
             map.sampler = t.sampler;
             map.transform = t.transform.as_ref().map(TextureTransform::uv_transform);
             sets.push(
@@ -865,9 +891,12 @@ pub fn scene_material(
         .iter()
         .all(|c| (0.0..=crate::checks::MAX_RADIOMETRIC).contains(c))
     {
-        return Err(format!(
-            "{at}.emissiveFactor × KHR_materials_emissive_strength: every component must be in [0, {:e}], got {emissive:?}",
-            crate::checks::MAX_RADIOMETRIC
+        return Err(GltfError::at(
+            &format!("{at}.emissiveFactor × KHR_materials_emissive_strength"),
+            format!(
+                "every component must be in [0, {:e}], got {emissive:?}",
+                crate::checks::MAX_RADIOMETRIC
+            ),
         ));
     }
     let alpha = alpha_mode.map(|mode| MaterialAlpha {
@@ -877,7 +906,7 @@ pub fn scene_material(
         vertex_alpha: vertex_color,
     });
     let shader = Lit::with_maps(model, maps)
-        .map_err(|e| format!("{at}: {e}"))?
+        .map_err(|e| GltfError::at(&at, e.to_string()))?
         .with_emission(emissive);
     let warning = rendered_without(&m.name, &missing);
     let material = Material::new(&m.name, shader, m.double_sided);

@@ -11,6 +11,7 @@
 //! specula scene; [`material::scene_material`] makes its materials.
 
 mod buffers;
+mod error;
 mod glb;
 pub mod images;
 pub mod material;
@@ -18,6 +19,7 @@ mod nodes;
 
 use crate::checks;
 use buffers::Buffers;
+pub use error::{DataUriError, GltfError};
 use glam::{Mat4, Vec2, Vec3, Vec4};
 use gltf::json;
 use json::validation::Validate;
@@ -155,7 +157,7 @@ pub fn load(
     path: &Path,
     bytes: &[u8],
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Result<GltfScene, String> {
+) -> Result<GltfScene, GltfError> {
     let glb_name = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("glb"));
@@ -195,27 +197,28 @@ pub fn load(
 
 /// The JSON as the `gltf` crate's types; a syntax or type error says the
 /// JSON path and the line.
-fn parse_json(bytes: &[u8]) -> Result<json::Root, String> {
+fn parse_json(bytes: &[u8]) -> Result<json::Root, GltfError> {
     let mut de = serde_json::Deserializer::from_slice(bytes);
     serde_path_to_error::deserialize(&mut de).map_err(|e| {
         let at = e.path().to_string();
         let inner = e.into_inner();
         if at.is_empty() || at == "." {
-            format!("JSON: {inner}")
+            GltfError::Syntax(inner)
         } else {
-            format!("{at}: {inner}")
+            GltfError::Json { at, source: inner }
         }
     })
 }
 
 /// `extensionsRequired` must name only extensions this loader reads;
 /// unknown ones in `extensionsUsed` are worth a warning.
-fn check_extensions(ctx: &mut Ctx) -> Result<(), String> {
+fn check_extensions(ctx: &mut Ctx) -> Result<(), GltfError> {
     for (i, e) in ctx.root.extensions_required.iter().enumerate() {
         if !KNOWN_EXTENSIONS.contains(&e.as_str()) {
-            return Err(format!(
-                "extensionsRequired[{i}]: {e:?} is required by the file and not supported here"
-            ));
+            return Err(GltfError::Extension {
+                index: i,
+                name: e.clone(),
+            });
         }
     }
     for e in &ctx.root.extensions_used {
@@ -235,21 +238,24 @@ fn check_extensions(ctx: &mut Ctx) -> Result<(), String> {
 /// Two deviations: POSITION accessors need no `min` / `max` here (the
 /// bounds are computed from the data), and POSITION indices are checked
 /// before the crate's validation, which indexes with them unchecked.
-fn validate(root: &json::Root) -> Result<(), String> {
+fn validate(root: &json::Root) -> Result<(), GltfError> {
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, prim) in mesh.primitives.iter().enumerate() {
             let pos = json::mesh::Semantic::Positions;
             if let Some(a) = prim.attributes.get(&json::validation::Checked::Valid(pos)) {
                 if a.value() >= root.accessors.len() {
-                    return Err(format!(
-                        "meshes[{m}].primitives[{p}].attributes.POSITION: index out of range (accessor {a} of {})",
-                        root.accessors.len()
+                    return Err(GltfError::at(
+                        &format!("meshes[{m}].primitives[{p}].attributes.POSITION"),
+                        format!(
+                            "index out of range (accessor {a} of {})",
+                            root.accessors.len()
+                        ),
                     ));
                 }
             }
         }
     }
-    let mut first: Option<String> = None;
+    let mut first: Option<GltfError> = None;
     root.validate(root, json::Path::new, &mut |path, err| {
         let p = path().to_string();
         let bounds = p.ends_with("[\"POSITION\"].min") || p.ends_with("[\"POSITION\"].max");
@@ -261,7 +267,7 @@ fn validate(root: &json::Root) -> Result<(), String> {
                 json::validation::Error::Oversize => "size too large",
                 json::validation::Error::Unsupported => "not supported",
             };
-            first = Some(format!("{p}: {what}"));
+            first = Some(GltfError::Invalid { at: p, what });
         }
     });
     match first {
@@ -276,20 +282,20 @@ pub(crate) fn punctual_light(
     at: &str,
     l: &json::extensions::scene::khr_lights_punctual::Light,
     world: &Mat4,
-) -> Result<Light, String> {
+) -> Result<Light, GltfError> {
     use json::extensions::scene::khr_lights_punctual::Type;
     use json::validation::Checked;
     let position = world.transform_point3(Vec3::ZERO);
     let direction = world
         .transform_vector3(Vec3::NEG_Z)
         .try_normalize()
-        .ok_or_else(|| format!("{at}: its node's transform has no direction (zero scale)"))?;
+        .ok_or_else(|| GltfError::at(at, "its node's transform has no direction (zero scale)"))?;
     let rgb = l.color.map(|c| c * l.intensity);
     checks::radiometric(&format!("{at}.color × intensity"), rgb)?;
     if !l.color.iter().all(|c| (0.0..=1.0).contains(c)) {
-        return Err(format!(
-            "{at}.color: every component must be in [0, 1], got {:?}",
-            l.color
+        return Err(GltfError::at(
+            &format!("{at}.color"),
+            format!("every component must be in [0, 1], got {:?}", l.color),
         ));
     }
     let range = l.range.unwrap_or(f32::INFINITY);
@@ -326,6 +332,6 @@ pub(crate) fn punctual_light(
                 range,
             }
         }
-        Checked::Invalid => return Err(format!("{at}.type: invalid")),
+        Checked::Invalid => return Err(GltfError::at(&format!("{at}.type"), "invalid")),
     })
 }

@@ -6,7 +6,7 @@
 //! stack.
 
 use super::buffers::{read_accessor, Buffers, Elements};
-use super::{punctual_light, Ctx, GltfCamera, GltfPrimitive, Projection};
+use super::{punctual_light, Ctx, GltfCamera, GltfError, GltfPrimitive, Projection};
 use crate::memory;
 use glam::{Mat3, Mat4, Quat, Vec2, Vec3, Vec4};
 use gltf::json;
@@ -23,10 +23,13 @@ pub(super) struct Placed {
 }
 
 /// A node's local transform: its matrix (column-major), or T · R · S.
-fn local(n: &json::Node, at: &str) -> Result<Mat4, String> {
+fn local(n: &json::Node, at: &str) -> Result<Mat4, GltfError> {
     if let Some(m) = n.matrix {
         if !m.iter().all(|v| v.is_finite()) {
-            return Err(format!("{at}.matrix: every element must be finite"));
+            return Err(GltfError::at(
+                &format!("{at}.matrix"),
+                "every element must be finite",
+            ));
         }
         return Ok(Mat4::from_cols_array(&m));
     }
@@ -39,15 +42,19 @@ fn local(n: &json::Node, at: &str) -> Result<Mat4, String> {
         ("rotation", &r[..]),
     ] {
         if !v.iter().all(|x| x.is_finite()) {
-            return Err(format!(
-                "{at}.{f}: every component must be finite, got {v:?}"
+            return Err(GltfError::at(
+                &format!("{at}.{f}"),
+                format!("every component must be finite, got {v:?}"),
             ));
         }
     }
     let q = Quat::from_array(r);
     let len = q.length();
     if len.is_nan() || len <= 0.0 {
-        return Err(format!("{at}.rotation: a zero quaternion is no rotation"));
+        return Err(GltfError::at(
+            &format!("{at}.rotation"),
+            "a zero quaternion is no rotation",
+        ));
     }
     Ok(Mat4::from_scale_rotation_translation(
         Vec3::from(s),
@@ -58,7 +65,7 @@ fn local(n: &json::Node, at: &str) -> Result<Mat4, String> {
 
 /// The scene's nodes placed: the default scene (`scene`, else scene 0);
 /// without scenes, every node without a parent (with a warning).
-pub(super) fn walk(ctx: &mut Ctx, buffers: &Buffers) -> Result<Placed, String> {
+pub(super) fn walk(ctx: &mut Ctx, buffers: &Buffers) -> Result<Placed, GltfError> {
     let root = &ctx.root;
     let n = root.nodes.len();
     // Parents, and the one-parent rule.
@@ -67,17 +74,19 @@ pub(super) fn walk(ctx: &mut Ctx, buffers: &Buffers) -> Result<Placed, String> {
         for (k, c) in node.children.iter().flatten().enumerate() {
             let c = c.value();
             if c >= n {
-                return Err(format!("nodes[{p}].children[{k}]: no node {c}"));
+                return Err(GltfError::at(
+                    &format!("nodes[{p}].children[{k}]"),
+                    format!("no node {c}"),
+                ));
             }
             if c == p {
-                return Err(format!(
-                    "nodes[{p}].children[{k}]: the node is its own child (a cycle)"
+                return Err(GltfError::at(
+                    &format!("nodes[{p}].children[{k}]"),
+                    "the node is its own child (a cycle)",
                 ));
             }
             if let Some(q) = parent[c] {
-                return Err(format!(
-                    "nodes[{p}].children[{k}]: node {c} is already a child of nodes[{q}] (the node hierarchy must be a set of disjoint trees)"
-                ));
+                return Err(GltfError::at(&format!("nodes[{p}].children[{k}]"), format!("node {c} is already a child of nodes[{q}] (the node hierarchy must be a set of disjoint trees)")));
             }
             parent[c] = Some(p);
         }
@@ -91,8 +100,11 @@ pub(super) fn walk(ctx: &mut Ctx, buffers: &Buffers) -> Result<Placed, String> {
         stack.extend(root.nodes[i].children.iter().flatten().map(|c| c.value()));
     }
     if let Some(i) = reached.iter().position(|r| !r) {
-        return Err(format!(
-            "nodes[{i}]: the node is on a cycle of the node hierarchy (nodes[{i}] is its own ancestor)"
+        return Err(GltfError::at(
+            &format!("nodes[{i}]"),
+            format!(
+                "the node is on a cycle of the node hierarchy (nodes[{i}] is its own ancestor)"
+            ),
         ));
     }
     let roots: Vec<usize> = match root
@@ -104,7 +116,7 @@ pub(super) fn walk(ctx: &mut Ctx, buffers: &Buffers) -> Result<Placed, String> {
             let scene = root
                 .scenes
                 .get(s)
-                .ok_or_else(|| format!("scene: no scene {s}"))?;
+                .ok_or_else(|| GltfError::at("scene", format!("no scene {s}")))?;
             scene.nodes.iter().map(|i| i.value()).collect()
         }
         None => {
@@ -126,9 +138,7 @@ pub(super) fn walk(ctx: &mut Ctx, buffers: &Buffers) -> Result<Placed, String> {
         visits += 1;
         if visits > n {
             // Scene roots listed twice or below one another.
-            return Err(format!(
-                "scene: nodes[{i}] is reached more than once (a scene's nodes must be roots of disjoint trees)"
-            ));
+            return Err(GltfError::at("scene", format!("nodes[{i}] is reached more than once (a scene's nodes must be roots of disjoint trees)")));
         }
         let node = &ctx.root.nodes[i];
         let at = format!("nodes[{i}]");
@@ -173,7 +183,10 @@ pub(super) fn walk(ctx: &mut Ctx, buffers: &Buffers) -> Result<Placed, String> {
                 .and_then(|e| e.khr_lights_punctual.as_ref())
                 .and_then(|k| k.lights.get(li))
                 .ok_or_else(|| {
-                    format!("{at}.extensions.KHR_lights_punctual.light: no light {li}")
+                    GltfError::at(
+                        &format!("{at}.extensions.KHR_lights_punctual.light"),
+                        format!("no light {li}"),
+                    )
                 })?;
             out.lights.push(punctual_light(&lat, light, &world)?);
         }
@@ -185,7 +198,7 @@ pub(super) fn walk(ctx: &mut Ctx, buffers: &Buffers) -> Result<Placed, String> {
 }
 
 /// `cameras[c]` at a node's world transform.
-fn camera(root: &json::Root, c: usize, world: &Mat4, node: &str) -> Result<GltfCamera, String> {
+fn camera(root: &json::Root, c: usize, world: &Mat4, node: &str) -> Result<GltfCamera, GltfError> {
     let at = format!("cameras[{c}]");
     let cam = &root.cameras[c];
     let projection = match (&cam.perspective, &cam.orthographic) {
@@ -201,14 +214,15 @@ fn camera(root: &json::Root, c: usize, world: &Mat4, node: &str) -> Result<GltfC
             znear: o.znear,
             zfar: o.zfar,
         },
-        (None, None) => return Err(format!("{at}: neither perspective nor orthographic")),
+        (None, None) => return Err(GltfError::at(&at, "neither perspective nor orthographic")),
     };
     let eye = world.transform_point3(Vec3::ZERO);
     let forward = world.transform_vector3(Vec3::NEG_Z).try_normalize();
     let up = world.transform_vector3(Vec3::Y).try_normalize();
     let (Some(forward), Some(up)) = (forward, up) else {
-        return Err(format!(
-            "{at} (at {node}): the node's transform has no view direction (zero scale)"
+        return Err(GltfError::at(
+            &format!("{at} (at {node})"),
+            "the node's transform has no view direction (zero scale)",
         ));
     };
     Ok(GltfCamera {
@@ -222,9 +236,12 @@ fn camera(root: &json::Root, c: usize, world: &Mat4, node: &str) -> Result<GltfC
 
 /// An attribute as `N`-component vectors, its count checked against the
 /// positions'.
-fn attribute<const N: usize>(e: Elements, at: &str, count: usize) -> Result<Vec<[f32; N]>, String> {
+fn attribute<const N: usize>(e: Elements, at: &str, count: usize) -> Result<Vec<[f32; N]>, GltfError> {
     if e.count != count {
-        return Err(format!("{at}: {} elements for {count} positions", e.count));
+        return Err(GltfError::at(
+            at,
+            format!("{} elements for {count} positions", e.count),
+        ));
     }
     let mut out = Vec::with_capacity(count);
     for (k, c) in e.values.chunks_exact(e.components).enumerate() {
@@ -233,7 +250,10 @@ fn attribute<const N: usize>(e: Elements, at: &str, count: usize) -> Result<Vec<
             *o = *x as f32;
         }
         if !v.iter().all(|x| x.is_finite()) {
-            return Err(format!("{at}: element {k} is not finite ({c:?})"));
+            return Err(GltfError::at(
+                at,
+                format!("element {k} is not finite ({c:?})"),
+            ));
         }
         out.push(v);
     }
@@ -249,13 +269,13 @@ fn read_primitive(
     p: usize,
     world: &Mat4,
     node: &str,
-) -> Result<Option<GltfPrimitive>, String> {
+) -> Result<Option<GltfPrimitive>, GltfError> {
     let (root, warnings) = (&ctx.root, &mut ctx.warnings);
     let prim = &root.meshes[m].primitives[p];
     let at = format!("meshes[{m}].primitives[{p}]");
     let mode = match prim.mode {
         Checked::Valid(mode) => mode,
-        Checked::Invalid => return Err(format!("{at}.mode: invalid")),
+        Checked::Invalid => return Err(GltfError::at(&format!("{at}.mode"), "invalid")),
     };
     if !matches!(
         mode,
@@ -268,7 +288,7 @@ fn read_primitive(
     }
     let attr = |s: Semantic| prim.attributes.get(&Checked::Valid(s)).map(|a| a.value());
     let pos_at = format!("{at}.attributes.POSITION");
-    let pos = attr(Semantic::Positions).ok_or_else(|| format!("{pos_at}: missing"))?;
+    let pos = attr(Semantic::Positions).ok_or_else(|| GltfError::at(&pos_at, "missing"))?;
     let positions: Vec<[f32; 3]> = {
         let e = read_accessor(root, buffers, pos, &pos_at, &[Type::Vec3])?;
         let count = e.count;
@@ -285,16 +305,18 @@ fn read_primitive(
                     ComponentType::U8 | ComponentType::U16 | ComponentType::U32
                 ))
             ) {
-                return Err(format!(
-                    "{iat}: accessor {a} must hold unsigned bytes, shorts or ints"
+                return Err(GltfError::at(
+                    &iat,
+                    format!("accessor {a} must hold unsigned bytes, shorts or ints"),
                 ));
             }
             let e = read_accessor(root, buffers, a.value(), &iat, &[Type::Scalar])?;
             let mut out = Vec::with_capacity(e.count);
             for (k, v) in e.values.iter().enumerate() {
                 if *v >= nv as f64 {
-                    return Err(format!(
-                        "{iat}: index {v} (element {k}) is past the {nv} vertices"
+                    return Err(GltfError::at(
+                        &iat,
+                        format!("index {v} (element {k}) is past the {nv} vertices"),
                     ));
                 }
                 out.push(*v as u32);
@@ -326,7 +348,7 @@ fn read_primitive(
         &format!("{at} ({nv} vertices, {} triangles)", triangles.len()),
         memory::mesh_bytes(3 * triangles.len().max(nv) as u64, triangles.len() as u64),
     )?;
-    let read = |s: Semantic, name: &str, types: &[Type]| -> Result<Option<Elements>, String> {
+    let read = |s: Semantic, name: &str, types: &[Type]| -> Result<Option<Elements>, GltfError> {
         attr(s)
             .map(|a| read_accessor(root, buffers, a, &format!("{at}.attributes.{name}"), types))
             .transpose()
@@ -369,8 +391,9 @@ fn read_primitive(
         .map(|p| world.transform_point3(Vec3::from(*p)))
         .collect();
     if let Some(k) = out.positions.iter().position(|p| !p.is_finite()) {
-        return Err(format!(
-            "{pos_at}: vertex {k} is not finite after the node transforms (at {node})"
+        return Err(GltfError::at(
+            &pos_at,
+            format!("vertex {k} is not finite after the node transforms (at {node})"),
         ));
     }
     out.uv0 = uv0.map(|v| v.into_iter().map(Vec2::from).collect());

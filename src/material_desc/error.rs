@@ -19,10 +19,10 @@ pub enum MaterialError {
     Ramp(#[from] ParamError),
     /// A texture a field names that cannot be used (the texture loader's
     /// message).
-    #[error("{field}: {message}")]
+    #[error("{field}: {source}")]
     Texture {
         field: &'static str,
-        message: String,
+        source: crate::textures::TextureError,
     },
     /// A `texture_filter` the sampler does not know (its message).
     #[error("texture_filter: {0}")]

@@ -214,7 +214,7 @@ impl MaterialDesc {
         let load = |field: &'static str, path: Option<&Path>, encoding: Encoding| {
             path.map(|p| {
                 crate::textures::load_map(p, read, encoding, sampler)
-                    .map_err(|message| MaterialError::Texture { field, message })
+                    .map_err(|source| MaterialError::Texture { field, source })
             })
             .transpose()
         };

@@ -97,10 +97,10 @@ impl ToonDesc {
             .transpose()
         };
         let base_color_map = match &self.base_color_texture {
-            Some(p) => Some(crate::textures::load_color_map(p, read).map_err(|message| {
+            Some(p) => Some(crate::textures::load_color_map(p, read).map_err(|source| {
                 MaterialError::Texture {
                     field: "base_color_texture",
-                    message,
+                    source,
                 }
             })?),
             None => None,
@@ -135,8 +135,10 @@ impl HatchingDesc {
         check_positive("scale", self.scale)?;
         let tam = match &self.tam {
             Some(dir) => Arc::new(
-                TamTexture::read_with_budget(dir, read, &crate::memory::reserve)
-                    .map_err(MaterialError::Tam)?,
+                TamTexture::read_with_budget(dir, read, &|what, bytes| {
+                    crate::memory::reserve(what, bytes).map_err(|e| e.to_string())
+                })
+                .map_err(MaterialError::Tam)?,
             ),
             None => builtin_tam().map_err(MaterialError::BuiltinTam)?,
         };

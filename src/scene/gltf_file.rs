@@ -6,7 +6,7 @@
 
 use super::build::*;
 use super::desc::*;
-use super::{LoadedScene, SceneError};
+use super::{GltfSceneError, LoadedScene, SceneError};
 use crate::gltf::material::{scene_material, GltfMaterial};
 use crate::gltf::{GltfScene, Projection};
 use crate::memory;
@@ -41,16 +41,22 @@ pub struct GltfOptions {
 impl SceneBuilder<'_> {
     /// Reads a glTF file (its buffers and images through `read`, relative
     /// to its folder), counted against the memory budget.
-    fn read_gltf(&mut self, what: &str, p: &Path) -> Result<GltfScene, String> {
-        let bytes =
-            (self.read)(p).map_err(|e| format!("{what}: cannot read {}: {e}", p.display()))?;
+    fn read_gltf(&mut self, what: &str, p: &Path) -> Result<GltfScene, GltfSceneError> {
+        let bytes = (self.read)(p).map_err(|source| GltfSceneError::Read {
+            what: what.to_string(),
+            path: p.to_path_buf(),
+            source,
+        })?;
         memory::reserve(
             &format!("{what} ({} bytes)", bytes.len()),
             bytes.len() as u64,
         )?;
         self.inputs.push(p.to_path_buf());
-        let g = crate::gltf::load(p, &bytes, self.read)
-            .map_err(|e| format!("{what}: {}: {e}", p.display()))?;
+        let g = crate::gltf::load(p, &bytes, self.read).map_err(|source| GltfSceneError::Gltf {
+            what: what.to_string(),
+            path: p.to_path_buf(),
+            source,
+        })?;
         self.inputs.extend(g.inputs.iter().cloned());
         self.warnings
             .extend(g.warnings.iter().map(|w| format!("{}: {w}", p.display())));
@@ -65,12 +71,13 @@ impl SceneBuilder<'_> {
         field: &str,
         md: &MeshDesc,
         p: &Path,
-    ) -> Result<(), String> {
+    ) -> Result<(), GltfSceneError> {
         let what = format!("{field}.gltf");
         let g = self.read_gltf(&what, p)?;
         let (mut mesh, local) = self.gltf_mesh(&what, p, &g, md.material.as_deref())?;
-        self.add_tangents_if_normal_mapped(&what, &mut mesh, &local)?;
-        let placement = place_mesh(field, md, &mesh.positions)?;
+        self.add_tangents_if_normal_mapped(&what, &mut mesh, &local)
+            .map_err(scene_check)?;
+        let placement = place_mesh(field, md, &mesh.positions).map_err(scene_check)?;
         self.append_mesh(&mesh, &placement, &local);
         Ok(())
     }
@@ -83,16 +90,22 @@ impl SceneBuilder<'_> {
         p: &Path,
         g: &GltfScene,
         override_name: Option<&str>,
-    ) -> Result<(MeshData, Vec<u32>), String> {
+    ) -> Result<(MeshData, Vec<u32>), GltfSceneError> {
         let file = p.display().to_string();
         let nmat = g.materials.len();
         // local[k]: material k of the file; local[nmat]: its default material.
         let mut local = vec![u32::MAX; nmat + 1];
         let mut textured = vec![None; nmat + 1];
         if let Some(name) = override_name {
-            let id = *self.materials.by_name.get(name).ok_or_else(|| {
-                format!("{what}: material {name:?}: no such entry in [materials]")
-            })?;
+            let id =
+                *self
+                    .materials
+                    .by_name
+                    .get(name)
+                    .ok_or_else(|| GltfSceneError::NoMaterial {
+                        what: what.to_string(),
+                        name: name.to_string(),
+                    })?;
             local.fill(id);
             if self.materials.textured.contains(&id) {
                 textured.fill(Some(0));
@@ -127,8 +140,14 @@ impl SceneBuilder<'_> {
                     Some(i) => g.materials[i].clone(),
                     None => GltfMaterial::default_material(),
                 };
-                let (mut built, warning) = scene_material(&desc, colored[k], &mut images)
-                    .map_err(|e| format!("{what}: {file}: {e}"))?;
+                let (mut built, warning) =
+                    scene_material(&desc, colored[k], &mut images).map_err(|source| {
+                        GltfSceneError::Gltf {
+                            what: what.to_string(),
+                            path: p.to_path_buf(),
+                            source,
+                        }
+                    })?;
                 built.name = format!("{file}#{}", desc.name);
                 self.warnings
                     .extend(warning.map(|w| format!("{file}: {w}")));
@@ -153,10 +172,12 @@ impl SceneBuilder<'_> {
                 _ => None,
             };
             if uvs.is_none() && textured[k].is_some() {
-                return Err(format!(
-                    "{what}: {file}: {}: the material samples a texture through TEXCOORD_{set}, which the primitive does not have",
-                    prim.at
-                ));
+                return Err(GltfSceneError::NoUvSet {
+                    what: what.to_string(),
+                    path: p.to_path_buf(),
+                    at: prim.at.clone(),
+                    set,
+                });
             }
             let mut piece = MeshData {
                 positions: prim.positions.clone(),
@@ -190,10 +211,13 @@ impl SceneBuilder<'_> {
                 let normal_mapped = self.materials.normal_mapped.contains(&local[k]);
                 match &prim.tangents {
                     Some(t) => piece.tangents = t.clone(),
-                    None if normal_mapped => {
-                        crate::tangents::add_mikktspace_tangents(&mut piece)
-                            .map_err(|e| format!("{what}: {file}: {}: {e}", prim.at))?
-                    }
+                    None if normal_mapped => crate::tangents::add_mikktspace_tangents(&mut piece)
+                        .map_err(|message| GltfSceneError::Tangents {
+                        what: what.to_string(),
+                        path: p.to_path_buf(),
+                        at: prim.at.clone(),
+                        message,
+                    })?,
                     None => {
                         piece.tangents = specula_raster::scene::compute_tangents(
                             &piece.positions,
@@ -237,7 +261,7 @@ impl SceneBuilder<'_> {
 }
 
 /// A checked scene camera from a glTF camera.
-fn scene_camera(c: &crate::gltf::GltfCamera) -> Result<(Camera, Option<String>), String> {
+fn scene_camera(c: &crate::gltf::GltfCamera) -> Result<(Camera, Option<String>), GltfSceneError> {
     let (desc, note) = match c.projection {
         Projection::Perspective {
             yfov, znear, zfar, ..
@@ -256,10 +280,10 @@ fn scene_camera(c: &crate::gltf::GltfCamera) -> Result<(Camera, Option<String>),
             ymag, znear, zfar, ..
         } => {
             if !(ymag.is_finite() && ymag > 0.0) {
-                return Err(format!(
-                    "{}: orthographic.ymag must be > 0, got {ymag}",
-                    c.at
-                ));
+                return Err(GltfSceneError::OrthographicYmag {
+                    at: c.at.clone(),
+                    ymag,
+                });
             }
             let d = ORTHO_DISTANCE * ymag;
             let eye = c.eye - c.forward * d;
@@ -279,13 +303,16 @@ fn scene_camera(c: &crate::gltf::GltfCamera) -> Result<(Camera, Option<String>),
             )
         }
     };
-    let cam = build_camera(&desc).map_err(|e| format!("{}: {e}", c.at))?;
+    let cam = build_camera(&desc).map_err(|e| GltfSceneError::Camera {
+        at: c.at.clone(),
+        message: e.to_string(),
+    })?;
     Ok((cam, note))
 }
 
 /// The camera framing a bounding sphere from +Z with +Y up; an error when
 /// the sphere is too large for its eye to stay inside the world.
-fn framing_camera(positions: &[Vec3]) -> Result<(Camera, String), String> {
+fn framing_camera(positions: &[Vec3]) -> Result<(Camera, String), GltfSceneError> {
     let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
     for p in positions {
         lo = lo.min(*p);
@@ -303,9 +330,8 @@ fn framing_camera(positions: &[Vec3]) -> Result<(Camera, String), String> {
         .max(1e-3);
     let d = radius / (DEFAULT_FOV_Y.to_radians() / 2.0).sin();
     let eye = centre + Vec3::Z * d;
-    crate::validate::check_point("the default camera's eye", eye.to_array()).map_err(|e| {
-        format!("no camera in the file, and its bounding sphere (radius {radius:e}) is too large to frame: {e}")
-    })?;
+    crate::validate::check_point("the default camera's eye", eye.to_array())
+        .map_err(|source| GltfSceneError::TooLargeToFrame { radius, source })?;
     let cam = Camera {
         eye,
         target: centre,
@@ -331,7 +357,7 @@ pub fn load_gltf_scene(path: &Path, opts: &GltfOptions) -> Result<LoadedScene, S
     let dir = path.parent().unwrap_or(Path::new("")).to_path_buf();
     let read = move |p: &Path| std::fs::read(dir.join(p));
     let name = PathBuf::from(path.file_name().unwrap_or_default());
-    let mut scene = load_gltf_str(&name, &read, opts).map_err(err)?;
+    let mut scene = load_gltf_str(&name, &read, opts).map_err(|e| err(e.to_string()))?;
     let base = path.parent().unwrap_or(Path::new(""));
     for p in scene.inputs.iter_mut() {
         *p = base.join(&p);
@@ -362,13 +388,13 @@ pub fn load_gltf_str(
     name: &Path,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     opts: &GltfOptions,
-) -> Result<LoadedScene, String> {
+) -> Result<LoadedScene, GltfSceneError> {
     let output = OutputDesc::default();
     let placeholder = framing_camera(&[])?.0;
     let mut scene = SceneBuilder::new(name, read, placeholder, output.background);
     // The glTF is the scene's first input (read_gltf records it).
     scene.inputs.clear();
-    let bytes = read(name).map_err(|e| format!("cannot read: {e}"))?;
+    let bytes = read(name).map_err(GltfSceneError::ReadScene)?;
     memory::reserve(
         &format!("the file ({} bytes)", bytes.len()),
         bytes.len() as u64,
@@ -378,7 +404,9 @@ pub fn load_gltf_str(
     scene.inputs.extend(g.inputs.iter().cloned());
     scene.warnings.extend(g.warnings.iter().cloned());
     let (mut mesh, local) = scene.gltf_mesh("mesh", name, &g, None)?;
-    scene.add_tangents_if_normal_mapped("mesh", &mut mesh, &local)?;
+    scene
+        .add_tangents_if_normal_mapped("mesh", &mut mesh, &local)
+        .map_err(scene_check)?;
     let md = MeshDesc {
         obj: None,
         gltf: Some(name.to_path_buf()),
@@ -390,20 +418,15 @@ pub fn load_gltf_str(
         rotate: [0.0; 3],
         scale: Scale::Uniform(1.0),
     };
-    let placement = place_mesh("mesh", &md, &mesh.positions)?;
+    let placement = place_mesh("mesh", &md, &mesh.positions).map_err(scene_check)?;
     scene.append_mesh(&mesh, &placement, &local);
     scene.finish_meshes();
     let camera = match (opts.camera, g.cameras.is_empty()) {
         (Some(n), _) if n >= g.cameras.len() => {
-            return Err(format!(
-                "--camera {n}: the file has {} cameras{}",
-                g.cameras.len(),
-                if g.cameras.is_empty() {
-                    String::new()
-                } else {
-                    format!(" (0 to {})", g.cameras.len() - 1)
-                }
-            ))
+            return Err(GltfSceneError::NoSuchCamera {
+                index: n,
+                count: g.cameras.len(),
+            })
         }
         (None, true) => {
             let (c, note) = framing_camera(&scene.data.positions)?;
@@ -453,7 +476,7 @@ pub fn load_gltf_str(
     data.materials = materials.list;
     data.geometry = vec![GeometryPass::main(data.triangles.len())];
     let lines = crate::lines::build(&mut data, &[], None, output.tonemap.into(), output.exposure);
-    data.validate()?;
+    data.validate().map_err(GltfSceneError::Scene)?;
     Ok(LoadedScene {
         data,
         output,
@@ -464,4 +487,9 @@ pub fn load_gltf_str(
         strokes: None,
         lines,
     })
+}
+
+/// A scene check shared with TOML scenes, as its message.
+fn scene_check(e: BuildError) -> GltfSceneError {
+    GltfSceneError::Scene(e.to_string())
 }

@@ -6,11 +6,13 @@
 mod build;
 mod desc;
 mod field_error;
+mod gltf_error;
 mod gltf_file;
 
 use build::*;
 use desc::*;
 pub use desc::{OutputDesc, TonemapDesc};
+pub use gltf_error::GltfSceneError;
 pub use gltf_file::{load_gltf_scene, load_gltf_str, GltfOptions};
 use specula_raster::GeometryPass;
 use specula_raster::SceneData;

@@ -31,10 +31,10 @@ pub(in crate::scene) fn build_environment(
                 source,
             })?;
             let map =
-                crate::envmap_file::load_env_map(path, &bytes, &settings).map_err(|message| {
-                    BuildError::Part {
-                        field: "environment.map".into(),
-                        message,
+                crate::envmap_file::load_env_map(path, &bytes, &settings).map_err(|source| {
+                    BuildError::EnvMap {
+                        field: "environment.map",
+                        source,
                     }
                 })?;
             Ok(Environment::Map(std::sync::Arc::new(map)))

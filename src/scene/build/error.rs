@@ -115,6 +115,12 @@ pub(in crate::scene) enum BuildError {
     /// message).
     #[error("material {material}: map_Kd: {message}")]
     MtlMap { material: String, message: String },
+    /// An MTL material's `map_Kd` file that is not a texture.
+    #[error("material {material}: map_Kd: {source}")]
+    MtlTexture {
+        material: String,
+        source: crate::textures::TextureError,
+    },
     /// An MTL material's error, under the mesh field that named the OBJ.
     #[error("{field}: {source}")]
     Mtl {
@@ -137,8 +143,14 @@ pub(in crate::scene) enum BuildError {
         name: String,
         source: Box<crate::material_desc::MaterialError>,
     },
+    /// An environment map file refused, under the field that named it.
+    #[error("{field}: {source}")]
+    EnvMap {
+        field: &'static str,
+        source: crate::envmap_file::EnvMapError,
+    },
     /// A part that still reports a message, under the field it was given:
-    /// OBJ files, tangents, environment map files.
+    /// OBJ files, tangents.
     #[error("{field}: {message}")]
     Part { field: String, message: String },
     /// A part whose message starts with a field inside `table`: labels
@@ -147,14 +159,14 @@ pub(in crate::scene) enum BuildError {
     #[error("{table}.{message}")]
     Table { table: String, message: String },
     /// The memory budget refused (its message names what asked).
-    #[error("{0}")]
-    Memory(String),
+    #[error(transparent)]
+    Memory(#[from] crate::memory::OverBudget),
     /// The line tables' checks (`lines.rs`; the message names the table).
     #[error("{0}")]
     Lines(String),
     /// A glTF mesh (`gltf_file.rs`; the message names the field).
-    #[error("{0}")]
-    Gltf(String),
+    #[error(transparent)]
+    Gltf(Box<crate::scene::GltfSceneError>),
     /// The finished scene's own check (`SceneData::validate`).
     #[error("{0}")]
     Scene(String),

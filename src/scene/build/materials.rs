@@ -86,7 +86,12 @@ fn mtl_material(
                 material: m.name.clone(),
                 message,
             };
-            let map = crate::textures::load_color_map(&path, read).map_err(map_kd)?;
+            let map = crate::textures::load_color_map(&path, read).map_err(|source| {
+                BuildError::MtlTexture {
+                    material: m.name.clone(),
+                    source,
+                }
+            })?;
             let maps = specula_raster::maps::ParamMaps {
                 base_color: Some(map),
                 ..Default::default()
