@@ -543,7 +543,10 @@ fn run_batch(a: specula::batch::BatchArgs) -> Result<(), String> {
         o.manifest.display()
     );
     for (scene, e) in &o.failed {
-        eprintln!("error: {scene}: {}", truncate_lines(&e.to_string(), MESSAGE_LINE_MAX));
+        eprintln!(
+            "error: {scene}: {}",
+            truncate_lines(&e.to_string(), MESSAGE_LINE_MAX)
+        );
     }
     if o.failed.is_empty() {
         Ok(())
@@ -575,7 +578,10 @@ fn main() -> ExitCode {
                 Ok(specula::diff::Verdict::Pass) => ExitCode::SUCCESS,
                 Ok(specula::diff::Verdict::Fail) => ExitCode::from(1),
                 Err(e) => {
-                    eprintln!("error: {}", truncate_lines(&e.to_string(), MESSAGE_LINE_MAX));
+                    eprintln!(
+                        "error: {}",
+                        truncate_lines(&e.to_string(), MESSAGE_LINE_MAX)
+                    );
                     ExitCode::from(2)
                 }
             }

@@ -236,7 +236,11 @@ fn camera(root: &json::Root, c: usize, world: &Mat4, node: &str) -> Result<GltfC
 
 /// An attribute as `N`-component vectors, its count checked against the
 /// positions'.
-fn attribute<const N: usize>(e: Elements, at: &str, count: usize) -> Result<Vec<[f32; N]>, GltfError> {
+fn attribute<const N: usize>(
+    e: Elements,
+    at: &str,
+    count: usize,
+) -> Result<Vec<[f32; N]>, GltfError> {
     if e.count != count {
         return Err(GltfError::at(
             at,

@@ -52,7 +52,9 @@ impl SceneBuilder<'_> {
     fn add_mesh(&mut self, field: &str, md: &MeshDesc) -> Result<(), BuildError> {
         if let Some(p) = &md.gltf {
             check_one_shape(field, md)?;
-            return self.add_gltf_mesh(field, md, p).map_err(|e| BuildError::Gltf(Box::new(e)));
+            return self
+                .add_gltf_mesh(field, md, p)
+                .map_err(|e| BuildError::Gltf(Box::new(e)));
         }
         let mut mesh = self.build_shape(field, md)?;
         let local = self.mesh_materials(field, md, &mesh)?;
