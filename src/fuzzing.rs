@@ -21,7 +21,7 @@ use specula_raster::fuzzing::{bin_chunk, BinnedChunk};
 use specula_raster::fuzzing::{covered_groups, rasterize_tile};
 use specula_raster::setup::{RasterTri, SetupContext, SetupCounts, TriPlanes};
 use specula_raster::target::{Target, VisBuffer, MISS, TILE, TILE_PIXELS};
-use specula_raster::{Cull, ShadePath};
+use specula_raster::{Cull, SceneData, ShadePath};
 use std::path::Path;
 
 /// Memory budget of one fuzz input (`memory::set_limit`): scenes that
@@ -214,11 +214,15 @@ pub fn envmap(data: &[u8]) -> Result<(), String> {
     }
     let mut scene = load_scene_str(Path::new("fuzz.toml"), ENV_SCENE, &serve_assets)
         .map_err(|e| e.to_string())?;
-    scene.data.environment = None;
-    scene.data.env_map = Some(std::sync::Arc::new(map.clone()));
+    let mut parts = scene.data.into_parts();
+    parts.environment = None;
+    parts.env_map = Some(std::sync::Arc::new(map.clone()));
+    scene.data = SceneData::new(parts).map_err(|e| e.to_string())?;
     render_checked(&scene)?;
     map.method = IblMethod::Reference { samples: 4 };
-    scene.data.env_map = Some(std::sync::Arc::new(map));
+    let mut parts = scene.data.into_parts();
+    parts.env_map = Some(std::sync::Arc::new(map));
+    scene.data = SceneData::new(parts).map_err(|e| e.to_string())?;
     render_checked(&scene)
 }
 

@@ -40,21 +40,36 @@ const MAX_CHARS: usize = 1000;
 /// Largest line height, in pixels.
 const MAX_SIZE: f32 = 1000.0;
 
+/// A label's field refused; the message names the field inside the label
+/// (the caller adds which label of which file).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LabelError {
+    /// `text` longer than [`MAX_CHARS`] characters.
+    #[error("text: longer than {MAX_CHARS} characters")]
+    TooLong,
+    /// `at` with a coordinate that is not finite.
+    #[error("at: must be finite, got {0:?}")]
+    At([f32; 2]),
+    /// `size` outside (0, [`MAX_SIZE`]].
+    #[error("size: must be in (0, {MAX_SIZE}] pixels, got {0}")]
+    Size(f32),
+    /// `color` outside [0, 1].
+    #[error(transparent)]
+    Color(#[from] crate::checks::FieldError),
+}
+
 impl LabelDesc {
     /// Checks the fields; the error names the field (the caller adds which
     /// label of which file).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), LabelError> {
         if self.text.chars().count() > MAX_CHARS {
-            return Err(format!("text: longer than {MAX_CHARS} characters"));
+            return Err(LabelError::TooLong);
         }
         if !self.at.iter().all(|v| v.is_finite()) {
-            return Err(format!("at: must be finite, got {:?}", self.at));
+            return Err(LabelError::At(self.at));
         }
         if !(self.size.is_finite() && self.size > 0.0 && self.size <= MAX_SIZE) {
-            return Err(format!(
-                "size: must be in (0, {MAX_SIZE}] pixels, got {}",
-                self.size
-            ));
+            return Err(LabelError::Size(self.size));
         }
         Ok(crate::checks::display_color("color", self.color)?)
     }
@@ -177,21 +192,24 @@ mod tests {
         }
         .validate()
         .unwrap_err();
-        assert!(e.starts_with("size"), "{e}");
+        assert!(matches!(e, LabelError::Size(_)), "{e}");
+        assert!(e.to_string().starts_with("size"), "{e}");
         let e = LabelDesc {
             at: [f32::INFINITY, 0.0],
             ..ok.clone()
         }
         .validate()
         .unwrap_err();
-        assert!(e.starts_with("at"), "{e}");
+        assert!(matches!(e, LabelError::At(_)), "{e}");
+        assert!(e.to_string().starts_with("at"), "{e}");
         let e = LabelDesc {
             color: [2.0, 0.0, 0.0],
             ..ok
         }
         .validate()
         .unwrap_err();
-        assert!(e.starts_with("color"), "{e}");
+        assert!(matches!(e, LabelError::Color(_)), "{e}");
+        assert!(e.to_string().starts_with("color"), "{e}");
     }
 
     /// A label scaled far beyond the image (a 16 × 16 scene's size 1000 at

@@ -166,14 +166,73 @@ pub struct StrokesSpec {
     pub cap: CapDesc,
 }
 
-fn check_width(field: &str, w: f32) -> Result<(), String> {
+/// A line table's field refused: the field as written (`outline[1].width`,
+/// `strokes.edges`) and why. The messages are the ones users read.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum LineTableError {
+    /// A check shared with the other tables (colours, weights).
+    #[error(transparent)]
+    Field(#[from] crate::checks::FieldError),
+    /// A line width outside (0, [`MAX_WIDTH`]].
+    #[error("{field}: must be a number in (0, {MAX_WIDTH}] pixels, got {got}")]
+    Width { field: String, got: f32 },
+    /// `materials = []`.
+    #[error("{field}: name at least one material (or leave the field out for all)")]
+    NoMaterials { field: String },
+    /// A material name the scene does not have.
+    #[error("{field}: no material named {name:?} in the scene")]
+    UnknownMaterial { field: String, name: String },
+    /// A field the outline's method does not read.
+    #[error("{field}.{name}: not used by method {method:?}")]
+    Unused {
+        field: String,
+        name: &'static str,
+        method: &'static str,
+    },
+    /// A per-source threshold table on a shading outline.
+    #[error("{field}.threshold: method \"shading\" takes one number (n·v), not a table")]
+    ShadingThresholdTable { field: String },
+    /// A shading outline's n·v threshold outside (0, 1).
+    #[error("{field}.threshold: n·v threshold must be in (0, 1), got {got}")]
+    ShadingThreshold { field: String, got: f32 },
+    /// `sources = []`.
+    #[error("{field}.sources: name at least one source (depth, normal, id, color)")]
+    NoSources { field: String },
+    /// A Sobel source named twice.
+    #[error("{field}.sources: {name:?} is listed twice")]
+    SourceTwice { field: String, name: &'static str },
+    /// A Sobel threshold that is not a finite number > 0 (`field` names
+    /// the threshold, per source where it is one).
+    #[error("{field}: must be a finite number > 0, got {got}")]
+    SobelThreshold { field: String, got: f32 },
+    /// A per-source threshold for a source the outline does not search.
+    #[error("{field}.threshold.{key}: not one of this outline's sources ({sources})")]
+    NotASource {
+        field: String,
+        key: String,
+        /// The outline's sources, comma separated.
+        sources: String,
+    },
+    /// `strokes.edges = []`.
+    #[error("strokes.edges: name at least one kind (silhouette, crease, boundary, material)")]
+    NoEdges,
+    /// An edge kind named twice in `strokes.edges`.
+    #[error("strokes.edges: {0:?} is listed twice")]
+    EdgeTwice(EdgeKindDesc),
+    /// `strokes.crease_angle` outside (0, 180).
+    #[error("strokes.crease_angle: must be in (0, 180) degrees, got {0}")]
+    CreaseAngle(f32),
+}
+
+fn check_width(field: &str, w: f32) -> Result<(), LineTableError> {
     // `contains` is false for NaN.
     if w > 0.0 && w <= MAX_WIDTH {
         Ok(())
     } else {
-        Err(format!(
-            "{field}: must be a number in (0, {MAX_WIDTH}] pixels, got {w}"
-        ))
+        Err(LineTableError::Width {
+            field: field.to_string(),
+            got: w,
+        })
     }
 }
 
@@ -181,17 +240,18 @@ fn check_materials(
     field: &str,
     m: &Option<Vec<String>>,
     known: &dyn Fn(&str) -> bool,
-) -> Result<(), String> {
+) -> Result<(), LineTableError> {
     let Some(list) = m else { return Ok(()) };
     if list.is_empty() {
-        return Err(format!(
-            "{field}: name at least one material (or leave the field out for all)"
-        ));
+        return Err(LineTableError::NoMaterials {
+            field: field.to_string(),
+        });
     }
-    for n in list {
-        if !known(n) {
-            return Err(format!("{field}: no material named {n:?} in the scene"));
-        }
+    if let Some(n) = list.iter().find(|n| !known(n.as_str())) {
+        return Err(LineTableError::UnknownMaterial {
+            field: field.to_string(),
+            name: n.clone(),
+        });
     }
     Ok(())
 }
@@ -199,7 +259,11 @@ fn check_materials(
 impl OutlineDesc {
     /// Checks the table (`field` is e.g. `outline[2]`); `known` says
     /// whether a material name exists in the scene.
-    pub fn check(&self, field: &str, known: &dyn Fn(&str) -> bool) -> Result<OutlineSpec, String> {
+    pub fn check(
+        &self,
+        field: &str,
+        known: &dyn Fn(&str) -> bool,
+    ) -> Result<OutlineSpec, LineTableError> {
         crate::checks::display_color(&format!("{field}.color"), self.color)?;
         check_materials(&format!("{field}.materials"), &self.materials, known)?;
         let method = match self.method {
@@ -207,7 +271,11 @@ impl OutlineDesc {
             MethodDesc::Extrusion => "extrusion",
             MethodDesc::Sobel => "sobel",
         };
-        let unused = |name: &str| format!("{field}.{name}: not used by method {method:?}");
+        let unused = |name: &'static str| LineTableError::Unused {
+            field: field.to_string(),
+            name,
+            method,
+        };
         let width = match (self.method, self.width) {
             (MethodDesc::Shading, Some(_)) => return Err(unused("width")),
             (_, Some(w)) => {
@@ -230,16 +298,17 @@ impl OutlineDesc {
                     None => 0.25,
                     Some(ThresholdDesc::All(t)) => *t,
                     Some(ThresholdDesc::PerSource(_)) => {
-                        return Err(format!(
-                        "{field}.threshold: method \"shading\" takes one number (n·v), not a table"
-                    ))
+                        return Err(LineTableError::ShadingThresholdTable {
+                            field: field.to_string(),
+                        })
                     }
                 };
                 // n·v of a visible surface is in [0, 1]; 1 would darken all.
                 if !(threshold > 0.0 && threshold < 1.0) {
-                    return Err(format!(
-                        "{field}.threshold: n·v threshold must be in (0, 1), got {threshold}"
-                    ));
+                    return Err(LineTableError::ShadingThreshold {
+                        field: field.to_string(),
+                        got: threshold,
+                    });
                 }
                 Ok(OutlineSpec::Shading {
                     color,
@@ -264,17 +333,17 @@ impl OutlineDesc {
                     SourceDesc::Id,
                 ]);
                 if list.is_empty() {
-                    return Err(format!(
-                        "{field}.sources: name at least one source (depth, normal, id, color)"
-                    ));
+                    return Err(LineTableError::NoSources {
+                        field: field.to_string(),
+                    });
                 }
                 let mut sorted = list.clone();
                 sorted.sort();
                 if let Some(w) = sorted.windows(2).find(|w| w[0] == w[1]) {
-                    return Err(format!(
-                        "{field}.sources: {:?} is listed twice",
-                        w[0].name()
-                    ));
+                    return Err(LineTableError::SourceTwice {
+                        field: field.to_string(),
+                        name: w[0].name(),
+                    });
                 }
                 let default = 0.25;
                 let mut sources = Vec::new();
@@ -288,7 +357,7 @@ impl OutlineDesc {
                         ),
                     };
                     if !(t > 0.0 && t.is_finite()) {
-                        return Err(format!("{tf}: must be a finite number > 0, got {t}"));
+                        return Err(LineTableError::SobelThreshold { field: tf, got: t });
                     }
                     sources.push((s, t));
                 }
@@ -297,14 +366,15 @@ impl OutlineDesc {
                         .keys()
                         .find(|k| !sources.iter().any(|(s, _)| s.name() == *k))
                     {
-                        return Err(format!(
-                            "{field}.threshold.{k}: not one of this outline's sources ({})",
-                            sources
+                        return Err(LineTableError::NotASource {
+                            field: field.to_string(),
+                            key: k.clone(),
+                            sources: sources
                                 .iter()
                                 .map(|(s, _)| s.name())
                                 .collect::<Vec<_>>()
-                                .join(", ")
-                        ));
+                                .join(", "),
+                        });
                     }
                 }
                 Ok(OutlineSpec::Sobel {
@@ -320,23 +390,18 @@ impl OutlineDesc {
 }
 
 impl StrokesDesc {
-    pub fn check(&self) -> Result<StrokesSpec, String> {
+    pub fn check(&self) -> Result<StrokesSpec, LineTableError> {
         let f = "strokes";
         if self.edges.is_empty() {
-            return Err(format!(
-                "{f}.edges: name at least one kind (silhouette, crease, boundary, material)"
-            ));
+            return Err(LineTableError::NoEdges);
         }
         let mut edges = self.edges.clone();
         edges.sort();
         if let Some(w) = edges.windows(2).find(|w| w[0] == w[1]) {
-            return Err(format!("{f}.edges: {:?} is listed twice", w[0]));
+            return Err(LineTableError::EdgeTwice(w[0]));
         }
         if !(self.crease_angle > 0.0 && self.crease_angle < 180.0) {
-            return Err(format!(
-                "{f}.crease_angle: must be in (0, 180) degrees, got {}",
-                self.crease_angle
-            ));
+            return Err(LineTableError::CreaseAngle(self.crease_angle));
         }
         check_width(&format!("{f}.width"), self.width)?;
         crate::checks::display_color(&format!("{f}.color"), self.color)?;
@@ -388,7 +453,7 @@ fn radiance_for(
 /// materials) and post stages; outline colours are display colours after
 /// the output's `tonemap` and `exposure`.
 pub fn build(
-    data: &mut specula_raster::SceneData,
+    data: &mut specula_raster::SceneParts,
     outlines: &[OutlineSpec],
     strokes: Option<&StrokesSpec>,
     tonemap: specula_raster::post::Tonemap,
@@ -398,7 +463,7 @@ pub fn build(
     use specula_npr::outline::{Selection, ShadingOutline};
     use specula_npr::sobel::{Sobel, Source};
     use std::sync::Arc;
-    let index = |data: &specula_raster::SceneData, names: &Option<Vec<String>>| {
+    let index = |data: &specula_raster::SceneParts, names: &Option<Vec<String>>| {
         names.as_ref().map(|list| {
             list.iter()
                 .filter_map(|n| data.materials.iter().position(|m| &m.name == n))

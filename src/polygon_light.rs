@@ -7,7 +7,7 @@ use glam::{DVec2, DVec3, Vec3, Vec4};
 use specula_core::light::MAX_POLYGON_VERTICES;
 use specula_core::models::microfacet::Ndf;
 use specula_core::Model;
-use specula_raster::{Lit, Material, SceneData, Unlit};
+use specula_raster::{Lit, Material, SceneParts, Unlit};
 
 /// Newell's normal of the polygon (twice its vector area, toward its front)
 /// and its size (the largest distance from the first vertex).
@@ -182,7 +182,7 @@ pub fn triangulate(v: &[[f32; 3]]) -> Vec<[usize; 3]> {
 /// a one-sided light's back is culled). Call after the meshes (uvs and
 /// tangents already settled) and before the geometry passes are set.
 pub fn add_visible(
-    data: &mut SceneData,
+    data: &mut SceneParts,
     materials: &mut Vec<Material>,
     name: &str,
     vertices: &[[f32; 3]],

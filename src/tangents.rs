@@ -16,6 +16,17 @@ use crate::mesh::MeshData;
 use glam::Vec4;
 use std::collections::HashMap;
 
+/// Why a mesh got no MikkTSpace tangents.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum TangentError {
+    /// The mesh has no uv per vertex.
+    #[error("tangents need texture coordinates")]
+    NoUvs,
+    /// MikkTSpace gave up on the mesh.
+    #[error("MikkTSpace could not make tangents for this mesh")]
+    Failed,
+}
+
 /// The mesh as MikkTSpace reads it, and the tangents it writes per corner.
 struct Corners<'a> {
     mesh: &'a MeshData,
@@ -46,16 +57,16 @@ impl mikktspace::Geometry for Corners<'_> {
 /// MikkTSpace's tangent (xyz, w = ±1 the bitangent's sign) of every
 /// triangle corner of `mesh` (which has uvs), `3 · t + k` for corner k of
 /// triangle t.
-pub fn corner_tangents(mesh: &MeshData) -> Result<Vec<[f32; 4]>, String> {
+pub fn corner_tangents(mesh: &MeshData) -> Result<Vec<[f32; 4]>, TangentError> {
     if mesh.uvs.len() != mesh.positions.len() {
-        return Err("tangents need texture coordinates".into());
+        return Err(TangentError::NoUvs);
     }
     let mut c = Corners {
         mesh,
         tangents: vec![[0.0; 4]; mesh.triangles.len() * 3],
     };
     if !mikktspace::generate_tangents(&mut c) {
-        return Err("MikkTSpace could not make tangents for this mesh".into());
+        return Err(TangentError::Failed);
     }
     Ok(c.tangents)
 }
@@ -63,7 +74,7 @@ pub fn corner_tangents(mesh: &MeshData) -> Result<Vec<[f32; 4]>, String> {
 /// Gives `mesh` (with uvs, without tangents) MikkTSpace tangents, one per
 /// vertex: a vertex whose corners got different tangents is split into
 /// one copy per distinct tangent (same position, normal, uv and colour).
-pub fn add_mikktspace_tangents(mesh: &mut MeshData) -> Result<(), String> {
+pub fn add_mikktspace_tangents(mesh: &mut MeshData) -> Result<(), TangentError> {
     let corners = corner_tangents(mesh)?;
     let n = mesh.positions.len();
     let mut tangents: Vec<Option<[f32; 4]>> = vec![None; n];

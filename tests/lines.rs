@@ -1401,10 +1401,11 @@ width = 1.5
             off_screen,
             "size {size}"
         );
-        let mut drawn = data.clone();
+        let mut drawn = data.clone().into_parts();
         for p in drawn.geometry.iter_mut().skip(1) {
             p.vertex = Arc::new(Shortcuts::without_hidden(p.vertex.instance()));
         }
+        let drawn = specula_raster::SceneData::new(drawn).unwrap();
         let (mut st_a, mut st_b) = (FrameStats::default(), FrameStats::default());
         let a = visibility(data, &target, &mut st_a);
         let b = visibility(&drawn, &target, &mut st_b);
@@ -1493,10 +1494,11 @@ width = 2.0
         let s = common::scene(&scene(eye, ssaa), &[]);
         let data = &s.data;
         let target = Target::new(80 * ssaa, 60 * ssaa).unwrap().with_ssaa(ssaa);
-        let mut plain = data.clone();
+        let mut plain = data.clone().into_parts();
         for p in plain.geometry.iter_mut().skip(1) {
             p.vertex = Arc::new(Shortcuts::without_mask(p.vertex.instance()));
         }
+        let plain = specula_raster::SceneData::new(plain).unwrap();
         let (mut st_a, mut st_b) = (FrameStats::default(), FrameStats::default());
         let a = visibility(data, &target, &mut st_a);
         let b = visibility(&plain, &target, &mut st_b);

@@ -9,7 +9,8 @@ use common::scene;
 use specula::render::{render_scene, RenderSettings};
 use specula_raster::frame::{render, visibility, FrameStats, ShadePath};
 use specula_raster::{
-    Cull, FrameContext, GeometryPass, Material, SceneData, Target, Unlit, VertexStage, MISS,
+    Cull, FrameContext, GeometryPass, Material, SceneData, SceneDataError, Target, Unlit,
+    VertexStage, MISS,
 };
 use std::sync::Arc;
 
@@ -52,14 +53,14 @@ fn a_scene_split_into_two_passes_gives_the_same_visibility_buffer() {
     let n = s.data.triangles.len() as u32;
     // Split inside the first sphere, so both passes hold part of a mesh.
     for split in [1, n / 3, n - 1] {
-        let mut two = s.data.clone();
+        let mut two = s.data.clone().into_parts();
         let mut a = GeometryPass::main(n as usize);
         a.triangles = 0..split;
         let mut b = GeometryPass::main(n as usize);
         b.triangles = split..n;
         b.name = "second".into();
         two.geometry = vec![a, b];
-        two.validate().unwrap();
+        let two = SceneData::new(two).unwrap();
         let v = visibility(&two, &t, &mut FrameStats::default());
         assert_eq!(v.vis.id, one.vis.id, "split at {split}");
         assert_eq!(v.vis.depth, one.vis.depth, "split at {split}");
@@ -114,7 +115,7 @@ irradiance = [1.0, 1.0, 1.0]
     let t = Target::new(160, 120).unwrap();
     let alone = render(&base.data, t, ShadePath::Simd);
 
-    let mut s = base.data.clone();
+    let mut s = base.data.clone().into_parts();
     let n = s.triangles.len() as u32;
     let ink = [0.1, 0.9, 0.2];
     s.materials.push(Material::new(
@@ -133,7 +134,7 @@ irradiance = [1.0, 1.0, 1.0]
         id_base: n,
         material: Some(s.materials.len() as u32 - 1),
     });
-    s.validate().unwrap();
+    let s = SceneData::new(s).unwrap();
     let both = render(&s, t, ShadePath::Simd);
 
     let (ids_alone, ids_both) = (
@@ -165,11 +166,12 @@ irradiance = [1.0, 1.0, 1.0]
 
 #[test]
 fn overlapping_id_ranges_are_refused() {
-    let mut s = scene(SPHERES, &[]).data;
+    let mut s = scene(SPHERES, &[]).data.into_parts();
     let n = s.triangles.len();
     s.geometry.push(GeometryPass::main(n));
-    let e = s.validate().unwrap_err();
-    assert!(e.contains("overlapping ids"), "{e}");
+    let e = SceneData::new(s).unwrap_err();
+    assert!(matches!(e, SceneDataError::Passes(_)), "{e}");
+    assert!(e.to_string().contains("overlapping ids"), "{e}");
 }
 
 #[test]

@@ -491,9 +491,10 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
     for (file, k, cascades, filter, radius) in cases {
         let mut s = specula::scene::load_scene(&common::fixtures().join("scenes").join(file))
             .expect("fixture scene");
-        let light = s.data.lights[k].clone();
-        s.data.lights = vec![light];
-        let mut settings = s.data.shadows[k].expect("a shadowed light");
+        let mut parts = s.data.into_parts();
+        let light = parts.lights[k].clone();
+        parts.lights = vec![light];
+        let mut settings = parts.shadows[k].expect("a shadowed light");
         settings.cascades = cascades;
         settings.map_size = 256;
         settings.filter_radius = radius;
@@ -502,7 +503,8 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
             "pcf" => specula_raster::shadow::ShadowFilter::Pcf,
             _ => specula_raster::shadow::ShadowFilter::Pcss,
         };
-        s.data.shadows = vec![Some(settings)];
+        parts.shadows = vec![Some(settings)];
+        s.data = specula_raster::SceneData::new(parts).expect("one shadowed light");
         let target = Target::new(96, 54).unwrap();
         let v = visibility(&s.data, &target, &mut FrameStats::default());
         let ls = v.shadows.light(0).expect("the light's maps");

@@ -44,10 +44,9 @@ fn benches(c: &mut Criterion) {
     let vis = p.install(|| visibility(&scene.data, &target, &mut FrameStats::default()));
     let mut color = FrameBuffers::new(&target, BufferSet::default());
     let with = |lights: Vec<Light>| {
-        let mut d = scene.data.clone();
+        let mut d = scene.data.clone().into_parts();
         d.lights = lights;
-        d.validate().expect("the lit materials take polygon lights");
-        d
+        specula_raster::SceneData::new(d).expect("the lit materials take polygon lights")
     };
     let grid16 = (0..16)
         .map(|k| {

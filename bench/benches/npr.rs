@@ -22,7 +22,9 @@ use specula_raster::{BufferSet, FrameBuffers, Lit, Material};
 fn with_all(scene: &LoadedScene, make: &dyn Fn(&str) -> Material) -> LoadedScene {
     let path = fixtures().join("scenes/npr-tones.toml");
     let mut s = load_scene(&path).unwrap_or_else(|e| panic!("{e}"));
-    s.data.materials = scene.data.materials.iter().map(|m| make(&m.name)).collect();
+    let mut parts = s.data.into_parts();
+    parts.materials = scene.data.materials.iter().map(|m| make(&m.name)).collect();
+    s.data = specula_raster::SceneData::new(parts).expect("the same scene, other materials");
     s
 }
 

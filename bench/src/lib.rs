@@ -27,7 +27,8 @@ pub fn benchmark_scene_microfacet() -> LoadedScene {
     use specula_core::Model;
     use specula_raster::Lit;
     let mut s = benchmark_scene();
-    for m in &mut s.data.materials {
+    let mut parts = s.data.into_parts();
+    for m in &mut parts.materials {
         let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() else {
             continue;
         };
@@ -47,6 +48,7 @@ pub fn benchmark_scene_microfacet() -> LoadedScene {
             *m = specula_raster::Material::new(&m.name, Lit::new(model), m.double_sided);
         }
     }
+    s.data = specula_raster::SceneData::new(parts).expect("the same scene, other materials");
     s
 }
 
@@ -60,7 +62,8 @@ pub fn benchmark_scene_disney() -> LoadedScene {
     use specula_core::Model;
     use specula_raster::Lit;
     let mut s = benchmark_scene();
-    for m in &mut s.data.materials {
+    let mut parts = s.data.into_parts();
+    for m in &mut parts.materials {
         let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() else {
             continue;
         };
@@ -79,6 +82,7 @@ pub fn benchmark_scene_disney() -> LoadedScene {
             *m = specula_raster::Material::new(&m.name, Lit::new(model), m.double_sided);
         }
     }
+    s.data = specula_raster::SceneData::new(parts).expect("the same scene, other materials");
     s
 }
 

@@ -59,7 +59,7 @@ impl LinePasses {
     pub fn new() -> Self {
         let scene = benchmark_scene();
         let plain = scene.data.clone();
-        let mut outlined = scene.data.clone();
+        let mut outlined = scene.data.clone().into_parts();
         let m = outlined.materials.len() as u32;
         outlined.materials.push(Material::new(
             "outline",
@@ -73,7 +73,7 @@ impl LinePasses {
         let base = outlined.triangles.len() as u32;
         let passes = extrusion_passes(&outlined, stage, m, base, &|_| true);
         outlined.geometry.extend(passes);
-        outlined.validate().expect("outlined scene");
+        let outlined = SceneData::new(outlined).expect("outlined scene");
         let target = Target::new(1920, 1080).expect("1080p");
 
         // As the CLI renders a PNG: no HDR output, so the 8-bit encode

@@ -21,10 +21,11 @@ const H: u32 = 540;
 /// Fixture scene `name` with only light `k`, shadowed with `settings`.
 fn scene_with_light(name: &str, k: usize, settings: ShadowSettings) -> LoadedScene {
     let mut s = load_scene(&fixtures().join("scenes").join(name)).expect("fixture scene");
-    let light = s.data.lights[k].clone();
-    s.data.lights = vec![light];
-    s.data.shadows = vec![Some(settings)];
-    s.data.validate().expect("valid scene");
+    let mut parts = s.data.into_parts();
+    let light = parts.lights[k].clone();
+    parts.lights = vec![light];
+    parts.shadows = vec![Some(settings)];
+    s.data = specula_raster::SceneData::new(parts).expect("valid scene");
     s
 }
 
@@ -286,9 +287,11 @@ fn area_errors(size: u32) -> (f64, f64, f64, usize) {
     const AH: u32 = 270;
     const N: usize = 8;
     let mut s = load_scene(&fixtures().join("scenes/shadows_area.toml")).expect("area scene");
-    if let Some(Some(settings)) = s.data.shadows.get_mut(0) {
+    let mut parts = s.data.into_parts();
+    if let Some(Some(settings)) = parts.shadows.get_mut(0) {
         settings.map_size = size;
     }
+    s.data = specula_raster::SceneData::new(parts).expect("valid scene");
     let Light::Polygon { vertices, .. } = &s.data.lights[0] else {
         panic!("the fixture's light is a polygon");
     };

@@ -25,11 +25,11 @@ use rayon::prelude::*;
 use specula_raster::geometry::IdMap;
 use specula_raster::post::{HdrImage, PostStage};
 use specula_raster::target::MISS;
-use specula_raster::{BufferSet, Camera, FrameBuffers, SceneData};
+use specula_raster::{BufferSet, Camera, FrameBuffers, SceneParts};
 
 /// Material index of every id the scene's passes write (index = id;
 /// u32::MAX for ids no pass writes).
-pub fn id_materials(scene: &SceneData) -> Vec<u32> {
+pub fn id_materials(scene: &SceneParts) -> Vec<u32> {
     let end = scene
         .geometry
         .iter()

@@ -56,7 +56,7 @@ pub use frame::{
 };
 pub use geometry::{Cull, FrameContext, GeometryPass, Project, VertexStage};
 pub use lit::{env_split_sum, prefilter_direction, Lit};
-pub use scene::SceneData;
+pub use scene::{SceneData, SceneDataError, SceneParts};
 pub use shader::{Material, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};
 pub use unlit::{Unlit, UnlitBase};

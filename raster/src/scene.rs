@@ -1,4 +1,10 @@
 //! A prepared scene: flat world-space arrays the passes read.
+//!
+//! A loader assembles [`SceneParts`] and hands them to [`SceneData::new`],
+//! which checks every invariant the passes rely on; a `SceneData` is
+//! therefore valid by construction, and its fields can be read (through
+//! `Deref`) but not changed. To change a scene, take its parts back
+//! ([`SceneData::into_parts`]) and build it again.
 
 use crate::camera::Camera;
 use crate::geometry::{validate_passes, GeometryPass};
@@ -7,8 +13,9 @@ use crate::shadow::ShadowSettings;
 use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
 
+/// What a scene is made of, as a loader assembles it: not yet checked.
 #[derive(Clone, Debug)]
-pub struct SceneData {
+pub struct SceneParts {
     /// World-space vertex positions.
     pub positions: Vec<Vec3>,
     /// World-space unit vertex normals, one per position.
@@ -44,74 +51,94 @@ pub struct SceneData {
     pub camera: Camera,
 }
 
+impl SceneParts {
+    /// No geometry, lights or environment: the start of a loader's scene.
+    pub fn empty(camera: Camera, background: [f32; 3]) -> SceneParts {
+        SceneParts {
+            positions: Vec::new(),
+            normals: Vec::new(),
+            uvs: Vec::new(),
+            tangents: Vec::new(),
+            colors: Vec::new(),
+            triangles: Vec::new(),
+            tri_material: Vec::new(),
+            materials: Vec::new(),
+            geometry: Vec::new(),
+            lights: Vec::new(),
+            shadows: Vec::new(),
+            environment: None,
+            env_map: None,
+            background,
+            camera,
+        }
+    }
+}
+
+/// A scene the passes can trust: made only by [`SceneData::new`], which
+/// checks its parts. Its parts are read through `Deref`.
+#[derive(Clone, Debug)]
+pub struct SceneData {
+    parts: SceneParts,
+}
+
+/// Why [`SceneData::new`] refused a scene's parts.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum SceneDataError {
+    #[error("{normals} normals for {positions} positions")]
+    Normals { normals: usize, positions: usize },
+    #[error("{uvs} uvs for {positions} positions")]
+    Uvs { uvs: usize, positions: usize },
+    #[error("{tangents} tangents for {uvs} uvs")]
+    Tangents { tangents: usize, uvs: usize },
+    #[error("{colors} vertex colours for {positions} positions")]
+    Colors { colors: usize, positions: usize },
+    #[error("one material index per triangle is required")]
+    MaterialPerTriangle,
+    #[error("too many triangles for 32-bit ids")]
+    TooManyTriangles,
+    #[error("triangle {triangle} indexes a vertex past the {vertices} given")]
+    VertexIndex { triangle: usize, vertices: usize },
+    #[error("triangle {triangle} uses material index past the {materials} given")]
+    MaterialIndex { triangle: usize, materials: usize },
+    /// The geometry passes' check (`geometry.rs`), as its message.
+    #[error("{0}")]
+    Passes(String),
+    #[error("{settings} shadow settings for {lights} lights")]
+    ShadowCount { settings: usize, lights: usize },
+    /// A light's shadow settings refused; `light` counts from 1.
+    #[error("light {light}: {message}")]
+    Shadow { light: usize, message: String },
+    /// A material whose shader cannot shade the scene's lights.
+    #[error("material {name:?}: {message}")]
+    Lights { name: String, message: String },
+}
+
+impl std::ops::Deref for SceneData {
+    type Target = SceneParts;
+    fn deref(&self) -> &SceneParts {
+        &self.parts
+    }
+}
+
 impl SceneData {
-    /// Checks the invariants the passes rely on (indices in range, array
-    /// lengths agree); loaders call it once so kernels can trust the data.
-    pub fn validate(&self) -> Result<(), String> {
-        let nv = self.positions.len();
-        if self.normals.len() != nv {
-            return Err(format!("{} normals for {nv} positions", self.normals.len()));
-        }
-        if !self.uvs.is_empty() && self.uvs.len() != nv {
-            return Err(format!("{} uvs for {nv} positions", self.uvs.len()));
-        }
-        if self.tangents.len() != self.uvs.len() {
-            return Err(format!(
-                "{} tangents for {} uvs",
-                self.tangents.len(),
-                self.uvs.len()
-            ));
-        }
-        if !self.colors.is_empty() && self.colors.len() != nv {
-            return Err(format!(
-                "{} vertex colours for {nv} positions",
-                self.colors.len()
-            ));
-        }
-        if self.tri_material.len() != self.triangles.len() {
-            return Err("one material index per triangle is required".into());
-        }
-        if self.triangles.len() >= crate::target::MISS as usize {
-            return Err("too many triangles for 32-bit ids".into());
-        }
-        if let Some(t) = self
-            .triangles
-            .iter()
-            .position(|t| t.iter().any(|&i| i as usize >= nv))
-        {
-            return Err(format!("triangle {t} indexes a vertex past the {nv} given"));
-        }
-        let nm = self.materials.len();
-        if let Some(t) = self.tri_material.iter().position(|&m| m as usize >= nm) {
-            return Err(format!(
-                "triangle {t} uses material index past the {nm} given"
-            ));
-        }
-        validate_passes(&self.geometry, self.triangles.len(), nm)?;
-        if !self.shadows.is_empty() && self.shadows.len() != self.lights.len() {
-            return Err(format!(
-                "{} shadow settings for {} lights",
-                self.shadows.len(),
-                self.lights.len()
-            ));
-        }
-        for (k, s) in self.shadows.iter().enumerate() {
-            if let Some(s) = s {
-                s.check().map_err(|e| format!("light {}: {e}", k + 1))?;
-            }
-        }
-        for m in &self.materials {
-            m.shader
-                .check_lights(&self.lights)
-                .map_err(|e| format!("material {:?}: {e}", m.name))?;
-        }
-        Ok(())
+    /// The scene of `parts`, once they hold the invariants the passes rely
+    /// on (indices in range, array lengths agree, passes, shadow settings
+    /// and the materials' lights accepted).
+    pub fn new(parts: SceneParts) -> Result<SceneData, SceneDataError> {
+        check(&parts)?;
+        Ok(SceneData { parts })
+    }
+
+    /// The parts back, to change and build again.
+    pub fn into_parts(self) -> SceneParts {
+        self.parts
     }
 
     /// Every material's texture maps sampled with `filter` from now on,
-    /// whatever their own samplers say (`--texture-filter`).
+    /// whatever their own samplers say (`--texture-filter`). The scene
+    /// stays valid: only how its textures are filtered changes.
     pub fn force_texture_filter(&mut self, filter: crate::texture::Filter) {
-        for m in &mut self.materials {
+        for m in &mut self.parts.materials {
             if let Some(shader) = m.shader.with_texture_filter(filter) {
                 m.shader = shader;
             }
@@ -120,6 +147,82 @@ impl SceneData {
             }
         }
     }
+}
+
+/// The checks of [`SceneData::new`].
+fn check(s: &SceneParts) -> Result<(), SceneDataError> {
+    let nv = s.positions.len();
+    if s.normals.len() != nv {
+        return Err(SceneDataError::Normals {
+            normals: s.normals.len(),
+            positions: nv,
+        });
+    }
+    if !s.uvs.is_empty() && s.uvs.len() != nv {
+        return Err(SceneDataError::Uvs {
+            uvs: s.uvs.len(),
+            positions: nv,
+        });
+    }
+    if s.tangents.len() != s.uvs.len() {
+        return Err(SceneDataError::Tangents {
+            tangents: s.tangents.len(),
+            uvs: s.uvs.len(),
+        });
+    }
+    if !s.colors.is_empty() && s.colors.len() != nv {
+        return Err(SceneDataError::Colors {
+            colors: s.colors.len(),
+            positions: nv,
+        });
+    }
+    if s.tri_material.len() != s.triangles.len() {
+        return Err(SceneDataError::MaterialPerTriangle);
+    }
+    if s.triangles.len() >= crate::target::MISS as usize {
+        return Err(SceneDataError::TooManyTriangles);
+    }
+    if let Some(t) = s
+        .triangles
+        .iter()
+        .position(|t| t.iter().any(|&i| i as usize >= nv))
+    {
+        return Err(SceneDataError::VertexIndex {
+            triangle: t,
+            vertices: nv,
+        });
+    }
+    let nm = s.materials.len();
+    if let Some(t) = s.tri_material.iter().position(|&m| m as usize >= nm) {
+        return Err(SceneDataError::MaterialIndex {
+            triangle: t,
+            materials: nm,
+        });
+    }
+    validate_passes(&s.geometry, s.triangles.len(), nm).map_err(SceneDataError::Passes)?;
+    if !s.shadows.is_empty() && s.shadows.len() != s.lights.len() {
+        return Err(SceneDataError::ShadowCount {
+            settings: s.shadows.len(),
+            lights: s.lights.len(),
+        });
+    }
+    for (k, settings) in s.shadows.iter().enumerate() {
+        if let Some(settings) = settings {
+            settings.check().map_err(|message| SceneDataError::Shadow {
+                light: k + 1,
+                message,
+            })?;
+        }
+    }
+    for m in &s.materials {
+        m.shader
+            .check_lights(&s.lights)
+            .map_err(|message| SceneDataError::Lights {
+                name: m.name.clone(),
+                message,
+            })?;
+    }
+    Ok(())
 }
 
 /// Per-vertex tangent frames from uvs \[Lengyel01\]: each triangle's ∂p/∂u

@@ -38,9 +38,12 @@ pub enum DiffError {
     /// `--ignore-background` on two black images.
     #[error("--ignore-background: {} and {} are both entirely black: nothing to compare", .reference.display(), .test.display())]
     BothBlack { reference: PathBuf, test: PathBuf },
-    /// A reference with no exposure range for HDR-FLIP (its message).
-    #[error("{}: {message}", .path.display())]
-    Exposure { path: PathBuf, message: String },
+    /// A reference with no exposure range for HDR-FLIP.
+    #[error("{}: {source}", .path.display())]
+    Exposure {
+        path: PathBuf,
+        source: super::flip::ExposureError,
+    },
     /// An image that cannot be read or compared.
     #[error(transparent)]
     Image(#[from] DiffImageError),

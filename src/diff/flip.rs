@@ -482,29 +482,44 @@ pub struct Exposures {
     pub count: usize,
 }
 
+/// Why a reference has no automatic HDR-FLIP exposure range.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ExposureError {
+    /// Every pixel is black.
+    #[error("the reference is black: HDR-FLIP has no exposure range to use")]
+    Black,
+    /// The median luminance is 0; `start` and `stop` are the range that
+    /// the median of the lit pixels would give, suggested to the user.
+    #[error("more than half of the reference's pixels are black, so HDR-FLIP's automatic exposure range is unbounded; give one, e.g. --exposures={start:.3}:{stop:.3} (the median of the lit pixels)")]
+    MostlyBlack { start: f32, stop: f32 },
+}
+
 /// The authors' automatic range \[Andersson21\]: c_start puts the reference's
 /// largest luminance, c_stop its median, where the tone curve reaches
 /// 0.85; one exposure per stop, at least two. `Err` when the largest or
 /// the median luminance is 0 (the range is then unbounded), with the
 /// median of the non-zero luminances as a suggestion.
-pub fn auto_exposures(reference: &[[f32; 3]], curve: ToneCurve) -> Result<Exposures, String> {
+pub fn auto_exposures(
+    reference: &[[f32; 3]],
+    curve: ToneCurve,
+) -> Result<Exposures, ExposureError> {
     let x = curve.x_at_target();
     let mut lum: Vec<f32> = reference.iter().map(|&c| luminance(c)).collect();
     let y_max = lum.iter().fold(f32::NEG_INFINITY, |m, &v| m.max(v));
     let mid = lum.len() / 2;
     let (_, &mut y_median, _) = lum.select_nth_unstable_by(mid, f32::total_cmp);
     if y_max <= 0.0 {
-        return Err("the reference is black: HDR-FLIP has no exposure range to use".into());
+        return Err(ExposureError::Black);
     }
     let start = (x / y_max).log2();
     if y_median <= 0.0 {
         let mut nonzero: Vec<f32> = lum.into_iter().filter(|&v| v > 0.0).collect();
         let m = nonzero.len() / 2;
         let (_, &mut y, _) = nonzero.select_nth_unstable_by(m, f32::total_cmp);
-        return Err(format!(
-            "more than half of the reference's pixels are black, so HDR-FLIP's automatic exposure range is unbounded; give one, e.g. --exposures={start:.3}:{:.3} (the median of the lit pixels)",
-            (x / y).log2()
-        ));
+        return Err(ExposureError::MostlyBlack {
+            start,
+            stop: (x / y).log2(),
+        });
     }
     let stop = (x / y_median).log2();
     Ok(Exposures {

@@ -236,10 +236,10 @@ pub fn compare(
         Encoding::Linear => {
             let e = match settings.exposures {
                 Some(e) => e,
-                None => flip::auto_exposures(&r.rgb, settings.curve).map_err(|message| {
+                None => flip::auto_exposures(&r.rgb, settings.curve).map_err(|source| {
                     DiffError::Exposure {
                         path: r.path.clone(),
-                        message,
+                        source,
                     }
                 })?,
             };

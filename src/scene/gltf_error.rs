@@ -44,13 +44,13 @@ pub enum GltfSceneError {
         at: String,
         set: u32,
     },
-    /// MikkTSpace tangents refused for a primitive (its message).
-    #[error("{what}: {}: {at}: {message}", .path.display())]
+    /// MikkTSpace tangents refused for a primitive.
+    #[error("{what}: {}: {at}: {source}", .path.display())]
     Tangents {
         what: String,
         path: PathBuf,
         at: String,
-        message: String,
+        source: crate::tangents::TangentError,
     },
     /// An orthographic camera without a positive view height.
     #[error("{at}: orthographic.ymag must be > 0, got {ymag}")]
@@ -68,10 +68,13 @@ pub enum GltfSceneError {
     /// `--camera N` past the file's cameras.
     #[error("--camera {index}: the file has {count} cameras{}", camera_range(*.count))]
     NoSuchCamera { index: usize, count: usize },
-    /// A check shared with TOML scenes (placement, tangents, the finished
-    /// scene's check), as its message.
+    /// A check shared with TOML scenes (placement, tangents), as its
+    /// message.
     #[error("{0}")]
     Scene(String),
+    /// The finished scene's own check (`SceneData::new`).
+    #[error(transparent)]
+    Invalid(#[from] specula_raster::SceneDataError),
 }
 
 /// ` (0 to n-1)` after a count of cameras, nothing for none.

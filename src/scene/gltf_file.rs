@@ -13,7 +13,7 @@ use crate::memory;
 use crate::mesh::MeshData;
 use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
-use specula_raster::{Camera, GeometryPass};
+use specula_raster::{Camera, GeometryPass, SceneData};
 use std::path::{Path, PathBuf};
 
 /// The default camera's vertical field of view (degrees) when the file
@@ -212,11 +212,11 @@ impl SceneBuilder<'_> {
                 match &prim.tangents {
                     Some(t) => piece.tangents = t.clone(),
                     None if normal_mapped => crate::tangents::add_mikktspace_tangents(&mut piece)
-                        .map_err(|message| GltfSceneError::Tangents {
+                        .map_err(|source| GltfSceneError::Tangents {
                         what: what.to_string(),
                         path: p.to_path_buf(),
                         at: prim.at.clone(),
-                        message,
+                        source,
                     })?,
                     None => {
                         piece.tangents = specula_raster::scene::compute_tangents(
@@ -373,8 +373,10 @@ pub fn load_gltf_scene(path: &Path, opts: &GltfOptions) -> Result<LoadedScene, S
         };
         let map = crate::envmap_file::load_env_map(&env.display().to_string(), &bytes, &settings)
             .map_err(|e| err(format!("--env: {e}")))?;
-        scene.data.environment = None;
-        scene.data.env_map = Some(std::sync::Arc::new(map));
+        let mut parts = scene.data.into_parts();
+        parts.environment = None;
+        parts.env_map = Some(std::sync::Arc::new(map));
+        scene.data = SceneData::new(parts).map_err(|e| err(e.to_string()))?;
         scene.inputs.push(env.clone());
         specula_core::albedo_tables::AlbedoTables::get();
     }
@@ -476,7 +478,7 @@ pub fn load_gltf_str(
     data.materials = materials.list;
     data.geometry = vec![GeometryPass::main(data.triangles.len())];
     let lines = crate::lines::build(&mut data, &[], None, output.tonemap.into(), output.exposure);
-    data.validate().map_err(GltfSceneError::Scene)?;
+    let data = SceneData::new(data)?;
     Ok(LoadedScene {
         data,
         output,

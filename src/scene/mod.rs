@@ -156,7 +156,7 @@ fn build_scene(
         .as_ref()
         .map(|s| s.check())
         .transpose()
-        .map_err(BuildError::Lines)?;
+        .map_err(|e| BuildError::Lines(Box::new(e)))?;
 
     let SceneBuilder {
         mut data,
@@ -174,7 +174,7 @@ fn build_scene(
         desc.output.tonemap.into(),
         desc.output.exposure,
     );
-    data.validate().map_err(BuildError::Scene)?;
+    let data = SceneData::new(data)?;
     let mut post_stages = build_posterize(desc.posterize.as_ref())?;
     post_stages.extend(std::mem::take(&mut lines.post));
     Ok(LoadedScene {

@@ -31,7 +31,7 @@ use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use specula_raster::buffers::prefetch;
 use specula_raster::camera::View;
-use specula_raster::SceneData;
+use specula_raster::SceneParts;
 use std::collections::HashMap;
 
 /// What an edge is drawn as; the order is the drawing and SVG group order.
@@ -195,7 +195,7 @@ impl MeshEdges {
     }
 
     /// The scene's main-pass triangles (the ones the scene's meshes made).
-    pub fn from_scene(scene: &SceneData, kinds: &[EdgeKind], crease_angle_deg: f32) -> MeshEdges {
+    pub fn from_scene(scene: &SceneParts, kinds: &[EdgeKind], crease_angle_deg: f32) -> MeshEdges {
         MeshEdges::new(
             &scene.positions,
             &scene.triangles,

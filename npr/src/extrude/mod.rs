@@ -67,7 +67,7 @@ use rayon::prelude::*;
 use specula_raster::camera::View;
 use specula_raster::geometry::{Cull, FrameContext, GeometryPass, VertexStage};
 use specula_raster::setup::{front_face_shown, front_faces_shown_x8};
-use specula_raster::SceneData;
+use specula_raster::{SceneData, SceneParts};
 use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::Arc;
@@ -146,7 +146,7 @@ struct FrameKey {
 }
 
 impl Extrude {
-    pub fn new(scene: &SceneData, width: f32) -> Extrude {
+    pub fn new(scene: &SceneParts, width: f32) -> Extrude {
         Extrude {
             width,
             mesh: Arc::new(ExtrudeMesh {
@@ -482,7 +482,7 @@ impl VertexStage for Extrude {
 /// for open ones (`Cull::Back`; module docs), shaded by `material`, ids
 /// from `id_base` (triangle i writes `id_base + i`).
 pub fn extrusion_passes(
-    scene: &SceneData,
+    scene: &SceneParts,
     stage: Arc<Extrude>,
     material: u32,
     id_base: u32,

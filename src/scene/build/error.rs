@@ -149,27 +149,38 @@ pub(in crate::scene) enum BuildError {
         field: &'static str,
         source: crate::envmap_file::EnvMapError,
     },
+    /// MikkTSpace tangents refused for a mesh, under its field.
+    #[error("{field}: {source}")]
+    Tangents {
+        field: String,
+        source: crate::tangents::TangentError,
+    },
     /// A part that still reports a message, under the field it was given:
-    /// OBJ files, tangents.
+    /// OBJ files.
     #[error("{field}: {message}")]
     Part { field: String, message: String },
-    /// A part whose message starts with a field inside `table`: labels
-    /// (`output.label[0].size`), a light's shadow settings
-    /// (`light[1].bias`).
+    /// An `[[output.label]]` refused (`output.label[0].size: …`).
+    #[error("output.label[{index}].{source}")]
+    Label {
+        index: usize,
+        source: Box<crate::label::LabelError>,
+    },
+    /// A part whose message starts with a field inside `table`: a light's
+    /// shadow settings (`light[1].bias`).
     #[error("{table}.{message}")]
     Table { table: String, message: String },
     /// The memory budget refused (its message names what asked).
     #[error(transparent)]
     Memory(#[from] crate::memory::OverBudget),
     /// The line tables' checks (`lines.rs`; the message names the table).
-    #[error("{0}")]
-    Lines(String),
+    #[error(transparent)]
+    Lines(Box<crate::lines::LineTableError>),
     /// A glTF mesh (`gltf_file.rs`; the message names the field).
     #[error(transparent)]
     Gltf(Box<crate::scene::GltfSceneError>),
-    /// The finished scene's own check (`SceneData::validate`).
-    #[error("{0}")]
-    Scene(String),
+    /// The finished scene's own check (`SceneData::new`).
+    #[error(transparent)]
+    Scene(#[from] specula_raster::SceneDataError),
 }
 
 /// What a mesh without uvs is, for [`BuildError::NoUvs`].

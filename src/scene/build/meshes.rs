@@ -79,9 +79,11 @@ impl SceneBuilder<'_> {
             .iter()
             .any(|m| self.materials.normal_mapped.contains(&local[*m as usize]));
         if normal_mapped && mesh.tangents.is_empty() {
-            crate::tangents::add_mikktspace_tangents(mesh).map_err(|message| BuildError::Part {
-                field: field.to_string(),
-                message,
+            crate::tangents::add_mikktspace_tangents(mesh).map_err(|source| {
+                BuildError::Tangents {
+                    field: field.to_string(),
+                    source,
+                }
             })?;
         }
         Ok(())

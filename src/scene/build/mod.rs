@@ -30,7 +30,7 @@ pub(super) use post::{build_posterize, check_outlines};
 
 use specula_core::light::Light;
 use specula_core::Model;
-use specula_raster::{Camera, SceneData};
+use specula_raster::{Camera, SceneParts};
 use specula_raster::{Lit, Material};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
@@ -39,7 +39,7 @@ use std::path::{Path, PathBuf};
 pub(super) struct SceneBuilder<'a> {
     pub(super) path: &'a Path,
     pub(super) read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-    pub(super) data: SceneData,
+    pub(super) data: SceneParts,
     pub(super) materials: Materials,
     /// Whether some mesh brought texture coordinates.
     pub(super) any_uvs: bool,
@@ -60,23 +60,7 @@ impl<'a> SceneBuilder<'a> {
         SceneBuilder {
             path,
             read,
-            data: SceneData {
-                positions: Vec::new(),
-                normals: Vec::new(),
-                uvs: Vec::new(),
-                tangents: Vec::new(),
-                colors: Vec::new(),
-                triangles: Vec::new(),
-                tri_material: Vec::new(),
-                materials: Vec::new(),
-                geometry: Vec::new(),
-                lights: Vec::new(),
-                shadows: Vec::new(),
-                environment: None,
-                env_map: None,
-                background,
-                camera,
-            },
+            data: SceneParts::empty(camera, background),
             materials: Materials {
                 list: Vec::new(),
                 by_name: HashMap::new(),

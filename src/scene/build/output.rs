@@ -13,9 +13,9 @@ pub(in crate::scene) fn check_output(o: &OutputDesc) -> Result<(), BuildError> {
         return Err(BuildError::Exposure);
     }
     for (i, l) in o.labels.iter().enumerate() {
-        l.validate().map_err(|message| BuildError::Table {
-            table: format!("output.label[{i}]"),
-            message,
+        l.validate().map_err(|source| BuildError::Label {
+            index: i,
+            source: Box::new(source),
         })?;
     }
     Ok(())

@@ -15,7 +15,7 @@ pub(in crate::scene) fn check_outlines(
         .enumerate()
         .map(|(i, o)| o.check(&format!("outline[{i}]"), &|n| by_name.contains_key(n)))
         .collect::<Result<_, _>>()
-        .map_err(BuildError::Lines)
+        .map_err(|e| BuildError::Lines(Box::new(e)))
 }
 
 /// `[posterize]`: the image-space stage it asks for, if any.
