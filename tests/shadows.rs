@@ -576,12 +576,14 @@ fn depth_only_maps_match_the_full_setup_bit_for_bit() {
         for size in [256, 1000] {
             let mut s = specula::scene::load_scene(&common::fixtures().join("scenes").join(file))
                 .expect("fixture scene");
-            for st in s.data.shadows.iter_mut().flatten() {
+            let mut parts = s.data.into_parts();
+            for st in parts.shadows.iter_mut().flatten() {
                 st.map_size = size;
                 if let Some(c) = cascades {
                     st.cascades = c;
                 }
             }
+            s.data = specula_raster::SceneData::new(parts).expect("valid scene");
             let view = s.data.camera.view(320, 180);
             let render = |maps: &mut ShadowMaps, setup| {
                 maps.render_with(&s.data, &view, setup, &mut FrameStats::default());
