@@ -132,7 +132,7 @@ impl BrdfVisitor for SplitSum<'_> {
         let (frame, wo) = setup(self.1);
         let p = b.prepare::<f64>(wo);
         let wo_world = frame.t * wo.x + frame.b * wo.y + frame.n * wo.z;
-        let c = specula_raster::env_split_sum(b, &p, &frame, wo_world, self.0);
+        let c = specula_raster::env_split_sum(b, &p, &frame, wo_world, self.0, |_| 1.0);
         [c.x, c.y, c.z]
     }
 }
@@ -363,7 +363,7 @@ impl BrdfVisitor for Pair<'_> {
         let f = &self.frame;
         let p = b.prepare::<f64>(self.wo);
         let wo_world = f.t * self.wo.x + f.b * self.wo.y + f.n * self.wo.z;
-        let s = specula_raster::env_split_sum(b, &p, f, wo_world, self.map);
+        let s = specula_raster::env_split_sum(b, &p, f, wo_world, self.map, |_| 1.0);
         let lobes = b.env_lobes(&p);
         let r = reference_radiance(b, &p, &lobes, self.wo, f, self.map, self.samples, self.seed);
         ([s.x, s.y, s.z], r, lobes)
@@ -611,7 +611,7 @@ fn the_generated_sun_is_taken_out() {
             let p = b.prepare::<f64>(self.2);
             let f = &self.1;
             let wo_world = f.t * self.2.x + f.b * self.2.y + f.n * self.2.z;
-            let c = specula_raster::env_split_sum(b, &p, f, wo_world, self.0);
+            let c = specula_raster::env_split_sum(b, &p, f, wo_world, self.0, |_| 1.0);
             [c.x, c.y, c.z]
         }
     }
@@ -743,7 +743,7 @@ fn clearcoat_with_its_own_normal_against_the_reference() {
         let p = gltf.prepare_with(&pixel, wo);
         let lobes = gltf.env_lobes(&p);
         let wo_world = frame.t * wo.x + frame.b * wo.y + frame.n * wo.z;
-        let split = specula_raster::env_split_sum(&gltf, &p, &frame, wo_world, &map);
+        let split = specula_raster::env_split_sum(&gltf, &p, &frame, wo_world, &map, |_| 1.0);
         // The coat's part read elsewhere: about the base's normal at the
         // coat's roughness; and, the former reading, on the base's lobe.
         let n = frame.n;

@@ -620,3 +620,242 @@ fn depth_only_maps_match_the_full_setup_bit_for_bit() {
         }
     }
 }
+
+/// The floor and unit box of [`floor_scene`] lit by the generated sky
+/// (`fixtures/env/sky.hdr`) alone, the floor's material `floor` (TOML
+/// lines), the sky's sun shadowed as `[environment.sun]` says (`sun`:
+/// its lines, or `None` for no such table).
+fn sky_scene(floor: &str, sun: Option<&str>) -> LoadedScene {
+    let sun = sun.map_or(String::new(), |s| format!("[environment.sun]\n{s}\n"));
+    let text = format!(
+        r#"
+[camera]
+eye = [-1.0, 5.0, 3.0]
+target = [-1.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 45.0
+near = 0.1
+far = 50.0
+[output]
+width = {SIDE}
+height = {SIDE}
+[environment]
+map = "sky.hdr"
+{sun}
+[[mesh]]
+plane = {{ size = [12.0, 12.0] }}
+material = "floor"
+[[mesh]]
+cube = {{ size = 1.0 }}
+translate = [0.0, 0.5, 0.0]
+material = "box"
+[materials.floor]
+{floor}
+[materials.box]
+model = "lambert"
+base_color = [0.5, 0.5, 0.5]
+"#
+    );
+    let sky = std::fs::read(common::fixtures().join("env/sky.hdr")).expect("fixture sky");
+    let read = move |p: &std::path::Path| -> std::io::Result<Vec<u8>> {
+        if p == std::path::Path::new("sky.hdr") {
+            Ok(sky.clone())
+        } else {
+            Err(std::io::ErrorKind::NotFound.into())
+        }
+    };
+    specula::scene::load_scene_str(std::path::Path::new("test.toml"), &text, &read)
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Floor pixels away from the box, by the exact visibility of the sun's
+/// centre past the box: each one's index, its surface point and the
+/// sun's shadow factor, and whether the box hides the sun from it, for
+/// the pixels whose 5 × 5 neighbourhood agrees on that (no shadow edge).
+fn sun_classes(s: &LoadedScene) -> Vec<(usize, f32, bool)> {
+    let target = Target::new(SIDE, SIDE).unwrap();
+    let v = visibility(&s.data, &target, &mut FrameStats::default());
+    let px = specula_raster::shadow::pixel_sun_shadows(&s.data, &target, &v);
+    assert_eq!(px.len(), (SIDE * SIDE) as usize, "the sun has a map");
+    let sun = s.data.env_map.as_ref().unwrap().sun_world().unwrap();
+    let to_sun = Vec3::from(sun.to_light);
+    let w = SIDE as i32;
+    let class = |x: i32, y: i32| -> Option<bool> {
+        if x < 0 || y < 0 || x >= w || y >= w {
+            return None;
+        }
+        let p = px[(y * w + x) as usize]?;
+        (p.p.y.abs() < 1e-4).then(|| box_blocks(p.p, to_sun))
+    };
+    let mut out = Vec::new();
+    for y in 0..w {
+        for x in 0..w {
+            let Some(c) = class(x, y) else { continue };
+            let uniform = (-2..=2).all(|dy| (-2..=2).all(|dx| class(x + dx, y + dy) == Some(c)));
+            if uniform {
+                let i = (y * w + x) as usize;
+                out.push((i, px[i].unwrap().factor, c));
+            }
+        }
+    }
+    out
+}
+
+/// The generated sky's sun, shadowed: away from shadow edges its map
+/// agrees with exact visibility past the box; a floor pixel in the box's
+/// shadow receives the sky's light alone (the split sum without the sun,
+/// its diffuse part the SH irradiance times the albedo over π), and a
+/// pixel in the sun keeps the unshadowed render's value.
+#[test]
+fn the_suns_shadow_takes_out_the_suns_light_alone() {
+    let lambert = "model = \"lambert\"\nbase_color = [0.5, 0.5, 0.5]";
+    let shadowed = sky_scene(lambert, Some("shadows = \"hard\"\nshadow_map_size = 1024"));
+    let open = sky_scene(lambert, None);
+    let classes = sun_classes(&shadowed);
+    let in_shadow = classes.iter().filter(|c| c.2).count();
+    assert!(
+        in_shadow > 500,
+        "{in_shadow} floor pixels in the box's shadow"
+    );
+    for &(i, factor, dark) in &classes {
+        assert_eq!(factor, if dark { 0.0 } else { 1.0 }, "pixel {i}");
+    }
+    let target = || Target::new(SIDE, SIDE).unwrap();
+    let a = specula_raster::render(&shadowed.data, target(), Default::default());
+    let b = specula_raster::render(&open.data, target(), Default::default());
+    let map = shadowed.data.env_map.as_ref().unwrap();
+    let up = specula_core::V3::<f64>::new(0.0, 1.0, 0.0);
+    let sky = map.sky_irradiance_over_pi(up);
+    let sky = [sky.x, sky.y, sky.z].map(|e| 0.5 * e);
+    let lit = map.irradiance_over_pi(up);
+    let lit = [lit.x, lit.y, lit.z].map(|e| 0.5 * e);
+    assert!(
+        lit[1] > 2.0 * sky[1],
+        "the sun outshines the sky: {lit:?} {sky:?}"
+    );
+    for &(i, _, dark) in &classes {
+        let (ca, cb) = (a.buffers.color.get(i), b.buffers.color.get(i));
+        if dark {
+            for c in 0..3 {
+                let rel = (ca[c] as f64 - sky[c]).abs() / sky[c];
+                assert!(rel < 1e-5, "pixel {i}: {ca:?} against the sky's {sky:?}");
+            }
+        } else {
+            assert_eq!(ca, cb, "pixel {i} in the sun");
+        }
+    }
+}
+
+/// Toon bands and hatching tones take the sky's sun's shadow: a floor
+/// pixel in the box's shadow is darker than one in the sun, and every
+/// floor pixel in the sun keeps the unshadowed render's value.
+#[test]
+fn npr_shaders_darken_in_the_suns_shadow() {
+    let floors = [
+        (
+            "toon",
+            "model = \"toon\"\nbands = 3\nbase_color = [0.5, 0.5, 0.5]",
+        ),
+        ("hatching", "model = \"hatching\""),
+    ];
+    for (name, floor) in floors {
+        let shadowed = sky_scene(floor, Some("shadows = \"pcf\""));
+        let open = sky_scene(floor, None);
+        let classes = sun_classes(&shadowed);
+        let target = || Target::new(SIDE, SIDE).unwrap();
+        let a = specula_raster::render(&shadowed.data, target(), Default::default());
+        let b = specula_raster::render(&open.data, target(), Default::default());
+        let luma = |c: [f32; 3]| 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+        let mean = |dark: bool| {
+            let v: Vec<f32> = (classes.iter())
+                .filter(|c| c.2 == dark)
+                .map(|c| luma(a.buffers.color.get(c.0)))
+                .collect();
+            assert!(v.len() > 500, "{name}: {} pixels", v.len());
+            v.iter().sum::<f32>() / v.len() as f32
+        };
+        let (dark, sunny) = (mean(true), mean(false));
+        assert!(
+            dark < 0.95 * sunny,
+            "{name}: shadow {dark} against sun {sunny}"
+        );
+        for &(i, _, in_shadow) in &classes {
+            if !in_shadow {
+                let (ca, cb) = (a.buffers.color.get(i), b.buffers.color.get(i));
+                assert_eq!(ca, cb, "{name}: pixel {i} in the sun");
+            }
+        }
+    }
+}
+
+/// `[environment.sun]`'s checks name the field: its shadow fields' ranges
+/// (checked with shadows off too), a uniform environment, and a map with
+/// no sun to take out.
+#[test]
+fn bad_sun_shadow_fields_are_refused_by_name() {
+    let sky = std::fs::read(common::fixtures().join("env/sky.hdr")).expect("fixture sky");
+    let flat = std::fs::read(common::fixtures().join("env/royal_esplanade_1k.hdr"))
+        .expect("fixture esplanade");
+    let read = move |p: &std::path::Path| -> std::io::Result<Vec<u8>> {
+        match p.to_str() {
+            Some("sky.hdr") => Ok(sky.clone()),
+            Some("flat.hdr") => Ok(flat.clone()),
+            _ => Err(std::io::ErrorKind::NotFound.into()),
+        }
+    };
+    let load = |environment: &str, sun: &str| {
+        let text = format!(
+            "[camera]\neye = [0.0, 2.0, 5.0]\ntarget = [0.0, 0.0, 0.0]\nup = [0.0, 1.0, 0.0]\n\
+             fov_y = 40.0\nnear = 0.1\nfar = 50.0\n[[mesh]]\nplane = {{ size = [4.0, 4.0] }}\n\
+             [environment]\n{environment}\n[environment.sun]\n{sun}\n"
+        );
+        specula::scene::load_scene_str(std::path::Path::new("s.toml"), &text, &read)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default()
+    };
+    let map = "map = \"sky.hdr\"";
+    for (sun, field) in [
+        (
+            "shadows = \"pcf\"\nshadow_map_size = 0",
+            "environment.sun.shadow_map_size",
+        ),
+        (
+            "shadows = \"pcf\"\nshadow_map_size = 1000000000",
+            "environment.sun.shadow_map_size",
+        ),
+        ("shadow_map_size = 0", "environment.sun.shadow_map_size"),
+        ("shadows = \"hard\"\nbias = -1.0", "environment.sun.bias"),
+        (
+            "shadows = \"pcss\"\nlight_size = nan",
+            "environment.sun.light_size",
+        ),
+        (
+            "shadows = \"pcf\"\ncascades = 5",
+            "environment.sun.cascades",
+        ),
+        ("shadows = \"soft\"", "environment.sun.shadows"),
+        ("colour = 1", "colour"),
+    ] {
+        let e = load(map, sun);
+        assert!(e.contains(field), "{sun}: {e}");
+    }
+    for sun in [
+        "shadows = \"pcf\"",
+        "shadows = \"pcss\"\ncascades = 4",
+        "shadows = \"none\"",
+    ] {
+        let e = load(map, sun);
+        assert!(e.is_empty(), "{sun}: {e}");
+    }
+    let e = load("uniform = [0.1, 0.1, 0.1]", "shadows = \"pcf\"");
+    assert!(
+        e.contains("environment.sun.shadows") && e.contains("uniform"),
+        "{e}"
+    );
+    let e = load("map = \"flat.hdr\"", "shadows = \"pcf\"");
+    assert!(
+        e.contains("environment.sun.shadows") && e.contains("no sun"),
+        "{e}"
+    );
+}

@@ -1,5 +1,6 @@
 //! Hard shadow maps against exact visibility: on the shadows fixture scene,
-//! for each light alone (directional, spot, point) with hard shadows, every
+//! for each light alone (directional, spot, point, and the generated sky's
+//! sun taken out of its map) with hard shadows, every
 //! drawn pixel facing the light is classified shadowed or lit twice: by
 //! the renderer's shadow factor (< 0.5: shadowed) and by an Embree shadow
 //! ray from the pixel's surface point to the light. At least 99.5 % of
@@ -8,11 +9,13 @@
 //! empty one), but for at most 10 pixels a light (docs/accuracy.md).
 
 use glam::Vec3;
+use specula::envmap_file::{load_env_map, EnvSettings};
 use specula::scene::{load_scene, LoadedScene};
 use specula_bench::embree::EmbreeScene;
 use specula_bench::{fixtures, pool};
 use specula_core::light::{spot_attenuation, spot_scale_offset, Light};
-use specula_raster::shadow::{pixel_shadows, ShadowFilter, ShadowSettings};
+use specula_raster::envmap::IblMethod;
+use specula_raster::shadow::{pixel_shadows, pixel_sun_shadows, ShadowFilter, ShadowSettings};
 use specula_raster::{visibility, FrameStats, Target};
 
 const W: u32 = 960;
@@ -41,8 +44,11 @@ fn hard(map_size: u32) -> ShadowSettings {
 /// Per pixel: `Some(true)` shadowed, `Some(false)` lit by Embree's shadow
 /// ray; `None` where nothing is drawn or the surface does not face the
 /// light (or lies outside a spot light's cone).
-fn embree_classes(s: &LoadedScene, points: &[Option<(Vec3, Vec3)>]) -> Vec<Option<bool>> {
-    let light = &s.data.lights[0];
+fn embree_classes(
+    s: &LoadedScene,
+    light: &Light,
+    points: &[Option<(Vec3, Vec3)>],
+) -> Vec<Option<bool>> {
     let extent = 12.0f32;
     let eps = 1e-4 * extent;
     let mut rays = Vec::new();
@@ -105,15 +111,27 @@ struct Agreement {
     far_from_edge: Vec<(i32, i32)>,
 }
 
-/// Renders `s` (one shadowed light) and compares its shadow factors
-/// (< 0.5: shadowed) with Embree's shadow rays, pixel by pixel.
+/// Renders `s` (one shadowed light, or no light and its environment
+/// map's sun shadowed) and compares the shadow factors (< 0.5: shadowed)
+/// with Embree's shadow rays, pixel by pixel.
 fn agreement(s: &LoadedScene, name: &str) -> Agreement {
     let target = Target::new(W, H).unwrap();
     let v = pool(2).install(|| visibility(&s.data, &target, &mut FrameStats::default()));
-    let px = pixel_shadows(&s.data, &target, &v, 0);
+    let (px, light) = match s.data.lights.first() {
+        Some(light) => (pixel_shadows(&s.data, &target, &v, 0), light.clone()),
+        None => {
+            let sun = s.data.env_map.as_ref().and_then(|m| m.sun_world());
+            let sun = sun.expect("a light or a sun");
+            let light = Light::Directional {
+                to_light: sun.to_light,
+                irradiance: sun.irradiance,
+            };
+            (pixel_sun_shadows(&s.data, &target, &v), light)
+        }
+    };
     assert_eq!(px.len(), (W * H) as usize, "{name}: a map for the light");
     let points: Vec<_> = px.iter().map(|p| p.map(|p| (p.p, p.n))).collect();
-    let exact = embree_classes(s, &points);
+    let exact = embree_classes(s, &light, &points);
     let (mut classified, mut agree, mut shadowed) = (0usize, 0usize, 0usize);
     let mut far_from_edge = Vec::new();
     for y in 0..H as i32 {
@@ -158,13 +176,18 @@ fn agreement(s: &LoadedScene, name: &str) -> Agreement {
 /// Agreement of the hard shadow map of the shadows scene's light `k` with
 /// Embree.
 fn crosscheck(k: usize, name: &str) {
-    let s = scene_with_light("shadows.toml", k, hard(2048));
+    expect_agreement(&scene_with_light("shadows.toml", k, hard(2048)), name);
+}
+
+/// At least 99.5 % of the pixels facing `s`'s one shadowed source agree
+/// with Embree, and at most 10 disagree away from shadow edges.
+fn expect_agreement(s: &LoadedScene, name: &str) {
     let Agreement {
         classified,
         shadowed,
         agree,
         far_from_edge,
-    } = agreement(&s, name);
+    } = agreement(s, name);
     let frac = agree as f64 / classified as f64;
     eprintln!(
         "{name}: {classified} pixels facing the light, {shadowed} shadowed by Embree, {:.3} % agree, {} mismatches farther than 2 px from an edge",
@@ -196,6 +219,32 @@ fn spot_hard_shadows_match_embree() {
 #[test]
 fn point_hard_shadows_match_embree() {
     crosscheck(2, "point");
+}
+
+/// The shadows scene without its lights, lit by the generated sky
+/// (`fixtures/env/sky.hdr`), whose sun is taken out of the map and
+/// shadowed with hard maps.
+#[test]
+fn the_skys_sun_hard_shadows_match_embree() {
+    let mut s = load_scene(&fixtures().join("scenes/shadows.toml")).expect("fixture scene");
+    let path = fixtures().join("env/sky.hdr");
+    let bytes = std::fs::read(&path).expect("fixture sky");
+    let settings = EnvSettings {
+        intensity: 1.0,
+        rotate_deg: 0.0,
+        visible: true,
+        method: IblMethod::SplitSum,
+    };
+    let map = load_env_map("sky.hdr", &bytes, &settings).expect("the sky loads");
+    assert!(map.sun_world().is_some(), "the sky's sun is taken out");
+    let mut parts = s.data.into_parts();
+    parts.lights.clear();
+    parts.shadows.clear();
+    parts.environment = None;
+    parts.env_map = Some(std::sync::Arc::new(map));
+    parts.sun_shadows = Some(hard(2048));
+    s.data = specula_raster::SceneData::new(parts).expect("valid scene");
+    expect_agreement(&s, "sun");
 }
 
 /// On a long ground plane seen from a low camera, a directional light's

@@ -74,7 +74,7 @@ impl Hatching {
             l += Rgb::from_f32(env);
         }
         if let Some(map) = env.env_map {
-            l += map.irradiance_over_pi(frag.n);
+            l += env.map_irradiance_over_pi(map, input, frag.n);
         }
         l.x * R::splat(LUMA[0]) + l.y * R::splat(LUMA[1]) + l.z * R::splat(LUMA[2])
     }

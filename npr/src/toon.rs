@@ -153,7 +153,7 @@ impl PacketShader for Toon {
             acc += base.mul_elem(Rgb::from_f32(l));
         }
         if let Some(map) = env.env_map {
-            acc += base.mul_elem(map.irradiance_over_pi(n));
+            acc += base.mul_elem(env.map_irradiance_over_pi(map, input, n));
         }
         if let Some(r) = &self.rim {
             let edge = (R::ONE - n.dot(frag.wo)).ge(R::splat(r.threshold as f64));

@@ -431,13 +431,27 @@ impl EnvMap {
     /// [`disk_cos_factor`], over π) included.
     #[inline(always)]
     pub fn irradiance_over_pi<R: Real>(&self, n: V3<R>) -> Rgb<R> {
+        self.irradiance_over_pi_shadowed(n, |_| R::ONE)
+    }
+
+    /// [`EnvMap::irradiance_over_pi`] with the sun's part times
+    /// `sun_visibility` of that part (its shadow factor).
+    #[inline(always)]
+    pub fn irradiance_over_pi_shadowed<R: Real>(
+        &self,
+        n: V3<R>,
+        sun_visibility: impl FnOnce(&Rgb<R>) -> R,
+    ) -> Rgb<R> {
         let sky = self.sky_irradiance_over_pi(n);
         match self.sun_world() {
             Some(sun) => {
                 let cos = n.dot(V3::from_f32(sun.to_light));
                 let k =
                     disk_cos_factor(cos, sun.sin2_radius) * R::splat(std::f64::consts::FRAC_1_PI);
-                V3::from_f32(sun.irradiance).mul_elem_add(V3::splat(k), sky)
+                let e = V3::from_f32(sun.irradiance);
+                // k × 1 is k: unshadowed, the same bits as without a factor.
+                let k = k * sun_visibility(&(e * k));
+                e.mul_elem_add(V3::splat(k), sky)
             }
             None => sky,
         }

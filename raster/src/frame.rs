@@ -184,7 +184,7 @@ pub fn visibility_into(
         out.vis.depth.fill(0.0);
         out.vis.id.fill(MISS);
     }
-    if scene.shadows.iter().any(Option::is_some) {
+    if scene.shadows.iter().any(Option::is_some) || scene.sun_shadows.is_some() {
         out.shadows.render(scene, &out.view, stats);
     } else if out.shadows.active().is_some() {
         out.shadows = ShadowMaps::default();

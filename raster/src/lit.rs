@@ -162,7 +162,10 @@ impl<R: Real> LightLoop<'_, '_, R> {
         }
         if let Some(map) = self.env.env_map {
             let env = match map.method {
-                IblMethod::SplitSum => env_split_sum(brdf, &prepared, frame, frag.wo, map),
+                IblMethod::SplitSum => {
+                    let sun = |part: &Rgb<R>| self.env.sun_visibility(self.input, part);
+                    env_split_sum(brdf, &prepared, frame, frag.wo, map, sun)
+                }
                 IblMethod::Reference { samples } => {
                     env_reference(brdf, self.maps, self.input, map, samples)
                 }
@@ -202,7 +205,8 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
 /// read along its lobe's dominant direction: [`prefilter_direction`]),
 /// plus the sun taken out of the map as a distant light through the
 /// model's BRDF: f(wi, wo) · E_sun toward the sun's centroid times the
-/// disk's clamped cosine ([`disk_cos_factor`]), at most L_sun · ρ(wo).
+/// disk's clamped cosine ([`disk_cos_factor`]), at most L_sun · ρ(wo),
+/// times `sun_visibility` of that part (its shadow factor).
 /// `frame` is the shading frame (world space, unit normal) and `wo` the
 /// unit view direction in world space.
 #[inline(always)]
@@ -212,6 +216,7 @@ pub fn env_split_sum<B: Brdf, R: Real>(
     frame: &ShadingFrame<R>,
     wo: V3<R>,
     map: &EnvMap,
+    sun_visibility: impl FnOnce(&Rgb<R>) -> R,
 ) -> Rgb<R> {
     let n = frame.n;
     let lobes = brdf.env_lobes(prepared);
@@ -245,7 +250,9 @@ pub fn env_split_sum<B: Brdf, R: Real>(
         // cut to the disk's radiance times the albedo (a mirror's exact
         // value when it reflects the disk).
         let cap = lobes.total().mul_elem(V3::from_f32(sun.radiance));
-        out += Rgb::new(part.x.min(cap.x), part.y.min(cap.y), part.z.min(cap.z));
+        let part = Rgb::new(part.x.min(cap.x), part.y.min(cap.y), part.z.min(cap.z));
+        // part × 1 is part: unshadowed, the same bits as without a factor.
+        out += part * sun_visibility(&part);
     }
     out
 }

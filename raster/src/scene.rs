@@ -46,6 +46,10 @@ pub struct SceneParts {
     /// An environment map lighting every surface (and seen where no
     /// surface is when it is visible); `environment` is then `None`.
     pub env_map: Option<std::sync::Arc<crate::envmap::EnvMap>>,
+    /// Shadow settings of the sun taken out of `env_map`
+    /// ([`crate::envmap::EnvMap::sun_world`]), shadowed as a directional
+    /// light; `None`: unshadowed. Needs a map with a sun.
+    pub sun_shadows: Option<ShadowSettings>,
     /// Radiance of pixels no triangle covers when there is no environment.
     pub background: [f32; 3],
     pub camera: Camera,
@@ -68,6 +72,7 @@ impl SceneParts {
             shadows: Vec::new(),
             environment: None,
             env_map: None,
+            sun_shadows: None,
             background,
             camera,
         }
@@ -108,6 +113,13 @@ pub enum SceneDataError {
     /// A light's shadow settings refused; `light` counts from 1.
     #[error("light {light}: {message}")]
     Shadow { light: usize, message: String },
+    /// Sun shadows without an environment map, or with a map that has no
+    /// sun taken out of it.
+    #[error("sun shadows need an environment map with a sun (a compact bright source taken out of the map)")]
+    SunShadowsWithoutSun,
+    /// The sun's shadow settings refused.
+    #[error("sun: {0}")]
+    SunShadow(String),
     /// A material whose shader cannot shade the scene's lights.
     #[error("material {name:?}: {message}")]
     Lights { name: String, message: String },
@@ -213,6 +225,12 @@ fn check(s: &SceneParts) -> Result<(), SceneDataError> {
                 message,
             })?;
         }
+    }
+    if let Some(settings) = &s.sun_shadows {
+        if s.env_map.as_ref().and_then(|m| m.sun_world()).is_none() {
+            return Err(SceneDataError::SunShadowsWithoutSun);
+        }
+        settings.check().map_err(SceneDataError::SunShadow)?;
     }
     for m in &s.materials {
         m.shader

@@ -78,6 +78,32 @@ pub struct ShadeEnv<'a> {
     pub shadows: Option<&'a crate::shadow::ShadowMaps>,
 }
 
+impl ShadeEnv<'_> {
+    /// The environment map's sun's shadow factor at the lanes of `input`,
+    /// for `part`, its part of the light there (1 where that is zero, or
+    /// when the sun has no shadow map).
+    #[inline(always)]
+    pub fn sun_visibility<R: Real>(&self, input: &ShadeInput<R>, part: &Rgb<R>) -> R {
+        match self.shadows.and_then(crate::shadow::ShadowMaps::sun) {
+            Some(s) => s.visibility_where(part, &input.frag.p, &input.frag.n, input.lanes),
+            None => R::ONE,
+        }
+    }
+
+    /// `map`'s [`EnvMap::irradiance_over_pi`](crate::envmap::EnvMap::irradiance_over_pi)
+    /// at unit world normal `n` of the lanes of `input`, its sun's part
+    /// shadowed ([`ShadeEnv::sun_visibility`]).
+    #[inline(always)]
+    pub fn map_irradiance_over_pi<R: Real>(
+        &self,
+        map: &crate::envmap::EnvMap,
+        input: &ShadeInput<R>,
+        n: specula_core::V3<R>,
+    ) -> Rgb<R> {
+        map.irradiance_over_pi_shadowed(n, |part| self.sun_visibility(input, part))
+    }
+}
+
 /// A shader written once over the lane type; see the module docs.
 pub trait PacketShader: Debug + Send + Sync + 'static {
     /// Outgoing radiance toward the eye in the lanes of `input.lanes`.

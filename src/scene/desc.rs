@@ -162,6 +162,36 @@ pub(super) struct EnvironmentDesc {
     /// Samples per pixel of `ibl = "reference"`.
     #[serde(default = "ibl_samples")]
     pub(super) ibl_samples: u32,
+    /// `[environment.sun]`: the shadow of the sun taken out of the map.
+    pub(super) sun: Option<SunDesc>,
+}
+
+/// `[environment.sun]`: the sun taken out of the map (envmap_sun.rs)
+/// casts a shadow, with a directional light's shadow fields.
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct SunDesc {
+    /// Shadows: "none", "hard", "pcf" or "pcss" (shadow.rs).
+    #[serde(default)]
+    pub(super) shadows: ShadowsDesc,
+    /// Shadow map side in texels (each cascade's).
+    #[serde(default = "shadow_map_size")]
+    pub(super) shadow_map_size: u32,
+    /// Depth offset toward the sun, in texels.
+    #[serde(default = "one")]
+    pub(super) bias: f32,
+    /// Offset along the surface normal, in texels.
+    #[serde(default = "one")]
+    pub(super) normal_bias: f32,
+    /// PCF half-width in texels.
+    #[serde(default = "filter_radius")]
+    pub(super) filter_radius: f32,
+    /// PCSS: the tangent of the sun's angular diameter; by default the
+    /// sun's own, from the solid angle taken out of the map.
+    pub(super) light_size: Option<f32>,
+    /// Shadow maps along the view's depth, 1 to 4 (shadow.rs).
+    #[serde(default = "cascades")]
+    pub(super) cascades: u32,
 }
 
 /// How an environment map lights surfaces.

@@ -138,7 +138,10 @@ fn build_scene(
     if let Some(e) = &desc.environment {
         match build_environment(e, read)? {
             Environment::Uniform(u) => scene.data.environment = Some(u),
-            Environment::Map(m) => scene.data.env_map = Some(m),
+            Environment::Map { map, sun_shadows } => {
+                scene.data.env_map = Some(map);
+                scene.data.sun_shadows = sun_shadows;
+            }
         }
     }
     if scene.data.lights.is_empty()

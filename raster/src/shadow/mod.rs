@@ -1,7 +1,10 @@
 //! Shadow maps: per shadowed light, depth-only passes of the scene through
 //! the light's view (the camera passes' setup, binning and scan keeping
 //! depth alone, `depth_pass.rs`), and the per-lane lookups the light loop
-//! multiplies a light's contribution by.
+//! multiplies a light's contribution by. The sun taken out of an
+//! environment map (`envmap_sun.rs`) is shadowed as the directional light
+//! it is shaded as; its factor multiplies the sun's part of the map's
+//! light alone (the sky stays unshadowed).
 //!
 //! A directional light gets one orthographic map, fitted across its
 //! direction to the part of the scene's bounds the camera can see (the
@@ -34,7 +37,7 @@ mod settings;
 pub use crate::depth_pass::DepthSetup;
 pub use cascades::{cascade_splits, CASCADE_LAMBDA, MAX_CASCADES};
 pub use passes::polygon_light_size;
-pub use pixels::{pixel_shadows, PixelShadow};
+pub use pixels::{pixel_shadows, pixel_sun_shadows, PixelShadow};
 pub use settings::{ShadowFilter, ShadowSettings, MAX_MAP_SIZE};
 
 use crate::camera::View;
@@ -42,6 +45,7 @@ use crate::frame::{FrameStats, Visibility};
 use crate::scene::SceneData;
 use glam::{Mat4, Vec3};
 use passes::{light_faces, render_face, Bounds};
+use specula_core::light::Light;
 
 /// One shadow map: a light's view and the depth it saw.
 #[derive(Clone, Debug, Default)]
@@ -113,6 +117,8 @@ enum Pick {
 #[derive(Default)]
 pub struct ShadowMaps {
     lights: Vec<Option<LightShadow>>,
+    /// The environment map's sun's, when the scene shadows it.
+    sun: Option<LightShadow>,
     any: bool,
 }
 
@@ -125,7 +131,7 @@ impl std::fmt::Debug for ShadowMaps {
 }
 
 impl ShadowMaps {
-    /// The maps when some light has shadows.
+    /// The maps when some light (or the sun) has shadows.
     pub fn active(&self) -> Option<&ShadowMaps> {
         self.any.then_some(self)
     }
@@ -135,10 +141,17 @@ impl ShadowMaps {
         self.lights.get(k).and_then(Option::as_ref)
     }
 
+    /// The environment map's sun's maps, if the scene shadows it
+    /// ([`SceneData::sun_shadows`](crate::scene::SceneParts::sun_shadows)).
+    pub fn sun(&self) -> Option<&LightShadow> {
+        self.sun.as_ref()
+    }
+
     /// Depth passes rendered this frame.
     pub fn passes(&self) -> u32 {
         self.lights
             .iter()
+            .chain(std::iter::once(&self.sun))
             .flatten()
             .map(|l| l.faces.len() as u32)
             .sum()
@@ -163,37 +176,70 @@ impl ShadowMaps {
         self.any = false;
         let Some(bounds) = Bounds::of(scene) else {
             self.lights.iter_mut().for_each(|l| *l = None);
+            self.sun = None;
             return;
         };
         for (k, light) in scene.lights.iter().enumerate() {
-            let Some(settings) = scene.shadows.get(k).copied().flatten() else {
-                self.lights[k] = None;
-                continue;
-            };
-            let Some((faces, pick)) =
-                light_faces(&settings, light, &bounds, view, scene.camera.near)
-            else {
-                self.lights[k] = None;
-                continue;
-            };
-            let ls = self.lights[k].get_or_insert_with(LightShadow::default);
-            ls.settings = settings;
-            ls.pick = pick;
-            // The previous frame's depth buffers are refilled, not reallocated.
-            let mut faces = faces;
-            for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
-                new.depth = old.depth;
-                new.blocks = old.blocks;
+            let slot = &mut self.lights[k];
+            match scene.shadows.get(k).copied().flatten() {
+                Some(settings) => {
+                    self.any |=
+                        render_light(slot, settings, light, &bounds, view, scene, setup, stats)
+                }
+                None => *slot = None,
             }
-            let block_side = settings.pcf_block_side();
-            ls.faces = faces;
-            ls.passes.resize_with(ls.faces.len(), || None);
-            for (face, pass) in ls.faces.iter_mut().zip(&mut ls.passes) {
-                render_face(scene, face, pass, block_side, setup, stats);
+        }
+        // The environment's sun, as the directional light it is shaded as.
+        let sun = scene.env_map.as_ref().and_then(|m| m.sun_world());
+        match scene.sun_shadows.zip(sun) {
+            Some((settings, sun)) => {
+                let light = Light::Directional {
+                    to_light: sun.to_light,
+                    irradiance: sun.irradiance,
+                };
+                let slot = &mut self.sun;
+                self.any |=
+                    render_light(slot, settings, &light, &bounds, view, scene, setup, stats);
             }
-            self.any = true;
+            None => self.sun = None,
         }
     }
+}
+
+/// Renders the maps of `light` shadowed with `settings` into `slot`
+/// (reusing the buffers it holds) when some map covers the scene;
+/// otherwise empties `slot`. Whether `slot` holds maps.
+#[allow(clippy::too_many_arguments)]
+fn render_light(
+    slot: &mut Option<LightShadow>,
+    settings: ShadowSettings,
+    light: &Light,
+    bounds: &Bounds,
+    view: &View,
+    scene: &SceneData,
+    setup: DepthSetup,
+    stats: &mut FrameStats,
+) -> bool {
+    let Some((faces, pick)) = light_faces(&settings, light, bounds, view, scene.camera.near) else {
+        *slot = None;
+        return false;
+    };
+    let ls = slot.get_or_insert_with(LightShadow::default);
+    ls.settings = settings;
+    ls.pick = pick;
+    // The previous frame's depth buffers are refilled, not reallocated.
+    let mut faces = faces;
+    for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
+        new.depth = old.depth;
+        new.blocks = old.blocks;
+    }
+    let block_side = settings.pcf_block_side();
+    ls.faces = faces;
+    ls.passes.resize_with(ls.faces.len(), || None);
+    for (face, pass) in ls.faces.iter_mut().zip(&mut ls.passes) {
+        render_face(scene, face, pass, block_side, setup, stats);
+    }
+    true
 }
 
 impl LightShadow {

@@ -1,7 +1,8 @@
-//! Every drawn pixel's surface point, normal and one light's shadow
-//! factor, as the shading pass sees them: for tests and tools that
-//! compare the maps with exact visibility.
+//! Every drawn pixel's surface point, normal and one light's (or the
+//! environment's sun's) shadow factor, as the shading pass sees them: for
+//! tests and tools that compare the maps with exact visibility.
 
+use super::LightShadow;
 use crate::frame::Visibility;
 use crate::scene::SceneData;
 use crate::target::Target;
@@ -14,7 +15,7 @@ pub struct PixelShadow {
     /// World position and unit shading normal at the pixel centre.
     pub p: Vec3,
     pub n: Vec3,
-    /// Light k's shadow factor (what the light loop multiplies by).
+    /// The light's shadow factor (what the light loop multiplies by).
     pub factor: f32,
 }
 
@@ -29,9 +30,32 @@ pub fn pixel_shadows(
     v: &Visibility,
     k: usize,
 ) -> Vec<Option<PixelShadow>> {
-    let Some(light) = v.shadows.light(k) else {
-        return Vec::new();
-    };
+    match v.shadows.light(k) {
+        Some(light) => pixels_of(scene, target, v, light),
+        None => Vec::new(),
+    }
+}
+
+/// [`pixel_shadows`] for the sun taken out of the scene's environment map;
+/// empty when the sun has no shadow map in `v`.
+pub fn pixel_sun_shadows(
+    scene: &SceneData,
+    target: &Target,
+    v: &Visibility,
+) -> Vec<Option<PixelShadow>> {
+    match v.shadows.sun() {
+        Some(sun) => pixels_of(scene, target, v, sun),
+        None => Vec::new(),
+    }
+}
+
+/// Every pixel's surface and `light`'s factor there.
+fn pixels_of(
+    scene: &SceneData,
+    target: &Target,
+    v: &Visibility,
+    light: &LightShadow,
+) -> Vec<Option<PixelShadow>> {
     let ctx = crate::resolve::ResolveContext::new(scene, &v.planes, &v.view);
     let mut out = Vec::with_capacity(target.pixel_count());
     for y in 0..target.height {

@@ -1,15 +1,22 @@
 //! `[environment]`: a uniform radiance or an environment map file, with
-//! the map's settings checked.
+//! the map's settings checked, and `[environment.sun]`, the shadow of the
+//! sun taken out of the map.
 
-use super::super::desc::{EnvironmentDesc, IblDesc};
+use super::super::desc::{EnvironmentDesc, IblDesc, ShadowsDesc, SunDesc};
 use super::BuildError;
 use crate::checks;
+use specula_raster::envmap::EnvMap;
+use specula_raster::shadow::{ShadowFilter, ShadowSettings};
 use std::path::Path;
 
-/// What `[environment]` gives: a uniform radiance or a map.
+/// What `[environment]` gives: a uniform radiance or a map, with its
+/// sun's shadow settings (`None`: unshadowed).
 pub(in crate::scene) enum Environment {
     Uniform([f32; 3]),
-    Map(std::sync::Arc<specula_raster::envmap::EnvMap>),
+    Map {
+        map: std::sync::Arc<EnvMap>,
+        sun_shadows: Option<ShadowSettings>,
+    },
 }
 
 /// `[environment]`: exactly one of `uniform` and `map`, the map's fields
@@ -21,6 +28,11 @@ pub(in crate::scene) fn build_environment(
     match (&e.uniform, &e.map) {
         (Some(u), None) => {
             checks::radiometric("environment.uniform", *u)?;
+            if e.sun.is_some() {
+                return Err(sun_error(
+                    "shadows: a uniform environment has no sun; [environment.sun] needs map = \"file.hdr\"",
+                ));
+            }
             Ok(Environment::Uniform(*u))
         }
         (None, Some(path)) => {
@@ -37,7 +49,14 @@ pub(in crate::scene) fn build_environment(
                         source,
                     }
                 })?;
-            Ok(Environment::Map(std::sync::Arc::new(map)))
+            let sun_shadows = match &e.sun {
+                Some(sun) => build_sun_shadows(sun, path, &map)?,
+                None => None,
+            };
+            Ok(Environment::Map {
+                map: std::sync::Arc::new(map),
+                sun_shadows,
+            })
         }
         (Some(_), Some(_)) => Err(BuildError::EnvironmentBoth),
         (None, None) => Err(BuildError::EnvironmentNeither),
@@ -67,4 +86,60 @@ fn env_settings(e: &EnvironmentDesc) -> Result<crate::envmap_file::EnvSettings, 
             },
         },
     })
+}
+
+/// `[environment.sun]`'s shadow settings for `map` (read from `path`),
+/// checked whether or not shadows are on; `None` with shadows "none".
+fn build_sun_shadows(
+    d: &SunDesc,
+    path: &str,
+    map: &EnvMap,
+) -> Result<Option<ShadowSettings>, BuildError> {
+    let filter = match d.shadows {
+        ShadowsDesc::None | ShadowsDesc::Hard => ShadowFilter::Hard,
+        ShadowsDesc::Pcf => ShadowFilter::Pcf,
+        ShadowsDesc::Pcss => ShadowFilter::Pcss,
+    };
+    let sun = map.sun_world();
+    let mut s = ShadowSettings {
+        filter,
+        map_size: d.shadow_map_size,
+        bias: d.bias,
+        normal_bias: d.normal_bias,
+        filter_radius: d.filter_radius,
+        light_size: d.light_size.unwrap_or(0.0),
+        cascades: d.cascades,
+    };
+    s.check().map_err(sun_error)?;
+    if d.shadows == ShadowsDesc::None {
+        return Ok(None);
+    }
+    let Some(sun) = sun else {
+        return Err(sun_error(format!(
+            "shadows: {path} has no sun to shadow (no compact, bright source is taken out of it; docs/accuracy.md, \"Environment maps\")"
+        )));
+    };
+    if d.light_size.is_none() {
+        s.light_size = sun_light_size(sun.sin2_radius);
+    }
+    let light = specula_core::light::Light::Directional {
+        to_light: sun.to_light,
+        irradiance: sun.irradiance,
+    };
+    crate::memory::reserve("the sun's shadow maps", s.bytes(&light)).map_err(BuildError::Memory)?;
+    Ok(Some(s))
+}
+
+/// A directional light's PCSS `light_size` for a disk of angular radius
+/// ρ (given sin² ρ): the tangent of its angular diameter, tan 2ρ.
+pub(in crate::scene) fn sun_light_size(sin2_radius: f32) -> f32 {
+    let rho = (sin2_radius.clamp(0.0, 1.0) as f64).sqrt().asin();
+    (2.0 * rho).tan() as f32
+}
+
+fn sun_error(message: impl Into<String>) -> BuildError {
+    BuildError::Table {
+        table: "environment.sun".into(),
+        message: message.into(),
+    }
 }

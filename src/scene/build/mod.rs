@@ -21,7 +21,7 @@ mod shadows;
 mod shapes;
 
 pub(super) use camera::build_camera;
-pub(super) use environment::{build_environment, Environment};
+pub(super) use environment::{build_environment, sun_light_size, Environment};
 pub(super) use error::BuildError;
 use materials::Materials;
 pub(super) use output::check_output;
