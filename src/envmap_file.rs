@@ -11,7 +11,7 @@
 //! - a truncated or corrupt file is the decoder's error, with the file
 //!   named;
 //! - texels: NaN and negative values become 0, values above
-//!   [`specula_raster::envmap::MAX_TEXEL`] (and +inf) become that
+//!   [`specula_raster::equirect::MAX_TEXEL`] (and +inf) become that
 //!   (envmap.rs), so every derived sum stays finite.
 //!
 //! The derived data (the sun taken out of the map, the prefiltered chain
@@ -19,7 +19,8 @@
 //! is kept in the table cache (table_cache.rs), keyed by a hash of the file's bytes and
 //! the settings it depends on.
 
-use specula_raster::envmap::{EnvMap, Equirect, IblMethod, PREFILTER_LEVELS};
+use specula_raster::envmap::{EnvMap, IblMethod, PREFILTER_LEVELS};
+use specula_raster::equirect::Equirect;
 use std::io::Cursor;
 
 /// An environment map file refused; each message starts with the name

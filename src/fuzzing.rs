@@ -171,7 +171,8 @@ translate = [0.9, 0.0, 0.0]
 /// Checks that every texel is finite and within the documented clamp,
 /// that the derived data is finite, and that every pixel is finite.
 pub fn envmap(data: &[u8]) -> Result<(), String> {
-    use specula_raster::envmap::{IblMethod, MAX_TEXEL};
+    use specula_raster::envmap::IblMethod;
+    use specula_raster::equirect::MAX_TEXEL;
     fresh_budget();
     let settings = crate::envmap_file::EnvSettings {
         intensity: 1.0,
@@ -216,6 +217,14 @@ pub fn envmap(data: &[u8]) -> Result<(), String> {
         .map_err(|e| e.to_string())?;
     let mut parts = scene.data.into_parts();
     parts.environment = None;
+    // A sun found in the map casts PCF shadows: its direction, whatever
+    // the map, reaches the shadow map's fit.
+    parts.sun_shadows = map
+        .sun_world()
+        .map(|_| specula_raster::shadow::ShadowSettings {
+            filter: specula_raster::shadow::ShadowFilter::Pcf,
+            ..Default::default()
+        });
     parts.env_map = Some(std::sync::Arc::new(map.clone()));
     scene.data = SceneData::new(parts).map_err(|e| e.to_string())?;
     render_checked(&scene)?;

@@ -15,7 +15,7 @@
 //! (8-bit mantissas), so the written `.hdr` file holds these values to
 //! the bit.
 
-use specula_raster::envmap::{uv_to_dir, Equirect};
+use specula_raster::equirect::{uv_to_dir, Equirect};
 
 /// Angular radius of the sun disk.
 pub const SUN_RADIUS_DEG: f64 = 2.0;

@@ -8,7 +8,8 @@ mod common;
 use specula::envmap_file::{decode_equirect, load_env_map, EnvMapError, EnvSettings};
 use specula::render::{render_scene, RenderSettings};
 use specula::scene::{load_scene_str, LoadedScene};
-use specula_raster::envmap::{IblMethod, MAX_TEXEL};
+use specula_raster::envmap::IblMethod;
+use specula_raster::equirect::MAX_TEXEL;
 use std::io::Cursor;
 use std::path::Path;
 

@@ -10,8 +10,9 @@
 
 use specula::material_desc::{MaterialDesc, Shading, Tables};
 use specula_core::{Brdf, BrdfVisitor, EnvLobes, Model, ShadingFrame, V3};
-use specula_raster::envmap::{EnvMap, Equirect, IblMethod};
-use specula_raster::envmap_sample::reference_radiance;
+use specula_raster::envmap::{EnvMap, IblMethod};
+use specula_raster::envmap_reference::reference_radiance;
+use specula_raster::equirect::Equirect;
 
 fn model(json: &str) -> Model {
     let desc: MaterialDesc = serde_json::from_str(json).unwrap();
@@ -677,7 +678,7 @@ fn blob_map(method: IblMethod) -> EnvMap {
     let texels = (0..h)
         .flat_map(|j| (0..w).map(move |i| (i, j)))
         .map(|(i, j)| {
-            let d = specula_raster::envmap::uv_to_dir(
+            let d = specula_raster::equirect::uv_to_dir(
                 (i as f64 + 0.5) / w as f64,
                 (j as f64 + 0.5) / h as f64,
             );

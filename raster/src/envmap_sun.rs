@@ -29,7 +29,7 @@
 //!    map and the sun add up to the original; the visible background and
 //!    the Monte Carlo reference keep the original.
 
-use crate::envmap::{luminance, uv_to_dir, Equirect};
+use crate::equirect::{luminance, uv_to_dir, Equirect};
 
 /// T is at least this many times the median luminance.
 pub const MEDIAN_RATIO: f32 = 64.0;

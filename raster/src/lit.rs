@@ -13,7 +13,7 @@
 //! ([`ParamMaps::frame`]).
 
 use crate::envmap::{disk_cos_factor, EnvMap, IblMethod};
-use crate::envmap_sample::{reference_radiance, seed_of};
+use crate::envmap_reference::{reference_radiance, seed_of};
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
 use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
@@ -279,7 +279,7 @@ pub fn prefilter_direction<R: Real>(n: V3<R>, wo: V3<R>, roughness: R) -> V3<R> 
 }
 
 /// The environment map's light by the Monte Carlo reference
-/// (envmap_sample.rs), lane by lane in f64. Out of line: it is the slow
+/// (envmap_reference.rs), lane by lane in f64. Out of line: it is the slow
 /// path by design.
 #[inline(never)]
 #[cold]

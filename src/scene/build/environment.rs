@@ -101,13 +101,15 @@ fn build_sun_shadows(
         ShadowsDesc::Pcss => ShadowFilter::Pcss,
     };
     let sun = map.sun_world();
-    let mut s = ShadowSettings {
+    // The sun's own size unless given (any in range where there is none).
+    let own_size = sun.map_or(0.0, |s| sun_light_size(s.sin2_radius));
+    let s = ShadowSettings {
         filter,
         map_size: d.shadow_map_size,
         bias: d.bias,
         normal_bias: d.normal_bias,
         filter_radius: d.filter_radius,
-        light_size: d.light_size.unwrap_or(0.0),
+        light_size: d.light_size.unwrap_or(own_size),
         cascades: d.cascades,
     };
     s.check().map_err(sun_error)?;
@@ -119,9 +121,6 @@ fn build_sun_shadows(
             "shadows: {path} has no sun to shadow (no compact, bright source is taken out of it; docs/accuracy.md, \"Environment maps\")"
         )));
     };
-    if d.light_size.is_none() {
-        s.light_size = sun_light_size(sun.sin2_radius);
-    }
     let light = specula_core::light::Light::Directional {
         to_light: sun.to_light,
         irradiance: sun.irradiance,
