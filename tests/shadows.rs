@@ -12,6 +12,26 @@ use specula_raster::{visibility, FrameStats, Target};
 
 const SIDE: u32 = 256;
 
+/// The camera and output of the floor scenes, and the floor (12 × 12,
+/// facing +Y, material "floor"), seen from above at an angle at
+/// `SIDE` × `SIDE` (256).
+const FLOOR_VIEW: &str = r#"
+[camera]
+eye = [-1.0, 5.0, 3.0]
+target = [-1.0, 0.0, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 45.0
+near = 0.1
+far = 50.0
+[output]
+width = 256
+height = 256
+[[mesh]]
+plane = { size = [12.0, 12.0] }
+material = "floor"
+"#;
+const _: () = assert!(SIDE == 256, "FLOOR_VIEW's output size is SIDE");
+
 /// A floor (12 × 12, facing +Y), optionally a unit box standing on it at
 /// the origin, under one directional light `elevation` degrees above the
 /// horizon, seen from above at an angle.
@@ -25,20 +45,7 @@ fn floor_scene(elevation: f64, with_box: bool, filter: &str) -> LoadedScene {
         ""
     };
     let text = format!(
-        r#"
-[camera]
-eye = [-1.0, 5.0, 3.0]
-target = [-1.0, 0.0, 0.0]
-up = [0.0, 1.0, 0.0]
-fov_y = 45.0
-near = 0.1
-far = 50.0
-[output]
-width = {SIDE}
-height = {SIDE}
-[[mesh]]
-plane = {{ size = [12.0, 12.0] }}
-material = "floor"
+        r#"{FLOOR_VIEW}
 {cube}
 [materials.floor]
 model = "lambert"
@@ -628,23 +635,10 @@ fn depth_only_maps_match_the_full_setup_bit_for_bit() {
 fn sky_scene(floor: &str, sun: Option<&str>) -> LoadedScene {
     let sun = sun.map_or(String::new(), |s| format!("[environment.sun]\n{s}\n"));
     let text = format!(
-        r#"
-[camera]
-eye = [-1.0, 5.0, 3.0]
-target = [-1.0, 0.0, 0.0]
-up = [0.0, 1.0, 0.0]
-fov_y = 45.0
-near = 0.1
-far = 50.0
-[output]
-width = {SIDE}
-height = {SIDE}
+        r#"{FLOOR_VIEW}
 [environment]
 map = "sky.hdr"
 {sun}
-[[mesh]]
-plane = {{ size = [12.0, 12.0] }}
-material = "floor"
 [[mesh]]
 cube = {{ size = 1.0 }}
 translate = [0.0, 0.5, 0.0]

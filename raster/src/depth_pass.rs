@@ -19,7 +19,7 @@
 use crate::bin::{BinnedChunk, CHUNK};
 use crate::camera::View;
 use crate::clip::GuardBand;
-use crate::frame::{geometry_pass, ms_since, FrameStats, Visibility};
+use crate::frame::{count_setup_sweep, geometry_pass, ms_since, FrameStats, Visibility};
 use crate::geometry::{Cull, FrameContext, GeometryPass};
 use crate::scan::{rasterize_tile_depth, AlphaScan};
 use crate::scene::SceneData;
@@ -202,15 +202,7 @@ fn depth_only_pass(
             (counts, ms_since(tb))
         })
         .collect();
-    let total = ms_since(t);
-    let busy: f64 = set_up.iter().map(|(_, b)| b).sum();
-    let bin = (busy / rayon::current_num_threads() as f64).min(total);
-    stats.times.setup += total - bin;
-    stats.times.bin += bin;
-    for ((c, _), chunk) in set_up.iter().zip(chunks.iter()) {
-        stats.counts.add(c);
-        stats.raster_triangles += chunk.tris.len() as u64;
-    }
+    count_setup_sweep(stats, t, &set_up, chunks);
     let chunks = &*chunks;
 
     let t = Instant::now();

@@ -111,6 +111,27 @@ pub(crate) fn ms_since(t: Instant) -> f64 {
     t.elapsed().as_secs_f64() * 1e3
 }
 
+/// Adds to `stats` a setup-and-bin sweep that started at `t`: each
+/// chunk's setup counts and binning time (`set_up`) and its screen
+/// triangles (`chunks`). The sweep's wall time is split: binning's share
+/// is the chunks' binning time (thread time) over the worker count.
+pub(crate) fn count_setup_sweep(
+    stats: &mut FrameStats,
+    t: Instant,
+    set_up: &[(SetupCounts, f64)],
+    chunks: &[BinnedChunk],
+) {
+    let total = ms_since(t);
+    let busy: f64 = set_up.iter().map(|(_, b)| b).sum();
+    let bin = (busy / rayon::current_num_threads() as f64).min(total);
+    stats.times.setup += total - bin;
+    stats.times.bin += bin;
+    for ((c, _), chunk) in set_up.iter().zip(chunks) {
+        stats.counts.add(c);
+        stats.raster_triangles += chunk.tris.len() as u64;
+    }
+}
+
 /// Every geometry pass of the scene into one visibility buffer, in the
 /// calling rayon pool.
 pub fn visibility(scene: &SceneData, target: &Target, stats: &mut FrameStats) -> Visibility {
@@ -329,17 +350,7 @@ pub(crate) fn geometry_pass(
             (counts, ms_since(tb))
         })
         .collect();
-    let total = ms_since(t);
-    // The sweep's wall time split: binning's share is the chunks' binning
-    // time (thread time) over the worker count.
-    let busy: f64 = set_up.iter().map(|(_, b)| b).sum();
-    let bin = (busy / rayon::current_num_threads() as f64).min(total);
-    stats.times.setup += total - bin;
-    stats.times.bin += bin;
-    for ((c, _), chunk) in set_up.iter().zip(chunks.iter()) {
-        stats.counts.add(c);
-        stats.raster_triangles += chunk.tris.len() as u64;
-    }
+    count_setup_sweep(stats, t, &set_up, chunks);
     let chunks = &*chunks;
 
     let t = Instant::now();
