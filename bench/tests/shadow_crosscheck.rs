@@ -121,11 +121,7 @@ fn agreement(s: &LoadedScene, name: &str) -> Agreement {
         Some(light) => (pixel_shadows(&s.data, &target, &v, 0), light.clone()),
         None => {
             let sun = s.data.env_map.as_ref().and_then(|m| m.sun_world());
-            let sun = sun.expect("a light or a sun");
-            let light = Light::Directional {
-                to_light: sun.to_light,
-                irradiance: sun.irradiance,
-            };
+            let light = sun.expect("a light or a sun").directional();
             (pixel_sun_shadows(&s.data, &target, &v), light)
         }
     };

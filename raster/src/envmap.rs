@@ -127,6 +127,17 @@ pub struct SunLight {
     pub sin2_radius: f32,
 }
 
+impl SunLight {
+    /// The directional light toward the sun's centroid, of its
+    /// irradiance: what its shadow maps are fitted to.
+    pub fn directional(&self) -> specula_core::light::Light {
+        specula_core::light::Light::Directional {
+            to_light: self.to_light,
+            irradiance: self.irradiance,
+        }
+    }
+}
+
 /// The clamped cosine of a uniform disk of angular radius ρ whose centre
 /// is at cos θ from the normal, as a factor of its irradiance when it
 /// faces the surface: ∫disk max(0, cos) dω / (π sin²ρ). It is max(0, cos θ)

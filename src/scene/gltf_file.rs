@@ -377,16 +377,12 @@ pub fn load_gltf_scene(path: &Path, opts: &GltfOptions) -> Result<LoadedScene, S
         // A sun taken out of the map casts PCF shadows, as the file's
         // punctual lights do.
         if let Some(sun) = map.sun_world() {
-            let light = Light::Directional {
-                to_light: sun.to_light,
-                irradiance: sun.irradiance,
-            };
             let pcf = specula_raster::shadow::ShadowSettings {
                 filter: specula_raster::shadow::ShadowFilter::Pcf,
                 light_size: super::build::sun_light_size(sun.sin2_radius),
                 ..Default::default()
             };
-            crate::memory::reserve("the sun's shadow maps", pcf.bytes(&light))
+            crate::memory::reserve("the sun's shadow maps", pcf.bytes(&sun.directional()))
                 .map_err(|e| err(e.to_string()))?;
             parts.sun_shadows = Some(pcf);
         }

@@ -193,10 +193,7 @@ impl ShadowMaps {
         let sun = scene.env_map.as_ref().and_then(|m| m.sun_world());
         match scene.sun_shadows.zip(sun) {
             Some((settings, sun)) => {
-                let light = Light::Directional {
-                    to_light: sun.to_light,
-                    irradiance: sun.irradiance,
-                };
+                let light = sun.directional();
                 let slot = &mut self.sun;
                 self.any |=
                     render_light(slot, settings, &light, &bounds, view, scene, setup, stats);

@@ -121,11 +121,8 @@ fn build_sun_shadows(
             "shadows: {path} has no sun to shadow (no compact, bright source is taken out of it; docs/accuracy.md, \"Environment maps\")"
         )));
     };
-    let light = specula_core::light::Light::Directional {
-        to_light: sun.to_light,
-        irradiance: sun.irradiance,
-    };
-    crate::memory::reserve("the sun's shadow maps", s.bytes(&light)).map_err(BuildError::Memory)?;
+    crate::memory::reserve("the sun's shadow maps", s.bytes(&sun.directional()))
+        .map_err(BuildError::Memory)?;
     Ok(Some(s))
 }
 
