@@ -137,7 +137,7 @@ impl<R: Real> LightLoop<'_, '_, R> {
         let mut acc = Rgb::zero();
         let mut rest = self.env.lights;
         if let Some(shadows) = self.env.shadows {
-            acc = shadowed_lights(brdf, self.maps, self.input, rest, shadows);
+            acc = shadowed_lights(brdf, &prepared, frame, self.maps, self.input, rest, shadows);
             rest = &[];
         }
         while let [light, tail @ ..] = rest {
@@ -485,21 +485,21 @@ fn lights_from_polygon<B: Brdf, R: Real>(
 
 /// The reflected radiance of `lights` when some have shadow maps: each
 /// light's part times its shadow factor at the packet's points (a polygon
-/// light's part is its unshadowed integral). Out of line, like [`lights_from_polygon`],
-/// so scenes without shadows keep the light loop as it was; the
-/// parameters, the frame and the prepared view are made again here.
+/// light's part is its unshadowed integral), with the packet's `prepared`
+/// view in its local `frame`. Out of line, like [`lights_from_polygon`],
+/// so scenes without shadows keep the light loop as it was.
 #[inline(never)]
-#[cold]
+#[allow(clippy::too_many_arguments)]
 fn shadowed_lights<B: Brdf, R: Real>(
     brdf: &B,
+    prepared: &B::Prepared<R>,
+    frame: &ShadingFrame<R>,
     maps: &ParamMaps,
     input: &ShadeInput<R>,
     lights: &[Light],
     shadows: &ShadowMaps,
 ) -> Rgb<R> {
-    let (frag, frame) = (input.frag, &maps.frame(input));
-    let (_, pixel) = pixel_at(brdf, maps, input, frame);
-    let prepared = &brdf.prepare_with(&pixel, frame.to_local(frag.wo));
+    let frag = input.frag;
     let mut acc = Rgb::zero();
     let mut polygons = false;
     for (k, light) in lights.iter().enumerate() {
