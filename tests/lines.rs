@@ -423,10 +423,10 @@ fn an_extrusion_stage_moved_between_views_matches_a_fresh_one() {
         let frame = FrameContext { view, ssaa: *ssaa };
         for _ in 0..2 {
             out.clear();
-            moving.clip_positions(&frame, data, &mut out);
+            moving.clip_positions(&frame, &data.mesh(), &mut out);
             let mut fresh = Extrude::new(data, 2.0);
             let mut want = Vec::new();
-            fresh.clip_positions(&frame, data, &mut want);
+            fresh.clip_positions(&frame, &data.mesh(), &mut want);
             assert_eq!(out.len(), data.positions.len());
             assert!(bits(&out) == bits(&want), "view {i}");
         }
@@ -1317,7 +1317,7 @@ impl specula_raster::VertexStage for Shortcuts {
     fn clip_positions(
         &mut self,
         frame: &FrameContext,
-        scene: &specula_raster::SceneData,
+        scene: &specula_raster::SceneMesh,
         out: &mut Vec<[f32; 4]>,
     ) {
         self.inner.clip_positions(frame, scene, out)
@@ -1395,7 +1395,7 @@ width = 1.5
             ssaa: 1,
         };
         let mut stage = open[0].vertex.instance();
-        stage.clip_positions(&frame, data, &mut Vec::new());
+        stage.clip_positions(&frame, &data.mesh(), &mut Vec::new());
         assert_eq!(
             stage.hidden(open[0].triangles.clone()),
             off_screen,

@@ -9,8 +9,8 @@ use common::scene;
 use specula::render::{render_scene, RenderSettings};
 use specula_raster::frame::{render, visibility, FrameStats, ShadePath};
 use specula_raster::{
-    Cull, FrameContext, GeometryPass, Material, SceneData, SceneDataError, Target, Unlit,
-    VertexStage, MISS,
+    Cull, FrameContext, GeometryPass, Material, SceneData, SceneDataError, SceneMesh, Target,
+    Unlit, VertexStage, MISS,
 };
 use std::sync::Arc;
 
@@ -77,13 +77,13 @@ impl VertexStage for Inflate {
         Box::new(Inflate(self.0))
     }
 
-    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneMesh, out: &mut Vec<[f32; 4]>) {
         let view = frame.view;
         out.extend(
             scene
                 .positions
                 .iter()
-                .zip(&scene.normals)
+                .zip(scene.normals)
                 .map(|(p, n)| (view.view_proj * (*p + *n * self.0).extend(1.0)).to_array()),
         );
     }

@@ -7,7 +7,7 @@ mod common;
 
 use glam::Vec3;
 use specula::scene::LoadedScene;
-use specula_raster::shadow::pixel_shadows;
+use specula_raster::shadow_pass::pixel_shadows;
 use specula_raster::{visibility, FrameStats, Target};
 
 const SIDE: u32 = 256;
@@ -572,7 +572,9 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
 /// frame before.
 #[test]
 fn depth_only_maps_match_the_full_setup_bit_for_bit() {
-    use specula_raster::shadow::{DepthSetup, ShadowMaps};
+    use specula_raster::shadow::ShadowMaps;
+    use specula_raster::shadow_pass::{render_maps, DepthSetup};
+    use specula_raster::ShadowBuffers;
     let cases = [
         ("shadows.toml", None),
         ("shadows.toml", Some(3)),
@@ -592,14 +594,16 @@ fn depth_only_maps_match_the_full_setup_bit_for_bit() {
             }
             s.data = specula_raster::SceneData::new(parts).expect("valid scene");
             let view = s.data.camera.view(320, 180);
-            let render = |maps: &mut ShadowMaps, setup| {
-                maps.render_with(&s.data, &view, setup, &mut FrameStats::default());
+            let render = |(maps, buffers): &mut (ShadowMaps, ShadowBuffers), setup| {
+                let stats = &mut FrameStats::default();
+                render_maps(&s.data, &view, setup, maps, buffers, stats);
             };
-            let mut full = ShadowMaps::default();
+            let mut full = Default::default();
             render(&mut full, DepthSetup::Full);
-            let mut fast = ShadowMaps::default();
+            let (full, mut fast) = (full.0, Default::default());
             for frame in 0..2 {
                 render(&mut fast, DepthSetup::DepthOnly);
+                let fast = &fast.0;
                 let mut lights = 0;
                 for k in 0..s.data.lights.len() {
                     let (Some(a), Some(b)) = (full.light(k), fast.light(k)) else {
@@ -669,7 +673,7 @@ base_color = [0.5, 0.5, 0.5]
 fn sun_classes(s: &LoadedScene) -> Vec<(usize, f32, bool)> {
     let target = Target::new(SIDE, SIDE).unwrap();
     let v = visibility(&s.data, &target, &mut FrameStats::default());
-    let px = specula_raster::shadow::pixel_sun_shadows(&s.data, &target, &v);
+    let px = specula_raster::shadow_pass::pixel_sun_shadows(&s.data, &target, &v);
     assert_eq!(px.len(), (SIDE * SIDE) as usize, "the sun has a map");
     let sun = s.data.env_map.as_ref().unwrap().sun_world().unwrap();
     let to_sun = Vec3::from(sun.to_light);

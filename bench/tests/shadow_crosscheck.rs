@@ -15,7 +15,8 @@ use specula_bench::embree::EmbreeScene;
 use specula_bench::{fixtures, pool};
 use specula_core::light::{spot_attenuation, spot_scale_offset, Light};
 use specula_raster::envmap::IblMethod;
-use specula_raster::shadow::{pixel_shadows, pixel_sun_shadows, ShadowFilter, ShadowSettings};
+use specula_raster::shadow::{ShadowFilter, ShadowSettings};
+use specula_raster::shadow_pass::{pixel_shadows, pixel_sun_shadows};
 use specula_raster::{visibility, FrameStats, Target};
 
 const W: u32 = 960;

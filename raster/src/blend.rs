@@ -28,12 +28,12 @@
 
 use crate::alpha::AlphaInputs;
 use crate::buffers::TileWriter;
-use crate::frame::Visibility;
 use crate::resolve::{PacketTris, ResolveContext};
 use crate::scan::covered_groups;
 use crate::setup::RasterTri;
 use crate::shader::{ShadeEnv, ShadeInput, ShadeLanes};
 use crate::target::{Target, MISS, TILE, TILE_PIXELS};
+use crate::visibility::Visibility;
 use specula_core::{f32x8, Mask, Real};
 
 /// Whether the frame has blended samples to composite.

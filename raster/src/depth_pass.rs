@@ -19,13 +19,14 @@
 use crate::bin::{BinnedChunk, CHUNK};
 use crate::camera::View;
 use crate::clip::GuardBand;
-use crate::frame::{count_setup_sweep, geometry_pass, ms_since, FrameStats, Visibility};
 use crate::geometry::{Cull, FrameContext, GeometryPass};
 use crate::scan::{rasterize_tile_depth, AlphaScan};
 use crate::scene::SceneData;
 use crate::setup::{outcode_f32, DepthPlanes, SetupContext, SetupCounts, TriPlanes};
 use crate::setup_x4::{Vertices4, LANES};
+use crate::stats::{count_setup_sweep, ms_since, FrameStats};
 use crate::target::{Target, VisBuffer, TILE_PIXELS};
+use crate::visibility::{geometry_pass, Visibility};
 use rayon::prelude::*;
 use std::sync::Arc;
 use std::time::Instant;
@@ -115,7 +116,7 @@ fn depth_only_pass(
     };
     out.stages[stage]
         .1
-        .clip_positions(&frame, scene, &mut out.clip);
+        .clip_positions(&frame, &scene.mesh(), &mut out.clip);
     assert_eq!(
         out.clip.len(),
         scene.positions.len(),

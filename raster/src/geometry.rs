@@ -11,8 +11,7 @@
 //! material is double-sided, ids = triangle indices.
 
 use crate::camera::View;
-use crate::scene::SceneData;
-use glam::Vec4;
+use glam::{Vec3, Vec4};
 use rayon::prelude::*;
 use std::fmt::Debug;
 use std::ops::Range;
@@ -43,6 +42,18 @@ pub struct FrameContext<'a> {
     pub ssaa: u32,
 }
 
+/// The scene's mesh as a vertex stage reads it: the world-space vertex
+/// arrays and the triangles that index them
+/// ([`SceneParts::mesh`](crate::scene::SceneParts::mesh)). A stage sees
+/// the geometry alone, not the materials or lights.
+#[derive(Clone, Copy, Debug)]
+pub struct SceneMesh<'a> {
+    pub positions: &'a [Vec3],
+    /// Unit vertex normals, one per position.
+    pub normals: &'a [Vec3],
+    pub triangles: &'a [[u32; 3]],
+}
+
 /// Where a pass puts the scene's vertices.
 ///
 /// The scene holds each stage as built (`GeometryPass::vertex`, shared by
@@ -54,9 +65,9 @@ pub trait VertexStage: Debug + Send + Sync {
     /// earlier frame's state.
     fn instance(&self) -> Box<dyn VertexStage>;
 
-    /// Clip-space position of every scene vertex (`scene.positions` order)
+    /// Clip-space position of every scene vertex (`mesh.positions` order)
     /// into `out`, which arrives cleared.
-    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>);
+    fn clip_positions(&mut self, frame: &FrameContext, mesh: &SceneMesh, out: &mut Vec<[f32; 4]>);
 
     /// Right after `clip_positions` for a frame's view: whether source
     /// triangles `triangles`, drawn from those positions by a pass that
@@ -101,10 +112,9 @@ impl VertexStage for Project {
         Box::new(Project)
     }
 
-    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+    fn clip_positions(&mut self, frame: &FrameContext, mesh: &SceneMesh, out: &mut Vec<[f32; 4]>) {
         let m = frame.view.view_proj;
-        scene
-            .positions
+        mesh.positions
             .par_iter()
             .with_min_len(4096)
             .map(|p| (m * Vec4::from((*p, 1.0))).to_array())

@@ -44,9 +44,12 @@ mod setup_x4;
 mod shader;
 mod shading_pass;
 pub mod shadow;
+pub mod shadow_pass;
+mod stats;
 pub mod target;
 pub mod texture;
 mod unlit;
+mod visibility;
 
 pub use alpha::{AlphaMode, MaterialAlpha};
 pub use buffers::{BufferSet, FrameBuffers, Planes3};
@@ -56,12 +59,13 @@ pub use frame::{
     render, render_into, render_ldr, render_ldr_into, render_with, shade, shade_into, visibility,
     visibility_into, Frame, FrameStats, PassTimes, ShadePath, Visibility,
 };
-pub use geometry::{Cull, FrameContext, GeometryPass, Project, VertexStage};
+pub use geometry::{Cull, FrameContext, GeometryPass, Project, SceneMesh, VertexStage};
 pub use lit::{env_split_sum, prefilter_direction, Lit};
-pub use scene::{SceneData, SceneDataError, SceneParts};
-pub use shader::{Material, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
+pub use scene::{Material, SceneData, SceneDataError, SceneParts};
+pub use shader::{PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};
 pub use unlit::{Unlit, UnlitBase};
+pub use visibility::ShadowBuffers;
 
 /// The fixed-point setup, binning and scan conversion, reached past the
 /// frame's pass list. Public only so specula's fuzz entry points and this

@@ -6,12 +6,14 @@
 //! `Deref`) but not changed. To change a scene, take its parts back
 //! ([`SceneData::into_parts`]) and build it again.
 
+use crate::alpha::{AlphaMode, MaterialAlpha};
 use crate::camera::Camera;
-use crate::geometry::{validate_passes, GeometryPass};
-use crate::shader::Material;
+use crate::geometry::{validate_passes, GeometryPass, SceneMesh};
+use crate::shader::SurfaceShader;
 use crate::shadow::ShadowSettings;
 use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
+use std::sync::Arc;
 
 /// What a scene is made of, as a loader assembles it: not yet checked.
 #[derive(Clone, Debug)]
@@ -45,7 +47,7 @@ pub struct SceneParts {
     pub environment: Option<[f32; 3]>,
     /// An environment map lighting every surface (and seen where no
     /// surface is when it is visible); `environment` is then `None`.
-    pub env_map: Option<std::sync::Arc<crate::envmap::EnvMap>>,
+    pub env_map: Option<Arc<crate::envmap::EnvMap>>,
     /// Shadow settings of the sun taken out of `env_map`
     /// ([`crate::envmap::EnvMap::sun_world`]), shadowed as a directional
     /// light; `None`: unshadowed. Needs a map with a sun.
@@ -76,6 +78,58 @@ impl SceneParts {
             background,
             camera,
         }
+    }
+
+    /// The mesh a vertex stage reads.
+    pub fn mesh(&self) -> SceneMesh<'_> {
+        SceneMesh {
+            positions: &self.positions,
+            normals: &self.normals,
+            triangles: &self.triangles,
+        }
+    }
+}
+
+/// A material as the passes see it: a shader plus the properties the
+/// geometry passes need.
+#[derive(Clone, Debug)]
+pub struct Material {
+    pub name: String,
+    pub shader: Arc<dyn SurfaceShader>,
+    /// Back faces are drawn (and shaded with the normal flipped toward the
+    /// viewer) instead of culled by a pass with [`crate::geometry::Cull::Back`].
+    pub double_sided: bool,
+    /// Masked or blended (glTF's alphaMode MASK and BLEND; alpha.rs);
+    /// `None`: opaque.
+    pub alpha: Option<Arc<MaterialAlpha>>,
+}
+
+impl Material {
+    pub fn new(name: &str, shader: impl SurfaceShader, double_sided: bool) -> Material {
+        Material {
+            name: name.to_string(),
+            shader: Arc::new(shader),
+            double_sided,
+            alpha: None,
+        }
+    }
+
+    /// This material masked or blended by `alpha`. A mask whose alpha is
+    /// a constant at or above its cutoff covers every sample: the material
+    /// stays opaque, so its triangles skip the per-sample test.
+    pub fn with_alpha(mut self, alpha: MaterialAlpha) -> Material {
+        if let (AlphaMode::Mask { cutoff }, Some(a)) = (alpha.mode, alpha.constant()) {
+            if a >= cutoff {
+                return self;
+            }
+        }
+        self.alpha = Some(Arc::new(alpha));
+        self
+    }
+
+    /// How alpha decides this material's coverage; `None`: opaque.
+    pub fn alpha_mode(&self) -> Option<AlphaMode> {
+        self.alpha.as_ref().map(|a| a.mode)
     }
 }
 
@@ -155,7 +209,7 @@ impl SceneData {
                 m.shader = shader;
             }
             if let Some(a) = &m.alpha {
-                m.alpha = Some(std::sync::Arc::new(a.with_texture_filter(filter)));
+                m.alpha = Some(Arc::new(a.with_texture_filter(filter)));
             }
         }
     }

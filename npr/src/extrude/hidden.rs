@@ -6,7 +6,7 @@ use super::OPEN_DEPTH_PUSH;
 use glam::Vec4;
 use specula_raster::clip::GuardBand;
 use specula_raster::setup::{orientation, MAX_CLIP_COORD};
-use specula_raster::SceneData;
+use specula_raster::SceneMesh;
 
 /// Whether the copy of flat open piece `p` (clip positions `clip`, the
 /// copy's `copy`, a `w` × `h` image) writes no pixel after the main pass,
@@ -39,7 +39,7 @@ use specula_raster::SceneData;
 ///    push · min S > 2·(δ + max(δ′, 0) + 2e), min S over the image's
 ///    corners (S is affine): the factor 2 is slack.
 pub(super) fn copy_hidden(
-    scene: &SceneData,
+    scene: &SceneMesh,
     p: &FlatPiece,
     clip: &[Vec4],
     copy: &[[f32; 4]],

@@ -67,7 +67,7 @@ use rayon::prelude::*;
 use specula_raster::camera::View;
 use specula_raster::geometry::{Cull, FrameContext, GeometryPass, VertexStage};
 use specula_raster::setup::{front_face_shown, front_faces_shown_x8};
-use specula_raster::{SceneData, SceneParts};
+use specula_raster::{SceneMesh, SceneParts};
 use std::collections::HashMap;
 use std::ops::Range;
 use std::sync::Arc;
@@ -184,7 +184,7 @@ impl ExtrudeMesh {
     /// `st.moves`. `None`: along the smoothed normal (closed pieces) or
     /// nowhere (open). Reads `st.clip`; fills `st.front` and
     /// `st.edge_normals` on the way (vectors reused from the last view).
-    fn moves(&self, scene: &SceneData, view: &View, st: &mut ViewState) {
+    fn moves(&self, scene: &SceneMesh, view: &View, st: &mut ViewState) {
         let t = &self.topo;
         let (hw, hh) = (view.width * 0.5, view.height * 0.5);
         let ViewState {
@@ -196,7 +196,7 @@ impl ExtrudeMesh {
         } = st;
         self.face_normals
             .par_iter()
-            .zip(&scene.triangles)
+            .zip(scene.triangles)
             .with_min_len(4096)
             .map(|(n, tri)| n.dot(view.eye - scene.positions[tri[0] as usize]) > 0.0)
             .collect_into_vec(front);
@@ -337,7 +337,7 @@ impl VertexStage for Extrude {
         })
     }
 
-    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneData, out: &mut Vec<[f32; 4]>) {
+    fn clip_positions(&mut self, frame: &FrameContext, scene: &SceneMesh, out: &mut Vec<[f32; 4]>) {
         let view = frame.view;
         let m = view.view_proj;
         let px = self.width * frame.ssaa.max(1) as f32;

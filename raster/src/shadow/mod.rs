@@ -20,54 +20,46 @@
 //! 1 + the filter's radius, since a wider filter reads the surface farther
 //! from the point). The factor is 1 outside a map.
 //!
+//! This module holds the maps and reads them; `shadow_pass` draws them.
 //! The pieces: [`ShadowSettings`] and their checks (`settings.rs`); the
-//! cascades' split depths (`cascades.rs`); each light kind's maps fitted
-//! to the scene and the view, and their depth passes (`passes.rs`); the
-//! scalar lookups with their filters, hard, PCF and PCSS (`lookup.rs`);
-//! the same lookups on a packet's lanes (`lanes.rs`); and every pixel's
-//! factor for tests and tools (`pixels.rs`).
+//! cascades' split depths (`cascades.rs`); a map's block depth bounds
+//! (`blocks.rs`); the scalar lookups with their filters, hard, PCF and
+//! PCSS (`lookup.rs`); and the same lookups on a packet's lanes
+//! (`lanes.rs`).
 
+mod blocks;
 mod cascades;
 mod lanes;
 mod lookup;
-mod passes;
-mod pixels;
 mod settings;
 
-pub use crate::depth_pass::DepthSetup;
 pub use cascades::{cascade_splits, CASCADE_LAMBDA, MAX_CASCADES};
-pub use passes::polygon_light_size;
-pub use pixels::{pixel_shadows, pixel_sun_shadows, PixelShadow};
-pub use settings::{ShadowFilter, ShadowSettings, MAX_MAP_SIZE};
+pub(crate) use settings::polygon_shape;
+pub use settings::{polygon_light_size, ShadowFilter, ShadowSettings, MAX_MAP_SIZE};
 
-use crate::camera::View;
-use crate::frame::{FrameStats, Visibility};
-use crate::scene::SceneData;
 use glam::{Mat4, Vec3};
-use passes::{light_faces, render_face, Bounds};
-use specula_core::light::Light;
 
 /// One shadow map: a light's view and the depth it saw.
 #[derive(Clone, Debug, Default)]
-struct Face {
+pub(crate) struct Face {
     /// World → the light's clip space.
-    clip: Mat4,
-    size: u32,
+    pub(crate) clip: Mat4,
+    pub(crate) size: u32,
     /// Row-major linear depth (along `axis` from `origin`); infinity where
     /// nothing was drawn.
-    depth: Vec<f32>,
-    origin: Vec3,
-    axis: Vec3,
+    pub(crate) depth: Vec<f32>,
+    pub(crate) origin: Vec3,
+    pub(crate) axis: Vec3,
     /// World size of a texel (perspective maps: at unit depth).
-    texel: f32,
-    perspective: bool,
+    pub(crate) texel: f32,
+    pub(crate) perspective: bool,
     /// Perspective maps: the near distance (NDC depth = near / depth).
     /// Orthographic: NDC depth = 1 − (depth − near) / span.
-    near: f32,
-    span: f32,
+    pub(crate) near: f32,
+    pub(crate) span: f32,
     /// PCF lights: the depth bounds that decide wholly lit and wholly
     /// shadowed lookups without their taps (`lanes.rs`).
-    blocks: Option<DepthBlocks>,
+    pub(crate) blocks: Option<DepthBlocks>,
 }
 
 /// A face's nearest and farthest depth over every 2 × 2 blocks of
@@ -76,7 +68,7 @@ struct Face {
 /// j..=j+1 down (cut to the map). A PCF lookup reads texels spanning at
 /// most `side` + 1 along each axis, which two blocks hold.
 #[derive(Clone, Debug, Default)]
-struct DepthBlocks {
+pub(crate) struct DepthBlocks {
     side: u32,
     /// Blocks along each axis.
     count: u32,
@@ -88,16 +80,14 @@ struct DepthBlocks {
 #[derive(Default)]
 pub struct LightShadow {
     pub settings: ShadowSettings,
-    faces: Vec<Face>,
+    pub(crate) faces: Vec<Face>,
     /// How a point picks its face.
-    pick: Pick,
-    /// The frames' working buffers of each face's depth pass.
-    passes: Vec<Option<Visibility>>,
+    pub(crate) pick: Pick,
 }
 
 /// How a shaded point picks one of a light's faces.
 #[derive(Clone, Debug, Default)]
-enum Pick {
+pub(crate) enum Pick {
     /// The only face.
     #[default]
     One,
@@ -116,10 +106,10 @@ enum Pick {
 /// Every shadowed light's maps for one frame, by light index.
 #[derive(Default)]
 pub struct ShadowMaps {
-    lights: Vec<Option<LightShadow>>,
+    pub(crate) lights: Vec<Option<LightShadow>>,
     /// The environment map's sun's, when the scene shadows it.
-    sun: Option<LightShadow>,
-    any: bool,
+    pub(crate) sun: Option<LightShadow>,
+    pub(crate) any: bool,
 }
 
 impl std::fmt::Debug for ShadowMaps {
@@ -156,87 +146,6 @@ impl ShadowMaps {
             .map(|l| l.faces.len() as u32)
             .sum()
     }
-
-    /// Renders every shadowed light's maps of `scene` for the camera's
-    /// `view`; `stats.times.shadow` gets their time.
-    pub fn render(&mut self, scene: &SceneData, view: &View, stats: &mut FrameStats) {
-        self.render_with(scene, view, DepthSetup::default(), stats);
-    }
-
-    /// [`ShadowMaps::render`] with the depth passes' `setup` chosen (the
-    /// tests compare the two).
-    pub fn render_with(
-        &mut self,
-        scene: &SceneData,
-        view: &View,
-        setup: DepthSetup,
-        stats: &mut FrameStats,
-    ) {
-        self.lights.resize_with(scene.lights.len(), || None);
-        self.any = false;
-        let Some(bounds) = Bounds::of(scene) else {
-            self.lights.iter_mut().for_each(|l| *l = None);
-            self.sun = None;
-            return;
-        };
-        for (k, light) in scene.lights.iter().enumerate() {
-            let slot = &mut self.lights[k];
-            match scene.shadows.get(k).copied().flatten() {
-                Some(settings) => {
-                    self.any |=
-                        render_light(slot, settings, light, &bounds, view, scene, setup, stats)
-                }
-                None => *slot = None,
-            }
-        }
-        // The environment's sun, as the directional light it is shaded as.
-        let sun = scene.env_map.as_ref().and_then(|m| m.sun_world());
-        match scene.sun_shadows.zip(sun) {
-            Some((settings, sun)) => {
-                let light = sun.directional();
-                let slot = &mut self.sun;
-                self.any |=
-                    render_light(slot, settings, &light, &bounds, view, scene, setup, stats);
-            }
-            None => self.sun = None,
-        }
-    }
-}
-
-/// Renders the maps of `light` shadowed with `settings` into `slot`
-/// (reusing the buffers it holds) when some map covers the scene;
-/// otherwise empties `slot`. Whether `slot` holds maps.
-#[allow(clippy::too_many_arguments)]
-fn render_light(
-    slot: &mut Option<LightShadow>,
-    settings: ShadowSettings,
-    light: &Light,
-    bounds: &Bounds,
-    view: &View,
-    scene: &SceneData,
-    setup: DepthSetup,
-    stats: &mut FrameStats,
-) -> bool {
-    let Some((faces, pick)) = light_faces(&settings, light, bounds, view, scene.camera.near) else {
-        *slot = None;
-        return false;
-    };
-    let ls = slot.get_or_insert_with(LightShadow::default);
-    ls.settings = settings;
-    ls.pick = pick;
-    // The previous frame's depth buffers are refilled, not reallocated.
-    let mut faces = faces;
-    for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
-        new.depth = old.depth;
-        new.blocks = old.blocks;
-    }
-    let block_side = settings.pcf_block_side();
-    ls.faces = faces;
-    ls.passes.resize_with(ls.faces.len(), || None);
-    for (face, pass) in ls.faces.iter_mut().zip(&mut ls.passes) {
-        render_face(scene, face, pass, block_side, setup, stats);
-    }
-    true
 }
 
 impl LightShadow {

@@ -3,6 +3,7 @@
 //! what they cost (faces, bytes, how far a lookup reads).
 
 use super::cascades::MAX_CASCADES;
+use glam::Vec3;
 use specula_core::light::Light;
 
 /// How a light's shadow is filtered.
@@ -108,7 +109,7 @@ impl ShadowSettings {
     }
 
     /// Texels a lookup may read away from its centre texel.
-    pub(super) fn reach(&self) -> f32 {
+    pub(crate) fn reach(&self) -> f32 {
         match self.filter {
             ShadowFilter::Hard => 1.0,
             ShadowFilter::Pcf => self.filter_radius + 2.0,
@@ -126,7 +127,7 @@ impl ShadowSettings {
     /// a filter radius r, since the taps at u − r, u and u + r read
     /// texels ⌊u − r⌋ to ⌊u + r⌋ + 1, at most ⌈2r⌉ + 2 of them, which two
     /// blocks of one fewer hold. `None` for other filters and wider PCF.
-    pub(super) fn pcf_block_side(&self) -> Option<u32> {
+    pub(crate) fn pcf_block_side(&self) -> Option<u32> {
         let side = (2.0 * self.filter_radius).ceil() as u32 + 1;
         (self.filter == ShadowFilter::Pcf && side <= MAX_PCF_BLOCK).then_some(side)
     }
@@ -134,3 +135,46 @@ impl ShadowSettings {
 
 /// Largest PCSS filter half-width in texels.
 pub(super) const PCSS_MAX_RADIUS: f32 = 24.0;
+
+/// A polygon's vertex mean, unit normal (Newell's, toward the side a
+/// counter-clockwise polygon faces) and area, or `None` when it has no
+/// area.
+pub(crate) fn polygon_shape(vertices: &[[f32; 3]]) -> Option<(Vec3, Vec3, f32)> {
+    let v: Vec<Vec3> = vertices.iter().map(|p| Vec3::from(*p)).collect();
+    if v.len() < 3 {
+        return None;
+    }
+    let centre = v.iter().copied().sum::<Vec3>() / v.len() as f32;
+    let twice = (0..v.len())
+        .map(|i| (v[i] - centre).cross(v[(i + 1) % v.len()] - centre))
+        .sum::<Vec3>();
+    let area = 0.5 * twice.length();
+    (area > 0.0 && area.is_finite()).then(|| (centre, twice.normalize(), area))
+}
+
+/// The PCSS light size of a polygon light: the diameter of the disk of
+/// the polygon's area (0 for a polygon without area).
+pub fn polygon_light_size(vertices: &[[f32; 3]]) -> f32 {
+    polygon_shape(vertices).map_or(0.0, |(_, _, a)| 2.0 * (a / std::f32::consts::PI).sqrt())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn polygon_light_size_is_the_equal_area_disk() {
+        let square = [
+            [0.0, 0.0, 0.0],
+            [2.0, 0.0, 0.0],
+            [2.0, 0.0, 2.0],
+            [0.0, 0.0, 2.0],
+        ];
+        let d = polygon_light_size(&square);
+        assert!(
+            (d - 2.0 * (4.0 / std::f32::consts::PI).sqrt()).abs() < 1e-5,
+            "{d}"
+        );
+        assert_eq!(polygon_light_size(&[[0.0; 3]; 3]), 0.0);
+    }
+}

@@ -1,20 +1,13 @@
-//! Each light kind's maps and their depth passes: one orthographic map
-//! (or one per cascade) for a directional light, fitted to the scene's
-//! bounds cut to the camera's view; one perspective map for a spot light;
-//! a cube of six for a point light and for a polygon light (from its
-//! centre). Each face is drawn by `depth_pass::depth_pass` and kept as linear
-//! depth.
+//! Each light kind's maps, fitted to the scene and the view: one
+//! orthographic map (or one per cascade) for a directional light, fitted
+//! to the scene's bounds cut to the camera's view; one perspective map
+//! for a spot light; a cube of six for a point light and for a polygon
+//! light (from its centre).
 
-use super::cascades::cascade_splits;
-use super::settings::ShadowSettings;
-use super::{DepthBlocks, Face, Pick};
 use crate::camera::{Camera, View};
-use crate::depth_pass::{depth_pass, DepthSetup};
-use crate::frame::{FrameStats, Visibility};
 use crate::scene::SceneData;
-use crate::target::{Target, TILE};
+use crate::shadow::{cascade_splits, polygon_shape, Face, Pick, ShadowSettings};
 use glam::{Mat4, Vec3, Vec4};
-use rayon::prelude::*;
 use specula_core::light::Light;
 
 /// The maps of `light` and how a point picks one, or `None` for a light
@@ -106,28 +99,6 @@ pub(super) fn light_faces(
             (faces, Pick::Cube(pos))
         }
     })
-}
-
-/// A polygon's vertex mean, unit normal (Newell's, toward the side a
-/// counter-clockwise polygon faces) and area, or `None` when it has no
-/// area.
-fn polygon_shape(vertices: &[[f32; 3]]) -> Option<(Vec3, Vec3, f32)> {
-    let v: Vec<Vec3> = vertices.iter().map(|p| Vec3::from(*p)).collect();
-    if v.len() < 3 {
-        return None;
-    }
-    let centre = v.iter().copied().sum::<Vec3>() / v.len() as f32;
-    let twice = (0..v.len())
-        .map(|i| (v[i] - centre).cross(v[(i + 1) % v.len()] - centre))
-        .sum::<Vec3>();
-    let area = 0.5 * twice.length();
-    (area > 0.0 && area.is_finite()).then(|| (centre, twice.normalize(), area))
-}
-
-/// The PCSS light size of a polygon light: the diameter of the disk of
-/// the polygon's area (0 for a polygon without area).
-pub fn polygon_light_size(vertices: &[[f32; 3]]) -> f32 {
-    polygon_shape(vertices).map_or(0.0, |(_, _, a)| 2.0 * (a / std::f32::consts::PI).sqrt())
 }
 
 /// Widest half-angle a spot light's map covers (degrees); points outside
@@ -273,126 +244,5 @@ fn perspective_face(s: &ShadowSettings, pos: Vec3, axis: Vec3, tan_half: f32, b:
         near,
         span: 0.0,
         blocks: None,
-    }
-}
-
-/// Draws `face`'s depth pass and keeps its linear depth, row-major, and
-/// with `block_side` its depth bounds over blocks of that side.
-pub(super) fn render_face(
-    scene: &SceneData,
-    face: &mut Face,
-    pass: &mut Option<Visibility>,
-    block_side: Option<u32>,
-    setup: DepthSetup,
-    stats: &mut FrameStats,
-) {
-    let target = Target::new(face.size, face.size).expect("map size checked at load");
-    let v = depth_pass(scene, &target, face.clip, setup, pass, stats);
-    let n = face.size as usize;
-    face.depth.resize(n * n, 0.0);
-    let (perspective, near, span) = (face.perspective, face.near, face.span);
-    face.depth
-        .par_chunks_mut(n)
-        .enumerate()
-        .for_each(|(y, row)| {
-            // The row's runs of up to a tile's width lie together in the
-            // tile-major buffer.
-            for (t, run) in row.chunks_mut(TILE).enumerate() {
-                let start = target.index((t * TILE) as u32, y as u32);
-                let z = &v.vis.depth[start..start + run.len()];
-                if perspective {
-                    for (d, &z) in run.iter_mut().zip(z) {
-                        *d = if z <= 0.0 { f32::INFINITY } else { near / z };
-                    }
-                } else {
-                    for (d, &z) in run.iter_mut().zip(z) {
-                        *d = if z <= 0.0 {
-                            f32::INFINITY
-                        } else {
-                            near + (1.0 - z) * span
-                        };
-                    }
-                }
-            }
-        });
-    match block_side {
-        Some(side) => {
-            let mut blocks = face.blocks.take().unwrap_or_default();
-            blocks.fill(&face.depth, n, side);
-            face.blocks = Some(blocks);
-        }
-        None => face.blocks = None,
-    }
-}
-
-impl DepthBlocks {
-    /// The bounds of the `n` × `n` row-major `depth` over blocks of
-    /// `side` texels (the buffers of an earlier frame refilled).
-    fn fill(&mut self, depth: &[f32], n: usize, side: u32) {
-        let b = side as usize;
-        let m = n.div_ceil(b);
-        self.side = side;
-        self.count = m as u32;
-        self.near.clear();
-        self.near.resize(m * m, f32::INFINITY);
-        self.far.clear();
-        self.far.resize(m * m, f32::NEG_INFINITY);
-        // Each block's own bounds, a row of blocks per task.
-        self.near
-            .par_chunks_mut(m)
-            .zip(self.far.par_chunks_mut(m))
-            .enumerate()
-            .for_each(|(j, (near, far))| {
-                for row in depth[j * b * n..((j + 1) * b).min(n) * n].chunks_exact(n) {
-                    for ((lo, hi), texels) in near.iter_mut().zip(far.iter_mut()).zip(row.chunks(b))
-                    {
-                        for &z in texels {
-                            *lo = lo.min(z);
-                            *hi = hi.max(z);
-                        }
-                    }
-                }
-            });
-        // Then over each block and its neighbours right and down (in
-        // place: each entry reads ones not yet overwritten).
-        sweep(&mut self.near, m, f32::min);
-        sweep(&mut self.far, m, f32::max);
-    }
-}
-
-/// `v` (m × m, row-major) replaced by `pick` over each entry and its
-/// neighbours right, down and diagonal (where they exist), in place.
-fn sweep(v: &mut [f32], m: usize, pick: fn(f32, f32) -> f32) {
-    for row in v.chunks_exact_mut(m) {
-        for i in 0..m - 1 {
-            row[i] = pick(row[i], row[i + 1]);
-        }
-    }
-    for j in 0..m - 1 {
-        let (top, rest) = v[j * m..].split_at_mut(m);
-        for (a, b) in top.iter_mut().zip(&rest[..m]) {
-            *a = pick(*a, *b);
-        }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn polygon_light_size_is_the_equal_area_disk() {
-        let square = [
-            [0.0, 0.0, 0.0],
-            [2.0, 0.0, 0.0],
-            [2.0, 0.0, 2.0],
-            [0.0, 0.0, 2.0],
-        ];
-        let d = polygon_light_size(&square);
-        assert!(
-            (d - 2.0 * (4.0 / std::f32::consts::PI).sqrt()).abs() < 1e-5,
-            "{d}"
-        );
-        assert_eq!(polygon_light_size(&[[0.0; 3]; 3]), 0.0);
     }
 }

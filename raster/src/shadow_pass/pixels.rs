@@ -2,10 +2,10 @@
 //! environment's sun's) shadow factor, as the shading pass sees them: for
 //! tests and tools that compare the maps with exact visibility.
 
-use super::LightShadow;
-use crate::frame::Visibility;
 use crate::scene::SceneData;
+use crate::shadow::LightShadow;
 use crate::target::Target;
+use crate::visibility::Visibility;
 use glam::Vec3;
 
 /// A drawn pixel's surface and one light's shadow factor there

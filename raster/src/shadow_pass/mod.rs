@@ -1,0 +1,169 @@
+//! Draws a frame's shadow maps ([`ShadowMaps`], read by the light loop
+//! through `shadow`): each shadowed light's faces fitted to the scene and
+//! the view (`fit.rs`), each face a depth-only pass of the scene
+//! (`depth_pass.rs`) kept as linear depth, with its block bounds for PCF;
+//! and every pixel's factor, for tests and tools that compare the maps
+//! with exact visibility (`pixels.rs`).
+
+mod fit;
+mod pixels;
+
+pub use crate::depth_pass::DepthSetup;
+pub use pixels::{pixel_shadows, pixel_sun_shadows, PixelShadow};
+
+use crate::camera::View;
+use crate::depth_pass::depth_pass;
+use crate::scene::SceneData;
+use crate::shadow::{Face, LightShadow, ShadowMaps, ShadowSettings};
+use crate::stats::FrameStats;
+use crate::target::{Target, TILE};
+use crate::visibility::{ShadowBuffers, Visibility};
+use fit::{light_faces, Bounds};
+use rayon::prelude::*;
+use specula_core::light::Light;
+
+/// Renders every shadowed light's maps of `scene` for the camera's `view`
+/// into `maps`, drawing each face with its buffers in `buffers` (those of
+/// an earlier frame are refilled); `setup` picks the depth passes' setup
+/// (the tests compare the two). `stats.times.shadow` gets their time.
+pub fn render_maps(
+    scene: &SceneData,
+    view: &View,
+    setup: DepthSetup,
+    maps: &mut ShadowMaps,
+    buffers: &mut ShadowBuffers,
+    stats: &mut FrameStats,
+) {
+    let n = scene.lights.len();
+    maps.lights.resize_with(n, || None);
+    buffers.lights.resize_with(n, Vec::new);
+    maps.any = false;
+    let Some(bounds) = Bounds::of(scene) else {
+        maps.lights.iter_mut().for_each(|l| *l = None);
+        maps.sun = None;
+        *buffers = ShadowBuffers::default();
+        return;
+    };
+    let lights = maps.lights.iter_mut().zip(&mut buffers.lights);
+    for (k, (light, (slot, passes))) in scene.lights.iter().zip(lights).enumerate() {
+        let map = Map { slot, passes };
+        match scene.shadows.get(k).copied().flatten() {
+            Some(settings) => {
+                maps.any |= render_light(map, settings, light, &bounds, view, scene, setup, stats)
+            }
+            None => map.clear(),
+        }
+    }
+    // The environment's sun, as the directional light it is shaded as.
+    let sun = scene.env_map.as_ref().and_then(|m| m.sun_world());
+    let map = Map {
+        slot: &mut maps.sun,
+        passes: &mut buffers.sun,
+    };
+    match scene.sun_shadows.zip(sun) {
+        Some((settings, sun)) => {
+            let light = sun.directional();
+            maps.any |= render_light(map, settings, &light, &bounds, view, scene, setup, stats);
+        }
+        None => map.clear(),
+    }
+}
+
+/// One light's maps and the buffers of their depth passes.
+struct Map<'a> {
+    slot: &'a mut Option<LightShadow>,
+    passes: &'a mut Vec<Option<Visibility>>,
+}
+
+impl Map<'_> {
+    /// No maps, and no buffers kept for them.
+    fn clear(self) {
+        *self.slot = None;
+        self.passes.clear();
+    }
+}
+
+/// Renders the maps of `light` shadowed with `settings` into `map`
+/// (reusing the buffers it holds) when some map covers the scene;
+/// otherwise clears `map`. Whether `map` holds maps.
+#[allow(clippy::too_many_arguments)]
+fn render_light(
+    map: Map,
+    settings: ShadowSettings,
+    light: &Light,
+    bounds: &Bounds,
+    view: &View,
+    scene: &SceneData,
+    setup: DepthSetup,
+    stats: &mut FrameStats,
+) -> bool {
+    let Some((faces, pick)) = light_faces(&settings, light, bounds, view, scene.camera.near) else {
+        map.clear();
+        return false;
+    };
+    let ls = map.slot.get_or_insert_with(LightShadow::default);
+    ls.settings = settings;
+    ls.pick = pick;
+    // The previous frame's depth buffers are refilled, not reallocated.
+    let mut faces = faces;
+    for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
+        new.depth = old.depth;
+        new.blocks = old.blocks;
+    }
+    let block_side = settings.pcf_block_side();
+    ls.faces = faces;
+    map.passes.resize_with(ls.faces.len(), || None);
+    for (face, pass) in ls.faces.iter_mut().zip(map.passes.iter_mut()) {
+        render_face(scene, face, pass, block_side, setup, stats);
+    }
+    true
+}
+
+/// Draws `face`'s depth pass and keeps its linear depth, row-major, and
+/// with `block_side` its depth bounds over blocks of that side.
+fn render_face(
+    scene: &SceneData,
+    face: &mut Face,
+    pass: &mut Option<Visibility>,
+    block_side: Option<u32>,
+    setup: DepthSetup,
+    stats: &mut FrameStats,
+) {
+    let target = Target::new(face.size, face.size).expect("map size checked at load");
+    let v = depth_pass(scene, &target, face.clip, setup, pass, stats);
+    let n = face.size as usize;
+    face.depth.resize(n * n, 0.0);
+    let (perspective, near, span) = (face.perspective, face.near, face.span);
+    face.depth
+        .par_chunks_mut(n)
+        .enumerate()
+        .for_each(|(y, row)| {
+            // The row's runs of up to a tile's width lie together in the
+            // tile-major buffer.
+            for (t, run) in row.chunks_mut(TILE).enumerate() {
+                let start = target.index((t * TILE) as u32, y as u32);
+                let z = &v.vis.depth[start..start + run.len()];
+                if perspective {
+                    for (d, &z) in run.iter_mut().zip(z) {
+                        *d = if z <= 0.0 { f32::INFINITY } else { near / z };
+                    }
+                } else {
+                    for (d, &z) in run.iter_mut().zip(z) {
+                        *d = if z <= 0.0 {
+                            f32::INFINITY
+                        } else {
+                            near + (1.0 - z) * span
+                        };
+                    }
+                }
+            }
+        });
+    match block_side {
+        Some(side) => {
+            let mut blocks = face.blocks.take().unwrap_or_default();
+            blocks.fill(&face.depth, n, side);
+            face.blocks = Some(blocks);
+        }
+        None => face.blocks = None,
+    }
+}

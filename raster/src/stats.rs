@@ -1,0 +1,59 @@
+//! What a frame counts and times ([`FrameStats`]): each pass's wall
+//! time, summed over a frame's geometry passes per stage, setup's counts,
+//! and the shadow maps' depth passes.
+
+use crate::bin::BinnedChunk;
+use crate::setup::SetupCounts;
+use std::time::Instant;
+
+/// Wall time of each pass in milliseconds.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct PassTimes {
+    pub vertex: f64,
+    pub setup: f64,
+    pub bin: f64,
+    pub raster: f64,
+    pub shade: f64,
+    /// The shadow maps' depth passes (all stages).
+    pub shadow: f64,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    pub times: PassTimes,
+    pub counts: SetupCounts,
+    /// Screen triangles after clipping and fan splitting.
+    pub raster_triangles: u64,
+    /// Pixels (samples) covered by a triangle and shaded.
+    pub pixels_shaded: u64,
+    /// Samples of blended (alphaMode BLEND) surfaces shaded and composited
+    /// over the opaque frame: a sample under k of them counts k times.
+    pub blended_samples: u64,
+    /// Shadow-map depth passes drawn (a cube map is 6).
+    pub shadow_passes: u32,
+}
+
+pub(crate) fn ms_since(t: Instant) -> f64 {
+    t.elapsed().as_secs_f64() * 1e3
+}
+
+/// Adds to `stats` a setup-and-bin sweep that started at `t`: each
+/// chunk's setup counts and binning time (`set_up`) and its screen
+/// triangles (`chunks`). The sweep's wall time is split: binning's share
+/// is the chunks' binning time (thread time) over the worker count.
+pub(crate) fn count_setup_sweep(
+    stats: &mut FrameStats,
+    t: Instant,
+    set_up: &[(SetupCounts, f64)],
+    chunks: &[BinnedChunk],
+) {
+    let total = ms_since(t);
+    let busy: f64 = set_up.iter().map(|(_, b)| b).sum();
+    let bin = (busy / rayon::current_num_threads() as f64).min(total);
+    stats.times.setup += total - bin;
+    stats.times.bin += bin;
+    for ((c, _), chunk) in set_up.iter().zip(chunks) {
+        stats.counts.add(c);
+        stats.raster_triangles += chunk.tris.len() as u64;
+    }
+}
