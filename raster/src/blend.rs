@@ -29,7 +29,7 @@
 use crate::alpha::AlphaInputs;
 use crate::buffers::TileWriter;
 use crate::resolve::{PacketTris, ResolveContext};
-use crate::scan::covered_groups;
+use crate::scan::{covered_groups, GroupDepth};
 use crate::setup::RasterTri;
 use crate::shader::{ShadeEnv, ShadeInput, ShadeLanes};
 use crate::target::{Target, MISS, TILE, TILE_PIXELS};
@@ -97,21 +97,10 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
         let shader_surface = ctx.needs_surface[m as usize];
         let needs_surface = shader_surface || alpha.needs_surface();
         let p = &v.planes[id as usize];
-        let [bx0, by0, bx1, by1] = rt.bbox;
-        let bounds = [
-            bx0.max(tx),
-            bx1.min(tx + TILE as i32),
-            by0.max(ty),
-            by1.min(ty + TILE as i32),
-        ];
-        let [za, zb, zc] = p.z;
-        let [ox, oy] = p.origin;
-        let lane_x = f32x8::lane_index() + f32x8::splat(0.5 - ox);
-        covered_groups(rt, bounds, tx, |y, gx, mask| {
+        let z_at = GroupDepth::new(p);
+        covered_groups(rt, rt.tile_bounds(tx, ty), tx, |y, gx, mask| {
             // The depth test of `scan_triangle`, against the opaque depth.
-            let row_z = zb.mul_add(y as f32 + 0.5 - oy, zc);
-            let z =
-                (lane_x + f32x8::splat(gx as f32)).mul_add(f32x8::splat(za), f32x8::splat(row_z));
+            let z = z_at.at(gx, y);
             let at = (y - ty) as usize * TILE + (gx - tx) as usize;
             let d_old = f32x8::load(&depth[at..at + 8]);
             let front = mask & Real::gt(z, d_old).bits();

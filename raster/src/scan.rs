@@ -41,7 +41,8 @@ pub(crate) fn rasterize_tile_depth(
     let depth: &mut [f32; TILE_PIXELS] = depth.try_into().expect("a tile of depth");
     let (tx, ty) = target.tile_origin(t);
     for_each_triangle(t, chunks, planes, |rt, p| {
-        depth_test_groups(rt, p, tx as i32, ty as i32, depth, |_, _| {});
+        let keep = |_, _, pass| pass;
+        depth_test_groups(rt, p, tx as i32, ty as i32, depth, keep, |_, _| {});
     });
 }
 
@@ -73,7 +74,7 @@ pub(crate) fn rasterize_tile_alpha(
                     let i = AlphaInputs::<f32x8>::at(p, uvs, alphas, x, y);
                     Real::ge(a.alpha(&i), f32x8::splat(cutoff))
                 };
-                scan_triangle_masked(rt, p, tx, ty, depth, ids, test);
+                scan_triangle_masked(rt, p, [tx, ty], depth, ids, test);
             }
             AlphaMode::Blend => {
                 if alpha.record_blend {
@@ -246,16 +247,48 @@ pub fn scan_triangle(
     ids: &mut [u32; TILE_PIXELS],
 ) {
     let id = u32x8::splat(rt.tri);
-    depth_test_groups(rt, planes, tx, ty, depth, |at, pass| {
-        let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");
-        let m: u32x8 = bytemuck::cast(pass);
-        ids[at..at + 8].copy_from_slice(&m.select(id, u32x8::new(old)).to_array());
+    let keep = |_, _, pass| pass;
+    depth_test_groups(rt, planes, tx, ty, depth, keep, |at, pass| {
+        write_ids(ids, at, pass, id)
     });
 }
 
-/// The depth test and write of [`scan_triangle`]: `passed(at, pass)` is
-/// called for each group of 8 at tile offset `at` where some sample
-/// passed (the lanes of `pass`), after their depth is written.
+/// A triangle's depth plane on 8-pixel groups: its z at the centres of
+/// the group of 8 pixels from (gx, y), as the scan, its alpha test and
+/// blend.rs's depth test all evaluate it (same operations, same bits).
+pub(crate) struct GroupDepth {
+    za8: f32x8,
+    zb: f32,
+    zc: f32,
+    oy: f32,
+    lane_x: f32x8,
+}
+
+impl GroupDepth {
+    #[inline(always)]
+    pub(crate) fn new<P: SetupPlanes>(planes: &P) -> GroupDepth {
+        let ([za, zb, zc], [ox, oy]) = planes.depth();
+        GroupDepth {
+            za8: f32x8::splat(za),
+            zb,
+            zc,
+            oy,
+            lane_x: f32x8::lane_index() + f32x8::splat(0.5 - ox),
+        }
+    }
+
+    #[inline(always)]
+    pub(crate) fn at(&self, gx: i32, y: i32) -> f32x8 {
+        let row_z = self.zb.mul_add(y as f32 + 0.5 - self.oy, self.zc);
+        (self.lane_x + f32x8::splat(gx as f32)).mul_add(self.za8, f32x8::splat(row_z))
+    }
+}
+
+/// The depth test and write of [`scan_triangle`]: for each group of 8 at
+/// tile offset `at` where some covered sample passes the depth test,
+/// `keep(gx, y, pass)` may take lanes out of `pass` (an alpha test), and
+/// where some remain their depth is written and `passed(at, pass)` is
+/// called.
 #[inline(always)]
 fn depth_test_groups<P: SetupPlanes>(
     rt: &RasterTri,
@@ -263,22 +296,13 @@ fn depth_test_groups<P: SetupPlanes>(
     tx: i32,
     ty: i32,
     depth: &mut [f32; TILE_PIXELS],
+    mut keep: impl FnMut(i32, i32, <f32x8 as Real>::Mask) -> <f32x8 as Real>::Mask,
     mut passed: impl FnMut(usize, <f32x8 as Real>::Mask),
 ) {
-    let [bx0, by0, bx1, by1] = rt.bbox;
-    let bounds = [
-        bx0.max(tx),
-        bx1.min(tx + TILE as i32),
-        by0.max(ty),
-        by1.min(ty + TILE as i32),
-    ];
-    let ([za, zb, zc], [ox, oy]) = planes.depth();
-    let za8 = f32x8::splat(za);
-    let lane_x = f32x8::lane_index() + f32x8::splat(0.5 - ox);
+    let z_at = GroupDepth::new(planes);
     // Groups are aligned to the tile, so loads never cross a row.
-    covered_groups(rt, bounds, tx, |y, gx, mask| {
-        let row_z = zb.mul_add(y as f32 + 0.5 - oy, zc);
-        let z = (lane_x + f32x8::splat(gx as f32)).mul_add(za8, f32x8::splat(row_z));
+    covered_groups(rt, rt.tile_bounds(tx, ty), tx, |y, gx, mask| {
+        let z = z_at.at(gx, y);
         let at = (y - ty) as usize * TILE + (gx - tx) as usize;
         // Groups are aligned to 8 inside the tile, so `at` is a multiple of
         // 8 below TILE_PIXELS and the mask changes nothing; it lets the
@@ -288,60 +312,38 @@ fn depth_test_groups<P: SetupPlanes>(
         let d_old = f32x8::load(&depth[at..at + 8]);
         let pass = f32x8::mask_from_bits(mask) & z.gt(d_old);
         if pass.any() {
-            pass.select(z, d_old).store(&mut depth[at..at + 8]);
-            passed(at, pass);
+            let pass = keep(gx, y, pass);
+            if pass.any() {
+                pass.select(z, d_old).store(&mut depth[at..at + 8]);
+                passed(at, pass);
+            }
         }
     });
+}
+
+/// `id` into the lanes of `pass` of the 8 ids from `at`.
+#[inline(always)]
+fn write_ids(ids: &mut [u32; TILE_PIXELS], at: usize, pass: <f32x8 as Real>::Mask, id: u32x8) {
+    let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");
+    let m: u32x8 = bytemuck::cast(pass);
+    ids[at..at + 8].copy_from_slice(&m.select(id, u32x8::new(old)).to_array());
 }
 
 /// [`scan_triangle`] of a masked triangle: a sample that passes the depth
 /// test is written only where `test(x, y)` (the alpha test of the 8
 /// samples from (x, y)) passes too. Depth first: the alpha costs a
 /// texture lookup, the depth test a load.
-#[allow(clippy::too_many_arguments)]
 fn scan_triangle_masked(
     rt: &RasterTri,
     planes: &TriPlanes,
-    tx: i32,
-    ty: i32,
+    [tx, ty]: [i32; 2],
     depth: &mut [f32; TILE_PIXELS],
     ids: &mut [u32; TILE_PIXELS],
     test: impl Fn(u32, u32) -> <f32x8 as Real>::Mask,
 ) {
-    let [bx0, by0, bx1, by1] = rt.bbox;
-    let bounds = [
-        bx0.max(tx),
-        bx1.min(tx + TILE as i32),
-        by0.max(ty),
-        by1.min(ty + TILE as i32),
-    ];
-    let [za, zb, zc] = planes.z;
-    let [ox, oy] = planes.origin;
     let id = u32x8::splat(rt.tri);
-    let za8 = f32x8::splat(za);
-    let lane_x = f32x8::lane_index() + f32x8::splat(0.5 - ox);
-    // Groups are aligned to the tile, so loads never cross a row.
-    covered_groups(rt, bounds, tx, |y, gx, mask| {
-        let row_z = zb.mul_add(y as f32 + 0.5 - oy, zc);
-        let z = (lane_x + f32x8::splat(gx as f32)).mul_add(za8, f32x8::splat(row_z));
-        let at = (y - ty) as usize * TILE + (gx - tx) as usize;
-        // Groups are aligned to 8 inside the tile, so `at` is a multiple of
-        // 8 below TILE_PIXELS and the mask changes nothing; it lets the
-        // compiler drop the bounds checks of the two 8-wide accesses.
-        debug_assert!(at.is_multiple_of(8) && at < TILE_PIXELS);
-        let at = at & (TILE_PIXELS - 8);
-        let d_old = f32x8::load(&depth[at..at + 8]);
-        let pass = f32x8::mask_from_bits(mask) & z.gt(d_old);
-        let pass = if pass.any() {
-            pass & test(gx as u32, y as u32)
-        } else {
-            pass
-        };
-        if pass.any() {
-            pass.select(z, d_old).store(&mut depth[at..at + 8]);
-            let old: [u32; 8] = ids[at..at + 8].try_into().expect("8 ids");
-            let m: u32x8 = bytemuck::cast(pass);
-            ids[at..at + 8].copy_from_slice(&m.select(id, u32x8::new(old)).to_array());
-        }
+    let keep = |gx: i32, y: i32, pass| pass & test(gx as u32, y as u32);
+    depth_test_groups(rt, planes, tx, ty, depth, keep, |at, pass| {
+        write_ids(ids, at, pass, id)
     });
 }

@@ -622,6 +622,20 @@ impl SetupContext {
 }
 
 impl RasterTri {
+    /// Its pixel bounding box cut to the tile with origin (tx, ty), as
+    /// [`crate::scan::covered_groups`] takes it: [x_lo, x_hi, y_lo, y_hi).
+    #[inline(always)]
+    pub(crate) fn tile_bounds(&self, tx: i32, ty: i32) -> [i32; 4] {
+        let [bx0, by0, bx1, by1] = self.bbox;
+        let tile = crate::target::TILE as i32;
+        [
+            bx0.max(tx),
+            bx1.min(tx + tile),
+            by0.max(ty),
+            by1.min(ty + tile),
+        ]
+    }
+
     /// The covered pixels [x_first, x_end) of row `y` within [xa, xb)
     /// (empty: x_first ≥ x_end).
     ///
