@@ -8,7 +8,7 @@
 //! scene's space (node transforms applied, +Y up, metres), uvs with
 //! (0, 0) at the top-left of the image, materials as the file describes
 //! them ([`material::GltfMaterial`]). `scene/gltf_file.rs` places it in a
-//! specula scene; [`material::scene_material`] makes its materials.
+//! specula scene; [`scene_material::scene_material`] makes its materials.
 
 mod buffers;
 mod error;
@@ -16,6 +16,7 @@ mod glb;
 pub mod images;
 pub mod material;
 mod nodes;
+pub mod scene_material;
 
 use crate::checks;
 use buffers::Buffers;

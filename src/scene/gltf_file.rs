@@ -7,7 +7,8 @@
 use super::build::*;
 use super::desc::*;
 use super::{GltfSceneError, LoadedScene, SceneError};
-use crate::gltf::material::{scene_material, GltfMaterial};
+use crate::gltf::material::GltfMaterial;
+use crate::gltf::scene_material::scene_material;
 use crate::gltf::{GltfScene, Projection};
 use crate::memory;
 use crate::mesh::MeshData;
