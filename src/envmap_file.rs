@@ -71,9 +71,12 @@ pub enum EnvMapError {
         name: String,
         source: image::ImageError,
     },
-    /// The decoded texels refused as a map (its message).
-    #[error("{name}: {message}")]
-    Map { name: String, message: String },
+    /// The decoded texels refused as a map.
+    #[error("{name}: {source}")]
+    Map {
+        name: String,
+        source: specula_raster::envmap::EnvMapError,
+    },
 }
 
 /// The seam for the callers whose errors are still `String`s: `?` turns
@@ -184,10 +187,10 @@ pub fn decode_equirect(name: &str, bytes: &[u8]) -> Result<Equirect, EnvMapError
 /// derived data not yet built ([`EnvMap::prepare`]).
 pub fn new_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, EnvMapError> {
     let source = decode_equirect(name, bytes)?;
-    EnvMap::new(source, s.intensity, s.rotate_deg, s.visible, s.method).map_err(|message| {
+    EnvMap::new(source, s.intensity, s.rotate_deg, s.visible, s.method).map_err(|source| {
         EnvMapError::Map {
             name: name.to_string(),
-            message,
+            source,
         }
     })
 }

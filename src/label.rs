@@ -44,13 +44,13 @@ const MAX_SIZE: f32 = 1000.0;
 /// (the caller adds which label of which file).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum LabelError {
-    /// `text` longer than [`MAX_CHARS`] characters.
+    /// `text` longer than `MAX_CHARS` characters.
     #[error("text: longer than {MAX_CHARS} characters")]
     TooLong,
     /// `at` with a coordinate that is not finite.
     #[error("at: must be finite, got {0:?}")]
     At([f32; 2]),
-    /// `size` outside (0, [`MAX_SIZE`]].
+    /// `size` outside (0, `MAX_SIZE`].
     #[error("size: must be in (0, {MAX_SIZE}] pixels, got {0}")]
     Size(f32),
     /// `color` outside [0, 1].

@@ -220,7 +220,7 @@ impl Aov {
     }
 }
 
-fn parse_texture_filter(s: &str) -> Result<Filter, String> {
+fn parse_texture_filter(s: &str) -> Result<Filter, specula_raster::texture::FilterParseError> {
     s.parse()
 }
 

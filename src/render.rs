@@ -115,9 +115,9 @@ pub enum RenderError {
     /// `--repeat 0`.
     #[error("--repeat must be at least 1")]
     Repeat,
-    /// The post stages refused the frame (their message).
-    #[error("{0}")]
-    Post(String),
+    /// The post stages refused the frame.
+    #[error(transparent)]
+    Post(#[from] specula_raster::post::PostError),
     /// No frame was rendered.
     #[error("no frame rendered")]
     NoFrame,

@@ -31,10 +31,12 @@ pub enum TextureError {
         name: String,
         source: std::io::Error,
     },
-    /// A size the texture cannot hold, or texels it refused (the
-    /// texture's message).
-    #[error("{name}: {message}")]
-    Texture { name: String, message: String },
+    /// A size the texture cannot hold, or texels it refused.
+    #[error("{name}: {source}")]
+    Texture {
+        name: String,
+        source: specula_raster::texture::TextureError,
+    },
     /// The decoded image is not the size its header gave.
     #[error("{name}: the image is empty or not {width}×{height}")]
     Empty {
@@ -156,9 +158,9 @@ pub fn decode_map_channels(
     let channels = channels.clamp(3, 4);
     let (w, h) = image_size(name, bytes)?;
     specula_raster::texture::check_mip_chain_size(w as usize, h as usize, channels).map_err(
-        |message| TextureError::Texture {
+        |source| TextureError::Texture {
             name: name.to_string(),
-            message,
+            source,
         },
     )?;
     let per_texel = if channels == 4 {
@@ -191,10 +193,10 @@ pub fn decode_map_channels(
     for row in raw.chunks_exact(w * channels).rev() {
         flipped.extend_from_slice(row);
     }
-    let texture = Texture::from_u8(w, h, channels, &flipped, encoding).map_err(|message| {
+    let texture = Texture::from_u8(w, h, channels, &flipped, encoding).map_err(|source| {
         TextureError::Texture {
             name: name.to_string(),
-            message,
+            source,
         }
     })?;
     Ok(ColorMap {

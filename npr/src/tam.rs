@@ -91,6 +91,9 @@ pub enum TamError {
     /// Tones, levels and darkness values that do not make a map.
     #[error("{0}")]
     Layout(String),
+    /// The drawn levels refused as a texture.
+    #[error(transparent)]
+    Texture(#[from] specula_raster::texture::TextureError),
     /// The caller's memory budget refused the map (its message).
     #[error("{0}")]
     Budget(String),
@@ -457,7 +460,7 @@ impl TamTexture {
             out.push((n, n, data));
         }
         Ok(TamTexture {
-            texture: Texture::from_levels(c, out).map_err(TamError::Layout)?,
+            texture: Texture::from_levels(c, out)?,
             darkness: std::iter::once(0.0)
                 .chain(darkness.iter().map(|&d| d as f32))
                 .collect(),

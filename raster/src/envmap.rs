@@ -190,6 +190,15 @@ pub struct EnvMap {
     pub(crate) sampler: crate::envmap_sample::EnvSampler,
 }
 
+/// Why [`EnvMap::new`] refused a source image.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum EnvMapError {
+    #[error("the map is {width}×{height}: an environment map needs at least 2×2 texels")]
+    TooSmall { width: usize, height: usize },
+    #[error("texel count does not match the size")]
+    TexelCount,
+}
+
 impl EnvMap {
     /// The map from `source` (texels as decoded: they are clamped here,
     /// then multiplied by `intensity`); nothing derived yet.
@@ -199,15 +208,13 @@ impl EnvMap {
         rotate_deg: f32,
         visible: bool,
         method: IblMethod,
-    ) -> Result<EnvMap, String> {
-        if source.width < 2 || source.height < 2 {
-            return Err(format!(
-                "the map is {}×{}: an environment map needs at least 2×2 texels",
-                source.width, source.height
-            ));
+    ) -> Result<EnvMap, EnvMapError> {
+        let (width, height) = (source.width, source.height);
+        if width < 2 || height < 2 {
+            return Err(EnvMapError::TooSmall { width, height });
         }
-        if source.texels.len() != source.width * source.height {
-            return Err("texel count does not match the size".into());
+        if source.texels.len() != width * height {
+            return Err(EnvMapError::TexelCount);
         }
         for t in &mut source.texels {
             *t = t.map(|c| (clamp_texel(c) * intensity).min(MAX_TEXEL));

@@ -156,40 +156,81 @@ impl GeometryPass {
     }
 }
 
+/// Why [`crate::SceneData::new`] refused a scene's geometry passes; `pass`
+/// counts from 0, and each pass is named as its `name` says.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum PassError {
+    #[error("geometry pass {pass} ({name}): triangles {triangles:?} outside the scene's {scene}")]
+    Triangles {
+        pass: usize,
+        name: String,
+        triangles: Range<u32>,
+        scene: usize,
+    },
+    #[error("geometry pass {pass} ({name}): ids past the 32-bit range")]
+    Ids { pass: usize, name: String },
+    #[error("geometry pass {pass} ({name}): material index {material} past the {materials} given")]
+    Material {
+        pass: usize,
+        name: String,
+        material: u32,
+        materials: usize,
+    },
+    #[error("geometry passes {first} ({first_name}) and {second} ({second_name}) write overlapping ids {first_ids:?} and {second_ids:?}")]
+    Overlap {
+        first: usize,
+        first_name: String,
+        first_ids: Range<u64>,
+        second: usize,
+        second_name: String,
+        second_ids: Range<u64>,
+    },
+}
+
 /// Checks a pass list against the scene: triangle ranges in bounds, id
 /// ranges disjoint and below the miss id, override materials present.
 pub(crate) fn validate_passes(
     passes: &[GeometryPass],
     triangles: usize,
     materials: usize,
-) -> Result<(), String> {
+) -> Result<(), PassError> {
     for (i, p) in passes.iter().enumerate() {
-        let name = &p.name;
+        let name = || p.name.clone();
         if p.triangles.start > p.triangles.end || p.triangles.end as usize > triangles {
-            return Err(format!(
-                "geometry pass {i} ({name}): triangles {:?} outside the scene's {triangles}",
-                p.triangles
-            ));
+            return Err(PassError::Triangles {
+                pass: i,
+                name: name(),
+                triangles: p.triangles.clone(),
+                scene: triangles,
+            });
         }
         if p.ids().end > crate::target::MISS as u64 {
-            return Err(format!(
-                "geometry pass {i} ({name}): ids past the 32-bit range"
-            ));
+            return Err(PassError::Ids {
+                pass: i,
+                name: name(),
+            });
         }
         if let Some(m) = p.material {
             if m as usize >= materials {
-                return Err(format!(
-                    "geometry pass {i} ({name}): material index {m} past the {materials} given"
-                ));
+                return Err(PassError::Material {
+                    pass: i,
+                    name: name(),
+                    material: m,
+                    materials,
+                });
             }
         }
         for (j, q) in passes[..i].iter().enumerate() {
             let (a, b) = (p.ids(), q.ids());
             if a.start < b.end && b.start < a.end {
-                return Err(format!(
-                    "geometry passes {j} ({}) and {i} ({name}) write overlapping ids {b:?} and {a:?}",
-                    q.name
-                ));
+                return Err(PassError::Overlap {
+                    first: j,
+                    first_name: q.name.clone(),
+                    first_ids: b,
+                    second: i,
+                    second_name: name(),
+                    second_ids: a,
+                });
             }
         }
     }

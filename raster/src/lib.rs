@@ -60,7 +60,7 @@ pub use frame::{
     visibility_into, Frame, FrameStats, PassTimes, ShadePath, Visibility,
 };
 pub use geometry::{Cull, FrameContext, GeometryPass, Project, SceneMesh, VertexStage};
-pub use lit::{env_split_sum, prefilter_direction, Lit};
+pub use lit::{env_split_sum, prefilter_direction, Lit, UnsupportedMap};
 pub use scene::{Material, SceneData, SceneDataError, SceneParts};
 pub use shader::{PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};

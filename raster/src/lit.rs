@@ -37,6 +37,15 @@ pub struct Lit {
     emissive: Option<[f32; 3]>,
 }
 
+/// A parameter map given to a model that has no parameter it fills
+/// ([`Lit::with_maps`]).
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{map}: the \"{model}\" model has no parameter this map fills")]
+pub struct UnsupportedMap {
+    pub map: &'static str,
+    pub model: &'static str,
+}
+
 impl Lit {
     /// The model with its constant parameters.
     pub fn new(model: Model) -> Lit {
@@ -52,7 +61,7 @@ impl Lit {
     /// make its clearcoat's normal differ from the base's (a clearcoat
     /// normal map, or a base normal map, which the coat does not take:
     /// maps.rs) reads the coat's normal per lane.
-    pub fn with_maps(model: Model, maps: ParamMaps) -> Result<Lit, String> {
+    pub fn with_maps(model: Model, maps: ParamMaps) -> Result<Lit, UnsupportedMap> {
         let model = match model {
             Model::Gltf(g) if maps.normal.is_some() || maps.has_coat_normal_map() => {
                 Model::Gltf(g.with_coat_normal())
@@ -67,10 +76,10 @@ impl Lit {
             }
         }
         match model.visit(Check(&maps)) {
-            Some(map) => Err(format!(
-                "{map}: the \"{}\" model has no parameter this map fills",
-                model.name()
-            )),
+            Some(map) => Err(UnsupportedMap {
+                map,
+                model: model.name(),
+            }),
             None => Ok(Lit {
                 model,
                 maps,

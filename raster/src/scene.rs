@@ -8,9 +8,9 @@
 
 use crate::alpha::{AlphaMode, MaterialAlpha};
 use crate::camera::Camera;
-use crate::geometry::{validate_passes, GeometryPass, SceneMesh};
+use crate::geometry::{validate_passes, GeometryPass, PassError, SceneMesh};
 use crate::shader::SurfaceShader;
-use crate::shadow::ShadowSettings;
+use crate::shadow::{ShadowSettings, ShadowSettingsError};
 use glam::{Vec2, Vec3, Vec4};
 use specula_core::light::Light;
 use std::sync::Arc;
@@ -141,7 +141,7 @@ pub struct SceneData {
 }
 
 /// Why [`SceneData::new`] refused a scene's parts.
-#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum SceneDataError {
     #[error("{normals} normals for {positions} positions")]
     Normals { normals: usize, positions: usize },
@@ -159,21 +159,23 @@ pub enum SceneDataError {
     VertexIndex { triangle: usize, vertices: usize },
     #[error("triangle {triangle} uses material index past the {materials} given")]
     MaterialIndex { triangle: usize, materials: usize },
-    /// The geometry passes' check (`geometry.rs`), as its message.
-    #[error("{0}")]
-    Passes(String),
+    #[error(transparent)]
+    Passes(#[from] PassError),
     #[error("{settings} shadow settings for {lights} lights")]
     ShadowCount { settings: usize, lights: usize },
     /// A light's shadow settings refused; `light` counts from 1.
-    #[error("light {light}: {message}")]
-    Shadow { light: usize, message: String },
+    #[error("light {light}: {source}")]
+    Shadow {
+        light: usize,
+        source: ShadowSettingsError,
+    },
     /// Sun shadows without an environment map, or with a map that has no
     /// sun taken out of it.
     #[error("sun shadows need an environment map with a sun (a compact bright source taken out of the map)")]
     SunShadowsWithoutSun,
     /// The sun's shadow settings refused.
     #[error("sun: {0}")]
-    SunShadow(String),
+    SunShadow(#[source] ShadowSettingsError),
     /// A material whose shader cannot shade the scene's lights.
     #[error("material {name:?}: {message}")]
     Lights { name: String, message: String },
@@ -265,7 +267,7 @@ fn check(s: &SceneParts) -> Result<(), SceneDataError> {
             materials: nm,
         });
     }
-    validate_passes(&s.geometry, s.triangles.len(), nm).map_err(SceneDataError::Passes)?;
+    validate_passes(&s.geometry, s.triangles.len(), nm)?;
     if !s.shadows.is_empty() && s.shadows.len() != s.lights.len() {
         return Err(SceneDataError::ShadowCount {
             settings: s.shadows.len(),
@@ -274,9 +276,9 @@ fn check(s: &SceneParts) -> Result<(), SceneDataError> {
     }
     for (k, settings) in s.shadows.iter().enumerate() {
         if let Some(settings) = settings {
-            settings.check().map_err(|message| SceneDataError::Shadow {
+            settings.check().map_err(|source| SceneDataError::Shadow {
                 light: k + 1,
-                message,
+                source,
             })?;
         }
     }

@@ -67,17 +67,74 @@ pub enum Filter {
 /// Most taps [`Filter::Anisotropic`] takes (what GPUs offer: 16×).
 pub const MAX_ANISOTROPY: u8 = 16;
 
+/// A texture filter's name that [`Filter`]'s `FromStr` does not know.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("expected nearest, bilinear, trilinear, anisotropic or anisotropic:N (N in 1..={MAX_ANISOTROPY}), got {0:?}", MAX_ANISOTROPY = MAX_ANISOTROPY)]
+pub struct FilterParseError(pub String);
+
+/// Why a texture could not be made from the texels given.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum TextureError {
+    #[error("texture size {width}×{height} with {channels} channels: all must be ≥ 1")]
+    Empty {
+        width: usize,
+        height: usize,
+        channels: usize,
+    },
+    #[error("texture size {width}×{height} overflows")]
+    Overflow { width: usize, height: usize },
+    #[error("texture too large: {width}×{height}×{channels} values, at most {MAX_VALUES}", MAX_VALUES = MAX_VALUES)]
+    TooLarge {
+        width: usize,
+        height: usize,
+        channels: usize,
+    },
+    #[error("texture too large: {width}×{height} with {channels} channels needs more than {MAX_VALUES} values with its mip chain", MAX_VALUES = MAX_VALUES)]
+    ChainTooLarge {
+        width: usize,
+        height: usize,
+        channels: usize,
+    },
+    #[error("texture too large: {0} values with its mip chain, at most {MAX_VALUES}", MAX_VALUES = MAX_VALUES)]
+    LevelsTooLarge(usize),
+    #[error("{len} values given for a {width}×{height} texture of {channels} channels ({expected} expected)")]
+    Length {
+        len: usize,
+        width: usize,
+        height: usize,
+        channels: usize,
+        expected: usize,
+    },
+    #[error("texel value {index} is not finite ({value}); textures hold finite values")]
+    NotFinite { index: usize, value: f32 },
+    #[error("a texture needs at least one level")]
+    NoLevels,
+    #[error("level {level} is {width}×{height}; after level 0 of {first_width}×{first_height} it must be {want_width}×{want_height}")]
+    LevelSize {
+        level: usize,
+        width: usize,
+        height: usize,
+        first_width: usize,
+        first_height: usize,
+        want_width: usize,
+        want_height: usize,
+    },
+    #[error("level {level}: {error}")]
+    Level {
+        level: usize,
+        error: Box<TextureError>,
+    },
+    #[error("level {0}: texel values must be finite")]
+    LevelNotFinite(usize),
+}
+
 impl core::str::FromStr for Filter {
-    type Err = String;
+    type Err = FilterParseError;
 
     /// "nearest", "bilinear", "trilinear", "anisotropic" (16 taps) or
     /// "anisotropic:N" with N in 1..=16.
-    fn from_str(s: &str) -> Result<Filter, String> {
-        let bad = || {
-            format!(
-                "expected nearest, bilinear, trilinear, anisotropic or anisotropic:N (N in 1..={MAX_ANISOTROPY}), got {s:?}"
-            )
-        };
+    fn from_str(s: &str) -> Result<Filter, FilterParseError> {
+        let bad = || FilterParseError(s.to_string());
         Ok(match s {
             "nearest" => Filter::Nearest,
             "bilinear" => Filter::Bilinear,
@@ -159,7 +216,11 @@ pub(crate) const MAX_VALUES: usize = 1 << 24;
 /// Checks that a `width` × `height` texture of `channels` channels with its
 /// whole mip chain stays within the 2²⁴ values a texture holds, from its
 /// size alone (an image's header), before its texels are decoded.
-pub fn check_mip_chain_size(width: usize, height: usize, channels: usize) -> Result<(), String> {
+pub fn check_mip_chain_size(
+    width: usize,
+    height: usize,
+    channels: usize,
+) -> Result<(), TextureError> {
     let (mut w, mut h) = (width.max(1), height.max(1));
     let mut total = 0usize;
     loop {
@@ -170,9 +231,11 @@ pub fn check_mip_chain_size(width: usize, height: usize, channels: usize) -> Res
         (w, h) = next_level_size(w, h);
     }
     if total > MAX_VALUES {
-        return Err(format!(
-            "texture too large: {width}×{height} with {channels} channels needs more than {MAX_VALUES} values with its mip chain"
-        ));
+        return Err(TextureError::ChainTooLarge {
+            width,
+            height,
+            channels,
+        });
     }
     Ok(())
 }
@@ -317,13 +380,11 @@ impl Texture {
         height: usize,
         channels: usize,
         texels: Vec<f32>,
-    ) -> Result<Texture, String> {
+    ) -> Result<Texture, TextureError> {
         check_size(width, height, channels, texels.len())?;
-        if let Some(i) = texels.iter().position(|v| !v.is_finite()) {
-            return Err(format!(
-                "texel value {i} is not finite ({}); textures hold finite values",
-                texels[i]
-            ));
+        if let Some(index) = texels.iter().position(|v| !v.is_finite()) {
+            let value = texels[index];
+            return Err(TextureError::NotFinite { index, value });
         }
         let mut levels = vec![(width, height, texels)];
         while let Some((w, h, d)) = levels.last() {
@@ -345,7 +406,7 @@ impl Texture {
         channels: usize,
         bytes: &[u8],
         encoding: Encoding,
-    ) -> Result<Texture, String> {
+    ) -> Result<Texture, TextureError> {
         check_size(width, height, channels, bytes.len())?;
         let srgb: [f32; 256] =
             core::array::from_fn(|k| crate::post::srgb_curve_inverse(k as f64 / 255.0) as f32);
@@ -367,9 +428,9 @@ impl Texture {
     pub fn from_levels(
         channels: usize,
         levels: Vec<(usize, usize, Vec<f32>)>,
-    ) -> Result<Texture, String> {
+    ) -> Result<Texture, TextureError> {
         let Some(first) = levels.first() else {
-            return Err("a texture needs at least one level".into());
+            return Err(TextureError::NoLevels);
         };
         let (mut w, mut h) = (first.0, first.1);
         for (l, (lw, lh, d)) in levels.iter().enumerate() {
@@ -377,25 +438,34 @@ impl Texture {
                 (w, h) = next_level_size(w, h);
             }
             if (*lw, *lh) != (w, h) {
-                return Err(format!(
-                    "level {l} is {lw}×{lh}; after level 0 of {}×{} it must be {w}×{h}",
-                    first.0, first.1
-                ));
+                return Err(TextureError::LevelSize {
+                    level: l,
+                    width: *lw,
+                    height: *lh,
+                    first_width: first.0,
+                    first_height: first.1,
+                    want_width: w,
+                    want_height: h,
+                });
             }
-            check_size(w, h, channels, d.len()).map_err(|e| format!("level {l}: {e}"))?;
+            check_size(w, h, channels, d.len()).map_err(|e| TextureError::Level {
+                level: l,
+                error: Box::new(e),
+            })?;
             if d.iter().any(|v| !v.is_finite()) {
-                return Err(format!("level {l}: texel values must be finite"));
+                return Err(TextureError::LevelNotFinite(l));
             }
         }
         Self::assemble(channels, levels)
     }
 
-    fn assemble(channels: usize, levels: Vec<(usize, usize, Vec<f32>)>) -> Result<Texture, String> {
+    fn assemble(
+        channels: usize,
+        levels: Vec<(usize, usize, Vec<f32>)>,
+    ) -> Result<Texture, TextureError> {
         let total: usize = levels.iter().map(|l| l.2.len()).sum();
         if total > MAX_VALUES {
-            return Err(format!(
-                "texture too large: {total} values with its mip chain, at most {MAX_VALUES}"
-            ));
+            return Err(TextureError::LevelsTooLarge(total));
         }
         let mut t = Texture {
             channels,
@@ -715,28 +785,36 @@ impl Texture {
     }
 }
 
-fn check_size(width: usize, height: usize, channels: usize, len: usize) -> Result<(), String> {
+fn check_size(
+    width: usize,
+    height: usize,
+    channels: usize,
+    len: usize,
+) -> Result<(), TextureError> {
     if width == 0 || height == 0 || channels == 0 {
-        return Err(format!(
-            "texture size {width}×{height} with {channels} channels: all must be ≥ 1"
-        ));
+        return Err(TextureError::Empty {
+            width,
+            height,
+            channels,
+        });
     }
     match width
         .checked_mul(height)
         .and_then(|n| n.checked_mul(channels))
     {
-        Some(n) if n == len => {}
-        Some(n) if n > MAX_VALUES => {
-            return Err(format!(
-                "texture too large: {width}×{height}×{channels} values, at most {MAX_VALUES}"
-            ))
-        }
-        Some(n) => {
-            return Err(format!(
-                "{len} values given for a {width}×{height} texture of {channels} channels ({n} expected)"
-            ))
-        }
-        None => return Err(format!("texture size {width}×{height} overflows")),
+        Some(n) if n == len => Ok(()),
+        Some(n) if n > MAX_VALUES => Err(TextureError::TooLarge {
+            width,
+            height,
+            channels,
+        }),
+        Some(expected) => Err(TextureError::Length {
+            len,
+            width,
+            height,
+            channels,
+            expected,
+        }),
+        None => Err(TextureError::Overflow { width, height }),
     }
-    Ok(())
 }

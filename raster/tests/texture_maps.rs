@@ -385,7 +385,8 @@ fn a_lambert_material_refuses_a_metallic_roughness_map() {
         }),
         maps,
     )
-    .unwrap_err();
+    .unwrap_err()
+    .to_string();
     assert!(err.contains("metallic_roughness_texture"), "{err}");
     // Occlusion, normal and emissive maps fit every model.
     let maps = ParamMaps {

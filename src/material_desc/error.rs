@@ -24,18 +24,18 @@ pub enum MaterialError {
         field: &'static str,
         source: crate::textures::TextureError,
     },
-    /// A `texture_filter` the sampler does not know (its message).
+    /// A `texture_filter` the sampler does not know.
     #[error("texture_filter: {0}")]
-    Filter(String),
+    Filter(#[from] specula_raster::texture::FilterParseError),
     /// A tonal art map folder that cannot be read.
     #[error("tam: {0}")]
     Tam(TamError),
     /// The built-in tonal art map could not be made.
     #[error("tam: the built-in map: {0}")]
     BuiltinTam(TamError),
-    /// The lit shader refused the material's maps (its message).
-    #[error("{0}")]
-    Maps(String),
+    /// The lit shader refused the material's maps.
+    #[error(transparent)]
+    Maps(#[from] specula_raster::UnsupportedMap),
 }
 
 /// The seam for the callers whose errors are still `String`s

@@ -62,7 +62,7 @@ impl<'a> SurfaceMaps<'a> {
     /// The sampler of the material's textures, checked.
     pub(super) fn sampler(&self) -> Result<Sampler, MaterialError> {
         let filter = match self.texture_filter {
-            Some(f) => f.parse().map_err(MaterialError::Filter)?,
+            Some(f) => f.parse::<Filter>()?,
             None => Filter::Trilinear,
         };
         let [u, v] = match self.texture_wrap {

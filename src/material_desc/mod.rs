@@ -129,7 +129,7 @@ impl MaterialDesc {
                 let lit = if maps.is_empty() {
                     Lit::new(model)
                 } else {
-                    Lit::with_maps(model, maps).map_err(MaterialError::Maps)?
+                    Lit::with_maps(model, maps)?
                 };
                 Material::new(name, lit.with_emission(emissive), double_sided)
             }

@@ -62,6 +62,17 @@ pub trait PostStage: std::fmt::Debug + Send + Sync {
     fn apply(&mut self, img: &mut HdrImage, frame: &FrameBuffers);
 }
 
+/// Why [`Post::validate`] refused a stage list.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+pub enum PostError {
+    #[error("post: \"encode\" must be the last stage")]
+    EncodeNotLast,
+    #[error("post: resolve factor {ssaa} does not divide the {width}×{height} frame")]
+    ResolveFactor { ssaa: u32, width: u32, height: u32 },
+    #[error("post: more than one resolve stage")]
+    TwoResolves,
+}
+
 /// One named step of the post list.
 #[derive(Debug)]
 pub enum Stage {
@@ -152,27 +163,27 @@ impl Post {
 
     /// Checks the list: `Encode` only last, one `Resolve` at most, whose
     /// factor divides the frame size.
-    pub fn validate(&self, width: u32, height: u32) -> Result<(), String> {
+    pub fn validate(&self, width: u32, height: u32) -> Result<(), PostError> {
         let n = self.stages.len();
         let mut resolves = 0;
         for (i, s) in self.stages.iter().enumerate() {
             match s {
-                Stage::Encode if i + 1 != n => {
-                    return Err("post: \"encode\" must be the last stage".into())
-                }
+                Stage::Encode if i + 1 != n => return Err(PostError::EncodeNotLast),
                 Stage::Downsample { ssaa } => {
                     resolves += 1;
                     if *ssaa == 0 || !width.is_multiple_of(*ssaa) || !height.is_multiple_of(*ssaa) {
-                        return Err(format!(
-                            "post: resolve factor {ssaa} does not divide the {width}×{height} frame"
-                        ));
+                        return Err(PostError::ResolveFactor {
+                            ssaa: *ssaa,
+                            width,
+                            height,
+                        });
                     }
                 }
                 _ => {}
             }
         }
         if resolves > 1 {
-            return Err("post: more than one resolve stage".into());
+            return Err(PostError::TwoResolves);
         }
         Ok(())
     }
@@ -212,7 +223,7 @@ impl Post {
     }
 
     /// Runs the stages over the frame's colour.
-    pub fn run(&mut self, frame: &FrameBuffers) -> Result<PostOutput, String> {
+    pub fn run(&mut self, frame: &FrameBuffers) -> Result<PostOutput, PostError> {
         self.run_reusing(frame, PostOutput::default())
     }
 
@@ -232,7 +243,7 @@ impl Post {
         &mut self,
         frame: &FrameBuffers,
         recycled: PostOutput,
-    ) -> Result<PostOutput, String> {
+    ) -> Result<PostOutput, PostError> {
         self.validate(frame.width, frame.height)?;
         let mut ldr_buf = recycled.ldr.unwrap_or_default();
         if let Some((ssaa, stops, tonemap)) = self.fused_form() {
@@ -432,8 +443,13 @@ mod tests {
         let t = crate::Target::new(150, 90).unwrap();
         let fb = FrameBuffers::new(&t, BufferSet::default());
         let mut p = Post::standard(4, 0.0, Tonemap::Clamp);
-        assert!(p.run(&fb).unwrap_err().contains("does not divide"));
+        let ssaa4 = PostError::ResolveFactor {
+            ssaa: 4,
+            width: 150,
+            height: 90,
+        };
+        assert_eq!(p.run(&fb).unwrap_err(), ssaa4);
         p.stages = vec![Stage::Encode, Stage::Tonemap(Tonemap::Clamp)];
-        assert!(p.run(&fb).unwrap_err().contains("last"));
+        assert_eq!(p.run(&fb).unwrap_err(), PostError::EncodeNotLast);
     }
 }

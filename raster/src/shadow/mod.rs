@@ -35,7 +35,9 @@ mod settings;
 
 pub use cascades::{cascade_splits, CASCADE_LAMBDA, MAX_CASCADES};
 pub(crate) use settings::polygon_shape;
-pub use settings::{polygon_light_size, ShadowFilter, ShadowSettings, MAX_MAP_SIZE};
+pub use settings::{
+    polygon_light_size, ShadowFilter, ShadowSettings, ShadowSettingsError, MAX_MAP_SIZE,
+};
 
 use glam::{Mat4, Vec3};
 

@@ -58,20 +58,30 @@ impl Default for ShadowSettings {
     }
 }
 
+/// Why [`ShadowSettings::check`] refused a light's settings; the message
+/// names the scene field at fault.
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+pub enum ShadowSettingsError {
+    #[error("shadow_map_size: must be 1..={MAX_MAP_SIZE} texels, got {0}", MAX_MAP_SIZE = MAX_MAP_SIZE)]
+    MapSize(u32),
+    #[error("cascades: must be 1..={MAX_CASCADES}, got {0}", MAX_CASCADES = MAX_CASCADES)]
+    Cascades(u32),
+    #[error("{field}: must be a finite number in [0, {max}], got {got}")]
+    OutOfRange {
+        field: &'static str,
+        max: f32,
+        got: f32,
+    },
+}
+
 impl ShadowSettings {
     /// Checks every field; the error names the field.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), ShadowSettingsError> {
         if !(1..=MAX_MAP_SIZE).contains(&self.map_size) {
-            return Err(format!(
-                "shadow_map_size: must be 1..={MAX_MAP_SIZE} texels, got {}",
-                self.map_size
-            ));
+            return Err(ShadowSettingsError::MapSize(self.map_size));
         }
         if !(1..=MAX_CASCADES).contains(&self.cascades) {
-            return Err(format!(
-                "cascades: must be 1..={MAX_CASCADES}, got {}",
-                self.cascades
-            ));
+            return Err(ShadowSettingsError::Cascades(self.cascades));
         }
         let fields = [
             ("bias", self.bias, 1e3),
@@ -79,11 +89,9 @@ impl ShadowSettings {
             ("filter_radius", self.filter_radius, 64.0),
             ("light_size", self.light_size, 1e9),
         ];
-        for (name, v, max) in fields {
-            if !(0.0..=max).contains(&v) {
-                return Err(format!(
-                    "{name}: must be a finite number in [0, {max}], got {v}"
-                ));
+        for (field, got, max) in fields {
+            if !(0.0..=max).contains(&got) {
+                return Err(ShadowSettingsError::OutOfRange { field, max, got });
             }
         }
         Ok(())

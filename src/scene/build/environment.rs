@@ -112,7 +112,7 @@ fn build_sun_shadows(
         light_size: d.light_size.unwrap_or(own_size),
         cascades: d.cascades,
     };
-    s.check().map_err(sun_error)?;
+    s.check().map_err(|e| sun_error(e.to_string()))?;
     if d.shadows == ShadowsDesc::None {
         return Ok(None);
     }

@@ -111,10 +111,12 @@ pub(in crate::scene) enum BuildError {
     /// An MTL material's `Kd` negative or not finite.
     #[error("material {material}: Kd must be finite and ≥ 0, got {got:?}")]
     MtlKd { material: String, got: [f32; 3] },
-    /// An MTL material's `map_Kd` that cannot be used (the texture's
-    /// message).
-    #[error("material {material}: map_Kd: {message}")]
-    MtlMap { material: String, message: String },
+    /// An MTL material's `map_Kd` that the lit shader cannot use.
+    #[error("material {material}: map_Kd: {source}")]
+    MtlMap {
+        material: String,
+        source: specula_raster::UnsupportedMap,
+    },
     /// An MTL material's `map_Kd` file that is not a texture.
     #[error("material {material}: map_Kd: {source}")]
     MtlTexture {

@@ -82,9 +82,9 @@ fn mtl_material(
     match &m.diffuse_texture {
         Some(tex) => {
             let path = obj_dir.join(tex.trim());
-            let map_kd = |message| BuildError::MtlMap {
+            let map_kd = |source| BuildError::MtlMap {
                 material: m.name.clone(),
-                message,
+                source,
             };
             let map = crate::textures::load_color_map(&path, read).map_err(|source| {
                 BuildError::MtlTexture {

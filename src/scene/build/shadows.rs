@@ -82,9 +82,9 @@ pub(super) fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSetti
     };
     // Checked with shadows off too: a value out of range is a mistake
     // whether or not it is used.
-    s.check().map_err(|message| BuildError::Table {
+    s.check().map_err(|e| BuildError::Table {
         table: format!("light[{i}]"),
-        message,
+        message: e.to_string(),
     })?;
     if let LightDesc::Polygon { vertices, .. } = l {
         s.light_size = specula_raster::shadow::polygon_light_size(vertices);
