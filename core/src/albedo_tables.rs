@@ -28,9 +28,9 @@ const SAMPLES: u32 = 2048;
 
 /// The three integrals of the module docs, per lane.
 pub(crate) struct SplitSum<R> {
-    pub a: R,
-    pub b: R,
-    pub c: R,
+    pub(crate) a: R,
+    pub(crate) b: R,
+    pub(crate) c: R,
 }
 
 pub struct AlbedoTables {
@@ -114,12 +114,6 @@ impl AlbedoTables {
     pub fn get() -> &'static AlbedoTables {
         static T: OnceLock<AlbedoTables> = OnceLock::new();
         T.get_or_init(Self::build)
-    }
-
-    /// A, B, C for one (μo, α); `AlbedoTables::ggx_schlick` at f32.
-    pub fn lookup(&self, mu_o: f32, alpha: f32) -> [f32; 3] {
-        let t = self.ggx_schlick(alpha, mu_o);
-        [t.a, t.b, t.c]
     }
 
     /// A, B, C per lane.

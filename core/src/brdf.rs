@@ -164,11 +164,11 @@ impl<R: Real> ShadingFrame<R> {
 #[derive(Clone, Copy, Debug)]
 pub struct Outgoing<R: Real> {
     /// Unit view direction in the local frame.
-    pub wo: V3<R>,
+    pub(crate) wo: V3<R>,
     /// μo = cos θo, floored at 1e-7 (see `above`).
-    pub cos_o: R,
+    pub(crate) cos_o: R,
     /// wo strictly above the horizon; models give zero in other lanes.
-    pub above: R::Mask,
+    pub(crate) above: R::Mask,
 }
 
 impl<R: Real> Outgoing<R> {
@@ -187,27 +187,27 @@ impl<R: Real> Outgoing<R> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct HalfAngles<R: Real> {
     /// n·wi and n·wo, floored at 1e-7 (see `above`).
-    pub cos_i: R,
-    pub cos_o: R,
+    pub(crate) cos_i: R,
+    pub(crate) cos_o: R,
     /// Both directions strictly above the horizon; other lanes must be
     /// zeroed by the caller (the floors above only keep them finite).
-    pub above: R::Mask,
+    pub(crate) above: R::Mask,
     /// cos²θh and sin²θh of the half vector, from the unnormalized sum
     /// (ndf.rs explains why); both carry the same `rcp` rounding (≤ 4e-7),
     /// so their ratio, which shapes D, is exact.
-    pub cos2_h: R,
-    pub sin2_h: R,
+    pub(crate) cos2_h: R,
+    pub(crate) sin2_h: R,
     /// cos θd = wi·h, the Fresnel angle.
-    pub cos_d: R,
+    pub(crate) cos_d: R,
     /// |wi + wo| = 2 cos θd (see [`crate::fresnel::schlick_weight_half`]).
-    pub len: R,
+    pub(crate) len: R,
     /// The unnormalized half vector s ∝ wi + wo (local; rescaled when tiny,
     /// see `new`), |s|² and 1/|s|², for models that need h's direction
     /// (anisotropic NDFs: h = s/|s|). |s|² ≥ [`HALF_LEN2_MIN`] wherever
     /// s ≠ 0 (s = 0 only for opposite directions, which are not `above`).
-    pub s: V3<R>,
-    pub len2: R,
-    pub inv_len2: R,
+    pub(crate) s: V3<R>,
+    pub(crate) len2: R,
+    pub(crate) inv_len2: R,
 }
 
 /// [`HalfAngles::new`] rescales a half vector s with |s|² below this to

@@ -23,7 +23,7 @@ use crate::ndf::Ndf;
 /// The GGX α whose microfacet normals have the same median polar angle
 /// as `ndf`'s at `alpha` (module docs), at most 1 (GTR at α = 1 is the
 /// uniform 1/π, as GGX at 1 is).
-pub fn ggx_equivalent_alpha(ndf: Ndf, alpha: f64) -> f64 {
+pub(crate) fn ggx_equivalent_alpha(ndf: Ndf, alpha: f64) -> f64 {
     let a2 = alpha * alpha;
     let tan2 = match ndf {
         Ndf::Ggx => a2,

@@ -100,18 +100,14 @@ const POINTS: usize = 8;
 /// Λ of one GTR(γ, α), tabulated (module docs).
 #[derive(Clone, Debug, PartialEq)]
 pub struct GtrLambdaTable {
-    pub gamma: f64,
-    pub alpha: f64,
+    pub(crate) gamma: f64,
+    pub(crate) alpha: f64,
     /// ln q, q = μΛ/(1 − μ²), over ln μ.
     mu_lambda: Table1<1>,
 }
 
-/// μΛ(μ) of GTR(γ, α) by the 1-D quadrature of the module docs.
-pub fn mu_lambda_gtr(gamma: f64, alpha: f64, mu: f64) -> f64 {
-    mu_lambda_gtr_with(&GaussLegendre::new(POINTS), gamma, alpha, mu)
-}
-
-/// [`mu_lambda_gtr`] with its Gauss–Legendre rule formed by the caller.
+/// μΛ(μ) of GTR(γ, α) by the 1-D quadrature of the module docs, with its
+/// Gauss–Legendre rule formed by the caller.
 fn mu_lambda_gtr_with(rule: &GaussLegendre, gamma: f64, alpha: f64, mu: f64) -> f64 {
     let mu = mu.clamp(0.0, 1.0);
     if mu >= 1.0 {

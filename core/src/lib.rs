@@ -11,7 +11,7 @@ pub mod albedo_tables;
 mod brdf;
 mod diffuse;
 pub mod fresnel;
-pub mod ggx_equivalent;
+mod ggx_equivalent;
 pub mod gtr_lambda;
 pub mod kulla_conty;
 pub mod light;

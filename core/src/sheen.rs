@@ -4,14 +4,14 @@
 //!
 //! With α = sheen_roughness² (the extension's `alphaG`):
 //!
-//! - D(h) = (2 + 1/α) sin^(1/α)θh / (2π) ([`d_charlie`]);
-//! - V = 1 / ((1 + Λ(μo) + Λ(μi)) 4 μo μi) ([`v_charlie`]), with the
-//!   fitted Λ of [`lambda_sheen`];
+//! - D(h) = (2 + 1/α) sin^(1/α)θh / (2π) (`d_charlie`);
+//! - V = 1 / ((1 + Λ(μo) + Λ(μi)) 4 μo μi) (`v_charlie`), with the
+//!   fitted Λ of `lambda_sheen`;
 //! - f_sheen = sheen_color · D · V (no Fresnel: the extension lets F = 1);
 //! - E(μ, sheen_roughness) = ∫ D V μi dωi at sheen_color = 1, the lobe's
 //!   directional albedo, tabulated here by quadrature ([`SheenTable`]).
 //!
-//! α is floored at [`SHEEN_ALPHA_MIN`]: the extension's default roughness
+//! α is floored at `SHEEN_ALPHA_MIN`: the extension's default roughness
 //! is 0, where 1/α is infinite; below the floor D's peak, (2 + 1/α)/(2π),
 //! and the power 1/(2α) of sin²θh leave what f32 resolves well, and the
 //! lobe is already confined to within a few degrees of the horizon.
@@ -25,11 +25,11 @@ use std::sync::OnceLock;
 
 /// Smallest sheen α (module docs): sheen_roughness below ≈ 0.032 acts as
 /// ≈ 0.032.
-pub const SHEEN_ALPHA_MIN: f64 = 1e-3;
+pub(crate) const SHEEN_ALPHA_MIN: f64 = 1e-3;
 
 /// α = max(sheen_roughness², [`SHEEN_ALPHA_MIN`]).
 #[inline(always)]
-pub fn sheen_alpha<R: Real>(sheen_roughness: R) -> R {
+pub(crate) fn sheen_alpha<R: Real>(sheen_roughness: R) -> R {
     (sheen_roughness * sheen_roughness).max(R::splat(SHEEN_ALPHA_MIN))
 }
 
@@ -40,7 +40,7 @@ pub fn sheen_alpha<R: Real>(sheen_roughness: R) -> R {
 /// exp(ln(sin²θh) / (2α)), with sin²θh floored at 1e-30 so that h = n
 /// gives exp(−huge) = 0 rather than ln(0).
 #[inline(always)]
-pub fn d_charlie<R: Real>(alpha: R, sin2_theta_h: R) -> R {
+pub(crate) fn d_charlie<R: Real>(alpha: R, sin2_theta_h: R) -> R {
     let inv = R::ONE / alpha;
     let p = (sin2_theta_h.max(R::splat(1e-30)).ln() * inv * R::HALF).exp();
     (R::splat(2.0) + inv) * p * R::splat(0.5 * std::f64::consts::FRAC_1_PI)
@@ -66,7 +66,7 @@ fn l_sheen<R: Real>(x: R, t: R) -> R {
 /// Charlie Λ(θ) for cos θ ∈ (0, 1] [Conty17; KhrSheen]:
 /// exp(l(cos θ)) for cos θ < ½, exp(2 l(½) − l(1 − cos θ)) otherwise.
 #[inline(always)]
-pub fn lambda_sheen<R: Real>(alpha: R, cos_theta: R) -> R {
+pub(crate) fn lambda_sheen<R: Real>(alpha: R, cos_theta: R) -> R {
     let t = (R::ONE - alpha) * (R::ONE - alpha);
     let low = l_sheen(cos_theta, t);
     let high = R::splat(2.0) * l_sheen(R::HALF, t) - l_sheen(R::ONE - cos_theta, t);
@@ -76,13 +76,13 @@ pub fn lambda_sheen<R: Real>(alpha: R, cos_theta: R) -> R {
 /// Charlie visibility V = 1 / ((1 + Λ(μo) + Λ(μi)) 4 μo μi), from the two
 /// Λ (a shader forms the view's once per pixel); cosines > 0.
 #[inline(always)]
-pub fn v_charlie<R: Real>(lambda_i: R, lambda_o: R, cos_i: R, cos_o: R) -> R {
+pub(crate) fn v_charlie<R: Real>(lambda_i: R, lambda_o: R, cos_i: R, cos_o: R) -> R {
     R::ONE / ((R::ONE + lambda_i + lambda_o) * (R::splat(4.0) * cos_i * cos_o))
 }
 
 /// The sheen lobe D V at sheen_color = 1 for unit local directions above
 /// the horizon (f64; what the table integrates).
-pub fn sheen_lobe(alpha: f64, wi: V3<f64>, wo: V3<f64>) -> f64 {
+pub(crate) fn sheen_lobe(alpha: f64, wi: V3<f64>, wo: V3<f64>) -> f64 {
     let s = wi + wo;
     let len2 = s.length_squared();
     if len2 <= 0.0 || wi.z <= 0.0 || wo.z <= 0.0 {
@@ -172,7 +172,7 @@ impl SheenTable {
 
     /// K(μo, sheen_roughness) per lane (see the field).
     #[inline(always)]
-    pub fn k<R: Real>(&self, mu: R, sheen_roughness: R) -> R {
+    pub(crate) fn k<R: Real>(&self, mu: R, sheen_roughness: R) -> R {
         let [k] = self.k.lookup(mu, sheen_roughness);
         k
     }

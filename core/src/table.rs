@@ -205,10 +205,6 @@ impl<const C: usize> Table1<C> {
         }
     }
 
-    pub fn axis(&self) -> &Axis {
-        &self.axis
-    }
-
     /// The stored values of node i.
     pub fn node_value(&self, i: usize) -> [f32; C] {
         core::array::from_fn(|c| self.data[i * C + c])
@@ -293,10 +289,6 @@ impl<const C: usize> Table2<C> {
             y,
             data: rows.into_iter().flatten().flatten().collect(),
         }
-    }
-
-    pub fn axes(&self) -> (&Axis, &Axis) {
-        (&self.x, &self.y)
     }
 
     /// The stored values of node (i, j).

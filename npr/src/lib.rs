@@ -33,7 +33,7 @@ pub mod toon;
 #[error("{field}: {reason}")]
 pub struct ParamError {
     pub field: String,
-    pub reason: String,
+    pub(crate) reason: String,
 }
 
 impl ParamError {

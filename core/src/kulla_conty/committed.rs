@@ -130,12 +130,7 @@ pub fn committed() -> &'static HashMap<String, Vec<f32>> {
 }
 
 /// Builds every table of [`committed_tables`] (what the generator writes):
-/// (store name, values).
-pub fn build_all() -> Vec<(String, Vec<f32>)> {
-    build_all_reporting(&mut || {})
-}
-
-/// [`build_all`], calling `built` after each table (the generator's
+/// (store name, values), calling `built` after each table (the generator's
 /// progress).
 pub fn build_all_reporting(built: &mut dyn FnMut()) -> Vec<(String, Vec<f32>)> {
     committed_tables()

@@ -126,11 +126,11 @@ pub fn table() -> &'static Table2<CHANNELS> {
 #[derive(Clone, Copy, Debug)]
 pub struct LtcGgx<R> {
     /// Rows of M⁻¹ R(−φo): X = rx·v, Y = ry·v, Z = rz·v.
-    pub rx: V3<R>,
-    pub ry: V3<R>,
-    pub rz: V3<R>,
-    pub n: R,
-    pub n_w: R,
+    pub(crate) rx: V3<R>,
+    pub(crate) ry: V3<R>,
+    pub(crate) rz: V3<R>,
+    pub(crate) n: R,
+    pub(crate) n_w: R,
 }
 
 impl<R: Real> LtcGgx<R> {

@@ -167,7 +167,7 @@ pub fn r0_of_ior(ior: f64) -> f64 {
 /// A glTF material: its factors, the IOR's r0 and which layers it has.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Gltf {
-    pub params: GltfParams,
+    pub(crate) params: GltfParams,
     r0: f64,
     sheen: bool,
     coat: bool,
@@ -205,11 +205,6 @@ impl Gltf {
     /// The material has a sheen layer (some sheen colour above 0).
     pub fn has_sheen(&self) -> bool {
         self.sheen
-    }
-
-    /// The material has a clearcoat layer (clearcoat above 0).
-    pub fn has_clearcoat(&self) -> bool {
-        self.coat
     }
 }
 
@@ -294,43 +289,43 @@ impl<R: Real> LaneParams<R> for GltfLaneParams<R> {
 #[derive(Clone, Copy, Debug)]
 pub struct GltfPixel<R: Real> {
     /// α = max(roughness², ALPHA_MIN), and the coat's.
-    pub alpha: R,
-    pub coat_alpha: R,
+    pub(crate) alpha: R,
+    pub(crate) coat_alpha: R,
     /// The specular lobe's F0 and F90 (module docs).
-    pub f0: Rgb<R>,
-    pub f90: R,
+    pub(crate) f0: Rgb<R>,
+    pub(crate) f90: R,
     /// The diffuse lobe's Fresnel weight G0, G90 (module docs).
-    pub g0: Rgb<R>,
-    pub g90: Rgb<R>,
+    pub(crate) g0: Rgb<R>,
+    pub(crate) g90: Rgb<R>,
     /// (1 − metallic) base, and its Lambertian lobe / π.
-    pub diffuse: Rgb<R>,
-    pub kd: Rgb<R>,
-    pub clearcoat: R,
-    pub sheen_color: Rgb<R>,
+    pub(crate) diffuse: Rgb<R>,
+    pub(crate) kd: Rgb<R>,
+    pub(crate) clearcoat: R,
+    pub(crate) sheen_color: Rgb<R>,
     /// max(sheen_color), the albedo scaling's weight.
-    pub sheen_max: R,
-    pub sheen_alpha: R,
-    pub sheen_roughness: R,
+    pub(crate) sheen_max: R,
+    pub(crate) sheen_alpha: R,
+    pub(crate) sheen_roughness: R,
     /// The coat's unit normal in the local frame (read only with
     /// [`Gltf::with_coat_normal`]).
-    pub coat_normal: V3<R>,
+    pub(crate) coat_normal: V3<R>,
 }
 
 /// A pixel's BRDF once the view is known.
 #[derive(Clone, Copy)]
 pub struct GltfPrepared<R: Real> {
-    pub o: Outgoing<R>,
-    pub px: GltfPixel<R>,
+    pub(crate) o: Outgoing<R>,
+    pub(crate) px: GltfPixel<R>,
     /// √(α² + (1 − α²) μo²) of the base (masking.rs).
-    pub smith_root_o: R,
+    pub(crate) smith_root_o: R,
     /// The coat's view cosine V·N_c (floored like μo), its Smith root, and
     /// its layer weight c F_c; zero without a coat.
-    pub coat_cos_o: R,
-    pub coat_smith_root_o: R,
-    pub coat_weight: R,
+    pub(crate) coat_cos_o: R,
+    pub(crate) coat_smith_root_o: R,
+    pub(crate) coat_weight: R,
     /// E(μo) and Λ(μo) of the sheen lobe; zero without sheen.
-    pub sheen_e_o: R,
-    pub sheen_lambda_o: R,
+    pub(crate) sheen_e_o: R,
+    pub(crate) sheen_lambda_o: R,
 }
 
 impl Gltf {
@@ -687,11 +682,11 @@ impl Brdf for Gltf {
 /// A glTF material's per-pixel state for polygon lights.
 #[derive(Clone, Copy)]
 pub struct GltfPolygons<R: Real> {
-    pub ltc: LtcGgx<R>,
+    pub(crate) ltc: LtcGgx<R>,
     /// The specular lobe's albedo F0 (n − n_w) + F90 n_w, times 1 − c F_c.
-    pub specular: Rgb<R>,
+    pub(crate) specular: Rgb<R>,
     /// The diffuse lobe's albedo at μo, times 1 − c F_c.
-    pub diffuse: Rgb<R>,
+    pub(crate) diffuse: Rgb<R>,
     /// The coat's LTC and c F_c(μo) n(α_c, μo); `None` without a coat.
-    pub coat: Option<(LtcGgx<R>, R)>,
+    pub(crate) coat: Option<(LtcGgx<R>, R)>,
 }

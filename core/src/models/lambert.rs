@@ -27,12 +27,11 @@ impl<R: Real> LaneParams<R> for LambertLaneParams<R> {
     }
 }
 
-/// A Lambertian pixel: the view and ρ, zero where the view is below the
-/// horizon (so every lobe below needs no mask of its own for it).
+/// A Lambertian pixel: ρ, zero where the view is below the horizon (so
+/// every lobe below needs no mask of its own for it).
 #[derive(Clone, Copy)]
 pub struct LambertPrepared<R: Real> {
-    pub o: Outgoing<R>,
-    pub rho: Rgb<R>,
+    pub(crate) rho: Rgb<R>,
 }
 
 impl Brdf for Lambert {
@@ -71,7 +70,6 @@ impl Brdf for Lambert {
         let o = Outgoing::new(wo);
         LambertPrepared {
             rho: Rgb::select(o.above, params.base_color, Rgb::zero()),
-            o,
         }
     }
 

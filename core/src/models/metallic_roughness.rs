@@ -51,7 +51,7 @@ impl MetallicRoughness {
 #[derive(Clone, Copy, Debug)]
 pub struct MetallicRoughnessLaneParams<R: Real> {
     /// Linear RGB.
-    pub base_color: Rgb<R>,
+    pub(crate) base_color: Rgb<R>,
     /// α = roughness², floored at `ALPHA_MIN`.
     pub alpha: R,
     pub metallic: R,
@@ -95,24 +95,24 @@ impl<R: Real> LaneParams<R> for MetallicRoughnessLaneParams<R> {
 /// view is known.
 #[derive(Clone, Copy, Debug)]
 pub struct MetallicRoughnessPixel<R: Real> {
-    pub alpha: R,
+    pub(crate) alpha: R,
     /// F0 = mix(0.04, base_color, metallic), and 1 − F0.
-    pub f0: Rgb<R>,
-    pub one_minus_f0: Rgb<R>,
+    pub(crate) f0: Rgb<R>,
+    pub(crate) one_minus_f0: Rgb<R>,
     /// Albedo of the diffuse lobe, (1 − metallic) base_color, and its
     /// Lambertian lobe ρd/π.
-    pub diffuse: Rgb<R>,
-    pub kd: Rgb<R>,
+    pub(crate) diffuse: Rgb<R>,
+    pub(crate) kd: Rgb<R>,
 }
 
 /// A metallic-roughness pixel: its view, the Smith root of the view, and
 /// what its parameters determine.
 #[derive(Clone, Copy)]
 pub struct MetallicRoughnessPrepared<R: Real> {
-    pub o: Outgoing<R>,
-    pub px: MetallicRoughnessPixel<R>,
+    pub(crate) o: Outgoing<R>,
+    pub(crate) px: MetallicRoughnessPixel<R>,
     /// √(α² + (1 − α²) μo²) (masking.rs).
-    pub smith_root_o: R,
+    pub(crate) smith_root_o: R,
 }
 
 impl<R: Real> MetallicRoughnessPrepared<R> {
@@ -305,13 +305,13 @@ impl Brdf for MetallicRoughness {
 /// A metallic-roughness material's per-pixel state for polygon lights.
 #[derive(Clone, Copy)]
 pub struct MetallicRoughnessPolygons<R: Real> {
-    pub ltc: LtcGgx<R>,
+    pub(crate) ltc: LtcGgx<R>,
     /// F0 (n − n_w) + n_w per channel: the specular lobe's albedo.
-    pub specular: Rgb<R>,
+    pub(crate) specular: Rgb<R>,
     /// (1 − F0) ρd (1 − C(μo)): what multiplies the form factor.
-    pub diffuse: Rgb<R>,
+    pub(crate) diffuse: Rgb<R>,
     /// No lane has a diffuse lobe.
-    pub metal: bool,
+    pub(crate) metal: bool,
 }
 
 /// The split sum's two terms at the prepared view (see albedo_tables):

@@ -58,8 +58,8 @@ pub struct Microfacet {
 /// colour factor per channel (kulla_conty.rs).
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct Compensation {
-    pub slice: KcSlice,
-    pub factor: [f32; 3],
+    pub(crate) slice: KcSlice,
+    pub(crate) factor: [f32; 3],
     /// factor / (π (1 − E_avg)) per channel: everything in f_ms that does
     /// not depend on the directions, folded once here.
     scale: [f32; 3],
@@ -153,13 +153,13 @@ impl<R: Real> LaneParams<R> for MicrofacetLaneParams<R> {}
 /// A microfacet material's per-pixel state.
 #[derive(Clone, Copy)]
 pub struct MicrofacetPrepared<R: Real> {
-    pub o: Outgoing<R>,
+    pub(crate) o: Outgoing<R>,
     /// ρd.
-    pub diffuse: Rgb<R>,
+    pub(crate) diffuse: Rgb<R>,
     /// Smith Λ(o) of the view direction.
-    pub lambda_o: R,
+    pub(crate) lambda_o: R,
     /// 1 − E(μo) of the compensation lobe (unused without compensation).
-    pub one_minus_e_o: R,
+    pub(crate) one_minus_e_o: R,
 }
 
 impl Brdf for Microfacet {
@@ -290,12 +290,12 @@ impl Brdf for Microfacet {
 /// A microfacet material's per-pixel state for polygon lights.
 #[derive(Clone, Copy)]
 pub struct MicrofacetPolygons<R: Real> {
-    pub ltc: LtcGgx<R>,
+    pub(crate) ltc: LtcGgx<R>,
     /// F0 (n − n_w) + n_w per channel: the specular lobe's albedo.
-    pub specular: Rgb<R>,
+    pub(crate) specular: Rgb<R>,
     /// ρd, plus the compensation lobe's factor · (1 − E(μo)): what
     /// multiplies the form factor.
-    pub diffuse: Rgb<R>,
+    pub(crate) diffuse: Rgb<R>,
 }
 
 /// α clamped into [ALPHA_MIN, 1], and whether that changed it.

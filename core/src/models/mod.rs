@@ -59,11 +59,6 @@ impl Model {
         self.visit(F(frame, wi, wo))
     }
 
-    /// [`Model::f_in`] around unit normal `n`, for isotropic use.
-    pub fn f<R: Real>(&self, n: V3<R>, wi: V3<R>, wo: V3<R>) -> Rgb<R> {
-        self.f_in(&ShadingFrame::from_normal(n), wi, wo)
-    }
-
     /// Whether the model integrates polygon lights.
     pub fn polygon_lights(&self) -> bool {
         struct P;

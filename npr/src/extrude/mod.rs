@@ -166,10 +166,6 @@ impl Extrude {
         }
     }
 
-    pub fn smoothed_normals(&self) -> &[Vec3] {
-        &self.mesh.smooth
-    }
-
     /// Whether triangle `t`'s connected piece of mesh is open (module
     /// docs): its copy is drawn front side out, not back faces.
     pub(crate) fn is_open(&self, t: usize) -> bool {

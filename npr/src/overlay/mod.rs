@@ -103,14 +103,6 @@ impl Strokes {
         }
     }
 
-    pub fn edges(&self) -> &MeshEdges {
-        &self.edges
-    }
-
-    pub fn camera(&self) -> &Camera {
-        &self.camera
-    }
-
     /// The visible polylines of a frame (whose buffers hold depth), in
     /// output pixels of a `ssaa`-times smaller image.
     pub fn polylines(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<Polyline> {

@@ -1,7 +1,6 @@
 //! The line over the image: the marks widened to the line's coverage
 //! (by [`crate::dilate`]) and blended in the outline colour, row by row
-//! in bands of rows straight into the image, or as a whole-frame coverage
-//! map ([`Sobel::coverage_map`]).
+//! in bands of rows straight into the image.
 
 use super::{prefetch, Buffers, RowsScratch, Sobel};
 use crate::dilate::{dilate, dilate_row, dilate_row_lanes, Cover, EdgeMask, Ink, BOUNDED_RADIUS};
@@ -10,34 +9,6 @@ use rayon::prelude::*;
 use specula_raster::post::HdrImage;
 use specula_raster::FrameBuffers;
 use wide::f32x8;
-
-impl Sobel {
-    /// Per-sample coverage over `frame` for a stage at supersampling `ssaa`
-    /// (in buffers of its own: the stage's scratch is its instance's).
-    pub fn coverage_map(&self, frame: &FrameBuffers, ssaa: usize) -> Vec<f32> {
-        let mut b = Buffers::default();
-        self.detect(frame, &mut b);
-        let cover = Cover::new(self.width * ssaa as f32, self.antialias);
-        let (w, h) = (frame.width as usize, frame.height as usize);
-        if cover.radius() > BOUNDED_RADIUS {
-            return dilate(
-                &b.mask.to_bools(),
-                w,
-                h,
-                self.width * ssaa as f32,
-                self.antialias,
-            );
-        }
-        let mut out = vec![0.0f32; w * h];
-        let (mask, marked, pool) = (&b.mask, &b.marked, &b.rows);
-        out.par_chunks_mut(w.max(1))
-            .enumerate()
-            .for_each(|(y, row)| {
-                pool.with(|s| dilate_row(mask, marked, y, cover, &mut s.dilate, |x, c| row[x] = c));
-            });
-        out
-    }
-}
 
 /// Prefetches the cache lines of row `y` of the image planes `rgb` (at
 /// the mask's size) that the line can ink: 16-sample lines with a mark

@@ -324,13 +324,13 @@ pub struct Disney {
 #[derive(Clone, Copy, Debug)]
 pub struct DisneyLaneParams<R: Real> {
     /// (1 − metallic) C_d / π.
-    pub diffuse: Rgb<R>,
+    pub(crate) diffuse: Rgb<R>,
     /// (1 − metallic) sheen C_sheen.
-    pub sheen: Rgb<R>,
+    pub(crate) sheen: Rgb<R>,
     /// C_spec0, the specular lobe's Schlick F0.
-    pub cspec0: Rgb<R>,
-    pub roughness: R,
-    pub subsurface: R,
+    pub(crate) cspec0: Rgb<R>,
+    pub(crate) roughness: R,
+    pub(crate) subsurface: R,
 }
 
 impl<R: Real> LaneParams<R> for DisneyLaneParams<R> {}
@@ -338,15 +338,15 @@ impl<R: Real> LaneParams<R> for DisneyLaneParams<R> {}
 /// Per-pixel state of a Disney material.
 #[derive(Clone, Copy)]
 pub struct DisneyPrepared<R: Real> {
-    pub o: Outgoing<R>,
-    pub lanes: DisneyLaneParams<R>,
+    pub(crate) o: Outgoing<R>,
+    pub(crate) lanes: DisneyLaneParams<R>,
     /// (1 − μo)⁵.
-    pub w_o: R,
+    pub(crate) w_o: R,
     /// Smith G1(o) of the specular and of the clearcoat lobe.
-    pub g1_o: R,
-    pub g1_coat_o: R,
+    pub(crate) g1_o: R,
+    pub(crate) g1_coat_o: R,
     /// 1 − E(μo) of the compensation lobe (0 without compensation).
-    pub one_minus_e_o: R,
+    pub(crate) one_minus_e_o: R,
 }
 
 /// The lobes of f at one direction pair, each without the horizon mask

@@ -15,7 +15,7 @@ pub struct DisneyPolygons<R: Real> {
     pub specular: Rgb<R>,
     /// The diffuse lobes' directional albedo at μo (plus the compensation
     /// lobe's factor · (1 − E(μo))): what multiplies the form factor.
-    pub diffuse: Rgb<R>,
+    pub(crate) diffuse: Rgb<R>,
 }
 
 impl Disney {
