@@ -19,7 +19,7 @@
 use crate::bin::{BinnedChunk, CHUNK};
 use crate::camera::View;
 use crate::clip::GuardBand;
-use crate::geometry::{Cull, FrameContext, GeometryPass};
+use crate::geometry::{Cull, GeometryPass};
 use crate::scan::{rasterize_tile_depth, AlphaScan};
 use crate::scene::SceneData;
 use crate::setup::{outcode_f32, DepthPlanes, SetupContext, SetupCounts, TriPlanes};
@@ -108,21 +108,7 @@ fn depth_only_pass(
     stats: &mut FrameStats,
 ) {
     let t = Instant::now();
-    let stage = out.stage_index(&pass.vertex);
-    out.clip.clear();
-    let frame = FrameContext {
-        view: &out.view,
-        ssaa: target.ssaa,
-    };
-    out.stages[stage]
-        .1
-        .clip_positions(&frame, &scene.mesh(), &mut out.clip);
-    assert_eq!(
-        out.clip.len(),
-        scene.positions.len(),
-        "vertex stage of pass {:?}: one position per vertex",
-        pass.name
-    );
+    out.vertex_stage(scene, target, pass, false);
     let clip = &out.clip;
     out.outcodes.resize(clip.len(), 0);
     out.outcodes

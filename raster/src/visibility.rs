@@ -64,6 +64,36 @@ impl Visibility {
             .map(|(_, i)| &**i)
     }
 
+    /// Runs `pass`'s vertex stage for this frame's view into `clip`
+    /// (unless `same_stage`: the previous pass ran it, and its positions
+    /// are there); the index in `stages` of its instance.
+    pub(crate) fn vertex_stage(
+        &mut self,
+        scene: &SceneData,
+        target: &Target,
+        pass: &GeometryPass,
+        same_stage: bool,
+    ) -> usize {
+        let stage = self.stage_index(&pass.vertex);
+        if !same_stage {
+            self.clip.clear();
+            let frame = FrameContext {
+                view: &self.view,
+                ssaa: target.ssaa,
+            };
+            self.stages[stage]
+                .1
+                .clip_positions(&frame, &scene.mesh(), &mut self.clip);
+        }
+        assert_eq!(
+            self.clip.len(),
+            scene.positions.len(),
+            "vertex stage of pass {:?}: one position per vertex",
+            pass.name
+        );
+        stage
+    }
+
     /// The index in `stages` of the instance of `stage` this run of
     /// frames uses (made on first use).
     pub(crate) fn stage_index(&mut self, stage: &Arc<dyn VertexStage>) -> usize {
@@ -133,23 +163,7 @@ pub(crate) fn geometry_pass(
 ) {
     let first = index == 0;
     let t = Instant::now();
-    let stage = out.stage_index(&pass.vertex);
-    if !same_stage {
-        out.clip.clear();
-        let frame = FrameContext {
-            view: &out.view,
-            ssaa: target.ssaa,
-        };
-        out.stages[stage]
-            .1
-            .clip_positions(&frame, &scene.mesh(), &mut out.clip);
-    }
-    assert_eq!(
-        out.clip.len(),
-        scene.positions.len(),
-        "vertex stage of pass {:?}: one position per vertex",
-        pass.name
-    );
+    let stage = out.vertex_stage(scene, target, pass, same_stage);
     let clip = &out.clip;
     let hidden = !first && out.stages[stage].1.hidden(pass.triangles.clone());
     stats.times.vertex += ms_since(t);

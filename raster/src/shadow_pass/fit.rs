@@ -65,17 +65,7 @@ pub(super) fn light_faces(
             );
             (vec![face], Pick::One)
         }
-        Light::Point { position, .. } => {
-            let pos = Vec3::from(*position);
-            let n = settings.map_size as f32;
-            let margin = settings.reach().ceil().min(n / 4.0);
-            let tan_half = n / (n - 2.0 * margin);
-            let faces = CUBE_AXES
-                .iter()
-                .map(|a| perspective_face(settings, pos, *a, tan_half, bounds))
-                .collect();
-            (faces, Pick::Cube(pos))
-        }
+        Light::Point { position, .. } => cube_faces(settings, Vec3::from(*position), bounds),
         Light::Polygon {
             vertices,
             two_sided,
@@ -89,16 +79,22 @@ pub(super) fn light_faces(
             } else {
                 centre + normal * (bounds.diagonal() * 1e-4)
             };
-            let n = settings.map_size as f32;
-            let margin = settings.reach().ceil().min(n / 4.0);
-            let tan_half = n / (n - 2.0 * margin);
-            let faces = CUBE_AXES
-                .iter()
-                .map(|a| perspective_face(settings, pos, *a, tan_half, bounds))
-                .collect();
-            (faces, Pick::Cube(pos))
+            cube_faces(settings, pos, bounds)
         }
     })
+}
+
+/// A cube of six maps around `pos`, each a little over 90° so that a
+/// filter near a face's edge stays inside that face.
+fn cube_faces(settings: &ShadowSettings, pos: Vec3, bounds: &Bounds) -> (Vec<Face>, Pick) {
+    let n = settings.map_size as f32;
+    let margin = settings.reach().ceil().min(n / 4.0);
+    let tan_half = n / (n - 2.0 * margin);
+    let faces = CUBE_AXES
+        .iter()
+        .map(|a| perspective_face(settings, pos, *a, tan_half, bounds))
+        .collect();
+    (faces, Pick::Cube(pos))
 }
 
 /// Widest half-angle a spot light's map covers (degrees); points outside
