@@ -1,6 +1,6 @@
 //! A directional light's cascades: maps along the view's depth, split by
 //! the practical split scheme (a blend of logarithmic and uniform split
-//! depths). Each cascade's map is fitted in `passes.rs`; a shaded point
+//! depths). Each cascade's map is fitted in `shadow_pass/fit.rs`; a shaded point
 //! picks its cascade by its view depth (`lookup.rs`).
 
 /// Largest number of cascades of a directional light.
