@@ -4,7 +4,9 @@
 //! (`material_desc`), rendering with statistics (`render`) and image output
 //! (`image_file`; where files go: `output_plan`), image files as textures (`textures`), text labels on images
 //! (`label`). The built-in demo lives in `demo`; `fuzzing` holds the fuzz
-//! targets' entry points.
+//! targets' entry points. The generators only the command line runs
+//! (`furnace`, `fit-ltc`, `fit-ltc-coat`) are modules of the binary
+//! (src/main.rs), not of this library.
 
 pub mod batch;
 pub mod checks;
@@ -12,9 +14,6 @@ pub mod demo;
 pub mod diff;
 pub mod envmap_file;
 pub mod eval;
-pub mod fit_ltc;
-pub mod fit_ltc_coat;
-pub mod furnace;
 pub mod fuzzing;
 pub mod gltf;
 pub mod image_file;
