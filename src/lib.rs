@@ -1,3 +1,4 @@
+#![warn(unreachable_pub)]
 //! specula: a CPU software rasterizer with a packed-SIMD fragment-shading
 //! core. This facade ties the crates together: scene files (`scene`), meshes
 //! (`mesh`), the material contract shared by scenes and `specula eval`
@@ -9,11 +10,14 @@
 //! (src/main.rs), not of this library.
 
 pub mod batch;
-pub mod checks;
+mod checks;
 pub mod demo;
 pub mod diff;
 pub mod envmap_file;
 pub mod eval;
+/// The fuzz targets' entry points (fuzz/fuzz_targets and the corpus
+/// tests in tests/ call them); not part of the library's API.
+#[doc(hidden)]
 pub mod fuzzing;
 pub mod gltf;
 pub mod image_file;
@@ -25,14 +29,14 @@ pub mod mesh;
 mod mesh_cache;
 pub mod objcheck;
 pub mod output_plan;
-pub mod polygon_light;
+mod polygon_light;
 pub mod progress;
 pub mod render;
 pub mod scene;
 pub mod sky;
 pub mod table_cache;
-pub mod tangents;
-pub mod textures;
+mod tangents;
+mod textures;
 pub mod validate;
 
 pub use specula_core as core;
