@@ -63,7 +63,7 @@ pub struct BatchArgs {
 #[derive(Clone, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub struct InputFile {
     pub path: String,
-    pub sha256: String,
+    pub(crate) sha256: String,
 }
 
 /// One line of the manifest.
@@ -73,20 +73,20 @@ pub struct Record {
     /// The scene's name: its file stem, unique in a batch.
     pub scene: String,
     /// The scene file as given on the command line.
-    pub scene_path: String,
+    pub(crate) scene_path: String,
     /// Every file the load read, scene file first, in the order read.
     pub inputs: Vec<InputFile>,
-    pub width: u32,
-    pub height: u32,
-    pub ssaa: u32,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) ssaa: u32,
     /// "simd" or "scalar".
-    pub shading: String,
+    pub(crate) shading: String,
     /// The image, relative to the batch folder.
     pub output: String,
     pub output_sha256: String,
     /// Wall time of the frame (vertex through post), milliseconds.
-    pub frame_ms: f64,
-    pub specula_version: String,
+    pub(crate) frame_ms: f64,
+    pub(crate) specula_version: String,
 }
 
 impl Record {
@@ -189,7 +189,7 @@ pub fn sha256_hex(bytes: &[u8]) -> String {
 }
 
 /// `I/N` → (I, N), 0 ≤ I < N.
-pub fn parse_shard(s: &str) -> Result<(usize, usize), BatchError> {
+pub(crate) fn parse_shard(s: &str) -> Result<(usize, usize), BatchError> {
     let bad = || BatchError::Shard(s.to_string());
     let (i, n) = s.split_once('/').ok_or_else(bad)?;
     let (i, n): (usize, usize) = (
@@ -203,7 +203,7 @@ pub fn parse_shard(s: &str) -> Result<(usize, usize), BatchError> {
 }
 
 /// The manifest's file name for a run.
-pub fn manifest_name(shard: Option<(usize, usize)>) -> String {
+pub(crate) fn manifest_name(shard: Option<(usize, usize)>) -> String {
     match shard {
         None => "manifest.jsonl".into(),
         Some((i, n)) => format!("manifest-{i}-of-{n}.jsonl"),
@@ -230,7 +230,7 @@ pub fn read_manifest(path: &Path) -> Result<Vec<Record>, BatchError> {
 }
 
 /// The scenes of one run: (name, path), sorted by name; names must be unique.
-pub fn scene_list(
+pub(crate) fn scene_list(
     scenes: &[PathBuf],
     shard: Option<(usize, usize)>,
 ) -> Result<Vec<(String, PathBuf)>, BatchError> {

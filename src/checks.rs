@@ -21,7 +21,7 @@ pub(crate) const MAX_LINEAR_COLOR: f32 = 1e6;
 #[error("{field}: {reason}")]
 pub struct FieldError {
     pub field: String,
-    pub reason: FieldReason,
+    pub(crate) reason: FieldReason,
 }
 
 impl FieldError {
@@ -43,7 +43,7 @@ impl From<FieldError> for String {
 
 /// Why a field's value was refused.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum FieldReason {
+pub(crate) enum FieldReason {
     /// Some component is NaN or infinite.
     #[error("every component must be finite, got {0:?}")]
     NotFinite(Vec<f32>),

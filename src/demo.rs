@@ -7,7 +7,7 @@ use crate::scene::{load_scene_str, LoadedScene, SceneError};
 use std::path::Path;
 
 /// fixtures/scenes/demo.toml
-pub const DEMO_TOML: &str = include_str!("../fixtures/scenes/demo.toml");
+pub(crate) const DEMO_TOML: &str = include_str!("../fixtures/scenes/demo.toml");
 
 /// The files demo.toml names, by the path it names them with, relative to
 /// fixtures/scenes/ (licences: the README's third-party table).

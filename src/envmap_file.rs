@@ -5,7 +5,7 @@
 //! - the format is sniffed from the bytes: anything but Radiance HDR or
 //!   OpenEXR is refused;
 //! - the size is read from the header and checked before any texel is
-//!   decoded: at least 2×2, at most [`MAX_SIDE`] per side, and the
+//!   decoded: at least 2×2, at most `MAX_SIDE` per side, and the
 //!   decoded map with its derived data within the memory budget
 //!   (memory.rs);
 //! - a truncated or corrupt file is the decoder's error, with the file
@@ -55,7 +55,7 @@ pub enum EnvMapError {
         width: u32,
         height: u32,
     },
-    /// A side above [`MAX_SIDE`].
+    /// A side above `MAX_SIDE`.
     #[error("{name}: the header says {width}×{height}: an environment map is at most {MAX_SIDE} texels on a side")]
     TooLarge {
         name: String,
@@ -88,7 +88,7 @@ impl From<EnvMapError> for String {
 }
 
 /// Largest side of a map: 32768 texels.
-pub const MAX_SIDE: u32 = 32768;
+pub(crate) const MAX_SIDE: u32 = 32768;
 
 /// Bytes per source texel from decode to the end of a frame: the decoded
 /// RGBA f32 image, our RGB copy, its mips, the sampling distribution.
@@ -98,7 +98,7 @@ const TEXEL_BYTES: u64 = 16 + 12 + 4 + 12;
 const PREFILTER_BYTES: u64 = 1024 * 1024 * 12 * 4 / 3 + (1 << 20);
 
 /// What a map of `w`×`h` texels costs in memory.
-pub fn env_map_bytes(w: u64, h: u64) -> u64 {
+pub(crate) fn env_map_bytes(w: u64, h: u64) -> u64 {
     w.saturating_mul(h)
         .saturating_mul(TEXEL_BYTES)
         .saturating_add(PREFILTER_BYTES)
@@ -185,7 +185,11 @@ pub fn decode_equirect(name: &str, bytes: &[u8]) -> Result<Equirect, EnvMapError
 /// The map from a file's bytes (decoded and checked by
 /// [`decode_equirect`], texels clamped and scaled by the settings), its
 /// derived data not yet built ([`EnvMap::prepare`]).
-pub fn new_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap, EnvMapError> {
+pub(crate) fn new_env_map(
+    name: &str,
+    bytes: &[u8],
+    s: &EnvSettings,
+) -> Result<EnvMap, EnvMapError> {
     let source = decode_equirect(name, bytes)?;
     EnvMap::new(source, s.intensity, s.rotate_deg, s.visible, s.method).map_err(|source| {
         EnvMapError::Map {

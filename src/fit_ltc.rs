@@ -22,10 +22,10 @@
 //! parallel, each in a fixed order, so the table does not depend on the
 //! thread count).
 
-use crate::progress::Progress;
 use argmin::core::{CostFunction, Error, Executor, State};
 use argmin::solver::neldermead::NelderMead;
 use rayon::prelude::*;
+use specula::progress::Progress;
 use specula_core::ltc::ggx::{Cell, N, X_AXIS, Y_AXIS};
 use specula_core::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
 use specula_core::small_light::{self, Scene};
@@ -37,17 +37,17 @@ use std::f64::consts::PI;
 /// grid, jittered by a fixed Hammersley offset).
 const SIDE: usize = 32;
 /// Smallest μo fitted (the last view node is μo = 0, a view on the horizon).
-pub const MU_MIN: f64 = 1e-3;
+pub(crate) const MU_MIN: f64 = 1e-3;
 
 /// The lobe at one (α, μo): everything the cost needs.
-pub struct Lobe {
-    pub alpha: f64,
-    pub wo: V3<f64>,
+pub(crate) struct Lobe {
+    pub(crate) alpha: f64,
+    pub(crate) wo: V3<f64>,
     model: Microfacet,
     /// n: ∫ f cos with F = 1.
-    pub n: f64,
+    pub(crate) n: f64,
     /// n_w: ∫ f cos (1 − wi·h)⁵.
-    pub n_w: f64,
+    pub(crate) n_w: f64,
 }
 
 fn ggx(alpha: f64, f0: f32) -> MicrofacetParams {
@@ -62,7 +62,7 @@ fn ggx(alpha: f64, f0: f32) -> MicrofacetParams {
 }
 
 impl Lobe {
-    pub fn new(alpha: f64, mu_o: f64) -> Lobe {
+    pub(crate) fn new(alpha: f64, mu_o: f64) -> Lobe {
         let mu = mu_o.clamp(MU_MIN, 1.0);
         let wo = V3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
         let n = ggx(alpha, 1.0).specular_albedo(mu)[0];
@@ -77,7 +77,7 @@ impl Lobe {
     }
 
     /// p(wi): the normalized lobe.
-    pub fn p(&self, wi: V3<f64>) -> f64 {
+    pub(crate) fn p(&self, wi: V3<f64>) -> f64 {
         let pr = self.model.prepare(self.wo);
         self.model.f_cos_local(&pr, wi).x / self.n
     }
@@ -119,7 +119,7 @@ pub(crate) fn reflected_pdf(wo: V3<f64>, wi: V3<f64>, d_cos: impl Fn(V3<f64>) ->
 }
 
 /// The LTC density D(ω) of M = [[a, 0, b], [0, c, 0], [0, 0, 1]] at unit ω.
-pub fn ltc_density(m: [f64; 4], w: V3<f64>) -> f64 {
+pub(crate) fn ltc_density(m: [f64; 4], w: V3<f64>) -> f64 {
     let [a, b, c, d] = m;
     let det = a - b * d;
     let o = V3::new((w.x - b * w.z) / det, w.y / c, (a * w.z - d * w.x) / det);
@@ -132,7 +132,7 @@ pub fn ltc_density(m: [f64; 4], w: V3<f64>) -> f64 {
 }
 
 /// A direction of the LTC's distribution from uniform (u1, u2).
-pub fn ltc_sample(m: [f64; 4], u1: f64, u2: f64) -> V3<f64> {
+pub(crate) fn ltc_sample(m: [f64; 4], u1: f64, u2: f64) -> V3<f64> {
     let [a, b, c, d] = m;
     let r = u1.sqrt();
     let phi = 2.0 * PI * u2;
@@ -141,7 +141,7 @@ pub fn ltc_sample(m: [f64; 4], u1: f64, u2: f64) -> V3<f64> {
 }
 
 /// The stratified points of the estimate.
-pub fn points() -> Vec<(f64, f64)> {
+pub(crate) fn points() -> Vec<(f64, f64)> {
     (0..SIDE * SIDE)
         .map(|k| {
             let (i, j) = (k % SIDE, k / SIDE);
@@ -154,7 +154,7 @@ pub fn points() -> Vec<(f64, f64)> {
 }
 
 /// ∫ |D − p| dω, estimated as in the module docs.
-pub fn l1_error(lobe: &Lobe, m: [f64; 4], pts: &[(f64, f64)]) -> f64 {
+pub(crate) fn l1_error(lobe: &Lobe, m: [f64; 4], pts: &[(f64, f64)]) -> f64 {
     let mut sum = 0.0;
     let term = |w: V3<f64>, pdf_lobe: f64| {
         let d = ltc_density(m, w);
@@ -261,7 +261,7 @@ pub(crate) fn cosine_step(x0: &[f64], k: usize) -> f64 {
 }
 
 /// Fits one cell from a starting M; returns the cell and its L1 error.
-pub fn fit_cell(alpha: f64, mu_o: f64, start: [f64; 4], pts: &[(f64, f64)]) -> (Cell, f64) {
+pub(crate) fn fit_cell(alpha: f64, mu_o: f64, start: [f64; 4], pts: &[(f64, f64)]) -> (Cell, f64) {
     let lobe = Lobe::new(alpha, mu_o);
     let x0 = [start[0].ln(), start[2].ln(), start[1], start[3]];
     let (best, err) = nelder_mead(
@@ -285,7 +285,7 @@ pub fn fit_cell(alpha: f64, mu_o: f64, start: [f64; 4], pts: &[(f64, f64)]) -> (
 }
 
 /// α and μo of node (i, j).
-pub fn node(i: usize, j: usize) -> (f64, f64) {
+pub(crate) fn node(i: usize, j: usize) -> (f64, f64) {
     let r = X_AXIS.node(i);
     let t = Y_AXIS.node(j);
     (r * r, 1.0 - t * t)
@@ -293,7 +293,7 @@ pub fn node(i: usize, j: usize) -> (f64, f64) {
 
 /// The whole table, rows in y (view), with each cell's L1 error; progress
 /// on stderr when `progress` (a bar on a terminal, else plain lines).
-pub fn fit_table(progress: bool) -> (Vec<Vec<Cell>>, Vec<Vec<f64>>) {
+pub(crate) fn fit_table(progress: bool) -> (Vec<Vec<Cell>>, Vec<Vec<f64>>) {
     let pts = points();
     let bar = cell_progress("fit-ltc", N * N, progress);
     // The α = 1 row (x = N − 1), from the normal view outward.
@@ -348,14 +348,14 @@ pub(crate) fn error_summary(errs: &[Vec<f64>]) -> String {
 }
 
 /// What `fit-ltc` does besides fitting the whole table.
-pub struct Options {
+pub(crate) struct Options {
     /// Measure this table file instead of fitting.
-    pub check: Option<std::path::PathBuf>,
+    pub(crate) check: Option<std::path::PathBuf>,
 }
 
 /// The per-pixel error under a small light and the view sweep's kinks of
 /// `table` (specula_core::small_light), one line per roughness.
-pub fn check_lines(table: &Table2<6>) -> Vec<String> {
+pub(crate) fn check_lines(table: &Table2<6>) -> Vec<String> {
     let alphas = [0.2, 0.3, 0.4, 0.5];
     let y_hi = (1.0 - 85f64.to_radians().cos()).sqrt();
     alphas
@@ -397,7 +397,7 @@ pub fn check_lines(table: &Table2<6>) -> Vec<String> {
 /// Fits the table and writes it to `out` (atomically), with the command,
 /// the axes and the error summary in its header; or measures a table file
 /// (`opts.check`).
-pub fn run(out: &std::path::Path, opts: &Options) -> Result<(), String> {
+pub(crate) fn run(out: &std::path::Path, opts: &Options) -> Result<(), String> {
     if let Some(path) = &opts.check {
         let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let t = specula_core::ltc::ggx::decode(&bytes)
@@ -407,7 +407,7 @@ pub fn run(out: &std::path::Path, opts: &Options) -> Result<(), String> {
         }
         return Ok(());
     }
-    crate::output_plan::check_early("--output", out)?;
+    specula::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
     let (cells, errs) = fit_table(true);
     let summary = error_summary(&errs);
@@ -425,10 +425,10 @@ pub fn run(out: &std::path::Path, opts: &Options) -> Result<(), String> {
 /// Writes a fitted table's bytes to `out`, checked and written like every
 /// output (output_plan.rs): no device or link is replaced, the write is atomic.
 pub(crate) fn write_table(out: &std::path::Path, bytes: &[u8]) -> Result<(), String> {
-    let sink = crate::output_plan::Output {
+    let sink = specula::output_plan::Output {
         flag: "--output".into(),
         path: out.to_path_buf(),
-        sink: crate::output_plan::resolve(out, false)?,
+        sink: specula::output_plan::resolve(out, false)?,
     };
     sink.write(bytes)?;
     eprintln!("wrote {}", out.display());

@@ -42,17 +42,17 @@ use specula_core::{Brdf, V3};
 use std::f64::consts::PI;
 
 /// The clearcoat lobe at one (α, μo).
-pub struct CoatLobe {
+pub(crate) struct CoatLobe {
     /// The model's α (from an f32 clearcoat_gloss, as a material has it).
-    pub alpha: f64,
-    pub wo: V3<f64>,
+    pub(crate) alpha: f64,
+    pub(crate) wo: V3<f64>,
     model: Disney,
     /// n = ∫ f_r μi dωi.
-    pub n: f64,
+    pub(crate) n: f64,
 }
 
 impl CoatLobe {
-    pub fn new(alpha: f64, mu_o: f64) -> CoatLobe {
+    pub(crate) fn new(alpha: f64, mu_o: f64) -> CoatLobe {
         let mu = mu_o.clamp(MU_MIN, 1.0);
         let wo = V3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
         let model = Disney::new_without_table(
@@ -76,7 +76,7 @@ impl CoatLobe {
     }
 
     /// p(wi): the normalized lobe (0 below the horizon).
-    pub fn p(&self, wi: V3<f64>) -> f64 {
+    pub(crate) fn p(&self, wi: V3<f64>) -> f64 {
         if wi.z <= 0.0 {
             return 0.0;
         }
@@ -110,11 +110,11 @@ impl CoatLobe {
 
 /// Fitted parameters per cell: (ln a, ln c, b, d) of each Mₖ, then the
 /// logits of w₂ … w_K (w₁'s is 0).
-pub const N_PARAMS: usize = 4 * K + K - 1;
-pub type Params = [f64; N_PARAMS];
+pub(crate) const N_PARAMS: usize = 4 * K + K - 1;
+pub(crate) type Params = [f64; N_PARAMS];
 
 /// (Mₖ, wₖ) of a parameter vector.
-pub fn unpack(p: &[f64]) -> ([[f64; 4]; K], [f64; K]) {
+pub(crate) fn unpack(p: &[f64]) -> ([[f64; 4]; K], [f64; K]) {
     let m = core::array::from_fn(|k| params_to_m(&p[4 * k..4 * k + 4]));
     let e: [f64; K] = core::array::from_fn(|k| if k == 0 { 1.0 } else { p[4 * K + k - 1].exp() });
     let sum: f64 = e.iter().sum();
@@ -122,7 +122,7 @@ pub fn unpack(p: &[f64]) -> ([[f64; 4]; K], [f64; K]) {
 }
 
 /// The parameters of (Mₖ, wₖ) (w₁ > 0).
-pub fn pack(m: &[[f64; 4]; K], w: &[f64; K]) -> Params {
+pub(crate) fn pack(m: &[[f64; 4]; K], w: &[f64; K]) -> Params {
     let mut p = [0.0; N_PARAMS];
     for k in 0..K {
         p[4 * k..4 * k + 4].copy_from_slice(&[m[k][0].ln(), m[k][2].ln(), m[k][1], m[k][3]]);
@@ -134,7 +134,7 @@ pub fn pack(m: &[[f64; 4]; K], w: &[f64; K]) -> Params {
 }
 
 /// ∫ |Σ wₖ Dₖ − p| dω, estimated as in the module docs.
-pub fn l1_error(lobe: &CoatLobe, p: &[f64], pts: &[(f64, f64)]) -> f64 {
+pub(crate) fn l1_error(lobe: &CoatLobe, p: &[f64], pts: &[(f64, f64)]) -> f64 {
     let (m, w) = unpack(p);
     let term = |x: V3<f64>, pdf_lobe: f64| {
         let d = m.map(|m| ltc_density(m, x));
@@ -189,7 +189,7 @@ fn step(x0: &[f64], k: usize) -> f64 {
 
 /// Fits one cell from a starting parameter vector; returns the cell, its
 /// parameters and its L1 error.
-pub fn fit_cell(
+pub(crate) fn fit_cell(
     alpha: f64,
     mu_o: f64,
     start: &Params,
@@ -209,14 +209,14 @@ pub fn fit_cell(
 }
 
 /// α and μo of node (i, j).
-pub fn node(i: usize, j: usize) -> (f64, f64) {
+pub(crate) fn node(i: usize, j: usize) -> (f64, f64) {
     let t = Y_AXIS.node(j);
     (X_AXIS.node(i).exp(), 1.0 - t * t)
 }
 
 /// The first cell's start (module docs): isotropic cosines
 /// a = c = α^((2K − 2k − 1)/2K), equal weights.
-pub fn first_start(alpha: f64) -> Params {
+pub(crate) fn first_start(alpha: f64) -> Params {
     let m = core::array::from_fn(|k| {
         let a = alpha.powf((2 * K - 2 * k - 1) as f64 / (2 * K) as f64);
         [a, 0.0, a, 0.0]
@@ -240,7 +240,7 @@ fn log(progress: bool, i: usize, j: usize, r: &(CoatCell, Params, f64)) {
 
 /// The whole table, rows in y (view), with each cell's L1 error; progress
 /// on stderr when `progress` (a bar on a terminal, else plain lines).
-pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
+pub(crate) fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
     let pts = points();
     let bar = cell_progress("fit-ltc-coat", NX * NY, progress);
     // The α = 0.001 column, from the normal view to grazing.
@@ -285,8 +285,8 @@ pub fn fit_table(progress: bool) -> (Vec<Vec<CoatCell>>, Vec<Vec<f64>>) {
 
 /// Fits the table and writes it to `out` (atomically), with the command,
 /// the axes and the error summary in its header.
-pub fn run(out: &std::path::Path) -> Result<(), String> {
-    crate::output_plan::check_early("--output", out)?;
+pub(crate) fn run(out: &std::path::Path) -> Result<(), String> {
+    specula::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
     let (cells, errs) = fit_table(true);
     let summary = crate::fit_ltc::error_summary(&errs);

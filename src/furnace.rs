@@ -2,20 +2,20 @@
 //! for several roughnesses, without and with Kulla–Conty compensation —
 //! the white furnace test of the course notes as a table and a plot.
 
-use crate::material_desc::{MaterialDesc, MaterialError, Shading, Tables};
+use specula::material_desc::{MaterialDesc, MaterialError, Shading, Tables};
 use specula_core::{Model, V3};
 
 /// Albedo curves of one α: (μo, E without, E with compensation), RGB.
-pub struct FurnaceCurve {
+pub(crate) struct FurnaceCurve {
     /// The α the curve was computed at (after clamping into [1e-3, 1]).
-    pub alpha: f32,
+    pub(crate) alpha: f32,
     /// What building the material adjusted (a clamped α), for stderr.
-    pub notes: Vec<String>,
-    pub points: Vec<(f64, [f64; 3], [f64; 3])>,
+    pub(crate) notes: Vec<String>,
+    pub(crate) points: Vec<(f64, [f64; 3], [f64; 3])>,
 }
 
 /// μo values of the table and plot.
-pub fn mus() -> Vec<f64> {
+pub(crate) fn mus() -> Vec<f64> {
     (1..=40).map(|i| i as f64 / 40.0).collect()
 }
 
@@ -31,7 +31,7 @@ fn albedo(m: &Model, mu: f64) -> [f64; 3] {
 
 /// Builds the material at each α (its own α is replaced), without and with
 /// compensation, and samples the tabulated directional albedo.
-pub fn furnace(material_json: &str, alphas: &[f32]) -> Result<Vec<FurnaceCurve>, String> {
+pub(crate) fn furnace(material_json: &str, alphas: &[f32]) -> Result<Vec<FurnaceCurve>, String> {
     let desc: MaterialDesc =
         serde_json::from_str(material_json).map_err(|e| format!("--material: {e}"))?;
     let MaterialDesc::Microfacet(base) = desc else {
@@ -73,7 +73,7 @@ pub fn furnace(material_json: &str, alphas: &[f32]) -> Result<Vec<FurnaceCurve>,
 }
 
 /// Tab-separated table: alpha, mu, E (r g b), E compensated (r g b).
-pub fn table(curves: &[FurnaceCurve]) -> String {
+pub(crate) fn table(curves: &[FurnaceCurve]) -> String {
     let mut s = String::from("alpha\tmu\tE_r\tE_g\tE_b\tEc_r\tEc_g\tEc_b\n");
     for c in curves {
         for (mu, e, ec) in &c.points {
@@ -99,7 +99,7 @@ const PALETTE: [[u8; 3]; 6] = [
 /// PNG bytes of the plot: E(μo) of channel mean, dashed without and solid
 /// with compensation, one colour per α; y from 0 to 1.1. Tick values, axis
 /// labels and the legend are drawn in the image (src/label.rs).
-pub fn plot_png(curves: &[FurnaceCurve]) -> Result<Vec<u8>, String> {
+pub(crate) fn plot_png(curves: &[FurnaceCurve]) -> Result<Vec<u8>, String> {
     plot_png_with(curves, true)
 }
 
@@ -124,13 +124,13 @@ struct PlotImage {
     rgb: Vec<u8>,
     /// Each text as drawn (top-left corner) and its width in pixels.
     #[cfg_attr(not(test), allow(dead_code))]
-    labels: Vec<(crate::label::LabelDesc, f32)>,
+    labels: Vec<(specula::label::LabelDesc, f32)>,
     #[cfg_attr(not(test), allow(dead_code))]
     frame: specula_npr::plot::Frame,
 }
 
 fn plot_rgb8(curves: &[FurnaceCurve], with_text: bool) -> Result<PlotImage, String> {
-    use crate::label::{draw_labels, text_width, LabelDesc};
+    use specula::label::{draw_labels, text_width, LabelDesc};
     use specula_npr::plot::{line_plot, Align, Curve, LegendEntry, PlotSpec};
     let mean = |e: &[f64; 3]| ((e[0] + e[1] + e[2]) / 3.0) as f32;
     let mut lines = Vec::new();
@@ -216,7 +216,7 @@ fn plot_rgb8(curves: &[FurnaceCurve], with_text: bool) -> Result<PlotImage, Stri
 
 /// The legend in words, printed beside the plot for logs (the image has
 /// its own).
-pub fn legend(curves: &[FurnaceCurve]) -> String {
+pub(crate) fn legend(curves: &[FurnaceCurve]) -> String {
     let names = ["blue", "orange", "green", "red", "purple", "brown"];
     let mut s = String::from("plot: x = mu_o in [0, 1], y = E in [0, 1.1], grid 0.1; dashed = single scattering, solid = compensated\n");
     for (i, c) in curves.iter().enumerate() {

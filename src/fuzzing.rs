@@ -27,15 +27,15 @@ use std::path::Path;
 /// Memory budget of one fuzz input (`memory::set_limit`): scenes that
 /// would build more than this are refused, as `--max-memory 64M` would.
 /// It keeps one input within the fuzzer's time and RSS limits.
-pub const MEMORY_LIMIT: u64 = 64 << 20;
+pub(crate) const MEMORY_LIMIT: u64 = 64 << 20;
 
 /// Side of the image a fuzzed scene is rendered at (after loading it the
 /// way `specula render` does): enough to shade every object, fast enough
 /// for thousands of inputs per second.
-pub const RENDER_SIDE: u32 = 16;
+pub(crate) const RENDER_SIDE: u32 = 16;
 
 /// Separates the OBJ from the MTL in an [`obj_mtl`] input.
-pub const MTL_SEPARATOR: &[u8] = b"\n%%mtl%%\n";
+pub(crate) const MTL_SEPARATOR: &[u8] = b"\n%%mtl%%\n";
 
 /// The OBJ a scene under [`scene_toml`] reads for any `*.obj` name: one
 /// quad with texture coordinates, normals and a material from its MTL.
@@ -262,7 +262,7 @@ position = [2.0, 3.0, 3.0]
 intensity = [10.0, 10.0, 10.0]
 "#;
 
-/// Target `obj_mtl`: the bytes before [`MTL_SEPARATOR`] are `m.obj`, the
+/// Target `obj_mtl`: the bytes before `MTL_SEPARATOR` are `m.obj`, the
 /// bytes after it the MTL file that any `mtllib` name reads (no separator:
 /// there is no MTL file). The OBJ is loaded by the project's loader
 /// (`objcheck` line checks, then tobj, ear clipping, the MTL reading)

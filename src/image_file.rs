@@ -27,7 +27,7 @@ pub enum ImageFileError {
         path: std::path::PathBuf,
         source: std::io::Error,
     },
-    /// A file that does not start with [`ID_MAGIC`].
+    /// A file that does not start with `ID_MAGIC`.
     #[error("{}: not a specula id file", .path.display())]
     NotIds { path: std::path::PathBuf },
     /// An id file whose length is not its header's size.
@@ -47,8 +47,8 @@ impl From<ImageFileError> for String {
     }
 }
 
-/// Magic of the raw triangle-id AOV; see `write_ids`.
-pub const ID_MAGIC: &[u8; 8] = b"SPCLID01";
+/// Magic of the raw triangle-id AOV; see `encode_ids`.
+pub(crate) const ID_MAGIC: &[u8; 8] = b"SPCLID01";
 
 /// Encodes 8-bit sRGB in `format` (PNG, or whatever the name asked for).
 ///
@@ -154,11 +154,7 @@ pub fn encode_ids(width: u32, height: u32, ids: &[u32]) -> Vec<u8> {
     bytes
 }
 
-pub fn write_ids(path: &Path, width: u32, height: u32, ids: &[u32]) -> Result<(), ImageFileError> {
-    write_path(path, &encode_ids(width, height, ids))
-}
-
-/// Reads an id AOV written by [`write_ids`]: (width, height, ids).
+/// Reads an id AOV written as [`encode_ids`] encodes it: (width, height, ids).
 pub fn read_ids(path: &Path) -> Result<(u32, u32, Vec<u32>), ImageFileError> {
     let b = std::fs::read(path).map_err(|source| ImageFileError::Read {
         path: path.to_path_buf(),

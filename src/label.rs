@@ -43,7 +43,7 @@ const MAX_SIZE: f32 = 1000.0;
 /// A label's field refused; the message names the field inside the label
 /// (the caller adds which label of which file).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum LabelError {
+pub(crate) enum LabelError {
     /// `text` longer than `MAX_CHARS` characters.
     #[error("text: longer than {MAX_CHARS} characters")]
     TooLong,
@@ -61,7 +61,7 @@ pub enum LabelError {
 impl LabelDesc {
     /// Checks the fields; the error names the field (the caller adds which
     /// label of which file).
-    pub fn validate(&self) -> Result<(), LabelError> {
+    pub(crate) fn validate(&self) -> Result<(), LabelError> {
         if self.text.chars().count() > MAX_CHARS {
             return Err(LabelError::TooLong);
         }

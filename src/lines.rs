@@ -10,7 +10,7 @@ use std::collections::BTreeMap;
 /// One `[[outline]]` table as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct OutlineDesc {
+pub(crate) struct OutlineDesc {
     method: MethodDesc,
     /// Line width in output pixels (extrusion, sobel).
     width: Option<f32>,
@@ -30,7 +30,7 @@ pub struct OutlineDesc {
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
-pub enum MethodDesc {
+pub(crate) enum MethodDesc {
     Shading,
     Extrusion,
     Sobel,
@@ -66,7 +66,7 @@ enum ThresholdDesc {
 /// `[strokes]` as written.
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct StrokesDesc {
+pub(crate) struct StrokesDesc {
     #[serde(default = "all_edges")]
     edges: Vec<EdgeKindDesc>,
     /// Degrees: an edge whose faces' normals differ by more is a crease.
@@ -111,7 +111,7 @@ pub enum EdgeKindDesc {
 
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
-pub enum JoinDesc {
+pub(crate) enum JoinDesc {
     #[default]
     Round,
     Miter,
@@ -120,7 +120,7 @@ pub enum JoinDesc {
 
 #[derive(Clone, Copy, Debug, Default, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
-pub enum CapDesc {
+pub(crate) enum CapDesc {
     #[default]
     Round,
     Butt,
@@ -129,7 +129,7 @@ pub enum CapDesc {
 
 /// Widest accepted line, in output pixels (the extrusion and the dilation
 /// work in supersamples: 64 × ssaa 16 = 1024 samples stays cheap).
-pub const MAX_WIDTH: f32 = 64.0;
+pub(crate) const MAX_WIDTH: f32 = 64.0;
 
 /// A checked `[[outline]]`.
 #[derive(Clone, Debug, PartialEq)]
@@ -160,16 +160,16 @@ pub struct StrokesSpec {
     pub edges: Vec<EdgeKindDesc>,
     pub crease_angle: f32,
     pub width: f32,
-    pub color: [f32; 3],
-    pub taper: f32,
-    pub join: JoinDesc,
-    pub cap: CapDesc,
+    pub(crate) color: [f32; 3],
+    pub(crate) taper: f32,
+    pub(crate) join: JoinDesc,
+    pub(crate) cap: CapDesc,
 }
 
 /// A line table's field refused: the field as written (`outline[1].width`,
 /// `strokes.edges`) and why. The messages are the ones users read.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
-pub enum LineTableError {
+pub(crate) enum LineTableError {
     /// A check shared with the other tables (colours, weights).
     #[error(transparent)]
     Field(#[from] crate::checks::FieldError),
@@ -259,7 +259,7 @@ fn check_materials(
 impl OutlineDesc {
     /// Checks the table (`field` is e.g. `outline[2]`); `known` says
     /// whether a material name exists in the scene.
-    pub fn check(
+    pub(crate) fn check(
         &self,
         field: &str,
         known: &dyn Fn(&str) -> bool,
@@ -390,7 +390,7 @@ impl OutlineDesc {
 }
 
 impl StrokesDesc {
-    pub fn check(&self) -> Result<StrokesSpec, LineTableError> {
+    pub(crate) fn check(&self) -> Result<StrokesSpec, LineTableError> {
         let f = "strokes";
         if self.edges.is_empty() {
             return Err(LineTableError::NoEdges);
@@ -422,7 +422,7 @@ impl StrokesDesc {
 #[derive(Default)]
 pub struct LineStages {
     /// Post stages, in the tables' order (after the tone map).
-    pub post: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
+    pub(crate) post: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
     /// The stroke overlay (also among `post`), for `--svg-lines`.
     pub strokes: Option<std::sync::Arc<specula_npr::overlay::Strokes>>,
 }
@@ -452,7 +452,7 @@ fn radiance_for(
 /// Builds the checked outlines into `data` (extrusion passes and their
 /// materials) and post stages; outline colours are display colours after
 /// the output's `tonemap` and `exposure`.
-pub fn build(
+pub(crate) fn build(
     data: &mut specula_raster::SceneParts,
     outlines: &[OutlineSpec],
     strokes: Option<&StrokesSpec>,
@@ -574,7 +574,7 @@ pub fn build(
 
 impl StrokesSpec {
     /// The overlay's drawing style.
-    pub fn style(&self) -> specula_npr::overlay::StrokeStyle {
+    pub(crate) fn style(&self) -> specula_npr::overlay::StrokeStyle {
         use specula_npr::overlay::{LineCap, LineJoin};
         specula_npr::overlay::StrokeStyle {
             width: self.width,

@@ -1,6 +1,13 @@
-//! The `specula` command line.
+//! The `specula` command line. Besides `cpu_check`, the modules only the
+//! command line needs live here rather than in the library: `furnace`
+//! (`specula furnace`) and the LTC table fits `fit_ltc` and `fit_ltc_coat`
+//! (`specula fit-ltc`, `specula fit-ltc-coat`); they reach the library
+//! as `specula::…`.
 
 mod cpu_check;
+mod fit_ltc;
+mod fit_ltc_coat;
+mod furnace;
 
 use clap::{Parser, Subcommand};
 use image::ImageFormat;
@@ -418,11 +425,11 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
 }
 
 fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
-    let curves = specula::furnace::furnace(&a.material, &a.alpha)?;
+    let curves = furnace::furnace(&a.material, &a.alpha)?;
     for n in curves.iter().flat_map(|c| &c.notes) {
         eprintln!("warning: --material.{n}");
     }
-    print!("{}", specula::furnace::table(&curves));
+    print!("{}", furnace::table(&curves));
     if let Some(p) = &a.output {
         // Not `-`: the table already goes to standard output.
         let plan = output_plan::plan(&[("-o", p)], &[], None)?;
@@ -432,9 +439,9 @@ fn run_furnace(a: FurnaceArgs) -> Result<(), String> {
                 p.display()
             ));
         }
-        let png = specula::furnace::plot_png(&curves)?;
+        let png = furnace::plot_png(&curves)?;
         plan[0].write(&png)?;
-        eprint!("{}", specula::furnace::legend(&curves));
+        eprint!("{}", furnace::legend(&curves));
         eprintln!("wrote {}", p.display());
     }
     Ok(())
@@ -601,10 +608,8 @@ fn main() -> ExitCode {
         Some(Command::Render(a)) => run_render(a),
         Some(Command::Furnace(a)) => run_furnace(a),
         Some(Command::Tam(a)) => run_tam(a),
-        Some(Command::FitLtc(a)) => {
-            specula::fit_ltc::run(&a.output, &specula::fit_ltc::Options { check: a.check })
-        }
-        Some(Command::FitLtcCoat(a)) => specula::fit_ltc_coat::run(&a.output),
+        Some(Command::FitLtc(a)) => fit_ltc::run(&a.output, &fit_ltc::Options { check: a.check }),
+        Some(Command::FitLtcCoat(a)) => fit_ltc_coat::run(&a.output),
         Some(Command::KcTables(a)) => specula::table_cache::write_committed(&a.output),
         Some(Command::Eval) => {
             let stdin = std::io::stdin().lock();

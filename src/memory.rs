@@ -17,7 +17,7 @@ const VERTEX_BYTES: u64 = 64;
 const TRIANGLE_BYTES: u64 = 72;
 /// Bytes per vertex of a glTF mesh with vertex colours, on top of
 /// [`mesh_bytes`]: its RGBA (4 f32) in the mesh and in the scene.
-pub const COLOR_VERTEX_BYTES: u64 = 32;
+pub(crate) const COLOR_VERTEX_BYTES: u64 = 32;
 /// Bytes per OBJ byte while tobj parses it (text, parsed arrays, our copy).
 const OBJ_BYTES_PER_BYTE: u64 = 8;
 /// Bytes per supersample: visibility buffer, colour, resolve.
@@ -41,7 +41,7 @@ pub fn set_limit(bytes: u64) {
 /// Forgets everything reserved so far, for a process that loads one
 /// scene after another (the fuzz targets, `fuzzing.rs`); the CLI loads
 /// one scene per run and never calls it.
-pub fn reset_reserved() {
+pub(crate) fn reset_reserved() {
     RESERVED.store(BASE_BYTES, Ordering::Relaxed);
 }
 
@@ -55,10 +55,10 @@ pub fn reset_reserved() {
     show(*.limit)
 )]
 pub struct OverBudget {
-    pub what: String,
-    pub bytes: u64,
-    pub planned: u64,
-    pub limit: u64,
+    pub(crate) what: String,
+    pub(crate) bytes: u64,
+    pub(crate) planned: u64,
+    pub(crate) limit: u64,
 }
 
 /// The seam for the callers whose errors are still `String`s: `?` turns
@@ -87,14 +87,14 @@ pub fn reserve(what: &str, bytes: u64) -> Result<(), OverBudget> {
 }
 
 /// Estimated bytes of a mesh of `vertices` and `triangles`.
-pub fn mesh_bytes(vertices: u64, triangles: u64) -> u64 {
+pub(crate) fn mesh_bytes(vertices: u64, triangles: u64) -> u64 {
     vertices
         .saturating_mul(VERTEX_BYTES)
         .saturating_add(triangles.saturating_mul(TRIANGLE_BYTES))
 }
 
 /// Estimated bytes of an OBJ file of `len` bytes while and after it loads.
-pub fn obj_bytes(len: u64) -> u64 {
+pub(crate) fn obj_bytes(len: u64) -> u64 {
     len.saturating_mul(OBJ_BYTES_PER_BYTE)
 }
 

@@ -10,23 +10,23 @@ pub struct MeshData {
     /// Unit normals, one per position.
     pub normals: Vec<Vec3>,
     /// One per position, or empty.
-    pub uvs: Vec<Vec2>,
+    pub(crate) uvs: Vec<Vec2>,
     /// Unit tangents (xyz) and the bitangent's sign (w = ±1), one per
     /// position, or empty (then made when the scene is built: tangents.rs
     /// for normal-mapped materials, `compute_tangents` otherwise).
-    pub tangents: Vec<glam::Vec4>,
+    pub(crate) tangents: Vec<glam::Vec4>,
     /// Vertex colours (linear RGBA), one per position, or empty.
-    pub colors: Vec<glam::Vec4>,
+    pub(crate) colors: Vec<glam::Vec4>,
     pub triangles: Vec<[u32; 3]>,
     pub tri_material: Vec<u32>,
     /// Names of the materials the triangles use (`None`: none assigned).
-    pub material_names: Vec<Option<String>>,
+    pub(crate) material_names: Vec<Option<String>>,
     /// Materials defined by the mesh's MTL files.
-    pub mtl: Vec<tobj::Material>,
+    pub(crate) mtl: Vec<tobj::Material>,
     /// The MTL files read (as passed to `read`): inputs, never outputs.
-    pub mtl_files: Vec<std::path::PathBuf>,
+    pub(crate) mtl_files: Vec<std::path::PathBuf>,
     /// Things the loader dropped or changed that the user should hear of.
-    pub warnings: Vec<String>,
+    pub(crate) warnings: Vec<String>,
 }
 
 impl MeshData {
@@ -62,7 +62,7 @@ impl MeshData {
 
 /// UV sphere around the origin with its poles on ±Y: `segments` around,
 /// `rings` from pole to pole; uv = (longitude, latitude) in [0, 1].
-pub fn sphere(radius: f32, segments: u32, rings: u32) -> MeshData {
+pub(crate) fn sphere(radius: f32, segments: u32, rings: u32) -> MeshData {
     let mut m = MeshData::default();
     for r in 0..=rings {
         let theta = std::f32::consts::PI * r as f32 / rings as f32;

@@ -33,7 +33,7 @@ const VERSION: &[u8] = b"specula-mesh-v1";
 /// Loads an OBJ (and the MTL files it names, through `read`) from its bytes.
 /// `path` is used for messages and to resolve `mtllib` names. Large files
 /// go through the mesh cache (this module) in the table cache folder.
-pub fn load_obj(
+pub(crate) fn load_obj(
     path: &Path,
     bytes: &[u8],
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,

@@ -24,7 +24,7 @@ fn quote(line: &str) -> String {
 
 /// `bytes` without a leading UTF-8 byte order mark, which some editors
 /// write and which tobj would read as part of the first line's keyword.
-pub fn strip_bom(bytes: &[u8]) -> &[u8] {
+pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
 }
 
@@ -40,7 +40,7 @@ fn numbers(rest: &[&str], n: usize) -> bool {
 }
 
 /// Checks an MTL file's text the way tobj will read it.
-pub fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), String> {
+pub(crate) fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), String> {
     let text = utf8(path, bytes)?;
     for (i, line) in text.lines().enumerate() {
         let words: Vec<&str> = line.split_whitespace().collect();
@@ -79,17 +79,17 @@ pub fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), String> {
 /// What the OBJ check found: the text tobj should read, with the faces it
 /// would mishandle blanked out (line numbers kept), and what was dropped.
 #[derive(Debug)]
-pub struct ObjScan {
-    pub text: String,
+pub(crate) struct ObjScan {
+    pub(crate) text: String,
     /// `f` lines with fewer than three corners (a point or a line, not a
     /// surface), and the first such line.
-    pub dropped_faces: usize,
-    pub first_dropped: Option<usize>,
+    pub(crate) dropped_faces: usize,
+    pub(crate) first_dropped: Option<usize>,
     /// `l` lines (polylines): tobj would read one with three or more points
     /// as a face.
-    pub polylines: usize,
+    pub(crate) polylines: usize,
     /// Each name `usemtl` gives, with the first line giving it.
-    pub usemtl: Vec<(String, usize)>,
+    pub(crate) usemtl: Vec<(String, usize)>,
 }
 
 /// Counts of `v`, `vt`, `vn` seen so far, for checking face indices.
@@ -133,7 +133,7 @@ fn check_corner(corner: &str, c: &Counts) -> Result<(), String> {
 
 /// Checks an OBJ file's text the way tobj will read it, line by line, and
 /// returns the text to give tobj (see [`ObjScan`]).
-pub fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, String> {
+pub(crate) fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, String> {
     let text = utf8(path, bytes)?;
     let mut out = String::with_capacity(text.len());
     let mut scan = ObjScan {

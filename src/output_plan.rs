@@ -258,7 +258,7 @@ impl Output {
 }
 
 /// Extensions of every image format this build can write.
-pub fn writable_extensions() -> Vec<&'static str> {
+pub(crate) fn writable_extensions() -> Vec<&'static str> {
     ImageFormat::all()
         .filter(|f| f.writing_enabled())
         .filter_map(|f| match f {
@@ -534,7 +534,7 @@ impl TempFile {
 }
 
 /// An output whose bytes are written but not yet in place: a regular
-/// file's temporary file, renamed by [`Staged::commit`] (and removed if
+/// file's temporary file, renamed by `Staged::commit` (and removed if
 /// dropped uncommitted); devices and standard output are written by
 /// [`Output::stage`] itself and have nothing left to do.
 pub struct Staged {
@@ -544,7 +544,7 @@ pub struct Staged {
 
 impl Staged {
     /// Puts the file in place.
-    pub fn commit(self) -> Result<(), OutputError> {
+    pub(crate) fn commit(self) -> Result<(), OutputError> {
         match self.file {
             Some((temp, dest)) => temp.place(&dest).map_err(|source| OutputError::Write {
                 path: self.shown,

@@ -58,7 +58,7 @@ fn segments_meet(a: DVec2, b: DVec2, c: DVec2, d: DVec2) -> bool {
 /// points, planar (within 1e-4 of its size), with a non-zero area, and
 /// simple (no edge meets another except its neighbours at their shared
 /// vertex), so its orientation and its inside are defined. Convex or not.
-pub fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), FieldError> {
+pub(crate) fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), FieldError> {
     let refuse = |reason| Err(FieldError::new(field, reason));
     if !(3..=MAX_POLYGON_VERTICES).contains(&v.len()) {
         return refuse(FieldReason::PolygonVertexCount {
@@ -104,7 +104,7 @@ pub fn check_polygon(field: &str, v: &[[f32; 3]]) -> Result<(), FieldError> {
 /// table is fitted to GGX, and Beckmann or GTR lobes through it err by up
 /// to 30 % of the albedo (core/tests/ltc_ggx.rs); the glTF sheen lobe has
 /// no LTC.
-pub fn ltc_refusal(model: &Model) -> Option<String> {
+pub(crate) fn ltc_refusal(model: &Model) -> Option<String> {
     match model {
         Model::Microfacet(m) if m.params.ndf != Ndf::Ggx => Some(format!(
             "polygon lights need ndf = \"ggx\" on microfacet materials (the LTC table is fitted to GGX; {:?} through it errs by up to 30 %)",
@@ -121,13 +121,13 @@ pub fn ltc_refusal(model: &Model) -> Option<String> {
 /// ([`ltc_refusal`]).
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 #[error("material {material:?}: {reason}")]
-pub struct LtcRefusal {
-    pub material: String,
-    pub reason: String,
+pub(crate) struct LtcRefusal {
+    pub(crate) material: String,
+    pub(crate) reason: String,
 }
 
 /// Checks every lit material against polygon lights (see [`ltc_refusal`]).
-pub fn check_materials(materials: &[Material]) -> Result<(), LtcRefusal> {
+pub(crate) fn check_materials(materials: &[Material]) -> Result<(), LtcRefusal> {
     for m in materials {
         if let Some(lit) = m.shader.as_any().downcast_ref::<Lit>() {
             if let Some(reason) = ltc_refusal(lit.model()) {
@@ -143,7 +143,7 @@ pub fn check_materials(materials: &[Material]) -> Result<(), LtcRefusal> {
 
 /// Triangles covering a simple planar polygon, by ear clipping in its
 /// plane, each turning like the polygon (so front faces stay front faces).
-pub fn triangulate(v: &[[f32; 3]]) -> Vec<[usize; 3]> {
+pub(crate) fn triangulate(v: &[[f32; 3]]) -> Vec<[usize; 3]> {
     let p: Vec<DVec3> = v.iter().map(|q| DVec3::from(q.map(|c| c as f64))).collect();
     let (n, _) = normal_and_size(&p);
     let q = in_plane(&p, n);
@@ -181,7 +181,7 @@ pub fn triangulate(v: &[[f32; 3]]) -> Vec<[usize; 3]> {
 /// material of the light's radiance (double-sided for two-sided lights;
 /// a one-sided light's back is culled). Call after the meshes (uvs and
 /// tangents already settled) and before the geometry passes are set.
-pub fn add_visible(
+pub(crate) fn add_visible(
     data: &mut SceneParts,
     materials: &mut Vec<Material>,
     name: &str,

@@ -2,7 +2,7 @@
 //! `fit-ltc-coat`) on stderr. On a terminal it is an indicatif bar.
 //! Elsewhere (a log file, a pipe) a bar would print nothing useful, so it
 //! is plain lines: one when the first step is done (the rate is known
-//! early), then one whenever [`LINE_EVERY`] seconds have passed or another
+//! early), then one whenever `LINE_EVERY` seconds have passed or another
 //! tenth of the work is done, and one at the end:
 //!
 //! ```text
@@ -17,7 +17,7 @@ use std::time::Instant;
 
 /// Seconds between two plain progress lines at most (unless a tenth of
 /// the work is done sooner).
-pub const LINE_EVERY: f64 = 5.0;
+pub(crate) const LINE_EVERY: f64 = 5.0;
 
 /// A progress report: a bar, plain lines, or nothing.
 pub struct Progress {

@@ -137,53 +137,53 @@ impl From<RenderError> for String {
 
 /// Per-frame timings (ms) as `--stats` and `--stats-json` report them.
 #[derive(Clone, Debug, Serialize)]
-pub struct FrameTimes {
-    pub vertex: f64,
-    pub setup: f64,
-    pub bin: f64,
-    pub raster: f64,
-    pub shade: f64,
+pub(crate) struct FrameTimes {
+    pub(crate) vertex: f64,
+    pub(crate) setup: f64,
+    pub(crate) bin: f64,
+    pub(crate) raster: f64,
+    pub(crate) shade: f64,
     /// The shadow maps' depth passes.
-    pub shadow: f64,
+    pub(crate) shadow: f64,
     /// The post stages: supersampling resolve + exposure + tone mapping +
     /// sRGB encode (in memory).
-    pub post: f64,
+    pub(crate) post: f64,
     /// The whole frame: vertex through post.
-    pub frame: f64,
+    pub(crate) frame: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
 pub struct RunStats {
-    pub width: u32,
-    pub height: u32,
-    pub ssaa: u32,
-    pub threads: usize,
-    pub shading: &'static str,
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) ssaa: u32,
+    pub(crate) threads: usize,
+    pub(crate) shading: &'static str,
     /// The standard post list ran inside the shading pass (see
     /// [`RenderSettings::keep_hdr`]): `shade` includes it, `post` is 0.
     pub post_in_shading: bool,
-    pub triangles_in: u64,
-    pub culled_backface: u64,
-    pub culled_outside: u64,
-    pub culled_occluded: u64,
-    pub skipped_invalid: u64,
-    pub skipped_degenerate: u64,
-    pub clipped: u64,
-    pub drawn: u64,
-    pub no_samples: u64,
-    pub raster_triangles: u64,
+    pub(crate) triangles_in: u64,
+    pub(crate) culled_backface: u64,
+    pub(crate) culled_outside: u64,
+    pub(crate) culled_occluded: u64,
+    pub(crate) skipped_invalid: u64,
+    pub(crate) skipped_degenerate: u64,
+    pub(crate) clipped: u64,
+    pub(crate) drawn: u64,
+    pub(crate) no_samples: u64,
+    pub(crate) raster_triangles: u64,
     pub pixels_shaded: u64,
     /// Samples of blended surfaces shaded and composited (see
     /// [`specula_raster::frame::FrameStats::blended_samples`]).
     pub blended_samples: u64,
     /// Shadow-map depth passes per frame.
-    pub shadow_passes: u32,
+    pub(crate) shadow_passes: u32,
     /// One entry per repeat.
-    pub frame_ms: Vec<f64>,
-    pub frames: Vec<FrameTimes>,
+    pub(crate) frame_ms: Vec<f64>,
+    pub(crate) frames: Vec<FrameTimes>,
     /// Median frame's pixels (samples) per second, in millions.
-    pub mpixels_per_s: f64,
-    pub load_ms: f64,
+    pub(crate) mpixels_per_s: f64,
+    pub(crate) load_ms: f64,
     /// Writing files (PNG/EXR/AOVs); filled in by the caller.
     pub encode_ms: f64,
 }

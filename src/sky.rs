@@ -23,7 +23,7 @@ pub const SUN_RADIUS_DEG: f64 = 2.0;
 pub const SUN_RADIANCE: [f32; 3] = [16384.0, 14336.0, 12288.0];
 /// Elevation above the horizon and azimuth (from −Z toward +X) of the sun.
 pub const SUN_ELEVATION_DEG: f64 = 35.0;
-pub const SUN_AZIMUTH_DEG: f64 = 40.0;
+pub(crate) const SUN_AZIMUTH_DEG: f64 = 40.0;
 const ZENITH: [f32; 3] = [0.25, 0.5, 1.0];
 const HORIZON: [f32; 3] = [1.0, 1.0, 1.0];
 const GROUND: [f32; 3] = [0.125, 0.125, 0.125];

@@ -21,7 +21,7 @@ use specula_core::kulla_conty::{set_table_store, TableStore};
 use std::path::PathBuf;
 
 /// The cache folder (module docs), or None when disabled or unknown.
-pub fn cache_dir() -> Option<PathBuf> {
+pub(crate) fn cache_dir() -> Option<PathBuf> {
     if let Some(d) = std::env::var_os("SPECULA_CACHE_DIR") {
         return (!d.is_empty()).then(|| PathBuf::from(d));
     }
@@ -29,8 +29,8 @@ pub fn cache_dir() -> Option<PathBuf> {
 }
 
 /// Tables as files in one folder.
-pub struct DirStore {
-    pub dir: PathBuf,
+pub(crate) struct DirStore {
+    pub(crate) dir: PathBuf,
 }
 
 impl TableStore for DirStore {

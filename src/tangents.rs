@@ -57,7 +57,7 @@ impl mikktspace::Geometry for Corners<'_> {
 /// MikkTSpace's tangent (xyz, w = ±1 the bitangent's sign) of every
 /// triangle corner of `mesh` (which has uvs), `3 · t + k` for corner k of
 /// triangle t.
-pub fn corner_tangents(mesh: &MeshData) -> Result<Vec<[f32; 4]>, TangentError> {
+pub(crate) fn corner_tangents(mesh: &MeshData) -> Result<Vec<[f32; 4]>, TangentError> {
     if mesh.uvs.len() != mesh.positions.len() {
         return Err(TangentError::NoUvs);
     }
@@ -74,7 +74,7 @@ pub fn corner_tangents(mesh: &MeshData) -> Result<Vec<[f32; 4]>, TangentError> {
 /// Gives `mesh` (with uvs, without tangents) MikkTSpace tangents, one per
 /// vertex: a vertex whose corners got different tangents is split into
 /// one copy per distinct tangent (same position, normal, uv and colour).
-pub fn add_mikktspace_tangents(mesh: &mut MeshData) -> Result<(), TangentError> {
+pub(crate) fn add_mikktspace_tangents(mesh: &mut MeshData) -> Result<(), TangentError> {
     let corners = corner_tangents(mesh)?;
     let n = mesh.positions.len();
     let mut tangents: Vec<Option<[f32; 4]>> = vec![None; n];

@@ -59,11 +59,11 @@ impl From<TextureError> for String {
 
 /// Supplies the files a material names (textures, tonal art maps),
 /// relative to the scene's folder.
-pub type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
+pub(crate) type ReadFile<'a> = &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>;
 
 /// Reads an sRGB colour image (alpha dropped) with its mip chain, sampled
 /// with repeat wrapping and trilinear filtering.
-pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, TextureError> {
+pub(crate) fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, TextureError> {
     load_map(
         path,
         read,
@@ -76,7 +76,7 @@ pub fn load_color_map(path: &Path, read: ReadFile) -> Result<ColorMap, TextureEr
 /// (`Encoding::Srgb`: base colour, emission) or data (`Encoding::Linear`:
 /// metallic-roughness, normal and occlusion maps, whose texels are not
 /// colours).
-pub fn load_map(
+pub(crate) fn load_map(
     path: &Path,
     read: ReadFile,
     encoding: Encoding,
@@ -89,28 +89,17 @@ pub fn load_map(
     decode_map(&path.display().to_string(), &bytes, encoding, sampler)
 }
 
-/// [`load_color_map`] from an image file's bytes; `name` says where they
-/// came from in messages.
-pub fn decode_color_map(name: &str, bytes: &[u8]) -> Result<ColorMap, TextureError> {
-    decode_map(
-        name,
-        bytes,
-        Encoding::Srgb,
-        Sampler::new(Wrap::Repeat, Filter::Trilinear),
-    )
-}
-
 /// Peak bytes per texel while an image becomes a texture: the decoded
 /// image (up to 8 bytes for 16-bit RGBA), its 8-bit RGB copy and the
 /// flipped rows (3 + 3), the f32 texels with their mip chain (16) and the
 /// texture they are assembled into (16), rounded up.
-pub const TEXEL_BYTES: u64 = 48;
+pub(crate) const TEXEL_BYTES: u64 = 48;
 
 /// [`TEXEL_BYTES`] for RGBA textures: 8 + 4 + 4 + 21⅓ + 21⅓, rounded up.
-pub const TEXEL_BYTES_RGBA: u64 = 64;
+pub(crate) const TEXEL_BYTES_RGBA: u64 = 64;
 
 /// An image's width and height from its header, without decoding it.
-pub fn image_size(name: &str, bytes: &[u8]) -> Result<(u32, u32), TextureError> {
+pub(crate) fn image_size(name: &str, bytes: &[u8]) -> Result<(u32, u32), TextureError> {
     image::ImageReader::new(std::io::Cursor::new(bytes))
         .with_guessed_format()
         .map_err(|source| TextureError::Sniff {
@@ -124,19 +113,10 @@ pub fn image_size(name: &str, bytes: &[u8]) -> Result<(u32, u32), TextureError> 
         })
 }
 
-/// Counts a `w`×`h` texture against the memory budget (`--max-memory`)
-/// before it is decoded, naming the file.
-pub fn reserve_texture(name: &str, (w, h): (u32, u32)) -> Result<(), memory::OverBudget> {
-    memory::reserve(
-        &format!("{name} ({w}×{h})"),
-        (w as u64 * h as u64).saturating_mul(TEXEL_BYTES),
-    )
-}
-
 /// [`load_map`] from an image file's bytes; `name` says where they came
 /// from in messages. The size in the image's header is counted against
 /// the memory budget before anything is decoded.
-pub fn decode_map(
+pub(crate) fn decode_map(
     name: &str,
     bytes: &[u8],
     encoding: Encoding,
@@ -148,7 +128,7 @@ pub fn decode_map(
 /// [`decode_map`] keeping `channels` of RGBA: 3 (alpha dropped) or 4
 /// (alpha kept as channel 3, linear whatever `encoding` says: glTF's
 /// base colour alpha is not sRGB-encoded; an image without alpha gets 1).
-pub fn decode_map_channels(
+pub(crate) fn decode_map_channels(
     name: &str,
     bytes: &[u8],
     encoding: Encoding,

@@ -4,7 +4,7 @@
 /// `s` cut to at most `max` characters (on a character boundary), with the
 /// number of characters left out, so a 5 MB bad value does not come back as
 /// 5 MB of error message.
-pub fn truncate_echo(s: &str, max: usize) -> String {
+pub(crate) fn truncate_echo(s: &str, max: usize) -> String {
     match s.char_indices().nth(max) {
         None => s.to_string(),
         Some((cut, _)) => {
@@ -14,7 +14,7 @@ pub fn truncate_echo(s: &str, max: usize) -> String {
     }
 }
 
-/// Every line of `s` cut to at most `max` characters ([`truncate_echo`]):
+/// Every line of `s` cut to at most `max` characters (`truncate_echo`):
 /// for messages that may quote user input (a TOML error shows the line).
 pub fn truncate_lines(s: &str, max: usize) -> String {
     s.lines()
@@ -32,19 +32,19 @@ use glam::Vec3;
 /// so for images at most as tall as they are wide the clip coordinates stay
 /// below 2·1e9·1.15e5 ≈ 2.3e14, inside the rasterizer's MAX_CLIP_COORD
 /// (2^50 ≈ 1.1e15); and f32 still resolves 1/16 m at 1e6 m.
-pub const MAX_WORLD: f32 = 1e9;
+pub(crate) const MAX_WORLD: f32 = 1e9;
 
 /// Smallest size of a procedural shape (radius, edge): below this the
 /// triangles are sub-micrometre and f32 positions degenerate.
-pub const MIN_EXTENT: f32 = 1e-6;
+pub(crate) const MIN_EXTENT: f32 = 1e-6;
 
 /// The accepted vertical field of view, degrees: tan(fov/2) stays well
 /// inside f32 at both ends.
-pub const MIN_FOV_Y_DEG: f32 = 1e-3;
-pub const MAX_FOV_Y_DEG: f32 = 179.0;
+pub(crate) const MIN_FOV_Y_DEG: f32 = 1e-3;
+pub(crate) const MAX_FOV_Y_DEG: f32 = 179.0;
 
 /// A point every coordinate of which is finite and within ±[`MAX_WORLD`].
-pub fn check_point(field: &str, v: [f32; 3]) -> Result<(), FieldError> {
+pub(crate) fn check_point(field: &str, v: [f32; 3]) -> Result<(), FieldError> {
     if v.iter().all(|x| x.abs() <= MAX_WORLD) {
         Ok(())
     } else {
@@ -59,7 +59,7 @@ pub fn check_point(field: &str, v: [f32; 3]) -> Result<(), FieldError> {
 }
 
 /// A size (radius, edge length) in [[`MIN_EXTENT`], [`MAX_WORLD`]].
-pub fn check_extent(field: &str, v: f32) -> Result<(), FieldError> {
+pub(crate) fn check_extent(field: &str, v: f32) -> Result<(), FieldError> {
     if (MIN_EXTENT..=MAX_WORLD).contains(&v) {
         Ok(())
     } else {
@@ -77,7 +77,7 @@ pub fn check_extent(field: &str, v: f32) -> Result<(), FieldError> {
 /// The unit vector along `v`; any finite non-zero `v` works, however large
 /// or small its components (it is scaled by its largest one first, so
 /// [3e38, −3e38, 0] does not overflow to an infinite length).
-pub fn direction(field: &str, v: [f32; 3]) -> Result<Vec3, FieldError> {
+pub(crate) fn direction(field: &str, v: [f32; 3]) -> Result<Vec3, FieldError> {
     let v = Vec3::from(v);
     let m = v.abs().max_element();
     if !(v.is_finite() && m > 0.0) {

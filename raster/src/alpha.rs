@@ -53,11 +53,11 @@ pub struct MaterialAlpha {
 /// What the alpha of a fragment is computed from: its uv with the uv's
 /// screen derivatives, and its interpolated vertex-colour alpha.
 #[derive(Clone, Copy, Debug)]
-pub struct AlphaInputs<R: Real> {
-    pub uv: [R; 2],
-    pub duv_dx: [R; 2],
-    pub duv_dy: [R; 2],
-    pub vertex_alpha: R,
+pub(crate) struct AlphaInputs<R: Real> {
+    pub(crate) uv: [R; 2],
+    pub(crate) duv_dx: [R; 2],
+    pub(crate) duv_dy: [R; 2],
+    pub(crate) vertex_alpha: R,
 }
 
 impl<R: Real> AlphaInputs<R> {
@@ -68,7 +68,7 @@ impl<R: Real> AlphaInputs<R> {
     /// the order `ResolveContext::resolve` and `surface` use, so the
     /// values are theirs.
     #[inline(always)]
-    pub fn at(p: &TriPlanes, uvs: [Vec2; 3], alphas: [f32; 3], x: u32, y: u32) -> Self {
+    pub(crate) fn at(p: &TriPlanes, uvs: [Vec2; 3], alphas: [f32; 3], x: u32, y: u32) -> Self {
         let splat = |c: f32| R::splat(c as f64);
         let px = R::splat(x as f64 + 0.5) + R::lane_index();
         let py = R::splat(y as f64 + 0.5);
@@ -105,20 +105,20 @@ impl<R: Real> AlphaInputs<R> {
 
 impl MaterialAlpha {
     /// Whether computing the alpha reads the surface (uv or vertex colour).
-    pub fn needs_surface(&self) -> bool {
+    pub(crate) fn needs_surface(&self) -> bool {
         self.map.is_some() || self.vertex_alpha
     }
 
     /// The alpha of every fragment when nothing per pixel feeds it (no map
     /// with an alpha channel, no vertex alpha): the factor.
-    pub fn constant(&self) -> Option<f32> {
+    pub(crate) fn constant(&self) -> Option<f32> {
         let map_alpha = self.map.as_ref().is_some_and(|m| m.texture.channels() >= 4);
         (!map_alpha && !self.vertex_alpha).then_some(self.factor)
     }
 
     /// factor × map alpha × vertex alpha per lane (module docs).
     #[inline(always)]
-    pub fn alpha<R: Real>(&self, i: &AlphaInputs<R>) -> R {
+    pub(crate) fn alpha<R: Real>(&self, i: &AlphaInputs<R>) -> R {
         let mut a = R::splat(self.factor as f64);
         if let Some(map) = &self.map {
             if map.texture.channels() >= 4 {
@@ -142,7 +142,7 @@ impl MaterialAlpha {
     }
 
     /// This alpha with its map sampled with `filter` (`--texture-filter`).
-    pub fn with_texture_filter(&self, filter: Filter) -> MaterialAlpha {
+    pub(crate) fn with_texture_filter(&self, filter: Filter) -> MaterialAlpha {
         let mut a = self.clone();
         if let Some(m) = &mut a.map {
             m.sampler.filter = filter;

@@ -16,18 +16,18 @@ pub(crate) const CHUNK: usize = 4096;
 /// One chunk's screen triangles and its per-tile index lists.
 #[derive(Default)]
 pub struct BinnedChunk {
-    pub tris: Vec<RasterTri>,
+    pub(crate) tris: Vec<RasterTri>,
     /// Tile t's entries are `items[offsets[t]..offsets[t + 1]]`.
-    pub offsets: Vec<u32>,
+    pub(crate) offsets: Vec<u32>,
     /// Indices into `tris`.
-    pub items: Vec<u32>,
+    pub(crate) items: Vec<u32>,
     /// Each tile's next free slot while binning (kept for its allocation).
     fill: Vec<u32>,
 }
 
 impl BinnedChunk {
     #[inline]
-    pub fn tile_items(&self, t: usize) -> &[u32] {
+    pub(crate) fn tile_items(&self, t: usize) -> &[u32] {
         &self.items[self.offsets[t] as usize..self.offsets[t + 1] as usize]
     }
 }
@@ -58,7 +58,7 @@ impl BinnedChunk {
     /// (Re)builds the per-tile lists of `self.tris`, reusing the vectors'
     /// allocations: a frame drawn after frame keeps its chunks, where
     /// fresh ones would cost page faults every frame.
-    pub fn bin(&mut self, target: &Target) {
+    pub(crate) fn bin(&mut self, target: &Target) {
         let BinnedChunk {
             tris,
             offsets,

@@ -19,7 +19,7 @@ pub struct Planes3 {
 }
 
 impl Planes3 {
-    pub fn new(len: usize) -> Planes3 {
+    pub(crate) fn new(len: usize) -> Planes3 {
         Planes3 {
             r: vec![0.0; len],
             g: vec![0.0; len],
@@ -87,21 +87,6 @@ impl FrameBuffers {
             normal: Planes3::new(len(set.normal)),
             id: vec![0; len(set.id)],
         }
-    }
-
-    /// The optional buffers present.
-    pub fn set(&self) -> BufferSet {
-        BufferSet {
-            depth: !self.depth.is_empty(),
-            normal: !self.normal.is_empty(),
-            id: !self.id.is_empty(),
-        }
-    }
-
-    /// Whether these buffers fit `target` and hold at least `set`.
-    pub fn fits(&self, target: &Target, set: BufferSet) -> bool {
-        let have = self.set();
-        self.width == target.width && self.height == target.height && have.union(set) == have
     }
 }
 

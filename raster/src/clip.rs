@@ -20,16 +20,16 @@ pub(crate) const MAX_CLIPPED: usize = 8;
 
 /// A convex polygon of at most `MAX_CLIPPED` vertices.
 #[derive(Clone, Copy)]
-pub struct Polygon {
-    pub v: [ClipVertex; MAX_CLIPPED],
-    pub len: usize,
+pub(crate) struct Polygon {
+    pub(crate) v: [ClipVertex; MAX_CLIPPED],
+    pub(crate) len: usize,
 }
 
 /// Guard band half-widths in NDC units: |x/w| ≤ kx, |y/w| ≤ ky.
 #[derive(Clone, Copy, Debug)]
 pub struct GuardBand {
-    pub kx: f64,
-    pub ky: f64,
+    pub(crate) kx: f64,
+    pub(crate) ky: f64,
 }
 
 impl GuardBand {
@@ -62,7 +62,7 @@ impl GuardBand {
 
     /// Sutherland–Hodgman against the planes some vertex violates. The
     /// result may be empty (fewer than 3 vertices).
-    pub fn clip(&self, tri: &[ClipVertex; 3]) -> Polygon {
+    pub(crate) fn clip(&self, tri: &[ClipVertex; 3]) -> Polygon {
         let mut poly = Polygon {
             v: [[0.0; 4]; MAX_CLIPPED],
             len: 3,

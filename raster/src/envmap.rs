@@ -21,7 +21,7 @@
 //! - the irradiance in nine spherical harmonics \[Ramamoorthi01\], as
 //!   E(n)/π: the radiance a white Lambertian surface reflects;
 //! - the luminance distribution for sampling the map in the reference
-//!   ([`crate::envmap_sample`]; the Monte Carlo reference that uses it is
+//!   (`crate::envmap_sample`; the Monte Carlo reference that uses it is
 //!   [`crate::envmap_reference`]).
 
 use crate::envmap_sun::Sun;
@@ -120,9 +120,9 @@ pub struct SunLight {
     /// Unit direction from the scene toward it.
     pub to_light: [f32; 3],
     /// Irradiance on a surface facing it: L · Ω.
-    pub irradiance: [f32; 3],
+    pub(crate) irradiance: [f32; 3],
     /// Its mean radiance L.
-    pub radiance: [f32; 3],
+    pub(crate) radiance: [f32; 3],
     /// sin² of its angular radius ρ, from Ω = 2π(1 − cos ρ).
     pub sin2_radius: f32,
 }
@@ -145,7 +145,7 @@ impl SunLight {
 /// across it, with x = √(1/sin²ρ − 1), y = −x cos θ / sin θ \[Lagarde14\]:
 /// ((cos θ acos y − x sin θ √(1 − y²)) sin²ρ + atan(sin θ √(1 − y²) / x)) / (π sin²ρ).
 #[inline(always)]
-pub fn disk_cos_factor<R: Real>(cos_theta: R, sin2_radius: f32) -> R {
+pub(crate) fn disk_cos_factor<R: Real>(cos_theta: R, sin2_radius: f32) -> R {
     let s2 = R::splat(sin2_radius as f64);
     let whole = cos_theta.max(R::ZERO);
     let sin_theta = (R::ONE - cos_theta * cos_theta)
@@ -173,7 +173,7 @@ pub struct EnvMap {
     /// cos and sin of the rotation about +Y.
     rot: [f32; 2],
     /// Whether the map is seen where no surface is.
-    pub visible: bool,
+    pub(crate) visible: bool,
     pub method: IblMethod,
     /// E(n)/π in nine SH coefficients per channel (map frame), without
     /// the sun.
@@ -290,20 +290,20 @@ impl EnvMap {
 
     /// A world direction in the map's frame (turned by −rotate about +Y).
     #[inline(always)]
-    pub fn to_map<R: Real>(&self, d: V3<R>) -> V3<R> {
+    pub(crate) fn to_map<R: Real>(&self, d: V3<R>) -> V3<R> {
         let (c, s) = (R::splat(self.rot[0] as f64), R::splat(self.rot[1] as f64));
         V3::new(c.mul_add(d.x, -(s * d.z)), d.y, s.mul_add(d.x, c * d.z))
     }
 
     /// A map direction in the world.
     #[inline]
-    pub fn to_world(&self, d: [f64; 3]) -> [f64; 3] {
+    pub(crate) fn to_world(&self, d: [f64; 3]) -> [f64; 3] {
         let (c, s) = (self.rot[0] as f64, self.rot[1] as f64);
         [c * d[0] + s * d[2], d[1], -s * d[0] + c * d[2]]
     }
 
     /// Radiance seen along world direction `d` (bilinear; the background).
-    pub fn radiance(&self, d: [f32; 3]) -> [f32; 3] {
+    pub(crate) fn radiance(&self, d: [f32; 3]) -> [f32; 3] {
         let m = self.to_map(V3::new(d[0], d[1], d[2]));
         let l = (m.x * m.x + m.y * m.y + m.z * m.z).sqrt().max(1e-30);
         let (u, v) = dir_to_uv([m.x / l, m.y / l, m.z / l]);
@@ -337,7 +337,7 @@ impl EnvMap {
 
     /// E(n)/π at world unit normal `n`: the radiance a white Lambertian
     /// surface reflects, the sun's part (E_sun times the disk's
-    /// [`disk_cos_factor`], over π) included.
+    /// `disk_cos_factor`, over π) included.
     #[inline(always)]
     pub fn irradiance_over_pi<R: Real>(&self, n: V3<R>) -> Rgb<R> {
         self.irradiance_over_pi_shadowed(n, |_| R::ONE)
@@ -346,7 +346,7 @@ impl EnvMap {
     /// [`EnvMap::irradiance_over_pi`] with the sun's part times
     /// `sun_visibility` of that part (its shadow factor).
     #[inline(always)]
-    pub fn irradiance_over_pi_shadowed<R: Real>(
+    pub(crate) fn irradiance_over_pi_shadowed<R: Real>(
         &self,
         n: V3<R>,
         sun_visibility: impl FnOnce(&Rgb<R>) -> R,

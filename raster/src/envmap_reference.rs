@@ -24,7 +24,7 @@ fn mix64(mut z: u64) -> u64 {
 }
 
 /// A pixel's seed from its world position.
-pub fn seed_of(p: V3<f64>) -> u64 {
+pub(crate) fn seed_of(p: V3<f64>) -> u64 {
     let bits = |x: f64| (x as f32).to_bits() as u64;
     mix64(bits(p.x) ^ mix64(bits(p.y) ^ mix64(bits(p.z))))
 }

@@ -10,7 +10,7 @@ use std::f64::consts::PI;
 /// The map's luminance distribution: a marginal CDF over rows and a
 /// conditional CDF per row.
 #[derive(Clone, Debug, Default)]
-pub struct EnvSampler {
+pub(crate) struct EnvSampler {
     width: usize,
     height: usize,
     /// Row CDF, `height + 1` entries from 0 to 1.
@@ -24,7 +24,7 @@ pub struct EnvSampler {
 impl EnvSampler {
     /// The distribution of `map`'s luminance · sin θ; empty (no map
     /// sampling) for a black map.
-    pub fn new(map: &Equirect) -> EnvSampler {
+    pub(crate) fn new(map: &Equirect) -> EnvSampler {
         let (w, h) = (map.width, map.height);
         let mut weights = vec![0.0f64; w * h];
         let mut total = 0.0;
@@ -71,7 +71,7 @@ impl EnvSampler {
     }
 
     /// Whether the map has light to sample.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.prob.is_empty()
     }
 

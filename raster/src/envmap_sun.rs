@@ -14,11 +14,11 @@
 //! 1. the map's typical level m is the solid-angle-weighted median of Y
 //!    (a histogram of quarter stops);
 //! 2. the source is the 8-connected region (wrapping in u) around the
-//!    brightest texel of texels with Y > T, T = max([`MEDIAN_RATIO`] · m,
-//!    peak / [`PEAK_RATIO`]);
+//!    brightest texel of texels with Y > T, T = max(`MEDIAN_RATIO` · m,
+//!    peak / `PEAK_RATIO`);
 //! 3. it is taken out only if it is compact (its solid angle at most
-//!    [`MAX_SOLID_ANGLE`]) and worth it (its luminance above the
-//!    surrounding sky level carries at least [`MIN_SHARE`] of the map's
+//!    `MAX_SOLID_ANGLE`) and worth it (its luminance above the
+//!    surrounding sky level carries at least `MIN_SHARE` of the map's
 //!    ∫ Y dω);
 //! 4. the surrounding sky level is the solid-angle-weighted mean radiance
 //!    of the texels touching the region; the region's texels are replaced
@@ -32,13 +32,13 @@
 use crate::equirect::{luminance, uv_to_dir, Equirect};
 
 /// T is at least this many times the median luminance.
-pub const MEDIAN_RATIO: f32 = 64.0;
+pub(crate) const MEDIAN_RATIO: f32 = 64.0;
 /// T is at least the peak luminance over this.
-pub const PEAK_RATIO: f32 = 64.0;
+pub(crate) const PEAK_RATIO: f32 = 64.0;
 /// Largest solid angle of a source (sr): a disk of about 7° radius.
-pub const MAX_SOLID_ANGLE: f64 = 0.05;
+pub(crate) const MAX_SOLID_ANGLE: f64 = 0.05;
 /// Smallest share of the map's ∫ Y dω a source must carry.
-pub const MIN_SHARE: f64 = 0.1;
+pub(crate) const MIN_SHARE: f64 = 0.1;
 
 /// A source taken out of a map (map frame).
 #[derive(Clone, Copy, Debug, PartialEq)]

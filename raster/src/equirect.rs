@@ -26,7 +26,7 @@ impl Equirect {
     }
 
     /// Bilinear radiance at (u, v) ∈ [0, 1]², wrapping in u.
-    pub fn bilinear(&self, u: f32, v: f32) -> [f32; 3] {
+    pub(crate) fn bilinear(&self, u: f32, v: f32) -> [f32; 3] {
         let x = u * self.width as f32 - 0.5;
         let y = v * self.height as f32 - 0.5;
         let (x0, y0) = (x.floor(), y.floor());
@@ -47,7 +47,7 @@ impl Equirect {
 
     /// The texel containing (u, v) (the map as a piecewise-constant
     /// function: what the reference integrates).
-    pub fn nearest(&self, u: f32, v: f32) -> [f32; 3] {
+    pub(crate) fn nearest(&self, u: f32, v: f32) -> [f32; 3] {
         let i = ((u * self.width as f32) as isize).min(self.width as isize - 1);
         let j = (v * self.height as f32) as isize;
         self.at(i.max(0), j)
@@ -83,7 +83,7 @@ impl Equirect {
 
 /// Unit map direction → (u, v).
 #[inline]
-pub fn dir_to_uv(d: [f32; 3]) -> (f32, f32) {
+pub(crate) fn dir_to_uv(d: [f32; 3]) -> (f32, f32) {
     let u = 0.5 + d[0].atan2(-d[2]) * (0.5 * std::f32::consts::FRAC_1_PI);
     let v = d[1].clamp(-1.0, 1.0).acos() * std::f32::consts::FRAC_1_PI;
     (u.clamp(0.0, 1.0), v.clamp(0.0, 1.0))
@@ -99,14 +99,14 @@ pub fn uv_to_dir(u: f64, v: f64) -> [f64; 3] {
 
 /// Rec. 709 luminance.
 #[inline]
-pub fn luminance(c: [f32; 3]) -> f32 {
+pub(crate) fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 /// A texel's documented clamping: NaN and negative → 0, above
 /// [`MAX_TEXEL`] (and +inf) → [`MAX_TEXEL`].
 #[inline]
-pub fn clamp_texel(c: f32) -> f32 {
+pub(crate) fn clamp_texel(c: f32) -> f32 {
     if c.is_nan() {
         0.0
     } else {

@@ -16,7 +16,7 @@
 //! material's per-pixel parameters from it; `post` runs the post stages (downsampling the
 //! supersamples, exposure, tone map, encode, and any custom image-space stage).
 
-pub mod alpha;
+mod alpha;
 mod bin;
 mod blend;
 pub mod buffers;
@@ -25,7 +25,7 @@ pub mod clip;
 mod depth_pass;
 pub mod envmap;
 pub mod envmap_reference;
-pub mod envmap_sample;
+mod envmap_sample;
 pub mod envmap_sun;
 pub mod equirect;
 mod fixed;

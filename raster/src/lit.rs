@@ -42,8 +42,8 @@ pub struct Lit {
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("{map}: the \"{model}\" model has no parameter this map fills")]
 pub struct UnsupportedMap {
-    pub map: &'static str,
-    pub model: &'static str,
+    pub(crate) map: &'static str,
+    pub(crate) model: &'static str,
 }
 
 impl Lit {
@@ -214,7 +214,7 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
 /// read along its lobe's dominant direction: [`prefilter_direction`]),
 /// plus the sun taken out of the map as a distant light through the
 /// model's BRDF: f(wi, wo) · E_sun toward the sun's centroid times the
-/// disk's clamped cosine ([`disk_cos_factor`]), at most L_sun · ρ(wo),
+/// disk's clamped cosine (`disk_cos_factor`), at most L_sun · ρ(wo),
 /// times `sun_visibility` of that part (its shadow factor).
 /// `frame` is the shading frame (world space, unit normal) and `wo` the
 /// unit view direction in world space.

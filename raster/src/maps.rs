@@ -38,7 +38,7 @@
 //!   Without it the coat's normal is the surface's, unmapped even where
 //!   `normal` bends the base's (the extension: "no normal mapping is
 //!   applied to the clear coat layer, even if normal mapping is applied
-//!   to the base material"): [`ParamMaps::coat_normal`];
+//!   to the base material"): `ParamMaps::coat_normal`;
 //! - KHR_materials_sheen: `sheen_color` RGB multiplies the sheen colour
 //!   (sRGB texels), `sheen_roughness` A its perceptual roughness
 //!   (linear).
@@ -64,13 +64,9 @@ pub struct UvTransform {
 }
 
 impl UvTransform {
-    pub const IDENTITY: UvTransform = UvTransform {
-        rows: [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]],
-    };
-
     /// The transformed point.
     #[inline(always)]
-    pub fn apply<R: Real>(&self, uv: [R; 2]) -> [R; 2] {
+    pub(crate) fn apply<R: Real>(&self, uv: [R; 2]) -> [R; 2] {
         self.rows.map(|[a, b, c]| {
             R::splat(a as f64).mul_add(uv[0], R::splat(b as f64).mul_add(uv[1], R::splat(c as f64)))
         })
@@ -78,7 +74,7 @@ impl UvTransform {
 
     /// The transformed direction (a derivative of uv): the linear part.
     #[inline(always)]
-    pub fn apply_vector<R: Real>(&self, d: [R; 2]) -> [R; 2] {
+    pub(crate) fn apply_vector<R: Real>(&self, d: [R; 2]) -> [R; 2] {
         self.rows
             .map(|[a, b, _]| R::splat(a as f64).mul_add(d[0], R::splat(b as f64) * d[1]))
     }
@@ -105,7 +101,7 @@ impl ColorMap {
     /// resolve's analytic derivatives); white where the shader got no
     /// surface.
     #[inline(always)]
-    pub fn sample<R: Real>(&self, input: &ShadeInput<R>) -> Rgb<R> {
+    pub(crate) fn sample<R: Real>(&self, input: &ShadeInput<R>) -> Rgb<R> {
         match input.surface {
             Some(_) => {
                 let [r, g, b] = self.sample_channels(input);
@@ -118,7 +114,7 @@ impl ColorMap {
     /// The map's alpha (its fourth channel: the texture must have four)
     /// at the packet's uv; one where the shader got no surface.
     #[inline(always)]
-    pub fn sample_alpha<R: Real>(&self, input: &ShadeInput<R>) -> R {
+    pub(crate) fn sample_alpha<R: Real>(&self, input: &ShadeInput<R>) -> R {
         match input.surface {
             Some(_) => self.sample_channels::<R, 4>(input)[3],
             None => R::ONE,
@@ -295,7 +291,7 @@ impl ParamMaps {
     }
 
     /// Every map, mutably (to set their samplers at once).
-    pub fn maps_mut(&mut self) -> impl Iterator<Item = &mut ColorMap> {
+    pub(crate) fn maps_mut(&mut self) -> impl Iterator<Item = &mut ColorMap> {
         [
             self.base_color.as_mut(),
             self.metallic_roughness.as_mut(),
@@ -365,7 +361,7 @@ impl ParamMaps {
     }
 
     /// The material has a clearcoat normal map.
-    pub fn has_coat_normal_map(&self) -> bool {
+    pub(crate) fn has_coat_normal_map(&self) -> bool {
         self.layers
             .as_ref()
             .is_some_and(|l| l.clearcoat_normal.is_some())
@@ -377,7 +373,7 @@ impl ParamMaps {
     /// unmapped normal under a base normal map (module docs); `None`
     /// where the coat's normal is the base's.
     #[inline(always)]
-    pub fn coat_normal<R: Real>(
+    pub(crate) fn coat_normal<R: Real>(
         &self,
         input: &ShadeInput<R>,
         frame: &ShadingFrame<R>,

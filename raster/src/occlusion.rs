@@ -63,7 +63,7 @@ impl DepthBounds {
 
     /// [`DepthBounds::build`] from each tile's [`tile_minima`] (tile
     /// order), which a pass can take while the tile is in cache.
-    pub fn build_from_tiles(&mut self, target: &Target, tiles: &[TileMinima]) {
+    pub(crate) fn build_from_tiles(&mut self, target: &Target, tiles: &[TileMinima]) {
         let row = self.shape(target);
         let tiles_x = target.tiles_x as usize;
         let blocks = row * target.tiles_y as usize * PER_TILE;

@@ -13,19 +13,19 @@ use wide::u32x8;
 
 /// Everything resolve and shading read, shared by all tiles.
 pub struct ResolveContext<'a> {
-    pub scene: &'a SceneData,
-    pub planes: &'a [TriPlanes],
-    pub view: &'a View,
-    pub ids: IdMap,
+    pub(crate) scene: &'a SceneData,
+    pub(crate) planes: &'a [TriPlanes],
+    pub(crate) view: &'a View,
+    pub(crate) ids: IdMap,
     /// Per material: its shader reads the surface (uvs, tangents).
-    pub needs_surface: Vec<bool>,
+    pub(crate) needs_surface: Vec<bool>,
     /// Some material's shader does.
-    pub any_needs_surface: bool,
+    pub(crate) any_needs_surface: bool,
     /// 2 / width and 2 / height of the view (pixel → NDC), as `resolve`
     /// rounds them: divided once here instead of in every packet.
     ndc_scale: [f32; 2],
     /// The frame's shadow maps, when some light has shadows.
-    pub shadows: Option<&'a crate::shadow::ShadowMaps>,
+    pub(crate) shadows: Option<&'a crate::shadow::ShadowMaps>,
 }
 
 impl<'a> ResolveContext<'a> {
@@ -54,22 +54,22 @@ impl<'a> ResolveContext<'a> {
 /// The distinct triangles of one packet and the lanes each covers.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct PacketTris {
-    pub n: usize,
+    pub(crate) n: usize,
     /// Visibility-buffer ids.
-    pub id: [u32; 8],
+    pub(crate) id: [u32; 8],
     /// Their source triangles and materials (filled by [`PacketTris::new`]).
-    pub tri: [u32; 8],
-    pub material: [u32; 8],
+    pub(crate) tri: [u32; 8],
+    pub(crate) material: [u32; 8],
     /// Bit i set: lane i shows triangle `id[t]`.
-    pub lanes: [u32; 8],
+    pub(crate) lanes: [u32; 8],
     /// Lanes covered by any triangle.
-    pub covered: u32,
+    pub(crate) covered: u32,
     /// The distinct materials of the packet (filled by [`PacketTris::new`]),
     /// in order of first appearance, and the lanes each covers: the shading
     /// pass calls one shader per entry.
-    pub groups: usize,
-    pub group_material: [u32; 8],
-    pub group_lanes: [u32; 8],
+    pub(crate) groups: usize,
+    pub(crate) group_material: [u32; 8],
+    pub(crate) group_lanes: [u32; 8],
 }
 
 impl PacketTris {
@@ -83,7 +83,8 @@ impl PacketTris {
     }
 
     /// The grouping alone (`tri` and `material` left zero).
-    pub fn group(ids: &[u32], lanes: usize) -> PacketTris {
+    #[cfg(test)]
+    pub(crate) fn group(ids: &[u32], lanes: usize) -> PacketTris {
         let mut p = PacketTris::default();
         p.fill(ids, lanes, None);
         p
@@ -112,7 +113,7 @@ impl PacketTris {
     /// its fields are written by scalar stores and the copy reads them
     /// back with vector loads, which stall on store forwarding.)
     #[inline(always)]
-    pub fn fill(&mut self, ids: &[u32], lanes: usize, ctx: Option<&ResolveContext>) {
+    pub(crate) fn fill(&mut self, ids: &[u32], lanes: usize, ctx: Option<&ResolveContext>) {
         if lanes == 8 {
             // One vector compare per distinct triangle. The counts live in
             // registers until the end, and indices are masked to 0..8 (a
@@ -190,7 +191,7 @@ impl ResolveContext<'_> {
     /// shaded soon: a packet's new triangles are scattered through arrays
     /// of the whole scene. No effect on results; MISS reads nothing.
     #[inline(always)]
-    pub fn prefetch(&self, id: u32) {
+    pub(crate) fn prefetch(&self, id: u32) {
         let Some(planes) = self.planes.get(id as usize) else {
             return;
         };

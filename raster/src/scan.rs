@@ -122,7 +122,7 @@ pub(crate) struct AlphaScan<'a> {
     materials: Vec<Option<&'a MaterialAlpha>>,
     /// Blended triangles are recorded for compositing (the camera's first
     /// pass) rather than only skipped (shadow maps, later passes).
-    pub record_blend: bool,
+    pub(crate) record_blend: bool,
 }
 
 impl<'a> AlphaScan<'a> {

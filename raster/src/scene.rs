@@ -53,7 +53,7 @@ pub struct SceneParts {
     /// light; `None`: unshadowed. Needs a map with a sun.
     pub sun_shadows: Option<ShadowSettings>,
     /// Radiance of pixels no triangle covers when there is no environment.
-    pub background: [f32; 3],
+    pub(crate) background: [f32; 3],
     pub camera: Camera,
 }
 
@@ -101,7 +101,7 @@ pub struct Material {
     pub double_sided: bool,
     /// Masked or blended (glTF's alphaMode MASK and BLEND; alpha.rs);
     /// `None`: opaque.
-    pub alpha: Option<Arc<MaterialAlpha>>,
+    pub(crate) alpha: Option<Arc<MaterialAlpha>>,
 }
 
 impl Material {

@@ -11,9 +11,9 @@ use crate::occlusion::DepthBounds;
 /// covered iff E ≥ 0 for all three edges.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Edge {
-    pub a: i64,
-    pub b: i64,
-    pub c: i64,
+    pub(crate) a: i64,
+    pub(crate) b: i64,
+    pub(crate) c: i64,
 }
 
 /// A screen-space triangle ready for scan conversion (a clipped triangle
@@ -36,7 +36,7 @@ pub struct RasterTri {
     /// Id of the source triangle (its index in the scene).
     pub tri: u32,
     pub edges: [Edge; 3],
-    /// 1 / (256·|A|) per edge (0 where A = 0): see [`RasterTri::span`].
+    /// 1 / (256·|A|) per edge (0 where A = 0): see `RasterTri::span`.
     pub inv_step: [f64; 3],
 }
 
@@ -62,9 +62,9 @@ pub(crate) const SMALL_PX: i64 = 64;
 /// (`a`, `b` already scaled by 256), bias included.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct SmallEdges {
-    pub e0: [i32; 3],
-    pub a: [i32; 3],
-    pub b: [i32; 3],
+    pub(crate) e0: [i32; 3],
+    pub(crate) a: [i32; 3],
+    pub(crate) b: [i32; 3],
 }
 
 /// Screen-space affine functions of one source triangle, each evaluated as
@@ -101,9 +101,9 @@ impl TriPlanes {
 /// so its setup writes and its scan reads less.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DepthPlanes {
-    pub origin: [f32; 2],
+    pub(crate) origin: [f32; 2],
     /// NDC depth z/w, as `TriPlanes::z`.
-    pub z: [f32; 3],
+    pub(crate) z: [f32; 3],
 }
 
 /// The planes a setup writes per triangle: all of them ([`TriPlanes`]),
@@ -176,7 +176,7 @@ pub struct SetupCounts {
 }
 
 impl SetupCounts {
-    pub fn add(&mut self, o: &SetupCounts) {
+    pub(crate) fn add(&mut self, o: &SetupCounts) {
         self.triangles += o.triangles;
         self.culled_backface += o.culled_backface;
         self.culled_outside += o.culled_outside;
@@ -645,7 +645,7 @@ impl RasterTri {
     /// estimate is within one pixel, |r| < 2⁶⁰ having 53 good bits): exact
     /// like an integer division, without a division per edge and row.
     #[inline]
-    pub fn span(&self, y: i32, xa: i32, xb: i32) -> (i32, i32) {
+    pub(crate) fn span(&self, y: i32, xa: i32, xb: i32) -> (i32, i32) {
         let yc = pixel_centre(y as i64);
         let (mut lo, mut hi) = (xa as i64, xb as i64);
         for (e, inv) in self.edges.iter().zip(self.inv_step) {
@@ -711,7 +711,7 @@ impl RasterTri {
     }
 
     /// True if the centre of pixel (x, y) is covered: the direct test that
-    /// [`RasterTri::span`] solves for a whole row (tests compare the two).
+    /// `RasterTri::span` solves for a whole row (tests compare the two).
     pub fn covers(&self, x: i32, y: i32) -> bool {
         let (px, py) = (pixel_centre(x as i64), pixel_centre(y as i64));
         self.edges.iter().all(|e| e.a * px + e.b * py + e.c >= 0)

@@ -101,17 +101,17 @@ fn to_f32(x: f64x4) -> ([f32; 4], f64x4) {
 /// Clip-space vertices of 4 triangles, structure of arrays in f64 (exact:
 /// they come from f32): `x[j]` holds vertex j's x of the 4 triangles.
 #[derive(Clone, Copy, Debug)]
-pub struct Vertices4 {
-    pub x: [f64x4; 3],
-    pub y: [f64x4; 3],
-    pub z: [f64x4; 3],
-    pub w: [f64x4; 3],
+pub(crate) struct Vertices4 {
+    pub(crate) x: [f64x4; 3],
+    pub(crate) y: [f64x4; 3],
+    pub(crate) z: [f64x4; 3],
+    pub(crate) w: [f64x4; 3],
 }
 
 impl Vertices4 {
     /// From per-triangle arrays `v[t][j]` (vertex j of triangle t).
     #[inline(always)]
-    pub fn from_arrays(v: &[[[f32; 4]; 3]; LANES]) -> Vertices4 {
+    pub(crate) fn from_arrays(v: &[[[f32; 4]; 3]; LANES]) -> Vertices4 {
         let coord = |j: usize, c: usize| f64x4::new(std::array::from_fn(|t| v[t][j][c] as f64));
         Vertices4 {
             x: std::array::from_fn(|j| coord(j, 0)),
@@ -129,7 +129,7 @@ impl Vertices4 {
     /// its time.) Panics, as indexing does, on an index past `clip`.
     #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
     #[inline(always)]
-    pub fn gather(clip: &[[f32; 4]], tris: &[[u32; 3]; LANES]) -> Vertices4 {
+    pub(crate) fn gather(clip: &[[f32; 4]], tris: &[[u32; 3]; LANES]) -> Vertices4 {
         use core::arch::x86_64::{
             __m256d, _mm256_cvtps_pd, _mm256_permute2f128_pd, _mm256_unpackhi_pd,
             _mm256_unpacklo_pd, _mm_loadu_ps,
@@ -168,13 +168,13 @@ impl Vertices4 {
     /// See the AVX version.
     #[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
     #[inline(always)]
-    pub fn gather(clip: &[[f32; 4]], tris: &[[u32; 3]; LANES]) -> Vertices4 {
+    pub(crate) fn gather(clip: &[[f32; 4]], tris: &[[u32; 3]; LANES]) -> Vertices4 {
         Vertices4::from_arrays(&tris.map(|t| t.map(|i| clip[i as usize])))
     }
 
     /// Triangle `t`'s vertices as f32 (exact: they were f32).
     #[inline(always)]
-    pub fn lane(&self, t: usize) -> [[f32; 4]; 3] {
+    pub(crate) fn lane(&self, t: usize) -> [[f32; 4]; 3] {
         std::array::from_fn(|j| {
             [self.x[j], self.y[j], self.z[j], self.w[j]].map(|c| c.to_array()[t] as f32)
         })
@@ -222,7 +222,7 @@ impl SetupContext {
     /// from a clip-position array, as the frame does), keeping all planes
     /// ([`TriPlanes`]) or only depth's ([`crate::setup::DepthPlanes`]).
     #[allow(clippy::too_many_arguments)]
-    pub fn setup_x4_vertices<P: SetupPlanes>(
+    pub(crate) fn setup_x4_vertices<P: SetupPlanes>(
         &self,
         first: u32,
         v: &Vertices4,

@@ -44,7 +44,7 @@ impl<'a, R: Real> ShadeInput<'a, R> {
     /// shading pass: passed through memory across the dynamic call it cost
     /// more than the dozen instructions that compute it.
     #[inline(always)]
-    pub fn frame(&self) -> ShadingFrame<R> {
+    pub(crate) fn frame(&self) -> ShadingFrame<R> {
         match self.surface {
             Some(s) => s.frame,
             None => ShadingFrame::from_normal(self.frag.n),
@@ -54,7 +54,10 @@ impl<'a, R: Real> ShadeInput<'a, R> {
     /// The inputs of a batch (no surface): `frags[i]` under `lanes[i]`
     /// ([`PacketShader::shade_batch`]).
     #[inline(always)]
-    pub fn batch(frags: &'a [Fragment<R>], lanes: &'a [u32]) -> impl Iterator<Item = Self> + 'a {
+    pub(crate) fn batch(
+        frags: &'a [Fragment<R>],
+        lanes: &'a [u32],
+    ) -> impl Iterator<Item = Self> + 'a {
         frags.iter().zip(lanes).map(|(frag, &lanes)| ShadeInput {
             frag,
             surface: None,
@@ -83,7 +86,7 @@ impl ShadeEnv<'_> {
     /// for `part`, its part of the light there (1 where that is zero, or
     /// when the sun has no shadow map).
     #[inline(always)]
-    pub fn sun_visibility<R: Real>(&self, input: &ShadeInput<R>, part: &Rgb<R>) -> R {
+    pub(crate) fn sun_visibility<R: Real>(&self, input: &ShadeInput<R>, part: &Rgb<R>) -> R {
         match self.shadows.and_then(crate::shadow::ShadowMaps::sun) {
             Some(s) => s.visibility_where(part, &input.frag.p, &input.frag.n, input.lanes),
             None => R::ONE,
@@ -92,7 +95,7 @@ impl ShadeEnv<'_> {
 
     /// `map`'s [`EnvMap::irradiance_over_pi`](crate::envmap::EnvMap::irradiance_over_pi)
     /// at unit world normal `n` of the lanes of `input`, its sun's part
-    /// shadowed ([`ShadeEnv::sun_visibility`]).
+    /// shadowed (`ShadeEnv::sun_visibility`).
     #[inline(always)]
     pub fn map_irradiance_over_pi<R: Real>(
         &self,

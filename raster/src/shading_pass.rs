@@ -15,13 +15,13 @@ use std::ops::Range;
 /// The frame buffers of one frame, open for tile-parallel writes. Planes
 /// that were not requested are empty writers and get nothing.
 pub(crate) struct ShadeTargets<'a> {
-    pub color: [TileWriter<'a, f32>; 3],
-    pub depth: TileWriter<'a, f32>,
-    pub normal: [TileWriter<'a, f32>; 3],
-    pub id: TileWriter<'a, u32>,
+    pub(crate) color: [TileWriter<'a, f32>; 3],
+    pub(crate) depth: TileWriter<'a, f32>,
+    pub(crate) normal: [TileWriter<'a, f32>; 3],
+    pub(crate) id: TileWriter<'a, u32>,
     /// 8-bit sRGB output encoded here, tile row by tile row (the colour
     /// then goes to the planes only if they are not empty).
-    pub ldr: Option<(LdrEncoding, TileWriter<'a, [u8; 3]>)>,
+    pub(crate) ldr: Option<(LdrEncoding, TileWriter<'a, [u8; 3]>)>,
 }
 
 /// Writes the first `out.len()` lanes of `v` (fewer than R::LANES only in

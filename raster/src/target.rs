@@ -19,15 +19,15 @@ pub struct Target {
     /// Size in samples (the output size times `ssaa`).
     pub width: u32,
     pub height: u32,
-    pub tiles_x: u32,
-    pub tiles_y: u32,
+    pub(crate) tiles_x: u32,
+    pub(crate) tiles_y: u32,
     /// Samples per output pixel along each axis: what the post's resolve
     /// will average, and what stages sized in output pixels scale by.
-    pub ssaa: u32,
+    pub(crate) ssaa: u32,
 }
 
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct TargetError(pub String);
+pub struct TargetError(pub(crate) String);
 
 impl fmt::Display for TargetError {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {

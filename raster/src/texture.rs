@@ -58,19 +58,19 @@ pub enum Filter {
     /// Bilinear on the two levels around λ, blended linearly.
     #[default]
     Trilinear,
-    /// Up to N trilinear taps (1 ≤ N ≤ [`MAX_ANISOTROPY`]) spread along
+    /// Up to N trilinear taps (1 ≤ N ≤ `MAX_ANISOTROPY`) spread along
     /// the major axis of the pixel's footprint, averaged; see the module
     /// docs.
     Anisotropic(u8),
 }
 
 /// Most taps [`Filter::Anisotropic`] takes (what GPUs offer: 16×).
-pub const MAX_ANISOTROPY: u8 = 16;
+pub(crate) const MAX_ANISOTROPY: u8 = 16;
 
 /// A texture filter's name that [`Filter`]'s `FromStr` does not know.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
 #[error("expected nearest, bilinear, trilinear, anisotropic or anisotropic:N (N in 1..={MAX_ANISOTROPY}), got {0:?}", MAX_ANISOTROPY = MAX_ANISOTROPY)]
-pub struct FilterParseError(pub String);
+pub struct FilterParseError(pub(crate) String);
 
 /// Why a texture could not be made from the texels given.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
@@ -148,36 +148,6 @@ impl core::str::FromStr for Filter {
                 }
             }
         })
-    }
-}
-
-impl Filter {
-    /// The filter for a glTF sampler's `minFilter` (`None` when absent):
-    /// NEAREST (9728) → [`Filter::Nearest`], LINEAR (9729) →
-    /// [`Filter::Bilinear`] (both read level 0, as glTF's non-mipmapped
-    /// filters do), each *_MIPMAP_* filter (9984–9987) and an absent or
-    /// unknown one → [`Filter::Trilinear`] (there is one mip filter here:
-    /// linear between levels, bilinear within one). `magFilter` has no
-    /// counterpart: each filter magnifies the way it minifies at level 0.
-    pub fn from_gltf_min_filter(min_filter: Option<u32>) -> Filter {
-        match min_filter {
-            Some(9728) => Filter::Nearest,
-            Some(9729) => Filter::Bilinear,
-            _ => Filter::Trilinear,
-        }
-    }
-}
-
-impl Wrap {
-    /// The wrap mode of a glTF sampler's `wrapS` / `wrapT`: REPEAT (10497,
-    /// also glTF's default, and any unknown value), CLAMP_TO_EDGE (33071),
-    /// MIRRORED_REPEAT (33648).
-    pub fn from_gltf(mode: Option<u32>) -> Wrap {
-        match mode {
-            Some(33071) => Wrap::Clamp,
-            Some(33648) => Wrap::Mirror,
-            _ => Wrap::Repeat,
-        }
     }
 }
 
@@ -486,7 +456,7 @@ impl Texture {
         Ok(t)
     }
 
-    pub fn channels(&self) -> usize {
+    pub(crate) fn channels(&self) -> usize {
         self.channels
     }
 
@@ -738,7 +708,7 @@ impl Texture {
         self.filtered(s, uv, lod, fetch, lerp)
     }
 
-    /// Channels 0..C (C ≤ [`Texture::channels`]; later ones repeat the
+    /// Channels 0..C (C ≤ `Texture::channels`; later ones repeat the
     /// last channel) at uv with the level of detail from its derivatives.
     #[inline(always)]
     pub fn sample<R: Real, const C: usize>(

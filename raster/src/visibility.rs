@@ -22,7 +22,7 @@ use std::sync::Arc;
 use std::time::Instant;
 
 /// The visibility pass's output, reusable from frame to frame: passing the
-/// previous frame's `Visibility` to [`visibility_into`](crate::frame::visibility_into) overwrites it without
+/// previous frame's `Visibility` to [`visibility_into`](crate::visibility_into) overwrites it without
 /// allocating (no page faults in steady state).
 pub struct Visibility {
     pub vis: VisBuffer,

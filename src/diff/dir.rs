@@ -40,7 +40,7 @@ fn manifests(dir: &Path) -> Vec<PathBuf> {
 
 /// The records of a batch folder: `manifest.jsonl` when present, else every
 /// shard manifest; a scene listed twice is an error.
-pub fn folder_records(dir: &Path) -> Result<Vec<Record>, DiffError> {
+pub(crate) fn folder_records(dir: &Path) -> Result<Vec<Record>, DiffError> {
     let whole = dir.join("manifest.jsonl");
     let files: Vec<PathBuf> = if whole.exists() {
         vec![whole]
@@ -88,7 +88,11 @@ struct Row {
     status: String,
 }
 
-pub fn run(a: &DiffArgs, bounds: &[Bound], settings: FlipSettings) -> Result<Verdict, DiffError> {
+pub(crate) fn run(
+    a: &DiffArgs,
+    bounds: &[Bound],
+    settings: FlipSettings,
+) -> Result<Verdict, DiffError> {
     let refs = folder_records(&a.reference)?;
     let tests = if a.test.is_dir() && !has_manifest(&a.test) {
         // Images from another renderer: the reference's names.

@@ -53,7 +53,7 @@ pub fn default_ppd() -> f32 {
 
 /// Pixels per degree for a viewer `distance` metres from a monitor
 /// `width_m` metres and `width_px` pixels wide.
-pub fn ppd(distance: f32, width_px: f32, width_m: f32) -> f32 {
+pub(crate) fn ppd(distance: f32, width_px: f32, width_m: f32) -> f32 {
     distance * (width_px / width_m) * (std::f32::consts::PI / 180.0)
 }
 
@@ -90,7 +90,7 @@ impl ToneCurve {
     }
 
     /// Tone maps one linear colour.
-    pub fn apply(self, c: [f32; 3]) -> [f32; 3] {
+    pub(crate) fn apply(self, c: [f32; 3]) -> [f32; 3] {
         if self == ToneCurve::Reinhard {
             let f = 1.0 / (1.0 + luminance(c));
             return c.map(|v| v * f);
@@ -118,12 +118,12 @@ impl ToneCurve {
 }
 
 /// Rec. 709 luminance of linear RGB.
-pub fn luminance(c: [f32; 3]) -> f32 {
+pub(crate) fn luminance(c: [f32; 3]) -> f32 {
     0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2]
 }
 
 /// sRGB transfer function, encoded → linear (IEC 61966-2-1).
-pub fn srgb_to_linear(v: f32) -> f32 {
+pub(crate) fn srgb_to_linear(v: f32) -> f32 {
     if v <= 0.04045 {
         v / 12.92
     } else {
@@ -132,7 +132,7 @@ pub fn srgb_to_linear(v: f32) -> f32 {
 }
 
 /// sRGB transfer function, linear → encoded.
-pub fn linear_to_srgb(v: f32) -> f32 {
+pub(crate) fn linear_to_srgb(v: f32) -> f32 {
     if v <= 0.0031308 {
         v * 12.92
     } else {
@@ -322,7 +322,7 @@ fn feature_filter(ppd: f32) -> Vec<[f32; 3]> {
 
 /// LDR-FLIP of two linear-RGB images in [0, 1] (values outside are
 /// clamped), row-major, `width` × `height`: the per-pixel error in [0, 1].
-pub fn ldr_flip(
+pub(crate) fn ldr_flip(
     reference: &[[f32; 3]],
     test: &[[f32; 3]],
     width: usize,
@@ -531,7 +531,7 @@ pub fn auto_exposures(
 
 /// HDR-FLIP of two linear images (non-negative), with the given exposures
 /// and tone curve: the per-pixel error in [0, 1].
-pub fn hdr_flip(
+pub(crate) fn hdr_flip(
     reference: &[[f32; 3]],
     test: &[[f32; 3]],
     width: usize,

@@ -15,10 +15,10 @@ const BAR: usize = 12;
 const TICKS: usize = 22;
 const TEXT: f32 = 14.0;
 /// Narrowest panel drawn, in pixels.
-pub const MIN_PANEL: usize = 192;
+pub(crate) const MIN_PANEL: usize = 192;
 
 /// The magma colour of an error in [0, 1] (the nearest of 256 entries).
-pub fn magma(e: f32) -> [u8; 3] {
+pub(crate) fn magma(e: f32) -> [u8; 3] {
     MAGMA[((e.clamp(0.0, 1.0) * 255.0 + 0.5) as usize).min(255)]
 }
 
@@ -35,7 +35,7 @@ fn shown(rgb: &[[f32; 3]], encoding: Encoding) -> Vec<[u8; 3]> {
 }
 
 /// The heat map as RGB8 (width, height, bytes).
-pub fn render(
+pub(crate) fn render(
     reference: &[[f32; 3]],
     test: &[[f32; 3]],
     flip: &[f32],

@@ -199,7 +199,7 @@ pub fn load(path: &Path) -> Result<DiffImage, DiffImageError> {
 }
 
 /// Checks that two images can be compared pixel by pixel.
-pub fn check_pair(r: &DiffImage, t: &DiffImage) -> Result<(), DiffImageError> {
+pub(crate) fn check_pair(r: &DiffImage, t: &DiffImage) -> Result<(), DiffImageError> {
     if (r.width, r.height) != (t.width, t.height) {
         return Err(DiffImageError::Size {
             reference: r.path.clone(),
@@ -229,7 +229,11 @@ pub fn check_pair(r: &DiffImage, t: &DiffImage) -> Result<(), DiffImageError> {
 
 /// Reads a mask: an image of the same size whose non-zero pixels (in any
 /// channel) are the ones compared.
-pub fn load_mask(path: &Path, width: usize, height: usize) -> Result<Vec<bool>, DiffImageError> {
+pub(crate) fn load_mask(
+    path: &Path,
+    width: usize,
+    height: usize,
+) -> Result<Vec<bool>, DiffImageError> {
     let m = load(path)?;
     if (m.width, m.height) != (width, height) {
         return Err(DiffImageError::MaskSize {

@@ -2,7 +2,7 @@
 //! bright: the FLIP authors' map for error images. Written by
 //! `fixtures/flip/magma_table.py` (matplotlib 3.11.2).
 
-pub const MAGMA: [[u8; 3]; 256] = [
+pub(crate) const MAGMA: [[u8; 3]; 256] = [
     [0, 0, 4],
     [1, 0, 5],
     [1, 1, 6],

@@ -6,11 +6,11 @@ use serde::Serialize;
 
 /// Added to the reference in relative errors, so that black pixels do not
 /// divide by zero; small against display values and typical radiances.
-pub const REL_EPSILON: f64 = 0.01;
+pub(crate) const REL_EPSILON: f64 = 0.01;
 
 /// Pixel-share thresholds: on the absolute error of display values (1, 4
 /// and 16 codes of 255), on the relative error of linear ones.
-pub fn thresholds(encoding: Encoding) -> [f64; 3] {
+pub(crate) fn thresholds(encoding: Encoding) -> [f64; 3] {
     match encoding {
         Encoding::Display => [1.0 / 255.0, 4.0 / 255.0, 16.0 / 255.0],
         Encoding::Linear => [0.01, 0.05, 0.25],
@@ -18,43 +18,43 @@ pub fn thresholds(encoding: Encoding) -> [f64; 3] {
 }
 
 /// Names of the three pixel shares, smallest threshold first.
-pub const OVER_NAMES: [&str; 3] = ["over_small", "over_medium", "over_large"];
+pub(crate) const OVER_NAMES: [&str; 3] = ["over_small", "over_medium", "over_large"];
 
 #[derive(Clone, Debug, Serialize)]
-pub struct Share {
-    pub name: &'static str,
+pub(crate) struct Share {
+    pub(crate) name: &'static str,
     /// The threshold, on the absolute error (display) or relative error (linear).
-    pub threshold: f64,
+    pub(crate) threshold: f64,
     /// Share of compared pixels whose largest channel error exceeds it.
-    pub share: f64,
+    pub(crate) share: f64,
 }
 
 #[derive(Clone, Debug, Serialize)]
 pub struct Metrics {
     /// Pixels compared.
-    pub pixels: usize,
+    pub(crate) pixels: usize,
     /// The PSNR's peak: 1 for display images, the reference's largest
     /// compared value for linear ones.
-    pub peak: f64,
+    pub(crate) peak: f64,
     /// 10 log₁₀(peak² / MSE) in dB; `null` when the images are equal.
-    pub psnr: Option<f64>,
-    pub rmse: f64,
-    pub mean_abs: f64,
+    pub(crate) psnr: Option<f64>,
+    pub(crate) rmse: f64,
+    pub(crate) mean_abs: f64,
     pub max_abs: f64,
     /// |test − ref| / (ref + 0.01), averaged and largest.
-    pub mean_rel: f64,
-    pub max_rel: f64,
-    pub over: Vec<Share>,
+    pub(crate) mean_rel: f64,
+    pub(crate) max_rel: f64,
+    pub(crate) over: Vec<Share>,
     pub flip_mean: f64,
-    pub flip_median: f64,
-    pub flip_p99: f64,
-    pub flip_max: f64,
+    pub(crate) flip_median: f64,
+    pub(crate) flip_p99: f64,
+    pub(crate) flip_max: f64,
     /// Where the FLIP error is largest (x, y).
-    pub flip_worst: [usize; 2],
+    pub(crate) flip_worst: [usize; 2],
 }
 
 /// Computes the metrics over the pixels `keep` selects (all when `None`).
-pub fn compute(
+pub(crate) fn compute(
     r: &[[f32; 3]],
     t: &[[f32; 3]],
     width: usize,
@@ -137,7 +137,7 @@ pub fn compute(
 }
 
 /// Every metric a bound (`--fail-above`, `--fail-below`) may name.
-pub const NAMES: [&str; 14] = [
+pub(crate) const NAMES: [&str; 14] = [
     "psnr",
     "rmse",
     "mean_abs",
@@ -156,7 +156,7 @@ pub const NAMES: [&str; 14] = [
 
 impl Metrics {
     /// A metric by name; PSNR of equal images is +∞.
-    pub fn get(&self, name: &str) -> Option<f64> {
+    pub(crate) fn get(&self, name: &str) -> Option<f64> {
         Some(match name {
             "psnr" => self.psnr.unwrap_or(f64::INFINITY),
             "rmse" => self.rmse,

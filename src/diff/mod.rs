@@ -5,15 +5,15 @@
 //! bounds that set the exit status. `--dir` compares two `specula batch`
 //! folders scene by scene (`dir.rs`).
 
-pub mod dir;
+pub(crate) mod dir;
 mod error;
 pub mod flip;
-pub mod heatmap;
+pub(crate) mod heatmap;
 pub mod load;
-pub mod magma;
-pub mod metrics;
+pub(crate) mod magma;
+pub(crate) mod metrics;
 
-pub use error::DiffError;
+pub(crate) use error::DiffError;
 use load::{DiffImage, Encoding};
 use metrics::Metrics;
 use serde::Serialize;
@@ -22,47 +22,47 @@ use std::path::{Path, PathBuf};
 #[derive(clap::Args, Debug, Clone)]
 pub struct DiffArgs {
     /// Reference image (with --dir: the reference batch folder).
-    pub reference: PathBuf,
+    pub(crate) reference: PathBuf,
     /// Test image (with --dir: the test batch folder).
-    pub test: PathBuf,
+    pub(crate) test: PathBuf,
     /// Compare every scene of two `specula batch` folders (their manifests).
     #[arg(long)]
-    pub dir: bool,
+    pub(crate) dir: bool,
     /// Write the heat map PNG here (with --dir: a folder, one PNG per scene).
     #[arg(long, value_name = "PATH")]
-    pub heatmap: Option<PathBuf>,
+    pub(crate) heatmap: Option<PathBuf>,
     /// Write the metrics as JSON here.
     #[arg(long, value_name = "PATH")]
-    pub json: Option<PathBuf>,
+    pub(crate) json: Option<PathBuf>,
     /// Exit with status 1 when METRIC exceeds VALUE (e.g. flip_mean=0.01); repeatable.
     #[arg(long, value_name = "METRIC=VALUE")]
-    pub fail_above: Vec<String>,
+    pub(crate) fail_above: Vec<String>,
     /// Exit with status 1 when METRIC is below VALUE (e.g. psnr=40); repeatable.
     #[arg(long, value_name = "METRIC=VALUE")]
-    pub fail_below: Vec<String>,
+    pub(crate) fail_below: Vec<String>,
     /// Compare only the pixels this image marks (non-zero in any channel).
     #[arg(long, value_name = "PATH", conflicts_with = "ignore_background")]
-    pub mask: Option<PathBuf>,
+    pub(crate) mask: Option<PathBuf>,
     /// Leave out pixels that are exactly black in both images (nothing drawn).
     #[arg(long)]
-    pub ignore_background: bool,
+    pub(crate) ignore_background: bool,
     /// FLIP's viewing condition in pixels per degree (default: 67, a 3840-pixel
     /// 0.7 m wide monitor seen from 0.7 m).
     #[arg(long, value_name = "PPD")]
-    pub ppd: Option<f32>,
+    pub(crate) ppd: Option<f32>,
     /// HDR-FLIP's exposure range in stops, START:STOP or START:STOP:COUNT
     /// (default: from the reference's largest and median luminance).
     #[arg(long, value_name = "START:STOP", allow_hyphen_values = true)]
-    pub exposures: Option<String>,
+    pub(crate) exposures: Option<String>,
     /// The tone curve HDR-FLIP assumes: aces, hable or reinhard.
     #[arg(long, default_value = "aces")]
-    pub tonemap: String,
+    pub(crate) tonemap: String,
 }
 
 /// Which side of a bound fails.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
 #[serde(rename_all = "lowercase")]
-pub enum Fails {
+pub(crate) enum Fails {
     /// The value exceeds the bound (`--fail-above`).
     Above,
     /// The value falls under the bound (`--fail-below`).
@@ -71,10 +71,10 @@ pub enum Fails {
 
 /// A bound on one metric.
 #[derive(Clone, Debug, Serialize)]
-pub struct Bound {
-    pub metric: String,
-    pub fails: Fails,
-    pub value: f64,
+pub(crate) struct Bound {
+    pub(crate) metric: String,
+    pub(crate) fails: Fails,
+    pub(crate) value: f64,
 }
 
 fn parse_bounds(a: &DiffArgs) -> Result<Vec<Bound>, DiffError> {
@@ -166,25 +166,25 @@ fn parse_flip(a: &DiffArgs) -> Result<FlipSettings, DiffError> {
 /// The result of comparing one pair.
 #[derive(Clone, Debug, Serialize)]
 pub struct Report {
-    pub reference: PathBuf,
-    pub test: PathBuf,
-    pub width: usize,
-    pub height: usize,
-    pub encoding: Encoding,
+    pub(crate) reference: PathBuf,
+    pub(crate) test: PathBuf,
+    pub(crate) width: usize,
+    pub(crate) height: usize,
+    pub(crate) encoding: Encoding,
     /// "ldr" or "hdr".
-    pub flip: &'static str,
-    pub ppd: f32,
+    pub(crate) flip: &'static str,
+    pub(crate) ppd: f32,
     /// HDR-FLIP's exposures (start, stop, count), when used.
-    pub exposures: Option<[f32; 3]>,
+    pub(crate) exposures: Option<[f32; 3]>,
     /// Which pixels were compared: "all", "mask PATH", "not black in both".
-    pub compared: String,
+    pub(crate) compared: String,
     pub metrics: Metrics,
     /// The bounds that failed, as text.
-    pub failed: Vec<String>,
+    pub(crate) failed: Vec<String>,
     #[serde(skip)]
-    pub flip_map: Vec<f32>,
+    pub(crate) flip_map: Vec<f32>,
     #[serde(skip)]
-    pub images: Option<(DiffImage, DiffImage)>,
+    pub(crate) images: Option<(DiffImage, DiffImage)>,
 }
 
 /// Compares two images already loaded.
@@ -269,7 +269,7 @@ pub fn compare(
 }
 
 /// Checks the bounds; fills `report.failed`.
-pub fn apply_bounds(report: &mut Report, bounds: &[Bound]) {
+pub(crate) fn apply_bounds(report: &mut Report, bounds: &[Bound]) {
     for b in bounds {
         let v = report
             .metrics
@@ -301,7 +301,7 @@ fn fmt_num(v: f64) -> String {
 }
 
 /// The one-screen text summary.
-pub fn summary(r: &Report) -> String {
+pub(crate) fn summary(r: &Report) -> String {
     let m = &r.metrics;
     let mut s = String::new();
     let kind = match r.encoding {

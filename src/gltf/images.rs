@@ -10,13 +10,13 @@ use specula_raster::texture::{Encoding, Filter, Sampler, Wrap};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-pub struct Images<'a> {
+pub(crate) struct Images<'a> {
     pub(super) root: &'a json::Root,
     pub(super) buffers: &'a Buffers,
     pub(super) dir: PathBuf,
     pub(super) read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     /// Files read (external images), for the scene's inputs.
-    pub inputs: Vec<PathBuf>,
+    pub(crate) inputs: Vec<PathBuf>,
     cache: HashMap<(usize, Encoding, usize), ColorMap>,
 }
 
@@ -37,25 +37,15 @@ impl<'a> Images<'a> {
         }
     }
 
-    /// `images[i]` as an sRGB colour map (v = 0 at the bottom row, like
-    /// every texture here; glTF's uvs are flipped to match where meshes
-    /// are read).
-    pub fn color_map(&mut self, i: usize) -> Result<ColorMap, GltfError> {
-        self.map(i, Encoding::Srgb)
-    }
-
-    /// `images[i]` decoded as `encoding`: sRGB for colours (base colour,
-    /// emission), linear for data (metallic-roughness, normal, occlusion).
-    /// Each (image, encoding) is decoded once.
-    pub fn map(&mut self, i: usize, encoding: Encoding) -> Result<ColorMap, GltfError> {
-        self.map_channels(i, encoding, 3)
-    }
-
-    /// [`Images::map`] with `channels` of RGBA kept: 4 for a base colour
+    /// `images[i]` decoded as `encoding` (sRGB for colours: base colour,
+    /// emission; linear for data: metallic-roughness, normal, occlusion;
+    /// v = 0 at the bottom row, like every texture here, glTF's uvs being
+    /// flipped to match where meshes are read) with `channels` of RGBA
+    /// kept: 3, or 4 for a base colour
     /// texture whose alpha a masked or blended material reads (alpha
     /// linear; 1 where the image has none). Each (image, encoding,
     /// channels) is decoded once.
-    pub fn map_channels(
+    pub(crate) fn map_channels(
         &mut self,
         i: usize,
         encoding: Encoding,

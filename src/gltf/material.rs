@@ -19,19 +19,19 @@ use std::collections::BTreeMap;
 /// rotated clockwise 90°"); the README's GLSL listing, read with GLSL's
 /// column-major `mat3`, is its transpose.
 #[derive(Clone, Debug, PartialEq)]
-pub struct TextureTransform {
-    pub offset: [f32; 2],
+pub(crate) struct TextureTransform {
+    pub(crate) offset: [f32; 2],
     /// Radians, counter-clockwise in uv.
-    pub rotation: f32,
-    pub scale: [f32; 2],
+    pub(crate) rotation: f32,
+    pub(crate) scale: [f32; 2],
     /// Overrides the reference's texCoord set.
-    pub tex_coord: Option<u32>,
+    pub(crate) tex_coord: Option<u32>,
 }
 
 impl TextureTransform {
     /// The transform as it acts on glTF's uvs (v = 0 at the top of the
     /// image): uv' = rows · (u, v, 1).
-    pub fn gltf_rows(&self) -> [[f64; 3]; 2] {
+    pub(crate) fn gltf_rows(&self) -> [[f64; 3]; 2] {
         let (s, c) = (self.rotation as f64).sin_cos();
         let [sx, sy] = self.scale.map(|x| x as f64);
         let [ox, oy] = self.offset.map(|x| x as f64);
@@ -41,7 +41,7 @@ impl TextureTransform {
     /// The same transform on specula's uvs, which loading flipped
     /// (v_ours = 1 − v_glTF, F(u, v) = (u, 1 − v)): F ∘ A ∘ F, so a texel
     /// lands where glTF puts it.
-    pub fn uv_transform(&self) -> UvTransform {
+    pub(crate) fn uv_transform(&self) -> UvTransform {
         let [[a, b, c], [d, e, f]] = self.gltf_rows();
         // F(A(F(x))) with F = diag(1, −1)·x + (0, 1):
         // linear part diag(1,−1)·L·diag(1,−1), offset diag(1,−1)·(L·(0,1) + o) + (0, 1).
@@ -57,21 +57,21 @@ impl TextureTransform {
 /// A texture as a material refers to it: the image, how it is sampled,
 /// which uv set reads it and how that set is transformed.
 #[derive(Clone, Debug, PartialEq)]
-pub struct TextureRef {
+pub(crate) struct TextureRef {
     /// Where the reference is (`materials[0].pbrMetallicRoughness.baseColorTexture`).
-    pub at: String,
-    pub texture: usize,
+    pub(crate) at: String,
+    pub(crate) texture: usize,
     /// `images[i]`.
-    pub image: usize,
-    pub sampler: Sampler,
-    pub tex_coord: u32,
-    pub transform: Option<TextureTransform>,
+    pub(crate) image: usize,
+    pub(crate) sampler: Sampler,
+    pub(crate) tex_coord: u32,
+    pub(crate) transform: Option<TextureTransform>,
     /// normalTexture.scale, occlusionTexture.strength (1 for the others).
-    pub scale: f32,
+    pub(crate) scale: f32,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub enum AlphaMode {
+pub(crate) enum AlphaMode {
     Opaque,
     Mask { cutoff: f32 },
     Blend,
@@ -79,98 +79,98 @@ pub enum AlphaMode {
 
 /// KHR_materials_pbrSpecularGlossiness.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SpecularGlossiness {
-    pub diffuse_factor: [f32; 4],
-    pub diffuse_texture: Option<TextureRef>,
-    pub specular_factor: [f32; 3],
-    pub glossiness_factor: f32,
-    pub specular_glossiness_texture: Option<TextureRef>,
+pub(crate) struct SpecularGlossiness {
+    pub(crate) diffuse_factor: [f32; 4],
+    pub(crate) diffuse_texture: Option<TextureRef>,
+    pub(crate) specular_factor: [f32; 3],
+    pub(crate) glossiness_factor: f32,
+    pub(crate) specular_glossiness_texture: Option<TextureRef>,
 }
 
 /// KHR_materials_specular.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Specular {
-    pub factor: f32,
-    pub texture: Option<TextureRef>,
-    pub color_factor: [f32; 3],
-    pub color_texture: Option<TextureRef>,
+pub(crate) struct Specular {
+    pub(crate) factor: f32,
+    pub(crate) texture: Option<TextureRef>,
+    pub(crate) color_factor: [f32; 3],
+    pub(crate) color_texture: Option<TextureRef>,
 }
 
 /// The textures of KHR_materials_clearcoat (its factors are read where
 /// the scene material is made, from `other_extensions`).
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct ClearcoatTextures {
-    pub texture: Option<TextureRef>,
-    pub roughness_texture: Option<TextureRef>,
+pub(crate) struct ClearcoatTextures {
+    pub(crate) texture: Option<TextureRef>,
+    pub(crate) roughness_texture: Option<TextureRef>,
     /// With its `scale`.
-    pub normal_texture: Option<TextureRef>,
+    pub(crate) normal_texture: Option<TextureRef>,
 }
 
 /// The textures of KHR_materials_sheen (its factors are read where the
 /// scene material is made, from `other_extensions`).
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct SheenTextures {
-    pub color_texture: Option<TextureRef>,
-    pub roughness_texture: Option<TextureRef>,
+pub(crate) struct SheenTextures {
+    pub(crate) color_texture: Option<TextureRef>,
+    pub(crate) roughness_texture: Option<TextureRef>,
 }
 
 /// KHR_materials_transmission.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Transmission {
-    pub factor: f32,
-    pub texture: Option<TextureRef>,
+pub(crate) struct Transmission {
+    pub(crate) factor: f32,
+    pub(crate) texture: Option<TextureRef>,
 }
 
 /// KHR_materials_volume.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Volume {
-    pub thickness_factor: f32,
-    pub thickness_texture: Option<TextureRef>,
-    pub attenuation_distance: f32,
-    pub attenuation_color: [f32; 3],
+pub(crate) struct Volume {
+    pub(crate) thickness_factor: f32,
+    pub(crate) thickness_texture: Option<TextureRef>,
+    pub(crate) attenuation_distance: f32,
+    pub(crate) attenuation_color: [f32; 3],
 }
 
 /// One glTF material, as the file gives it (defaults filled in).
 #[derive(Clone, Debug, PartialEq)]
-pub struct GltfMaterial {
+pub(crate) struct GltfMaterial {
     /// Its name, or `materials[i]`, or "default" for the spec's default
     /// material (primitives without one).
-    pub name: String,
+    pub(crate) name: String,
     /// `materials[i]`, or `None` for the default material.
-    pub index: Option<usize>,
-    pub base_color_factor: [f32; 4],
-    pub base_color_texture: Option<TextureRef>,
-    pub metallic_factor: f32,
-    pub roughness_factor: f32,
-    pub metallic_roughness_texture: Option<TextureRef>,
-    pub normal_texture: Option<TextureRef>,
-    pub occlusion_texture: Option<TextureRef>,
-    pub emissive_factor: [f32; 3],
-    pub emissive_texture: Option<TextureRef>,
-    pub alpha_mode: AlphaMode,
-    pub double_sided: bool,
+    pub(crate) index: Option<usize>,
+    pub(crate) base_color_factor: [f32; 4],
+    pub(crate) base_color_texture: Option<TextureRef>,
+    pub(crate) metallic_factor: f32,
+    pub(crate) roughness_factor: f32,
+    pub(crate) metallic_roughness_texture: Option<TextureRef>,
+    pub(crate) normal_texture: Option<TextureRef>,
+    pub(crate) occlusion_texture: Option<TextureRef>,
+    pub(crate) emissive_factor: [f32; 3],
+    pub(crate) emissive_texture: Option<TextureRef>,
+    pub(crate) alpha_mode: AlphaMode,
+    pub(crate) double_sided: bool,
     /// KHR_materials_unlit.
-    pub unlit: bool,
+    pub(crate) unlit: bool,
     /// KHR_materials_emissive_strength.
-    pub emissive_strength: Option<f32>,
+    pub(crate) emissive_strength: Option<f32>,
     /// KHR_materials_ior.
-    pub ior: Option<f32>,
-    pub specular: Option<Specular>,
-    pub transmission: Option<Transmission>,
-    pub volume: Option<Volume>,
-    pub specular_glossiness: Option<SpecularGlossiness>,
+    pub(crate) ior: Option<f32>,
+    pub(crate) specular: Option<Specular>,
+    pub(crate) transmission: Option<Transmission>,
+    pub(crate) volume: Option<Volume>,
+    pub(crate) specular_glossiness: Option<SpecularGlossiness>,
     /// KHR_materials_clearcoat's textures (none without the extension).
-    pub clearcoat_textures: ClearcoatTextures,
+    pub(crate) clearcoat_textures: ClearcoatTextures,
     /// KHR_materials_sheen's textures (none without the extension).
-    pub sheen_textures: SheenTextures,
+    pub(crate) sheen_textures: SheenTextures,
     /// Every other material extension (KHR_materials_clearcoat, _sheen,
     /// _iridescence, _anisotropy, …), by name, as its JSON object.
-    pub other_extensions: BTreeMap<String, serde_json::Value>,
+    pub(crate) other_extensions: BTreeMap<String, serde_json::Value>,
 }
 
 impl GltfMaterial {
     /// The spec's default material: white, metallic 1, roughness 1.
-    pub fn default_material() -> GltfMaterial {
+    pub(crate) fn default_material() -> GltfMaterial {
         GltfMaterial {
             name: "default".into(),
             index: None,
@@ -204,7 +204,7 @@ impl GltfMaterial {
     /// (specular, specular colour, clearcoat, clearcoat roughness,
     /// clearcoat normal, sheen colour, sheen roughness), with
     /// KHR_texture_transform's override.
-    pub fn uv_set(&self) -> Option<u32> {
+    pub(crate) fn uv_set(&self) -> Option<u32> {
         [
             &self.base_color_texture,
             &self.metallic_roughness_texture,
@@ -240,35 +240,6 @@ impl GltfMaterial {
         ]
         .into_iter()
         .flatten()
-    }
-
-    /// Every texture the material refers to.
-    pub fn textures(&self) -> Vec<&TextureRef> {
-        let mut t: Vec<&TextureRef> = [
-            &self.base_color_texture,
-            &self.metallic_roughness_texture,
-            &self.normal_texture,
-            &self.occlusion_texture,
-            &self.emissive_texture,
-        ]
-        .into_iter()
-        .flatten()
-        .collect();
-        t.extend(self.layer_textures());
-        if let Some(s) = &self.transmission {
-            t.extend(&s.texture);
-        }
-        if let Some(v) = &self.volume {
-            t.extend(&v.thickness_texture);
-        }
-        if let Some(s) = &self.specular_glossiness {
-            t.extend(
-                s.diffuse_texture
-                    .iter()
-                    .chain(&s.specular_glossiness_texture),
-            );
-        }
-        t
     }
 }
 

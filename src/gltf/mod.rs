@@ -7,16 +7,16 @@
 //! What comes out ([`GltfScene`]) is still glTF's: positions in the
 //! scene's space (node transforms applied, +Y up, metres), uvs with
 //! (0, 0) at the top-left of the image, materials as the file describes
-//! them ([`material::GltfMaterial`]). `scene/gltf_file.rs` places it in a
-//! specula scene; [`scene_material::scene_material`] makes its materials.
+//! them (`material::GltfMaterial`). `scene/gltf_file.rs` places it in a
+//! specula scene; `scene_material::scene_material` makes its materials.
 
 mod buffers;
 mod error;
 mod glb;
-pub mod images;
-pub mod material;
+pub(crate) mod images;
+pub(crate) mod material;
 mod nodes;
-pub mod scene_material;
+pub(crate) mod scene_material;
 
 use crate::checks;
 use buffers::Buffers;
@@ -32,7 +32,7 @@ use std::path::{Path, PathBuf};
 /// error, in `extensionsUsed` a warning). KHR_texture_transform and the
 /// material extensions are read into the material description, which
 /// says which of them are rendered.
-pub const KNOWN_EXTENSIONS: &[&str] = &[
+pub(crate) const KNOWN_EXTENSIONS: &[&str] = &[
     "KHR_lights_punctual",
     "KHR_texture_transform",
     "KHR_materials_emissive_strength",
@@ -62,23 +62,23 @@ pub struct GltfPrimitive {
     /// vertices) where it has none, as the spec requires.
     pub normals: Vec<Vec3>,
     /// TANGENT (xyz unit, w = ±1 handedness), when given with normals.
-    pub tangents: Option<Vec<Vec4>>,
+    pub(crate) tangents: Option<Vec<Vec4>>,
     /// TEXCOORD_0 and TEXCOORD_1 in glTF's convention: (0, 0) is the
     /// top-left corner of the image.
     pub uv0: Option<Vec<Vec2>>,
-    pub uv1: Option<Vec<Vec2>>,
+    pub(crate) uv1: Option<Vec<Vec2>>,
     /// COLOR_0 as RGBA (alpha 1 where the file gives RGB).
-    pub color0: Option<Vec<Vec4>>,
+    pub(crate) color0: Option<Vec<Vec4>>,
     /// Counter-clockwise seen from the front (after the node transform:
     /// mirroring ones are flipped back).
     pub triangles: Vec<[u32; 3]>,
     /// `materials[i]`, or `None` for the default material.
-    pub material: Option<usize>,
+    pub(crate) material: Option<usize>,
 }
 
 /// A camera's projection as the file gives it.
 #[derive(Clone, Debug, PartialEq)]
-pub enum Projection {
+pub(crate) enum Projection {
     /// `yfov` in radians; `zfar` `None` is infinite.
     Perspective {
         yfov: f32,
@@ -98,19 +98,19 @@ pub enum Projection {
 #[derive(Clone, Debug, PartialEq)]
 pub struct GltfCamera {
     /// `cameras[c]` (at `nodes[n]`).
-    pub at: String,
+    pub(crate) at: String,
     pub eye: Vec3,
     /// Unit view direction and up.
     pub forward: Vec3,
     pub up: Vec3,
-    pub projection: Projection,
+    pub(crate) projection: Projection,
 }
 
 /// The default scene of a glTF file, read and checked.
 pub struct GltfScene {
     pub primitives: Vec<GltfPrimitive>,
     /// `materials[i]`, in order.
-    pub materials: Vec<GltfMaterial>,
+    pub(crate) materials: Vec<GltfMaterial>,
     /// Cameras in the order their nodes are met (depth first, children in
     /// order), which `--camera N` counts.
     pub cameras: Vec<GltfCamera>,
@@ -119,7 +119,7 @@ pub struct GltfScene {
     pub lights: Vec<Light>,
     pub warnings: Vec<String>,
     /// Files read besides the glTF itself (buffers, images read so far).
-    pub inputs: Vec<PathBuf>,
+    pub(crate) inputs: Vec<PathBuf>,
     root: json::Root,
     buffers: Buffers,
     dir: PathBuf,
@@ -128,7 +128,7 @@ pub struct GltfScene {
 impl GltfScene {
     /// The images of the file, decoded on demand (`read` supplies files
     /// relative to the glTF's folder).
-    pub fn images<'a>(
+    pub(crate) fn images<'a>(
         &'a self,
         read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     ) -> images::Images<'a> {
@@ -147,7 +147,7 @@ pub(crate) struct Ctx<'a> {
 }
 
 /// Whether `bytes` are a GLB container (by its magic).
-pub fn is_glb(bytes: &[u8]) -> bool {
+pub(crate) fn is_glb(bytes: &[u8]) -> bool {
     bytes.starts_with(glb::MAGIC)
 }
 

@@ -36,7 +36,7 @@ use specula_raster::{Lit, Material, MaterialAlpha, UnlitBase};
 /// Everything else is listed in the warning. A KHR_materials_unlit
 /// material is [`UnlitBase`]: its base colour factor times its base
 /// colour texture, shown as it is.
-pub fn scene_material(
+pub(crate) fn scene_material(
     m: &GltfMaterial,
     vertex_color: bool,
     images: &mut Images,

@@ -40,7 +40,7 @@ macro_rules! surface_maps {
 /// error naming the field.
 #[derive(Clone, Debug, Deserialize, PartialEq, Eq)]
 #[serde(untagged)]
-pub enum WrapsDesc {
+pub(crate) enum WrapsDesc {
     Both(String),
     Axes([String; 2]),
 }

@@ -20,7 +20,7 @@ use specula_raster::{Lit, Material, Unlit};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
-pub use crate::textures::ReadFile;
+pub(crate) use crate::textures::ReadFile;
 
 mod error;
 #[macro_use]
@@ -31,11 +31,10 @@ mod pbr;
 pub use error::MaterialError;
 
 use maps::SurfaceMaps;
-pub use maps::WrapsDesc;
-pub use npr::{HatchingDesc, ToonDesc, UnlitDesc};
-pub use pbr::{
-    DisneyDesc, FresnelDesc, GltfDesc, GtrLambdaDesc, KcColorDesc, LambertDesc,
-    MetallicRoughnessDesc, MicrofacetDesc, NdfDesc, SmithDesc, GTR_GAMMA_MAX,
+pub(crate) use maps::WrapsDesc;
+pub(crate) use npr::{HatchingDesc, ToonDesc, UnlitDesc};
+pub(crate) use pbr::{
+    DisneyDesc, GltfDesc, KcColorDesc, LambertDesc, MetallicRoughnessDesc, MicrofacetDesc,
 };
 
 /// One material description; `model` selects the variant.
@@ -88,25 +87,9 @@ pub enum Shading {
 impl MaterialDesc {
     /// Validates every field and builds the runtime material. Errors name the
     /// field (the caller adds where the material came from); adjustments
-    /// such as a clamped alpha are pushed to `warnings`.
-    pub fn build(
-        &self,
-        name: &str,
-        tables: Tables,
-        warnings: &mut Vec<String>,
-    ) -> Result<Material, MaterialError> {
-        let no_files = |p: &Path| -> std::io::Result<Vec<u8>> {
-            Err(std::io::Error::new(
-                std::io::ErrorKind::NotFound,
-                format!("{}: no files are available here", p.display()),
-            ))
-        };
-        self.build_with(name, tables, warnings, &no_files)
-    }
-
-    /// [`MaterialDesc::build`] with the files the material names (textures,
-    /// tonal art maps) read through `read`.
-    pub fn build_with(
+    /// such as a clamped alpha are pushed to `warnings`. The files the
+    /// material names (textures, tonal art maps) are read through `read`.
+    pub(crate) fn build_with(
         &self,
         name: &str,
         tables: Tables,
@@ -174,13 +157,13 @@ impl MaterialDesc {
 
     /// The texture files the material names (inputs outputs must not
     /// overwrite).
-    pub fn texture_files(&self) -> Vec<&Path> {
+    pub(crate) fn texture_files(&self) -> Vec<&Path> {
         self.texture_fields().into_iter().map(|(_, p)| p).collect()
     }
 
     /// The material has a normal map: its meshes need tangents
     /// (tangents.rs).
-    pub fn has_normal_map(&self) -> bool {
+    pub(crate) fn has_normal_map(&self) -> bool {
         self.surface_maps()
             .is_some_and(|m| m.normal_texture.is_some())
     }
@@ -250,7 +233,7 @@ impl MaterialDesc {
     }
 
     /// The base-colour image the material names, if any.
-    pub fn base_color_texture(&self) -> Option<&Path> {
+    pub(crate) fn base_color_texture(&self) -> Option<&Path> {
         match self {
             MaterialDesc::Lambert(d) => d.base_color_texture.as_deref(),
             MaterialDesc::MetallicRoughness(d) => d.base_color_texture.as_deref(),
@@ -262,11 +245,11 @@ impl MaterialDesc {
 
     /// The material reads uvs (a texture or a tonal art map): meshes
     /// without them cannot use it.
-    pub fn needs_uvs(&self) -> bool {
+    pub(crate) fn needs_uvs(&self) -> bool {
         !self.texture_fields().is_empty() || matches!(self, MaterialDesc::Hatching(_))
     }
 
-    /// [`MaterialDesc::build`] before it becomes a shader (what `specula
+    /// `MaterialDesc::build_with` before it becomes a shader (what `specula
     /// eval` evaluates), and whether it is double-sided. Only materials
     /// with a BRDF value at a direction pair have one: stylized shaders
     /// and textured materials (whose value depends on uv) are refused.

@@ -8,23 +8,23 @@ use super::*;
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct ToonDesc {
-    pub base_color: [f32; 3],
+    pub(crate) base_color: [f32; 3],
     #[serde(default)]
-    pub base_color_texture: Option<PathBuf>,
+    pub(crate) base_color_texture: Option<PathBuf>,
     #[serde(default)]
-    pub bands: Option<u32>,
+    pub(crate) bands: Option<u32>,
     #[serde(default)]
-    pub ramp: Option<Vec<(f32, [f32; 3])>>,
+    pub(crate) ramp: Option<Vec<(f32, [f32; 3])>>,
     #[serde(default)]
-    pub specular_threshold: Option<f32>,
+    pub(crate) specular_threshold: Option<f32>,
     #[serde(default = "white")]
-    pub specular_color: [f32; 3],
+    pub(crate) specular_color: [f32; 3],
     #[serde(default)]
-    pub rim_threshold: Option<f32>,
+    pub(crate) rim_threshold: Option<f32>,
     #[serde(default = "white")]
-    pub rim_color: [f32; 3],
+    pub(crate) rim_color: [f32; 3],
     #[serde(default)]
-    pub double_sided: bool,
+    pub(crate) double_sided: bool,
 }
 
 pub(super) fn default_ink() -> [f32; 3] {
@@ -41,27 +41,27 @@ pub(super) fn default_scale() -> f32 {
 #[serde(deny_unknown_fields)]
 pub struct HatchingDesc {
     #[serde(default)]
-    pub tam: Option<PathBuf>,
+    pub(crate) tam: Option<PathBuf>,
     #[serde(default = "default_ink")]
-    pub ink: [f32; 3],
+    pub(crate) ink: [f32; 3],
     #[serde(default = "white")]
-    pub paper: [f32; 3],
+    pub(crate) paper: [f32; 3],
     /// Map repeats per unit of uv.
     #[serde(default = "default_scale")]
-    pub scale: f32,
+    pub(crate) scale: f32,
     #[serde(default)]
-    pub double_sided: bool,
+    pub(crate) double_sided: bool,
 }
 
 /// `unlit`: emits color × intensity, ignores lights.
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct UnlitDesc {
-    pub color: [f32; 3],
+    pub(crate) color: [f32; 3],
     #[serde(default = "one")]
-    pub intensity: f32,
+    pub(crate) intensity: f32,
     #[serde(default)]
-    pub double_sided: bool,
+    pub(crate) double_sided: bool,
 }
 
 impl ToonDesc {

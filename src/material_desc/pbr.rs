@@ -5,7 +5,7 @@ use super::*;
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq)]
 #[serde(rename_all = "snake_case")]
-pub enum NdfDesc {
+pub(crate) enum NdfDesc {
     Ggx,
     Beckmann,
     Gtr,
@@ -13,7 +13,7 @@ pub enum NdfDesc {
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
-pub enum SmithDesc {
+pub(crate) enum SmithDesc {
     Separable,
     #[default]
     HeightCorrelated,
@@ -21,7 +21,7 @@ pub enum SmithDesc {
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(tag = "type", rename_all = "snake_case", deny_unknown_fields)]
-pub enum FresnelDesc {
+pub(crate) enum FresnelDesc {
     Schlick { f0: [f32; 3] },
     Dielectric { ior: f32 },
     Conductor { eta: [f32; 3], k: [f32; 3] },
@@ -30,7 +30,7 @@ pub enum FresnelDesc {
 /// Which Smith Λ `ndf = "gtr"` uses.
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
-pub enum GtrLambdaDesc {
+pub(crate) enum GtrLambdaDesc {
     /// GGX's Λ at the same α.
     #[default]
     Ggx,
@@ -40,7 +40,7 @@ pub enum GtrLambdaDesc {
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
-pub enum KcColorDesc {
+pub(crate) enum KcColorDesc {
     /// F_avg² E_avg / (1 − F_avg (1 − E_avg)) \[Kulla17\].
     #[default]
     KullaConty,
@@ -57,114 +57,114 @@ pub(super) fn two() -> f32 {
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MicrofacetDesc {
-    pub ndf: NdfDesc,
+    pub(crate) ndf: NdfDesc,
     /// GTR exponent (ignored by the other NDFs).
     #[serde(default = "two")]
-    pub gamma: f32,
+    pub(crate) gamma: f32,
     /// Smith Λ of GTR (`ndf = "gtr"` only).
     #[serde(default)]
-    pub gtr_lambda: GtrLambdaDesc,
+    pub(crate) gtr_lambda: GtrLambdaDesc,
     pub alpha: f32,
     #[serde(default)]
-    pub smith: SmithDesc,
-    pub fresnel: FresnelDesc,
+    pub(crate) smith: SmithDesc,
+    pub(crate) fresnel: FresnelDesc,
     #[serde(default)]
-    pub diffuse: [f32; 3],
+    pub(crate) diffuse: [f32; 3],
     #[serde(default)]
     pub energy_compensation: bool,
     #[serde(default)]
-    pub kc_color: KcColorDesc,
+    pub(crate) kc_color: KcColorDesc,
     #[serde(default)]
-    pub double_sided: bool,
+    pub(crate) double_sided: bool,
 }
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct LambertDesc {
-    pub base_color: [f32; 3],
+    pub(crate) base_color: [f32; 3],
     /// An sRGB image multiplying base_color at the surface's uv.
     #[serde(default)]
-    pub base_color_texture: Option<PathBuf>,
+    pub(crate) base_color_texture: Option<PathBuf>,
     /// Refused (lambert has no metallic or roughness); accepted here so
     /// the message says why rather than "unknown field".
     #[serde(default)]
-    pub metallic_roughness_texture: Option<PathBuf>,
+    pub(crate) metallic_roughness_texture: Option<PathBuf>,
     // The maps every lit model takes (`SurfaceMaps`):
     /// A linear tangent-space normal map (glTF's normalTexture).
     #[serde(default)]
-    pub normal_texture: Option<PathBuf>,
+    pub(crate) normal_texture: Option<PathBuf>,
     /// Scales the normal map's x and y.
     #[serde(default = "one")]
-    pub normal_scale: f32,
+    pub(crate) normal_scale: f32,
     /// A linear image whose red channel darkens the environment term.
     #[serde(default)]
-    pub occlusion_texture: Option<PathBuf>,
+    pub(crate) occlusion_texture: Option<PathBuf>,
     /// 1 + strength · (occlusion − 1); in [0, 1].
     #[serde(default = "one")]
-    pub occlusion_strength: f32,
+    pub(crate) occlusion_strength: f32,
     /// Emitted radiance, linear RGB (the emissive texture multiplies it).
     #[serde(default)]
-    pub emissive: [f32; 3],
+    pub(crate) emissive: [f32; 3],
     /// An sRGB image multiplying `emissive`.
     #[serde(default)]
-    pub emissive_texture: Option<PathBuf>,
+    pub(crate) emissive_texture: Option<PathBuf>,
     /// "nearest", "bilinear", "trilinear" (default), "anisotropic" (16
     /// taps) or "anisotropic:N" (N in 1..=16), for every texture of the
     /// material.
     #[serde(default)]
-    pub texture_filter: Option<String>,
+    pub(crate) texture_filter: Option<String>,
     /// "repeat" (default), "clamp_to_edge" or "mirrored_repeat", or a pair
     /// [u, v] of them.
     #[serde(default)]
-    pub texture_wrap: Option<WrapsDesc>,
+    pub(crate) texture_wrap: Option<WrapsDesc>,
     #[serde(default)]
-    pub double_sided: bool,
+    pub(crate) double_sided: bool,
 }
 
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct MetallicRoughnessDesc {
-    pub base_color: [f32; 3],
-    pub roughness: f32,
+    pub(crate) base_color: [f32; 3],
+    pub(crate) roughness: f32,
     #[serde(default)]
-    pub metallic: f32,
+    pub(crate) metallic: f32,
     /// An sRGB image multiplying base_color at the surface's uv.
     #[serde(default)]
-    pub base_color_texture: Option<PathBuf>,
+    pub(crate) base_color_texture: Option<PathBuf>,
     /// A linear image whose blue channel multiplies metallic and green
     /// channel roughness (glTF's metallicRoughnessTexture).
     #[serde(default)]
-    pub metallic_roughness_texture: Option<PathBuf>,
+    pub(crate) metallic_roughness_texture: Option<PathBuf>,
     // The maps every lit model takes (`SurfaceMaps`):
     /// A linear tangent-space normal map (glTF's normalTexture).
     #[serde(default)]
-    pub normal_texture: Option<PathBuf>,
+    pub(crate) normal_texture: Option<PathBuf>,
     /// Scales the normal map's x and y.
     #[serde(default = "one")]
-    pub normal_scale: f32,
+    pub(crate) normal_scale: f32,
     /// A linear image whose red channel darkens the environment term.
     #[serde(default)]
-    pub occlusion_texture: Option<PathBuf>,
+    pub(crate) occlusion_texture: Option<PathBuf>,
     /// 1 + strength · (occlusion − 1); in [0, 1].
     #[serde(default = "one")]
-    pub occlusion_strength: f32,
+    pub(crate) occlusion_strength: f32,
     /// Emitted radiance, linear RGB (the emissive texture multiplies it).
     #[serde(default)]
-    pub emissive: [f32; 3],
+    pub(crate) emissive: [f32; 3],
     /// An sRGB image multiplying `emissive`.
     #[serde(default)]
-    pub emissive_texture: Option<PathBuf>,
+    pub(crate) emissive_texture: Option<PathBuf>,
     /// "nearest", "bilinear", "trilinear" (default), "anisotropic" (16
     /// taps) or "anisotropic:N" (N in 1..=16), for every texture of the
     /// material.
     #[serde(default)]
-    pub texture_filter: Option<String>,
+    pub(crate) texture_filter: Option<String>,
     /// "repeat" (default), "clamp_to_edge" or "mirrored_repeat", or a pair
     /// [u, v] of them.
     #[serde(default)]
-    pub texture_wrap: Option<WrapsDesc>,
+    pub(crate) texture_wrap: Option<WrapsDesc>,
     #[serde(default)]
-    pub double_sided: bool,
+    pub(crate) double_sided: bool,
 }
 
 /// Burley's principled BRDF (core::models::disney); field names and
@@ -172,19 +172,19 @@ pub struct MetallicRoughnessDesc {
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct DisneyDesc {
-    pub base_color: [f32; 3],
-    pub metallic: f32,
-    pub subsurface: f32,
-    pub specular: f32,
-    pub specular_tint: f32,
-    pub roughness: f32,
-    pub anisotropic: f32,
-    pub sheen: f32,
-    pub sheen_tint: f32,
-    pub clearcoat: f32,
-    pub clearcoat_gloss: f32,
-    pub energy_compensation: bool,
-    pub double_sided: bool,
+    pub(crate) base_color: [f32; 3],
+    pub(crate) metallic: f32,
+    pub(crate) subsurface: f32,
+    pub(crate) specular: f32,
+    pub(crate) specular_tint: f32,
+    pub(crate) roughness: f32,
+    pub(crate) anisotropic: f32,
+    pub(crate) sheen: f32,
+    pub(crate) sheen_tint: f32,
+    pub(crate) clearcoat: f32,
+    pub(crate) clearcoat_gloss: f32,
+    pub(crate) energy_compensation: bool,
+    pub(crate) double_sided: bool,
 }
 
 impl Default for DisneyDesc {
@@ -214,23 +214,23 @@ impl Default for DisneyDesc {
 #[derive(Clone, Debug, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields, default)]
 pub struct GltfDesc {
-    pub base_color_factor: [f32; 3],
-    pub metallic_factor: f32,
-    pub roughness_factor: f32,
-    pub ior: f32,
-    pub specular_factor: f32,
-    pub specular_color_factor: [f32; 3],
-    pub clearcoat_factor: f32,
-    pub clearcoat_roughness_factor: f32,
-    pub sheen_color_factor: [f32; 3],
-    pub sheen_roughness_factor: f32,
+    pub(crate) base_color_factor: [f32; 3],
+    pub(crate) metallic_factor: f32,
+    pub(crate) roughness_factor: f32,
+    pub(crate) ior: f32,
+    pub(crate) specular_factor: f32,
+    pub(crate) specular_color_factor: [f32; 3],
+    pub(crate) clearcoat_factor: f32,
+    pub(crate) clearcoat_roughness_factor: f32,
+    pub(crate) sheen_color_factor: [f32; 3],
+    pub(crate) sheen_roughness_factor: f32,
     /// `"normative"` (Appendix B's fresnel_mix) or `"simplified"` (the
     /// diffuse lobe weighted by 1 − F with F0 = mix(dielectric F0, base,
     /// metallic)); read as text so that an unknown value names the field.
-    pub fresnel: String,
+    pub(crate) fresnel: String,
     /// An sRGB image multiplying base_color_factor at the surface's uv.
-    pub base_color_texture: Option<PathBuf>,
-    pub double_sided: bool,
+    pub(crate) base_color_texture: Option<PathBuf>,
+    pub(crate) double_sided: bool,
 }
 
 impl Default for GltfDesc {
@@ -321,7 +321,7 @@ pub(super) const DISNEY_ROUGHNESS_MAX: f32 = 10.0;
 /// α floor of every other NDF (its width shrinks as α/√γ), and the f32
 /// evaluation of r^(−γ) (module docs of `core::ndf::d_gtr`) loses its
 /// digits: γ · 6e-8 nears 1.
-pub const GTR_GAMMA_MAX: f32 = 1e6;
+pub(crate) const GTR_GAMMA_MAX: f32 = 1e6;
 
 impl DisneyDesc {
     /// Every field checked. Burley's parameters live in [0, 1]; beyond it:

@@ -96,12 +96,12 @@ pub(super) struct CameraDesc {
 pub struct OutputDesc {
     pub width: u32,
     pub height: u32,
-    pub ssaa: u32,
-    pub tonemap: TonemapDesc,
+    pub(crate) ssaa: u32,
+    pub(crate) tonemap: TonemapDesc,
     /// Exposure in stops: radiance is scaled by 2^exposure before tone mapping.
-    pub exposure: f32,
+    pub(crate) exposure: f32,
     /// Radiance of uncovered pixels when there is no environment.
-    pub background: [f32; 3],
+    pub(crate) background: [f32; 3],
     /// Text written on the image (`[[output.label]]`, label.rs).
     #[serde(rename = "label")]
     pub labels: Vec<crate::label::LabelDesc>,
@@ -123,7 +123,7 @@ impl Default for OutputDesc {
 
 #[derive(Clone, Copy, Debug, Deserialize, PartialEq, Eq, Default)]
 #[serde(rename_all = "snake_case")]
-pub enum TonemapDesc {
+pub(crate) enum TonemapDesc {
     #[default]
     Clamp,
     Reinhard,

@@ -22,9 +22,9 @@ use std::path::{Path, PathBuf};
 const DEFAULT_FOV_Y: f32 = 40.0;
 /// The default lights when the file has none: a directional key light
 /// from above, in front and to the right, and a dim uniform environment.
-pub const DEFAULT_KEY_TO_LIGHT: [f32; 3] = [1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0];
-pub const DEFAULT_KEY_IRRADIANCE: f32 = 3.0;
-pub const DEFAULT_ENVIRONMENT: f32 = 0.3;
+pub(crate) const DEFAULT_KEY_TO_LIGHT: [f32; 3] = [1.0 / 3.0, 2.0 / 3.0, 2.0 / 3.0];
+pub(crate) const DEFAULT_KEY_IRRADIANCE: f32 = 3.0;
+pub(crate) const DEFAULT_ENVIRONMENT: f32 = 0.3;
 /// How far an orthographic camera is stood back, in units of its ymag: its
 /// rays then diverge by at most 1/1000 rad.
 const ORTHO_DISTANCE: f32 = 1000.0;

@@ -10,8 +10,8 @@ mod gltf_error;
 mod gltf_file;
 
 use build::*;
+pub(crate) use desc::OutputDesc;
 use desc::*;
-pub use desc::{OutputDesc, TonemapDesc};
 pub use gltf_error::GltfSceneError;
 pub use gltf_file::{load_gltf_scene, load_gltf_str, GltfOptions};
 use specula_raster::GeometryPass;
@@ -22,8 +22,8 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 #[error("{}: {message}", file.display())]
 pub struct SceneError {
-    pub file: PathBuf,
-    pub message: String,
+    pub(crate) file: PathBuf,
+    pub(crate) message: String,
 }
 
 /// A loaded scene, ready to render.
@@ -39,7 +39,7 @@ pub struct LoadedScene {
     pub warnings: Vec<String>,
     /// Image-space stages the scene asks for, run after the tone map and
     /// before the encode (`[posterize]`).
-    pub post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
+    pub(crate) post_stages: Vec<std::sync::Arc<dyn specula_raster::post::PostStage>>,
     /// The checked `[[outline]]` tables, in order, and `[strokes]` (lines.rs).
     pub outlines: Vec<crate::lines::OutlineSpec>,
     pub strokes: Option<crate::lines::StrokesSpec>,

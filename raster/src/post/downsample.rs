@@ -1,7 +1,7 @@
 //! Downsampling the supersamples: a box filter over each output pixel's
 //! ssaa² samples, on its own into an HDR image ([`downsample`]) or fused
 //! with exposure and tone mapping ([`downsample_hdr_into`]) and with the sRGB
-//! encode as well ([`downsample_ldr`]), in one pass over the samples.
+//! encode as well ([`downsample_ldr_into`]), in one pass over the samples.
 
 use super::encode::{encode_pixels, encode_planes, load8, size_output};
 use super::tonemap::{curve_of, Tonemap};
@@ -64,7 +64,7 @@ pub fn downsample(color: &Planes3, width: u32, height: u32, ssaa: u32) -> HdrIma
 /// after the other (the same products in the same order), without the
 /// copies and passes in between. The head of a post list with custom
 /// stages.
-pub fn downsample_hdr_into(
+pub(crate) fn downsample_hdr_into(
     frame: &FrameBuffers,
     ssaa: u32,
     tonemap: Tonemap,
@@ -122,18 +122,11 @@ fn downsample_hdr_with<const CURVE: u8>(
 
 /// Downsample, exposure (in stops), tone mapping and sRGB
 /// encoding in one pass over the samples: 8-bit RGB, row-major, of
-/// (width / ssaa) × (height / ssaa). Equal to the unfused stage list (a
-/// test checks it) without the HDR images in between.
-pub fn downsample_ldr(frame: &FrameBuffers, ssaa: u32, tonemap: Tonemap, exposure: f32) -> Vec<u8> {
-    let mut out = Vec::new();
-    downsample_ldr_into(frame, ssaa, tonemap, exposure, &mut out);
-    out
-}
-
-/// [`downsample_ldr`] into `out`, resized to the output (its earlier bytes
-/// are all overwritten, so an allocation from an earlier frame is reused
-/// as it is).
-pub fn downsample_ldr_into(
+/// (width / ssaa) × (height / ssaa), into `out`, resized to the output (its
+/// earlier bytes are all overwritten, so an allocation from an earlier frame
+/// is reused as it is). Equal to the unfused stage list (a test checks it)
+/// without the HDR images in between.
+pub(crate) fn downsample_ldr_into(
     frame: &FrameBuffers,
     ssaa: u32,
     tonemap: Tonemap,

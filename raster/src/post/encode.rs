@@ -69,7 +69,7 @@ pub struct LdrEncoding {
 
 impl LdrEncoding {
     /// Exposure `stops`, then `tonemap`, then the sRGB encode.
-    pub fn new(tonemap: Tonemap, stops: f32) -> LdrEncoding {
+    pub(crate) fn new(tonemap: Tonemap, stops: f32) -> LdrEncoding {
         LdrEncoding {
             tonemap,
             k: stops.exp2(),
@@ -77,7 +77,7 @@ impl LdrEncoding {
     }
 
     /// Codes of the pixels with linear colours `r[i]`, `g[i]`, `b[i]` into
-    /// `out[3i..3i + 3]`: the bytes [`downsample_ldr`](super::downsample_ldr) gives for them.
+    /// `out[3i..3i + 3]`: the bytes [`downsample_ldr_into`](super::downsample_ldr_into) gives for them.
     pub(crate) fn encode_row(&self, r: &[f32], g: &[f32], b: &[f32], out: &mut [u8]) {
         match self.tonemap {
             Tonemap::Clamp => encode_planes::<0>(r, g, b, self.k, out),
@@ -167,7 +167,7 @@ pub fn encode_ldr(rgb: &Planes3) -> Vec<u8> {
 }
 
 /// [`encode_ldr`] into `out` (see [`downsample_ldr_into`](super::downsample_ldr_into)).
-pub fn encode_ldr_into(rgb: &Planes3, out: &mut Vec<u8>) {
+pub(crate) fn encode_ldr_into(rgb: &Planes3, out: &mut Vec<u8>) {
     let enc = SrgbEncoder::new();
     let enc8 = SrgbEncoderX8::new();
     size_output(out, rgb.len() * 3);

@@ -2,23 +2,25 @@
 //! buffers: downsampling the supersamples (box filter, in linear HDR), exposure,
 //! tone mapping and the one sRGB encode at the very end, plus any custom
 //! image-space stage ([`PostStage`]) where the list puts it. The standard
-//! list runs fused in one pass over the samples ([`downsample_ldr`]).
+//! list runs fused in one pass over the samples (`downsample_ldr_into`).
 //!
 //! This file holds the stage list and how it runs ([`Post`], [`Stage`],
 //! [`PostStage`], [`HdrImage`]); the tone curves are in `tonemap`, the sRGB
 //! transfer function and its 8-bit encoders in `srgb`, the fused 8-bit
 //! encode ([`LdrEncoding`], [`encode_ldr`]) in `encode` and the
-//! downsampling of the supersamples ([`downsample`], [`downsample_ldr`],
-//! [`downsample_hdr_into`]) in `downsample`.
+//! downsampling of the supersamples ([`downsample`], `downsample_ldr_into`,
+//! `downsample_hdr_into`) in `downsample`.
 
 mod downsample;
 mod encode;
 mod srgb;
 mod tonemap;
 
-pub use downsample::{downsample, downsample_hdr_into, downsample_ldr, downsample_ldr_into};
-pub use encode::{encode_ldr, encode_ldr_into, LdrEncoding};
-pub use srgb::{srgb_curve, srgb_curve_inverse, srgb_encode, SrgbEncoder, SrgbEncoderX8};
+pub use downsample::downsample;
+pub(crate) use downsample::{downsample_hdr_into, downsample_ldr_into};
+pub(crate) use encode::encode_ldr_into;
+pub use encode::{encode_ldr, LdrEncoding};
+pub use srgb::{srgb_curve_inverse, srgb_encode};
 pub use tonemap::Tonemap;
 
 use crate::buffers::{BufferSet, FrameBuffers, Planes3};
@@ -104,18 +106,6 @@ impl Clone for Stage {
     }
 }
 
-impl Stage {
-    pub fn name(&self) -> &str {
-        match self {
-            Stage::Downsample { .. } => "resolve", // the name messages use for this stage
-            Stage::Exposure { .. } => "exposure",
-            Stage::Tonemap(_) => "tonemap",
-            Stage::Encode => "encode",
-            Stage::Custom(s) => s.name(),
-        }
-    }
-}
-
 /// What the post list produced: the final HDR image (after the last stage
 /// before `Encode`) unless the fused path ran, and the 8-bit sRGB pixels
 /// (RGB, row-major) if the list encodes.
@@ -131,7 +121,7 @@ pub struct PostOutput {
 #[derive(Clone, Debug)]
 pub struct Post {
     pub stages: Vec<Stage>,
-    /// Run [`downsample_ldr`] (one pass over the samples, no HDR image in
+    /// Run `downsample_ldr_into` (one pass over the samples, no HDR image in
     /// between) when the list is exactly downsample, exposure, tone map,
     /// encode. Off only to measure what fusing is worth.
     pub fuse: bool,
@@ -235,9 +225,9 @@ impl Post {
     /// over `--repeat 10` shows it).
     ///
     /// With `fuse` set, the standard list runs as one pass over the samples
-    /// ([`downsample_ldr`]), and a list that starts with downsample, exposure and
+    /// (`downsample_ldr_into`), and a list that starts with downsample, exposure and
     /// tone map and then has custom stages runs that head as one pass into
-    /// the HDR image ([`downsample_hdr_into`]); both give the bytes of the
+    /// the HDR image (`downsample_hdr_into`); both give the bytes of the
     /// stage-by-stage list (tested).
     pub fn run_reusing(
         &mut self,

@@ -7,7 +7,8 @@ use specula_core::{f32x8, Real};
 use wide::i32x8;
 
 /// The sRGB transfer function (IEC 61966-2-1), in f64.
-pub fn srgb_curve(v: f64) -> f64 {
+#[cfg(test)]
+fn srgb_curve(v: f64) -> f64 {
     if v <= 0.003_130_8 {
         12.92 * v
     } else {
@@ -15,7 +16,7 @@ pub fn srgb_curve(v: f64) -> f64 {
     }
 }
 
-/// Inverse of [`srgb_curve`]: sRGB-encoded [0, 1] to linear.
+/// Inverse of `srgb_curve`: sRGB-encoded [0, 1] to linear.
 pub fn srgb_curve_inverse(s: f64) -> f64 {
     if s <= 0.040_45 {
         s / 12.92
@@ -65,13 +66,13 @@ fn bin_start_codes() -> &'static [u8; SRGB_BINS + 1] {
 /// the next threshold finishes it (a `powf` per channel, or a branchy binary
 /// search, cost more than the rest of tone mapping).
 #[derive(Clone, Copy)]
-pub struct SrgbEncoder {
+pub(crate) struct SrgbEncoder {
     start: &'static [u8; SRGB_BINS + 1],
     thresholds: &'static [f32; 256],
 }
 
 impl SrgbEncoder {
-    pub fn new() -> SrgbEncoder {
+    pub(crate) fn new() -> SrgbEncoder {
         SrgbEncoder {
             start: bin_start_codes(),
             thresholds: thresholds(),
@@ -79,7 +80,7 @@ impl SrgbEncoder {
     }
 
     #[inline(always)]
-    pub fn encode(&self, v: f32) -> u8 {
+    pub(crate) fn encode(&self, v: f32) -> u8 {
         // NaN → 0 (clamp keeps NaN; the cast saturates it to bin 0, and the
         // comparison with a threshold is false).
         let v = v.clamp(0.0, 1.0);
@@ -150,12 +151,12 @@ fn srgb_cells() -> &'static [i32] {
 /// (bin start, then threshold) were most of the fused post pass, and a
 /// hardware gather is slow on the machines measured.
 #[derive(Clone, Copy)]
-pub struct SrgbEncoderX8 {
+pub(crate) struct SrgbEncoderX8 {
     cells: &'static [i32],
 }
 
 impl SrgbEncoderX8 {
-    pub fn new() -> SrgbEncoderX8 {
+    pub(crate) fn new() -> SrgbEncoderX8 {
         SrgbEncoderX8 {
             cells: srgb_cells(),
         }
@@ -208,7 +209,7 @@ impl Default for SrgbEncoderX8 {
     }
 }
 
-/// [`SrgbEncoder::encode`] for one value.
+/// `SrgbEncoder::encode` for one value.
 pub fn srgb_encode(v: f32) -> u8 {
     SrgbEncoder::new().encode(v)
 }

@@ -4,17 +4,17 @@
 //! picks its cascade by its view depth (`lookup.rs`).
 
 /// Largest number of cascades of a directional light.
-pub const MAX_CASCADES: u32 = 4;
+pub(crate) const MAX_CASCADES: u32 = 4;
 
 /// The practical split scheme's blend between logarithmic (1) and uniform
 /// (0) split depths.
-pub const CASCADE_LAMBDA: f32 = 0.75;
+pub(crate) const CASCADE_LAMBDA: f32 = 0.75;
 
 /// The `count − 1` view depths between `count` cascades over the view
 /// depths `near..far`: the practical split scheme, a blend by
 /// [`CASCADE_LAMBDA`] of the logarithmic split near·(far/near)^(i/count)
 /// and the uniform one near + (far − near)·i/count.
-pub fn cascade_splits(count: u32, near: f32, far: f32) -> Vec<f32> {
+pub(crate) fn cascade_splits(count: u32, near: f32, far: f32) -> Vec<f32> {
     if !(far > 0.0 && far.is_finite()) {
         return vec![0.0; count.saturating_sub(1) as usize];
     }

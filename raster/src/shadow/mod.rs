@@ -33,7 +33,7 @@ mod lanes;
 mod lookup;
 mod settings;
 
-pub use cascades::{cascade_splits, CASCADE_LAMBDA, MAX_CASCADES};
+pub(crate) use cascades::cascade_splits;
 pub(crate) use settings::polygon_shape;
 pub use settings::{
     polygon_light_size, ShadowFilter, ShadowSettings, ShadowSettingsError, MAX_MAP_SIZE,
@@ -81,7 +81,7 @@ pub(crate) struct DepthBlocks {
 /// A shadowed light's maps for one frame.
 #[derive(Default)]
 pub struct LightShadow {
-    pub settings: ShadowSettings,
+    pub(crate) settings: ShadowSettings,
     pub(crate) faces: Vec<Face>,
     /// How a point picks its face.
     pub(crate) pick: Pick,
@@ -124,7 +124,7 @@ impl std::fmt::Debug for ShadowMaps {
 
 impl ShadowMaps {
     /// The maps when some light (or the sun) has shadows.
-    pub fn active(&self) -> Option<&ShadowMaps> {
+    pub(crate) fn active(&self) -> Option<&ShadowMaps> {
         self.any.then_some(self)
     }
 
@@ -135,12 +135,12 @@ impl ShadowMaps {
 
     /// The environment map's sun's maps, if the scene shadows it
     /// ([`SceneData::sun_shadows`](crate::scene::SceneParts::sun_shadows)).
-    pub fn sun(&self) -> Option<&LightShadow> {
+    pub(crate) fn sun(&self) -> Option<&LightShadow> {
         self.sun.as_ref()
     }
 
     /// Depth passes rendered this frame.
-    pub fn passes(&self) -> u32 {
+    pub(crate) fn passes(&self) -> u32 {
         self.lights
             .iter()
             .chain(std::iter::once(&self.sun))

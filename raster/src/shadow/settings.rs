@@ -37,7 +37,7 @@ pub struct ShadowSettings {
     /// tangent of its angular diameter).
     pub light_size: f32,
     /// Directional lights: maps along the view's depth (1..=4), each
-    /// `map_size` a side ([`cascade_splits`](super::cascade_splits)); 1 for other lights.
+    /// `map_size` a side (`cascade_splits`); 1 for other lights.
     pub cascades: u32,
 }
 
@@ -98,7 +98,7 @@ impl ShadowSettings {
     }
 
     /// Faces of a light's map: 6 for a point light, 1 otherwise.
-    pub fn faces(&self, light: &Light) -> u32 {
+    pub(crate) fn faces(&self, light: &Light) -> u32 {
         match light {
             Light::Point { .. } | Light::Polygon { .. } => 6,
             Light::Directional { .. } => self.cascades,

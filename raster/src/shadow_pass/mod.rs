@@ -9,7 +9,7 @@ mod fit;
 mod pixels;
 
 pub use crate::depth_pass::DepthSetup;
-pub use pixels::{pixel_shadows, pixel_sun_shadows, PixelShadow};
+pub use pixels::{pixel_shadows, pixel_sun_shadows};
 
 use crate::camera::View;
 use crate::depth_pass::depth_pass;
