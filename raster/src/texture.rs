@@ -69,7 +69,7 @@ pub(crate) const MAX_ANISOTROPY: u8 = 16;
 
 /// A texture filter's name that [`Filter`]'s `FromStr` does not know.
 #[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
-#[error("expected nearest, bilinear, trilinear, anisotropic or anisotropic:N (N in 1..={MAX_ANISOTROPY}), got {0:?}", MAX_ANISOTROPY = MAX_ANISOTROPY)]
+#[error("expected nearest, bilinear, trilinear, anisotropic or anisotropic:N (N in 1..={MAX_ANISOTROPY}), got {0:?}")]
 pub struct FilterParseError(pub(crate) String);
 
 /// Why a texture could not be made from the texels given.
@@ -83,19 +83,19 @@ pub enum TextureError {
     },
     #[error("texture size {width}×{height} overflows")]
     Overflow { width: usize, height: usize },
-    #[error("texture too large: {width}×{height}×{channels} values, at most {MAX_VALUES}", MAX_VALUES = MAX_VALUES)]
+    #[error("texture too large: {width}×{height}×{channels} values, at most {MAX_VALUES}")]
     TooLarge {
         width: usize,
         height: usize,
         channels: usize,
     },
-    #[error("texture too large: {width}×{height} with {channels} channels needs more than {MAX_VALUES} values with its mip chain", MAX_VALUES = MAX_VALUES)]
+    #[error("texture too large: {width}×{height} with {channels} channels needs more than {MAX_VALUES} values with its mip chain")]
     ChainTooLarge {
         width: usize,
         height: usize,
         channels: usize,
     },
-    #[error("texture too large: {0} values with its mip chain, at most {MAX_VALUES}", MAX_VALUES = MAX_VALUES)]
+    #[error("texture too large: {0} values with its mip chain, at most {MAX_VALUES}")]
     LevelsTooLarge(usize),
     #[error("{len} values given for a {width}×{height} texture of {channels} channels ({expected} expected)")]
     Length {

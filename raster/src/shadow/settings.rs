@@ -62,9 +62,9 @@ impl Default for ShadowSettings {
 /// names the scene field at fault.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ShadowSettingsError {
-    #[error("shadow_map_size: must be 1..={MAX_MAP_SIZE} texels, got {0}", MAX_MAP_SIZE = MAX_MAP_SIZE)]
+    #[error("shadow_map_size: must be 1..={MAX_MAP_SIZE} texels, got {0}")]
     MapSize(u32),
-    #[error("cascades: must be 1..={MAX_CASCADES}, got {0}", MAX_CASCADES = MAX_CASCADES)]
+    #[error("cascades: must be 1..={MAX_CASCADES}, got {0}")]
     Cascades(u32),
     #[error("{field}: must be a finite number in [0, {max}], got {got}")]
     OutOfRange {
