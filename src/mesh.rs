@@ -1,5 +1,6 @@
 //! Meshes in object space: procedural shapes and OBJ/MTL files (through tobj).
 
+use crate::objcheck::ObjError;
 use glam::{Vec2, Vec3};
 use std::path::Path;
 
@@ -295,7 +296,7 @@ pub(crate) fn parse_obj(
     bytes: &[u8],
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     mtls: &mut Vec<Option<MtlSource>>,
-) -> Result<MeshData, String> {
+) -> Result<MeshData, ObjError> {
     // tobj reports errors without a line and can panic on bad indices:
     // check every line first; faces it would mishandle are blanked out.
     let scan = crate::objcheck::check_obj(path, bytes)?;
@@ -344,33 +345,33 @@ pub(crate) fn parse_obj(
                     Err(tobj::LoadError::MaterialParseError)
                 }
             },
-            Err(e) => {
+            Err(source) => {
                 mtl_sources.borrow_mut().push(None);
                 mtl_errors
                     .borrow_mut()
-                    .push(format!("{}: {e}", p.display()));
+                    .push(ObjError::ReadMtl { path: p, source });
                 Err(tobj::LoadError::OpenFileFailed)
             }
         }
     });
     let (models, materials) = match loaded {
         Ok(r) => r,
-        Err(e) => {
-            let at = locate_obj_error(text, e)
-                .map(|l| format!(" at line {l}"))
-                .unwrap_or_default();
-            return Err(format!("{}{at}: {e}", path.display()));
+        Err(source) => {
+            return Err(ObjError::Parse {
+                path: path.to_path_buf(),
+                line: locate_obj_error(text, source),
+                source,
+            });
         }
     };
     let materials = match materials {
         Ok(m) => m,
-        Err(e) => {
-            let why = mtl_errors.borrow().join("; ");
-            return Err(format!(
-                "{}: material library: {}",
-                path.display(),
-                if why.is_empty() { e.to_string() } else { why }
-            ));
+        Err(source) => {
+            return Err(ObjError::Materials {
+                path: path.to_path_buf(),
+                errors: mtl_errors.into_inner(),
+                source,
+            });
         }
     };
 
@@ -451,7 +452,7 @@ mod tests {
         path: &Path,
         bytes: &[u8],
         read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-    ) -> Result<MeshData, String> {
+    ) -> Result<MeshData, ObjError> {
         parse_obj(path, bytes, read, &mut Vec::new())
     }
 
@@ -506,13 +507,52 @@ mod tests {
             Err(std::io::ErrorKind::NotFound.into())
         })
         .unwrap_err();
+        assert!(matches!(err, ObjError::Line { line: 5, .. }), "{err:?}");
+        let err = err.to_string();
         assert!(err.contains("bad.obj") && err.contains("line 5"), "{err}");
         let obj = b"v 0 0 0\nv 1 zero 0\n";
         let err = load_obj(Path::new("bad.obj"), obj, &|_| {
             Err(std::io::ErrorKind::NotFound.into())
         })
         .unwrap_err();
-        assert!(err.contains("line 2"), "{err}");
+        assert!(matches!(err, ObjError::Line { line: 2, .. }), "{err:?}");
+        assert!(err.to_string().contains("line 2"), "{err}");
+    }
+
+    /// A bad MTL line and a missing MTL file each fail the load, naming
+    /// the MTL file (and the line) under the OBJ's material library.
+    #[test]
+    fn mtl_errors_name_the_mtl_file_and_line() {
+        let obj = b"mtllib m.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let err = load_obj(Path::new("d/a.obj"), obj, &|p| {
+            assert_eq!(p, Path::new("d/m.mtl"));
+            Ok(b"newmtl x\nKd 0.5 0.5\n".to_vec())
+        })
+        .unwrap_err();
+        let ObjError::Materials { errors, .. } = &err else {
+            panic!("{err:?}");
+        };
+        assert!(
+            matches!(&errors[..], [ObjError::Line { line: 2, .. }]),
+            "{errors:?}"
+        );
+        let msg = err.to_string();
+        assert!(
+            msg.starts_with("d/a.obj: material library: d/m.mtl: line 2: Kd needs three numbers"),
+            "{msg}"
+        );
+        let err = load_obj(Path::new("a.obj"), obj, &|_| {
+            Err(std::io::ErrorKind::NotFound.into())
+        })
+        .unwrap_err();
+        let ObjError::Materials { errors, .. } = &err else {
+            panic!("{err:?}");
+        };
+        assert!(
+            matches!(&errors[..], [ObjError::ReadMtl { .. }]),
+            "{errors:?}"
+        );
+        assert!(err.to_string().contains("m.mtl"), "{err}");
     }
 
     /// A concave pentagon (a square with a notch cut into its top edge),

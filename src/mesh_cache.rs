@@ -37,7 +37,7 @@ pub(crate) fn load_obj(
     path: &Path,
     bytes: &[u8],
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Result<MeshData, String> {
+) -> Result<MeshData, crate::objcheck::ObjError> {
     let cache = crate::table_cache::cache_dir().filter(|_| bytes.len() >= MIN_OBJ_BYTES);
     Ok(load_obj_cached(path, bytes, read, cache.as_deref())?.0)
 }
@@ -49,7 +49,7 @@ pub(crate) fn load_obj_cached(
     bytes: &[u8],
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
     cache: Option<&Path>,
-) -> Result<(MeshData, bool), String> {
+) -> Result<(MeshData, bool), crate::objcheck::ObjError> {
     let key = cache.map(|_| key(path, bytes));
     if let (Some(dir), Some(key)) = (cache, &key) {
         if let Some(m) = load(dir, key, path, read) {
@@ -367,10 +367,15 @@ mod tests {
 
         // A missing MTL: not a hit, and the parse's own error or warning.
         files.borrow_mut().clear();
-        let uncached = load_obj_cached(path, &obj, &read, None).map(|(m, _)| all(&m));
-        let got = load_obj_cached(path, &obj, &read, Some(dir.path()));
+        let both = |c: Option<&Path>| {
+            load_obj_cached(path, &obj, &read, c)
+                .map(|(m, hit)| (all(&m), hit))
+                .map_err(|e| e.to_string())
+        };
+        let uncached = both(None);
+        let got = both(Some(dir.path()));
         assert!(!matches!(got, Ok((_, true))));
-        assert_eq!(got.map(|(m, _)| all(&m)), uncached);
+        assert_eq!(got.map(|(m, _)| m), uncached.map(|(m, _)| m));
     }
 
     #[test]

@@ -6,7 +6,7 @@
 //! tobj 4 accepts, so a file that passes cannot make it panic or fail, and
 //! a file that does not pass gets a message naming the file and the line.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 /// Longest piece of an offending line quoted back in a message.
 const QUOTE_MAX: usize = 60;
@@ -16,6 +16,72 @@ const QUOTE_MAX: usize = 60;
 /// count for awkward (self-intersecting) outlines; a larger face is refused
 /// naming its line. Meshes that need more are given as triangles.
 pub const MAX_FACE_CORNERS: usize = 4096;
+
+/// Why an OBJ file (or an MTL file it names) cannot be read. Each message
+/// starts with the file, and with the line where one is at fault.
+#[derive(Debug, thiserror::Error)]
+pub enum ObjError {
+    /// The file is not UTF-8 text.
+    #[error("{}: not UTF-8 text: {source}", .path.display())]
+    NotUtf8 {
+        path: PathBuf,
+        source: std::str::Utf8Error,
+    },
+    /// A line breaks one of the rules tobj reads by: `why` says which,
+    /// `got` quotes the line (shortened).
+    #[error("{}: line {line}: {why}, got {got:?}", .path.display())]
+    Line {
+        path: PathBuf,
+        line: usize,
+        why: String,
+        got: String,
+    },
+    /// Some `v` lines carry a vertex colour and others do not: `later` is
+    /// the first line that disagrees with line `earlier`.
+    #[error("{}: line {later}: a v line {} a vertex colour, but line {earlier} {} (give every v line a colour or none)",
+        .path.display(),
+        if *.later_coloured { "with" } else { "without" },
+        if *.later_coloured { "has none" } else { "has one" })]
+    MixedColours {
+        path: PathBuf,
+        later: usize,
+        earlier: usize,
+        later_coloured: bool,
+    },
+    /// An MTL file the OBJ names that cannot be read.
+    #[error("{}: {source}", .path.display())]
+    ReadMtl {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    /// tobj's own refusal, at the line it most likely means.
+    #[error("{}{}: {source}", .path.display(), at_line(*.line))]
+    Parse {
+        path: PathBuf,
+        line: Option<usize>,
+        source: tobj::LoadError,
+    },
+    /// The MTL files named could not be loaded: each one's error, or
+    /// tobj's when there is none.
+    #[error("{}: material library: {}", .path.display(), materials_message(.errors, .source))]
+    Materials {
+        path: PathBuf,
+        errors: Vec<ObjError>,
+        source: tobj::LoadError,
+    },
+}
+
+fn at_line(line: Option<usize>) -> String {
+    line.map(|l| format!(" at line {l}")).unwrap_or_default()
+}
+
+fn materials_message(errors: &[ObjError], tobj: &tobj::LoadError) -> String {
+    if errors.is_empty() {
+        return tobj.to_string();
+    }
+    let all: Vec<String> = errors.iter().map(ToString::to_string).collect();
+    all.join("; ")
+}
 
 /// The line, shortened for a message.
 fn quote(line: &str) -> String {
@@ -28,9 +94,21 @@ pub(crate) fn strip_bom(bytes: &[u8]) -> &[u8] {
     bytes.strip_prefix(b"\xEF\xBB\xBF").unwrap_or(bytes)
 }
 
-fn utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str, String> {
-    std::str::from_utf8(strip_bom(bytes))
-        .map_err(|e| format!("{}: not UTF-8 text: {e}", path.display()))
+fn utf8<'a>(path: &Path, bytes: &'a [u8]) -> Result<&'a str, ObjError> {
+    std::str::from_utf8(strip_bom(bytes)).map_err(|source| ObjError::NotUtf8 {
+        path: path.to_path_buf(),
+        source,
+    })
+}
+
+/// The error for line `n` (1-based) breaking rule `why`.
+fn line_error(path: &Path, n: usize, line: &str, why: String) -> ObjError {
+    ObjError::Line {
+        path: path.to_path_buf(),
+        line: n,
+        why,
+        got: quote(line),
+    }
 }
 
 /// Whether the first `n` words after the keyword are numbers (tobj ignores
@@ -40,7 +118,7 @@ fn numbers(rest: &[&str], n: usize) -> bool {
 }
 
 /// Checks an MTL file's text the way tobj will read it.
-pub(crate) fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), String> {
+pub(crate) fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), ObjError> {
     let text = utf8(path, bytes)?;
     for (i, line) in text.lines().enumerate() {
         let words: Vec<&str> = line.split_whitespace().collect();
@@ -65,12 +143,7 @@ pub(crate) fn check_mtl(path: &Path, bytes: &[u8]) -> Result<(), String> {
             _ => None,
         };
         if let Some(why) = why {
-            return Err(format!(
-                "{}: line {}: {why}, got {:?}",
-                path.display(),
-                i + 1,
-                quote(line)
-            ));
+            return Err(line_error(path, i + 1, line, why));
         }
     }
     Ok(())
@@ -102,14 +175,14 @@ struct Counts {
 
 /// Checks one face corner `v`, `v/vt`, `v//vn` or `v/vt/vn` against the
 /// elements defined so far (OBJ indices are 1-based; negative ones count
-/// back from the last element defined).
-fn check_corner(corner: &str, c: &Counts) -> Result<(), String> {
+/// back from the last element defined): why it is refused, or None.
+fn corner_fault(corner: &str, c: &Counts) -> Option<String> {
     let parts: Vec<&str> = corner.split('/').collect();
     if parts.len() > 3 {
-        return Err(format!("corner {corner:?} has more than v/vt/vn"));
+        return Some(format!("corner {corner:?} has more than v/vt/vn"));
     }
     if parts[0].is_empty() {
-        return Err(format!("corner {corner:?} has no vertex index"));
+        return Some(format!("corner {corner:?} has no vertex index"));
     }
     for (k, (part, (name, count))) in parts
         .iter()
@@ -120,20 +193,20 @@ fn check_corner(corner: &str, c: &Counts) -> Result<(), String> {
             continue;
         }
         let Ok(i) = part.parse::<i64>() else {
-            return Err(format!("corner {corner:?}: {part:?} is not an index"));
+            return Some(format!("corner {corner:?}: {part:?} is not an index"));
         };
         if i == 0 || i.abs() > count {
-            return Err(format!(
+            return Some(format!(
                 "corner {corner:?}: {name} index {i} is out of range ({count} {name} lines so far; indices are 1..={count} or -1..=-{count})"
             ));
         }
     }
-    Ok(())
+    None
 }
 
 /// Checks an OBJ file's text the way tobj will read it, line by line, and
 /// returns the text to give tobj (see [`ObjScan`]).
-pub(crate) fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, String> {
+pub(crate) fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, ObjError> {
     let text = utf8(path, bytes)?;
     let mut out = String::with_capacity(text.len());
     let mut scan = ObjScan {
@@ -195,9 +268,9 @@ pub(crate) fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, String> {
                     "a face has {} corners, at most {MAX_FACE_CORNERS} are read (split it into smaller faces or triangles)",
                     rest.len()
                 )),
-                "f" | "l" => match rest.iter().try_for_each(|c| check_corner(c, &counts)) {
-                    Err(e) => Some(e),
-                    Ok(()) => {
+                "f" | "l" => match rest.iter().find_map(|c| corner_fault(c, &counts)) {
+                    Some(why) => Some(why),
+                    None => {
                         keep = false;
                         if key == "l" {
                             scan.polylines += 1;
@@ -226,22 +299,15 @@ pub(crate) fn check_obj(path: &Path, bytes: &[u8]) -> Result<ObjScan, String> {
             },
         };
         if let Some(why) = why {
-            return Err(format!(
-                "{}: line {n}: {why}, got {:?}",
-                path.display(),
-                quote(line)
-            ));
+            return Err(line_error(path, n, line, why));
         }
         if let (Some(c), Some(p)) = (coloured, plain) {
-            let (later, earlier, this, that) = if c > p {
-                (c, p, "with", "has none")
-            } else {
-                (p, c, "without", "has one")
-            };
-            return Err(format!(
-                "{}: line {later}: a v line {this} a vertex colour, but line {earlier} {that} (give every v line a colour or none)",
-                path.display()
-            ));
+            return Err(ObjError::MixedColours {
+                path: path.to_path_buf(),
+                later: c.max(p),
+                earlier: c.min(p),
+                later_coloured: c > p,
+            });
         }
         if keep {
             out.push_str(line);
@@ -269,7 +335,9 @@ mod tests {
             ("map_Kd", "map_Kd"),
         ] {
             let mtl = format!("# comment\nnewmtl a\n{bad}\n");
-            let err = check_mtl(Path::new("m.mtl"), mtl.as_bytes()).unwrap_err();
+            let err = check_mtl(Path::new("m.mtl"), mtl.as_bytes())
+                .unwrap_err()
+                .to_string();
             assert!(
                 err.contains("m.mtl") && err.contains("line 3") && err.contains(key),
                 "{bad}: {err}"
@@ -281,7 +349,9 @@ mod tests {
     }
 
     fn obj_err(text: &str) -> String {
-        check_obj(Path::new("m.obj"), text.as_bytes()).unwrap_err()
+        check_obj(Path::new("m.obj"), text.as_bytes())
+            .unwrap_err()
+            .to_string()
     }
 
     #[test]

@@ -29,9 +29,7 @@ pub(in crate::scene) fn build_environment(
         (Some(u), None) => {
             checks::radiometric("environment.uniform", *u)?;
             if e.sun.is_some() {
-                return Err(sun_error(
-                    "shadows: a uniform environment has no sun; [environment.sun] needs map = \"file.hdr\"",
-                ));
+                return Err(BuildError::SunWithoutMap);
             }
             Ok(Environment::Uniform(*u))
         }
@@ -112,14 +110,17 @@ fn build_sun_shadows(
         light_size: d.light_size.unwrap_or(own_size),
         cascades: d.cascades,
     };
-    s.check().map_err(|e| sun_error(e.to_string()))?;
+    s.check().map_err(|source| BuildError::Shadows {
+        table: "environment.sun".into(),
+        source,
+    })?;
     if d.shadows == ShadowsDesc::None {
         return Ok(None);
     }
     let Some(sun) = sun else {
-        return Err(sun_error(format!(
-            "shadows: {path} has no sun to shadow (no compact, bright source is taken out of it; docs/accuracy.md, \"Environment maps\")"
-        )));
+        return Err(BuildError::NoSun {
+            path: path.to_string(),
+        });
     };
     crate::memory::reserve("the sun's shadow maps", s.bytes(&sun.directional()))
         .map_err(BuildError::Memory)?;
@@ -131,11 +132,4 @@ fn build_sun_shadows(
 pub(in crate::scene) fn sun_light_size(sin2_radius: f32) -> f32 {
     let rho = (sin2_radius.clamp(0.0, 1.0) as f64).sqrt().asin();
     (2.0 * rho).tan() as f32
-}
-
-fn sun_error(message: impl Into<String>) -> BuildError {
-    BuildError::Table {
-        table: "environment.sun".into(),
-        message: message.into(),
-    }
 }

@@ -157,20 +157,31 @@ pub(in crate::scene) enum BuildError {
         field: String,
         source: crate::tangents::TangentError,
     },
-    /// A part that still reports a message, under the field it was given:
-    /// OBJ files.
-    #[error("{field}: {message}")]
-    Part { field: String, message: String },
+    /// An OBJ file (or an MTL file it names) refused, under its field.
+    #[error("{field}: {source}")]
+    Obj {
+        field: String,
+        source: crate::objcheck::ObjError,
+    },
     /// An `[[output.label]]` refused (`output.label[0].size: …`).
     #[error("output.label[{index}].{source}")]
     Label {
         index: usize,
         source: Box<crate::label::LabelError>,
     },
-    /// A part whose message starts with a field inside `table`: a light's
-    /// shadow settings (`light[1].bias`).
-    #[error("{table}.{message}")]
-    Table { table: String, message: String },
+    /// Shadow settings refused, under the table that gave them
+    /// (`light[1].bias: …`, `environment.sun.cascades: …`).
+    #[error("{table}.{source}")]
+    Shadows {
+        table: String,
+        source: specula_raster::shadow::ShadowSettingsError,
+    },
+    /// `[environment.sun]` under a uniform environment.
+    #[error("environment.sun.shadows: a uniform environment has no sun; [environment.sun] needs map = \"file.hdr\"")]
+    SunWithoutMap,
+    /// `[environment.sun]` with shadows under a map with no sun found in it.
+    #[error("environment.sun.shadows: {path} has no sun to shadow (no compact, bright source is taken out of it; docs/accuracy.md, \"Environment maps\")")]
+    NoSun { path: String },
     /// The memory budget refused (its message names what asked).
     #[error(transparent)]
     Memory(#[from] crate::memory::OverBudget),
@@ -193,13 +204,5 @@ fn no_uvs(field: &str, obj: Option<&Path>) -> String {
             p.display()
         ),
         None => format!("{field}: the mesh has no texture coordinates"),
-    }
-}
-
-/// The seam for the callers whose errors are still `String`s
-/// (`gltf_file.rs`): `?` turns the error into its message.
-impl From<BuildError> for String {
-    fn from(e: BuildError) -> String {
-        e.to_string()
     }
 }

@@ -117,10 +117,10 @@ impl SceneBuilder<'_> {
         )
         .map_err(BuildError::Memory)?;
         self.inputs.push(p.to_path_buf());
-        let m = crate::mesh_cache::load_obj(p, &bytes, self.read).map_err(|message| {
-            BuildError::Part {
+        let m = crate::mesh_cache::load_obj(p, &bytes, self.read).map_err(|source| {
+            BuildError::Obj {
                 field: format!("{field}.obj"),
-                message,
+                source,
             }
         })?;
         self.inputs.extend(m.mtl_files.iter().cloned());

@@ -82,9 +82,9 @@ pub(super) fn build_shadow(i: usize, l: &LightDesc) -> Result<Option<ShadowSetti
     };
     // Checked with shadows off too: a value out of range is a mistake
     // whether or not it is used.
-    s.check().map_err(|e| BuildError::Table {
+    s.check().map_err(|source| BuildError::Shadows {
         table: format!("light[{i}]"),
-        message: e.to_string(),
+        source,
     })?;
     if let LightDesc::Polygon { vertices, .. } = l {
         s.light_size = specula_raster::shadow::polygon_light_size(vertices);
