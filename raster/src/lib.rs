@@ -62,7 +62,7 @@ pub use frame::{
 pub use geometry::{Cull, FrameContext, GeometryPass, Project, SceneMesh, VertexStage};
 pub use lit::{env_split_sum, prefilter_direction, Lit, UnsupportedMap};
 pub use scene::{Material, SceneData, SceneDataError, SceneParts};
-pub use shader::{PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
+pub use shader::{LightRefusal, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
 pub use target::{Target, MISS, TILE};
 pub use unlit::{Unlit, UnlitBase};
 pub use visibility::ShadowBuffers;

@@ -16,7 +16,7 @@ use crate::envmap::{disk_cos_factor, EnvMap, IblMethod};
 use crate::envmap_reference::{reference_radiance, seed_of};
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
-use crate::shader::{PacketShader, ShadeEnv, ShadeInput};
+use crate::shader::{LightRefusal, PacketShader, ShadeEnv, ShadeInput};
 use crate::shadow::ShadowMaps;
 use crate::texture::Filter;
 use specula_core::light::{
@@ -639,17 +639,19 @@ impl PacketShader for Lit {
         Some(lit)
     }
 
-    fn check_lights(&self, lights: &[Light]) -> Result<(), String> {
+    fn check_lights(&self, lights: &[Light]) -> Result<(), LightRefusal> {
         if !self.model.polygon_lights() {
             if let Some(i) = lights
                 .iter()
                 .position(|l| matches!(l, Light::Polygon { .. }))
             {
-                return Err(format!(
-                    "light {} is a polygon light, and the \"{}\" model has no integral over polygons yet (polygon lights shade only materials that have one; \"unlit\" ignores lights)",
-                    i + 1,
-                    self.model.name()
-                ));
+                return Err(LightRefusal {
+                    light: i,
+                    why: format!(
+                        "a polygon light, and the \"{}\" model has no integral over polygons yet (polygon lights shade only materials that have one; \"unlit\" ignores lights)",
+                        self.model.name()
+                    ),
+                });
             }
         }
         Ok(())

@@ -177,8 +177,11 @@ pub enum SceneDataError {
     #[error("sun: {0}")]
     SunShadow(#[source] ShadowSettingsError),
     /// A material whose shader cannot shade the scene's lights.
-    #[error("material {name:?}: {message}")]
-    Lights { name: String, message: String },
+    #[error("material {name:?}: {source}")]
+    Lights {
+        name: String,
+        source: crate::shader::LightRefusal,
+    },
 }
 
 impl std::ops::Deref for SceneData {
@@ -291,9 +294,9 @@ fn check(s: &SceneParts) -> Result<(), SceneDataError> {
     for m in &s.materials {
         m.shader
             .check_lights(&s.lights)
-            .map_err(|message| SceneDataError::Lights {
+            .map_err(|source| SceneDataError::Lights {
                 name: m.name.clone(),
-                message,
+                source,
             })?;
     }
     Ok(())

@@ -107,6 +107,16 @@ impl ShadeEnv<'_> {
     }
 }
 
+/// A light a shader cannot light with ([`PacketShader::check_lights`]).
+#[derive(Clone, Debug, PartialEq, thiserror::Error)]
+#[error("light {} is {why}", .light + 1)]
+pub struct LightRefusal {
+    /// The light's index in the scene's list (the message counts from 1).
+    pub light: usize,
+    /// Why, as the message goes on after "light N is".
+    pub why: String,
+}
+
 /// A shader written once over the lane type; see the module docs.
 pub trait PacketShader: Debug + Send + Sync + 'static {
     /// Outgoing radiance toward the eye in the lanes of `input.lanes`.
@@ -137,7 +147,7 @@ pub trait PacketShader: Debug + Send + Sync + 'static {
     /// Whether the shader can light itself with these lights; called once
     /// when a scene is loaded, so a shader never meets a light it cannot
     /// handle. The error says which light and why.
-    fn check_lights(&self, _lights: &[Light]) -> Result<(), String> {
+    fn check_lights(&self, _lights: &[Light]) -> Result<(), LightRefusal> {
         Ok(())
     }
 
@@ -166,7 +176,7 @@ pub trait SurfaceShader: Debug + Send + Sync + 'static {
         out: &mut [Rgb<f32x8>],
     );
     fn needs_surface(&self) -> bool;
-    fn check_lights(&self, lights: &[Light]) -> Result<(), String>;
+    fn check_lights(&self, lights: &[Light]) -> Result<(), LightRefusal>;
     /// See [`PacketShader::with_texture_filter`].
     fn with_texture_filter(&self, filter: Filter) -> Option<Arc<dyn SurfaceShader>>;
     /// For callers that need the concrete shader back (benchmarks swapping
@@ -193,7 +203,7 @@ impl<T: PacketShader> SurfaceShader for T {
     fn needs_surface(&self) -> bool {
         PacketShader::needs_surface(self)
     }
-    fn check_lights(&self, lights: &[Light]) -> Result<(), String> {
+    fn check_lights(&self, lights: &[Light]) -> Result<(), LightRefusal> {
         PacketShader::check_lights(self, lights)
     }
     fn with_texture_filter(&self, filter: Filter) -> Option<Arc<dyn SurfaceShader>> {
