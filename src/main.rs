@@ -595,14 +595,7 @@ fn main() -> ExitCode {
         }
         Some(Command::Batch(a)) => run_batch(a),
         Some(Command::Sky(a)) => {
-            if (4..=16384).contains(&a.width) && a.width % 2 == 0 {
-                specula::sky::write_sky(&a.output, a.width, a.width / 2)
-            } else {
-                Err(format!(
-                    "--width must be even, in 4..=16384, got {}",
-                    a.width
-                ))
-            }
+            specula::sky::write_sky(&a.output, a.width).map_err(|e| e.to_string())
         }
         None => run_demo(),
         Some(Command::Render(a)) => run_render(a),
@@ -610,7 +603,9 @@ fn main() -> ExitCode {
         Some(Command::Tam(a)) => run_tam(a),
         Some(Command::FitLtc(a)) => fit_ltc::run(&a.output, &fit_ltc::Options { check: a.check }),
         Some(Command::FitLtcCoat(a)) => fit_ltc_coat::run(&a.output),
-        Some(Command::KcTables(a)) => specula::table_cache::write_committed(&a.output),
+        Some(Command::KcTables(a)) => {
+            specula::table_cache::write_committed(&a.output).map_err(|e| e.to_string())
+        }
         Some(Command::Eval) => {
             let stdin = std::io::stdin().lock();
             let stdout = std::io::BufWriter::new(std::io::stdout().lock());

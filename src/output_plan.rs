@@ -188,6 +188,19 @@ pub fn check_early(flag: &str, path: &Path) -> Result<(), OutputError> {
 }
 
 impl Output {
+    /// The output `flag` names at `path` (standard output refused).
+    pub fn new(flag: &str, path: &Path) -> Result<Output, OutputError> {
+        let sink = resolve(path, false).map_err(|source| OutputError::Resolve {
+            flag: flag.to_string(),
+            source,
+        })?;
+        Ok(Output {
+            flag: flag.to_string(),
+            path: path.to_path_buf(),
+            sink,
+        })
+    }
+
     /// Writes `bytes` to the output.
     pub fn write(&self, bytes: &[u8]) -> Result<(), OutputError> {
         write_sink(&self.sink, bytes).map_err(|source| self.write_error(source))

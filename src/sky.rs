@@ -81,13 +81,41 @@ pub fn sun_solid_angle(w: usize, h: usize) -> f64 {
     sum
 }
 
-/// Writes the sky as a Radiance `.hdr` file.
-pub fn write_sky(path: &std::path::Path, w: usize, h: usize) -> Result<(), String> {
+/// Why `specula sky` wrote nothing.
+#[derive(Debug, thiserror::Error)]
+pub enum SkyError {
+    /// A width the map cannot have.
+    #[error("--width must be even, in 4..=16384, got {0}")]
+    Width(usize),
+    /// The Radiance encoder refused the texels.
+    #[error("{}: {source}", .path.display())]
+    Encode {
+        path: std::path::PathBuf,
+        source: image::ImageError,
+    },
+    /// The output cannot be written (`--output` at fault).
+    #[error(transparent)]
+    Output(#[from] crate::output_plan::OutputError),
+}
+
+/// `specula sky`: writes the sky, `width` × `width / 2` texels, as a
+/// Radiance `.hdr` file to `path` (through the output plan: a file is
+/// replaced whole or not at all).
+pub fn write_sky(path: &std::path::Path, width: usize) -> Result<(), SkyError> {
+    if !(4..=16384).contains(&width) || !width.is_multiple_of(2) {
+        return Err(SkyError::Width(width));
+    }
+    crate::output_plan::check_early("--output", path)?;
+    let (w, h) = (width, width / 2);
     let map = sky(w, h);
     let px: Vec<image::Rgb<f32>> = map.texels.iter().map(|t| image::Rgb(*t)).collect();
-    let mut out = Vec::new();
-    image::codecs::hdr::HdrEncoder::new(&mut out)
+    let mut bytes = Vec::new();
+    image::codecs::hdr::HdrEncoder::new(&mut bytes)
         .encode(&px, w, h)
-        .map_err(|e| format!("{}: {e}", path.display()))?;
-    std::fs::write(path, out).map_err(|e| format!("{}: {e}", path.display()))
+        .map_err(|source| SkyError::Encode {
+            path: path.to_path_buf(),
+            source,
+        })?;
+    crate::output_plan::Output::new("--output", path)?.write(&bytes)?;
+    Ok(())
 }

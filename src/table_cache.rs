@@ -62,7 +62,7 @@ impl TableStore for DirStore {
 
 /// `specula kc-tables`: builds the tables core commits
 /// (core/src/kulla_conty/committed.rs) and writes the file to `out`.
-pub fn write_committed(out: &std::path::Path) -> Result<(), String> {
+pub fn write_committed(out: &std::path::Path) -> Result<(), crate::output_plan::OutputError> {
     crate::output_plan::check_early("--output", out)?;
     let t = std::time::Instant::now();
     let total = specula_core::kulla_conty::committed::committed_tables().len() as u64;
@@ -75,12 +75,7 @@ pub fn write_committed(out: &std::path::Path) -> Result<(), String> {
         "GTR at gamma = 2^(-2 + 9 k / 27), k = 0..27, with GGX's and with the exact Lambda; names as KcTable::store_name".into(),
     ];
     let bytes = specula_core::kulla_conty::committed::encode(&tables, &comments);
-    let sink = crate::output_plan::Output {
-        flag: "--output".into(),
-        path: out.to_path_buf(),
-        sink: crate::output_plan::resolve(out, false)?,
-    };
-    sink.write(&bytes)?;
+    crate::output_plan::Output::new("--output", out)?.write(&bytes)?;
     eprintln!(
         "wrote {} tables to {} ({:.0} s)",
         tables.len(),

@@ -599,3 +599,33 @@ fn furnace_prints_compensated_albedo_near_one_and_plots() {
     assert!(!bad.status.success());
     assert!(String::from_utf8_lossy(&bad.stderr).contains("microfacet"));
 }
+
+/// `specula sky` refuses a width it cannot make and an output that is a
+/// folder, before computing anything, and writes nothing in either case.
+#[test]
+fn sky_refuses_bad_widths_and_folders() {
+    let dir = temp_dir("sky-refusals");
+    for (args, needle) in [
+        (
+            &["sky", "-o", "s.hdr", "--width", "5"][..],
+            "--width must be even",
+        ),
+        (&["sky", "-o", "s.hdr", "--width", "2"][..], "got 2"),
+        (&["sky", "-o", ".", "--width", "8"][..], "--output"),
+    ] {
+        let out = specula(args, &dir);
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(!out.status.success(), "{args:?}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{args:?}: {err}");
+    }
+    assert!(!dir.join("s.hdr").exists());
+    let out = specula(&["sky", "-o", "s.hdr", "--width", "8"], &dir);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let map = image::open(dir.join("s.hdr")).unwrap();
+    assert_eq!((map.width(), map.height()), (8, 4));
+}

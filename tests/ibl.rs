@@ -540,7 +540,7 @@ fn split_sum_against_reference_table() {
 fn the_fixture_sky_is_the_generated_sky() {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("fixtures/env/sky.hdr");
     let tmp = std::env::temp_dir().join(format!("specula-sky-{}.hdr", std::process::id()));
-    specula::sky::write_sky(&tmp, 512, 256).unwrap();
+    specula::sky::write_sky(&tmp, 512).unwrap();
     let made = std::fs::read(&tmp).unwrap();
     let _ = std::fs::remove_file(&tmp);
     if std::env::var_os("SPECULA_BLESS").is_some() {
