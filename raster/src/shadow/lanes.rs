@@ -309,18 +309,28 @@ impl Face {
             1 => R::select(mid, a[M + 1 + e], a[M + e]),
             _ => a[K + e],
         };
-        // Per tap across and its texel e: that column of every row.
-        let cols: [[[R; MAX]; 2]; 3] = std::array::from_fn(|ti| {
-            std::array::from_fn(|e| std::array::from_fn(|j| pick(&lit[j], ti, mx, e)))
-        });
+        // Tap row by tap row: its two texel rows picked from the grid's
+        // (a pick is a select, so rows before columns gives the same
+        // comparisons), then each tap's columns; summed in `pcf_lanes`'s
+        // order.
         let mut sum = R::ZERO;
         for (tj, &tv) in tv.iter().enumerate() {
+            let mut rows = [[R::ZERO; MAX]; 2];
+            for (e, row) in rows.iter_mut().enumerate() {
+                for (c, l) in row.iter_mut().enumerate().take(K + 2) {
+                    *l = match tj {
+                        0 => lit[e][c],
+                        1 => R::select(my, lit[M + 1 + e][c], lit[M + e][c]),
+                        _ => lit[K + e][c],
+                    };
+                }
+            }
+            let fy = tv - tv.floor();
             for (ti, &tu) in tu.iter().enumerate() {
                 // `compare_bilinear_lanes` on the grid's comparisons.
-                let (fx, fy) = (tu - tu.floor(), tv - tv.floor());
-                let [c0, c1] = &cols[ti];
-                let (l00, l10) = (pick(c0, tj, my, 0), pick(c1, tj, my, 0));
-                let (l01, l11) = (pick(c0, tj, my, 1), pick(c1, tj, my, 1));
+                let fx = tu - tu.floor();
+                let (l00, l10) = (pick(&rows[0], ti, mx, 0), pick(&rows[0], ti, mx, 1));
+                let (l01, l11) = (pick(&rows[1], ti, mx, 0), pick(&rows[1], ti, mx, 1));
                 let top = l00 * (R::ONE - fx) + l10 * fx;
                 let bottom = l01 * (R::ONE - fx) + l11 * fx;
                 sum += top * (R::ONE - fy) + bottom * fy;
