@@ -208,10 +208,11 @@ impl Face {
 
     /// [`Face::pcf`] of every lane in `lanes` without reading its taps,
     /// when each such lane is wholly lit or wholly shadowed: `Some(1)`
-    /// where `d` is at most the nearest depth of the 2 × 2 blocks that
-    /// hold every texel its taps read ([`DepthBlocks`](super::DepthBlocks)), `Some(0)` where
-    /// it is beyond the farthest; `None` when a lane is neither (or the
-    /// face has no blocks), and the taps decide.
+    /// where `d` is at most the nearest depth of the window that holds
+    /// every texel its taps read ([`DepthWindows`](super::DepthWindows)),
+    /// `Some(0)` where it is beyond the farthest; `None` when a lane is
+    /// neither (or the face has no bounds), and the taps decide. (Lanes
+    /// outside `lanes` get 1 or 0 alike: the caller drops them.)
     ///
     /// Exact, so the same bits as [`Face::pcf_lanes`]: all comparisons 0
     /// give 0; all 1 give 1, since every bilinear weight pair
@@ -220,25 +221,27 @@ impl Face {
     /// sum rounds away), and 9 × 1 / 9 = 1.
     #[inline(always)]
     fn pcf_decided<R: Real>(&self, u: R, v: R, d: R, radius: f32, lanes: R::Mask) -> Option<R> {
-        let b = self.blocks.as_ref()?;
+        let b = self.bounds.as_ref()?;
         let last = R::splat((self.size - 1) as f64);
-        let side = R::splat(b.side as f64);
-        let two_sides = R::splat((2 * b.side - 1) as f64);
+        let reach = R::splat((b.window - 1) as f64);
         // The taps' texels along one axis: from the lowest tap's x0 to the
         // highest tap's x0 + 1, computed as `pcf_lanes` computes them,
-        // then clamped as `at` clamps. The first block that holds the
-        // lowest, and whether the next block also holds the highest.
+        // then clamped as `at` clamps. The window from the lowest, and
+        // whether it also holds the highest.
         let span = |t: R| {
             let first = (t + R::splat(-radius as f64)).floor().clamp(R::ZERO, last);
             let end = ((t + R::splat(radius as f64)).floor() + R::ONE).clamp(R::ZERO, last);
-            let block = (first / side).floor();
-            (block, end.le(block * side + two_sides))
+            (first, end.le(first + reach))
         };
-        let (bx, fits_x) = span(u);
-        let (by, fits_y) = span(v);
-        let i = by * R::splat(b.count as f64) + bx;
+        let (x, fits_x) = span(u);
+        let (y, fits_y) = span(v);
+        let i = y * R::splat(self.size as f64) + x;
         let fits = fits_x & fits_y;
+        // Mostly lit: then the far bounds are not read.
         let lit = fits & d.le(R::gather(&b.near, i));
+        if (!lanes | lit).all() {
+            return Some(R::ONE);
+        }
         let dark = fits & d.gt(R::gather(&b.far, i));
         (!lanes | lit | dark)
             .all()
