@@ -470,7 +470,7 @@ shadow_map_size = 2048
 /// The 8-lane lookup gives each lane the scalar lookup's bits when the
 /// lanes spread over a directional light's cascades and a point light's
 /// cube faces (hard and PCF), for PCF radii that take each of its paths
-/// (depth blocks, texel grid, taps), and for PCSS (lane by lane).
+/// (depth windows, texel grid, taps), and for PCSS (lane by lane).
 #[test]
 #[allow(clippy::needless_range_loop)]
 fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
@@ -483,7 +483,7 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
         (rng >> 40) as f32 / (1u64 << 24) as f32
     };
     // PCF radii: 1.5 (the default) and 1 and 0.5 read a texel grid once,
-    // 0.75 and 0 their taps; all first try the depth blocks.
+    // 0.75 and 0 their taps; all first try the depth windows.
     let cases = [
         ("shadows_cascades.toml", 0, 4, "hard", 1.5),
         ("shadows_cascades.toml", 0, 3, "pcf", 1.5),

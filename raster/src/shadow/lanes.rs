@@ -208,10 +208,11 @@ impl Face {
 
     /// [`Face::pcf`] of every lane in `lanes` without reading its taps,
     /// when each such lane is wholly lit or wholly shadowed: `Some(1)`
-    /// where `d` is at most the nearest depth of the 2 × 2 blocks that
-    /// hold every texel its taps read ([`DepthBlocks`](super::DepthBlocks)), `Some(0)` where
-    /// it is beyond the farthest; `None` when a lane is neither (or the
-    /// face has no blocks), and the taps decide.
+    /// where `d` is at most the nearest depth of the window that holds
+    /// every texel its taps read ([`DepthWindows`](super::DepthWindows)),
+    /// `Some(0)` where it is beyond the farthest; `None` when a lane is
+    /// neither (or the face has no bounds), and the taps decide. (Lanes
+    /// outside `lanes` get 1 or 0 alike: the caller drops them.)
     ///
     /// Exact, so the same bits as [`Face::pcf_lanes`]: all comparisons 0
     /// give 0; all 1 give 1, since every bilinear weight pair
@@ -220,25 +221,27 @@ impl Face {
     /// sum rounds away), and 9 × 1 / 9 = 1.
     #[inline(always)]
     fn pcf_decided<R: Real>(&self, u: R, v: R, d: R, radius: f32, lanes: R::Mask) -> Option<R> {
-        let b = self.blocks.as_ref()?;
+        let b = self.bounds.as_ref()?;
         let last = R::splat((self.size - 1) as f64);
-        let side = R::splat(b.side as f64);
-        let two_sides = R::splat((2 * b.side - 1) as f64);
+        let reach = R::splat((b.window - 1) as f64);
         // The taps' texels along one axis: from the lowest tap's x0 to the
         // highest tap's x0 + 1, computed as `pcf_lanes` computes them,
-        // then clamped as `at` clamps. The first block that holds the
-        // lowest, and whether the next block also holds the highest.
+        // then clamped as `at` clamps. The window from the lowest, and
+        // whether it also holds the highest.
         let span = |t: R| {
             let first = (t + R::splat(-radius as f64)).floor().clamp(R::ZERO, last);
             let end = ((t + R::splat(radius as f64)).floor() + R::ONE).clamp(R::ZERO, last);
-            let block = (first / side).floor();
-            (block, end.le(block * side + two_sides))
+            (first, end.le(first + reach))
         };
-        let (bx, fits_x) = span(u);
-        let (by, fits_y) = span(v);
-        let i = by * R::splat(b.count as f64) + bx;
+        let (x, fits_x) = span(u);
+        let (y, fits_y) = span(v);
+        let i = y * R::splat(self.size as f64) + x;
         let fits = fits_x & fits_y;
+        // Mostly lit: then the far bounds are not read.
         let lit = fits & d.le(R::gather(&b.near, i));
+        if (!lanes | lit).all() {
+            return Some(R::ONE);
+        }
         let dark = fits & d.gt(R::gather(&b.far, i));
         (!lanes | lit | dark)
             .all()
@@ -309,18 +312,28 @@ impl Face {
             1 => R::select(mid, a[M + 1 + e], a[M + e]),
             _ => a[K + e],
         };
-        // Per tap across and its texel e: that column of every row.
-        let cols: [[[R; MAX]; 2]; 3] = std::array::from_fn(|ti| {
-            std::array::from_fn(|e| std::array::from_fn(|j| pick(&lit[j], ti, mx, e)))
-        });
+        // Tap row by tap row: its two texel rows picked from the grid's
+        // (a pick is a select, so rows before columns gives the same
+        // comparisons), then each tap's columns; summed in `pcf_lanes`'s
+        // order.
         let mut sum = R::ZERO;
         for (tj, &tv) in tv.iter().enumerate() {
+            let mut rows = [[R::ZERO; MAX]; 2];
+            for (e, row) in rows.iter_mut().enumerate() {
+                for (c, l) in row.iter_mut().enumerate().take(K + 2) {
+                    *l = match tj {
+                        0 => lit[e][c],
+                        1 => R::select(my, lit[M + 1 + e][c], lit[M + e][c]),
+                        _ => lit[K + e][c],
+                    };
+                }
+            }
+            let fy = tv - tv.floor();
             for (ti, &tu) in tu.iter().enumerate() {
                 // `compare_bilinear_lanes` on the grid's comparisons.
-                let (fx, fy) = (tu - tu.floor(), tv - tv.floor());
-                let [c0, c1] = &cols[ti];
-                let (l00, l10) = (pick(c0, tj, my, 0), pick(c1, tj, my, 0));
-                let (l01, l11) = (pick(c0, tj, my, 1), pick(c1, tj, my, 1));
+                let fx = tu - tu.floor();
+                let (l00, l10) = (pick(&rows[0], ti, mx, 0), pick(&rows[0], ti, mx, 1));
+                let (l01, l11) = (pick(&rows[1], ti, mx, 0), pick(&rows[1], ti, mx, 1));
                 let top = l00 * (R::ONE - fx) + l10 * fx;
                 let bottom = l01 * (R::ONE - fx) + l11 * fx;
                 sum += top * (R::ONE - fy) + bottom * fy;

@@ -22,16 +22,16 @@
 //!
 //! This module holds the maps and reads them; `shadow_pass` draws them.
 //! The pieces: [`ShadowSettings`] and their checks (`settings.rs`); the
-//! cascades' split depths (`cascades.rs`); a map's block depth bounds
-//! (`blocks.rs`); the scalar lookups with their filters, hard, PCF and
+//! cascades' split depths (`cascades.rs`); a map's depth bounds over
+//! its filter windows (`windows.rs`); the scalar lookups with their filters, hard, PCF and
 //! PCSS (`lookup.rs`); and the same lookups on a packet's lanes
 //! (`lanes.rs`).
 
-mod blocks;
 mod cascades;
 mod lanes;
 mod lookup;
 mod settings;
+mod windows;
 
 pub(crate) use cascades::cascade_splits;
 pub(crate) use settings::polygon_shape;
@@ -61,19 +61,17 @@ pub(crate) struct Face {
     pub(crate) span: f32,
     /// PCF lights: the depth bounds that decide wholly lit and wholly
     /// shadowed lookups without their taps (`lanes.rs`).
-    pub(crate) blocks: Option<DepthBlocks>,
+    pub(crate) bounds: Option<DepthWindows>,
 }
 
-/// A face's nearest and farthest depth over every 2 × 2 blocks of
-/// `side` × `side` texels, row-major by the first block: `near[j·count +
-/// i]` is the least depth of the texels of blocks i..=i+1 across and
-/// j..=j+1 down (cut to the map). A PCF lookup reads texels spanning at
-/// most `side` + 1 along each axis, which two blocks hold.
+/// A face's nearest and farthest depth over every window of `window` ×
+/// `window` texels, row-major by the window's first texel: `near[y·size
+/// + x]` is the least depth of texels x..x + window across and y..y +
+/// window down (cut to the map). A PCF lookup reads texels spanning at
+/// most `window` along each axis, so one window holds them.
 #[derive(Clone, Debug, Default)]
-pub(crate) struct DepthBlocks {
-    side: u32,
-    /// Blocks along each axis.
-    count: u32,
+pub(crate) struct DepthWindows {
+    window: u32,
     near: Vec<f32>,
     far: Vec<f32>,
 }

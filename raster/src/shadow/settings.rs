@@ -107,13 +107,13 @@ impl ShadowSettings {
     }
 
     /// Bytes of a light's maps (a frame's depth and id per texel, the
-    /// linear depth kept for lookups, and PCF's depth bounds per block).
+    /// linear depth kept for lookups, and PCF's depth bounds per texel).
     pub fn bytes(&self, light: &Light) -> u64 {
         let side = (self.map_size as u64).div_ceil(64) * 64;
-        let blocks = self
-            .pcf_block_side()
-            .map_or(0, |b| (self.map_size as u64).div_ceil(b as u64).pow(2) * 8);
-        (side * side * 12 + blocks) * self.faces(light) as u64
+        let bounds = self
+            .pcf_window()
+            .map_or(0, |_| (self.map_size as u64).pow(2) * 8);
+        (side * side * 12 + bounds) * self.faces(light) as u64
     }
 
     /// Texels a lookup may read away from its centre texel.
@@ -126,18 +126,18 @@ impl ShadowSettings {
     }
 }
 
-/// Largest block side of a PCF face's depth bounds (filter radii up to
+/// Largest window side of a PCF face's depth bounds (filter radii up to
 /// 7 texels); wider filters always read their taps.
-const MAX_PCF_BLOCK: u32 = 16;
+const MAX_PCF_WINDOW: u32 = 17;
 
 impl ShadowSettings {
-    /// PCF: the side of the blocks of a face's depth bounds, ⌈2r⌉ + 1 for
-    /// a filter radius r, since the taps at u − r, u and u + r read
-    /// texels ⌊u − r⌋ to ⌊u + r⌋ + 1, at most ⌈2r⌉ + 2 of them, which two
-    /// blocks of one fewer hold. `None` for other filters and wider PCF.
-    pub(crate) fn pcf_block_side(&self) -> Option<u32> {
-        let side = (2.0 * self.filter_radius).ceil() as u32 + 1;
-        (self.filter == ShadowFilter::Pcf && side <= MAX_PCF_BLOCK).then_some(side)
+    /// PCF: the side of the windows of a face's depth bounds, ⌈2r⌉ + 2
+    /// for a filter radius r, since the taps at u − r, u and u + r read
+    /// texels ⌊u − r⌋ to ⌊u + r⌋ + 1, at most ⌈2r⌉ + 2 of them. `None`
+    /// for other filters and wider PCF.
+    pub(crate) fn pcf_window(&self) -> Option<u32> {
+        let window = (2.0 * self.filter_radius).ceil() as u32 + 2;
+        (self.filter == ShadowFilter::Pcf && window <= MAX_PCF_WINDOW).then_some(window)
     }
 }
 

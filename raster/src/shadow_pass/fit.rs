@@ -211,7 +211,7 @@ fn directional_face(
         perspective: false,
         near,
         span,
-        blocks: None,
+        bounds: None,
     }
 }
 
@@ -239,6 +239,6 @@ fn perspective_face(s: &ShadowSettings, pos: Vec3, axis: Vec3, tan_half: f32, b:
         perspective: true,
         near,
         span: 0.0,
-        blocks: None,
+        bounds: None,
     }
 }

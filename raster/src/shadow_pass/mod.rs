@@ -1,7 +1,7 @@
 //! Draws a frame's shadow maps ([`ShadowMaps`], read by the light loop
 //! through `shadow`): each shadowed light's faces fitted to the scene and
 //! the view (`fit.rs`), each face a depth-only pass of the scene
-//! (`depth_pass.rs`) kept as linear depth, with its block bounds for PCF;
+//! (`depth_pass.rs`) kept as linear depth, with its window bounds for PCF;
 //! and every pixel's factor, for tests and tools that compare the maps
 //! with exact visibility (`pixels.rs`).
 
@@ -108,24 +108,24 @@ fn render_light(
     let mut faces = faces;
     for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
         new.depth = old.depth;
-        new.blocks = old.blocks;
+        new.bounds = old.bounds;
     }
-    let block_side = settings.pcf_block_side();
+    let window = settings.pcf_window();
     ls.faces = faces;
     map.passes.resize_with(ls.faces.len(), || None);
     for (face, pass) in ls.faces.iter_mut().zip(map.passes.iter_mut()) {
-        render_face(scene, face, pass, block_side, setup, stats);
+        render_face(scene, face, pass, window, setup, stats);
     }
     true
 }
 
 /// Draws `face`'s depth pass and keeps its linear depth, row-major, and
-/// with `block_side` its depth bounds over blocks of that side.
+/// with `window` its depth bounds over windows of that side.
 fn render_face(
     scene: &SceneData,
     face: &mut Face,
     pass: &mut Option<Visibility>,
-    block_side: Option<u32>,
+    window: Option<u32>,
     setup: DepthSetup,
     stats: &mut FrameStats,
 ) {
@@ -158,12 +158,12 @@ fn render_face(
                 }
             }
         });
-    match block_side {
-        Some(side) => {
-            let mut blocks = face.blocks.take().unwrap_or_default();
-            blocks.fill(&face.depth, n, side);
-            face.blocks = Some(blocks);
+    match window {
+        Some(window) => {
+            let mut bounds = face.bounds.take().unwrap_or_default();
+            bounds.fill(&face.depth, n, window);
+            face.bounds = Some(bounds);
         }
-        None => face.blocks = None,
+        None => face.bounds = None,
     }
 }
