@@ -306,12 +306,6 @@ impl Face {
                 *l = R::select(d.le(R::gather(&self.depth, base + c)), R::ONE, R::ZERO);
             }
         }
-        // Tap t's texel t0 + e along an axis, t0 = 0, M or M + 1, K.
-        let pick = |a: &[R; MAX], t: usize, mid: R::Mask, e: usize| match t {
-            0 => a[e],
-            1 => R::select(mid, a[M + 1 + e], a[M + e]),
-            _ => a[K + e],
-        };
         // Tap row by tap row: its two texel rows picked from the grid's
         // (a pick is a select, so rows before columns gives the same
         // comparisons), then each tap's columns; summed in `pcf_lanes`'s
@@ -321,19 +315,16 @@ impl Face {
             let mut rows = [[R::ZERO; MAX]; 2];
             for (e, row) in rows.iter_mut().enumerate() {
                 for (c, l) in row.iter_mut().enumerate().take(K + 2) {
-                    *l = match tj {
-                        0 => lit[e][c],
-                        1 => R::select(my, lit[M + 1 + e][c], lit[M + e][c]),
-                        _ => lit[K + e][c],
-                    };
+                    *l = tap_texel::<R, K, M>(tj, my, e, |k| lit[k][c]);
                 }
             }
             let fy = tv - tv.floor();
             for (ti, &tu) in tu.iter().enumerate() {
                 // `compare_bilinear_lanes` on the grid's comparisons.
                 let fx = tu - tu.floor();
-                let (l00, l10) = (pick(&rows[0], ti, mx, 0), pick(&rows[0], ti, mx, 1));
-                let (l01, l11) = (pick(&rows[1], ti, mx, 0), pick(&rows[1], ti, mx, 1));
+                let pick = |r: &[R; MAX], e| tap_texel::<R, K, M>(ti, mx, e, |k| r[k]);
+                let (l00, l10) = (pick(&rows[0], 0), pick(&rows[0], 1));
+                let (l01, l11) = (pick(&rows[1], 0), pick(&rows[1], 1));
                 let top = l00 * (R::ONE - fx) + l10 * fx;
                 let bottom = l01 * (R::ONE - fx) + l11 * fx;
                 sum += top * (R::ONE - fy) + bottom * fy;
@@ -360,5 +351,22 @@ impl Face {
             }
         }
         sum / R::splat(9.0)
+    }
+}
+
+/// In [`Face::pcf_grid_k`] (2r = `K`, ⌊r⌋ = `M`): tap `t`'s texel
+/// t0 + `e` along one axis, where t0 is 0, M or M + 1 (by `mid`) or K,
+/// read from the grid by `at`.
+#[inline(always)]
+fn tap_texel<R: Real, const K: usize, const M: usize>(
+    t: usize,
+    mid: R::Mask,
+    e: usize,
+    at: impl Fn(usize) -> R,
+) -> R {
+    match t {
+        0 => at(e),
+        1 => R::select(mid, at(M + 1 + e), at(M + e)),
+        _ => at(K + e),
     }
 }
