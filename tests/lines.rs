@@ -719,14 +719,13 @@ fn random_polylines(seed: u64, n: usize, w: f32, h: f32) -> Vec<specula_npr::edg
 }
 
 #[test]
-fn the_banded_stroke_drawing_gives_the_bytes_of_one_pixmap_for_any_thread_count() {
+fn the_banded_stroke_drawing_is_close_to_one_surface_and_alike_for_any_thread_count() {
     use specula_npr::overlay::{draw, Canvases, LineCap, LineJoin, StrokeStyle};
     use specula_raster::post::HdrImage;
     use specula_raster::Planes3;
-    // Frames in sequence on the same canvases (which must come back
-    // transparent), in several styles: plain, tapered and wide with
-    // miters, hairlines (≤ 1 px, which tiny-skia draws another way), and
-    // an image of another size.
+    // Frames in sequence on the same canvases (cleared for each frame), in
+    // several styles: plain, tapered and wide with miters, thin (≤ 1 px),
+    // and an image of another size.
     let style = |width, taper, join, cap| StrokeStyle {
         width,
         color: [0.1, 0.7, 0.3],
@@ -763,7 +762,7 @@ fn the_banded_stroke_drawing_gives_the_bytes_of_one_pixmap_for_any_thread_count(
         let mut lines = random_polylines(f as u64 + 1, 60, *w as f32, *h as f32);
         // With miter-clip joins tiny-skia strokes this open line with a
         // spike reaching from (148, 68) up to (205, 0), far past w/2 × the
-        // miter limit: a band must find it from the drawn outline.
+        // miter limit: a band must find it from the outline.
         let spike = [
             [133.54846, 73.255135],
             [122.72453, 71.96292],
@@ -785,8 +784,8 @@ fn the_banded_stroke_drawing_gives_the_bytes_of_one_pixmap_for_any_thread_count(
             points: spike.to_vec(),
             closed: false,
         });
-        // The reference: every stroke on one fresh pixmap, the coverage
-        // blended pixel by pixel.
+        // The plain drawing: every draw on one surface of the whole image,
+        // the coverage blended pixel by pixel.
         let cov = draw(&lines, style, *w, *h);
         let mut reference = base.clone();
         let c = style.color;
@@ -801,6 +800,15 @@ fn the_banded_stroke_drawing_gives_the_bytes_of_one_pixmap_for_any_thread_count(
             cov.iter().filter(|&&a| a > 0.0).count() > n / 20,
             "frame {f}: few strokes"
         );
+        // Against the plain drawing: a band clips the paths that cross
+        // its surface's edges, and tiny-skia steps a clipped edge from
+        // where the clip cut it, so along such an edge a pixel may gain or
+        // lose one of its 16 supersamples (coverage 16/255; at most 1 % of
+        // the stroked pixels); a stroke lost or drawn twice at a band's
+        // edge would differ by far more. Between thread counts: the same
+        // bits.
+        let stroked = cov.iter().filter(|&&a| a > 0.0).count();
+        let mut first: Option<Planes3> = None;
         for (threads, cv) in canvases.iter_mut() {
             let mut img = HdrImage {
                 width: *w,
@@ -812,19 +820,39 @@ fn the_banded_stroke_drawing_gives_the_bytes_of_one_pixmap_for_any_thread_count(
                 .build()
                 .unwrap();
             pool.install(|| cv.blend(&lines, style, &mut img));
-            for (name, got, want) in [
-                ("r", &img.rgb.r, &reference.r),
-                ("g", &img.rgb.g, &reference.g),
-                ("b", &img.rgb.b, &reference.b),
-            ] {
-                let bad = got
-                    .iter()
-                    .zip(want.iter())
-                    .position(|(a, b)| a.to_bits() != b.to_bits());
-                assert!(
-                    bad.is_none(),
-                    "frame {f}, {threads} threads: {name} differs at pixel {bad:?}"
-                );
+            let (mut differ, mut worst) = (0usize, 0f32);
+            for i in 0..n {
+                let d = [
+                    (img.rgb.r[i] - reference.r[i]).abs(),
+                    (img.rgb.g[i] - reference.g[i]).abs(),
+                    (img.rgb.b[i] - reference.b[i]).abs(),
+                ];
+                let d = d[0].max(d[1]).max(d[2]);
+                differ += usize::from(d > 0.0);
+                worst = worst.max(d);
+            }
+            assert!(
+                worst <= 16.0 / 255.0 + 1e-6 && differ * 100 <= stroked,
+                "frame {f}, {threads} threads: {differ} of {stroked} stroked pixels differ, worst {worst}"
+            );
+            match &first {
+                None => first = Some(img.rgb),
+                Some(want) => {
+                    for (name, got, want) in [
+                        ("r", &img.rgb.r, &want.r),
+                        ("g", &img.rgb.g, &want.g),
+                        ("b", &img.rgb.b, &want.b),
+                    ] {
+                        let bad = got
+                            .iter()
+                            .zip(want.iter())
+                            .position(|(a, b)| a.to_bits() != b.to_bits());
+                        assert!(
+                            bad.is_none(),
+                            "frame {f}, {threads} threads: {name} differs from 1 thread's at pixel {bad:?}"
+                        );
+                    }
+                }
             }
         }
     }

@@ -8,11 +8,11 @@
 //! - `lines/strokes`: the stroke overlay stage of a steady frame
 //!   (silhouette + crease + boundary edges of the view, found once per
 //!   scene; per frame their visibility against the depth buffer, chaining,
-//!   tiny-skia stroking and filling, each draw once on its own mask by
-//!   parallel workers, and the coverage composed and blended row by row);
-//!   `lines/strokes_one_pixmap` the same lines drawn the plain way (one
-//!   fresh pixmap, a coverage image); `lines/strokes_topology` the
-//!   once-per-scene edge table.
+//!   tiny-skia stroking, and the outlines filled in bands of rows, each on
+//!   a mask of its own, in parallel, and blended);
+//!   `lines/strokes_one_mask` the same lines drawn the plain way (one
+//!   fresh mask of the whole image, a coverage image);
+//!   `lines/strokes_topology` the once-per-scene edge table.
 //!
 //! - `lines/frame`: the benchmark frame itself, steady (buffers reused, the
 //!   8-bit encode inside the shading pass, no PNG compression), as
@@ -79,10 +79,9 @@ fn benches(c: &mut Criterion) {
     g.bench_function("strokes", |b| {
         b.iter(|| p.install(|| lp.run_strokes(&mut strokes, &mut im)))
     });
-    // Before the banded drawing: the same polylines drawn on one fresh
-    // pixmap, turned into a coverage image (what `lines/strokes` measured
-    // until 2026-12-01's second session).
-    g.bench_function("strokes_one_pixmap", |b| {
+    // The same polylines drawn on one fresh mask of the whole image, on
+    // one thread, turned into a coverage image: what the bands save.
+    g.bench_function("strokes_one_mask", |b| {
         b.iter(|| {
             p.install(|| {
                 let lines = lp.strokes.polylines(&lp.frame.buffers, 1);

@@ -14,17 +14,13 @@
 //! Where things are:
 //! - this file: the [`Strokes`] post stage and its [`StrokeStyle`];
 //! - `schedule`: how a frame's draws are spread over threads (bands of
-//!   rows, a worker per canvas) and blended over the image, with bytes
-//!   that do not depend on the thread count;
-//! - `coverage`: the alpha spans a draw leaves and the runs of touched
-//!   8-pixel chunks, as plain bytes and bits;
+//!   rows, each drawn on its own surface) and blended over the image, with
+//!   bytes that do not depend on the thread count;
 //! - `skia`: everything that talks to tiny-skia (the strokes, the custom
-//!   outline for gentle polylines, the pixmaps and masks drawn on, and the
-//!   tiny-skia behaviour the rest relies on); the only module that names
-//!   tiny-skia types;
+//!   outline for gentle polylines, a band's surface); the only module
+//!   that names tiny-skia types;
 //! - `svg`: the SVG writer.
 
-mod coverage;
 mod schedule;
 mod skia;
 mod svg;

@@ -1,32 +1,81 @@
 //! How a frame's strokes are spread over threads and blended over the
 //! image, with the same bytes whatever the thread count.
 //!
-//! With no hairline, every draw is filled on its own ([`raster`]: a worker
-//! per canvas takes the costliest polyline left) and the coverages are
-//! composed row by row in drawing order ([`compose_bands`]); with
-//! hairlines, bands of rows each draw every draw that reaches them on
-//! their own canvas ([`draw_bands`], the bands cut by [`band_rows`]).
-//! Either way a pixel's alpha is the sequence of draws over it on one
-//! surface, so the bytes are those of [`draw`](super::draw).
+//! The image's rows are cut into [`BANDS`] bands where the draws cost
+//! least ([`band_rows`]: the cut depends on the draws alone); each band,
+//! in parallel, draws every draw that reaches its rows, in drawing order,
+//! on a surface of its own rows and a [`MARGIN`] (`draw_band`), then
+//! blends its rows over the image. A draw over two bands is drawn by both,
+//! each keeping its own rows.
 
-use super::coverage::{runs, Coverage};
-use super::skia::{
-    draw_of, draws, fill_local, lerp_alpha, no_hairlines, strokes_of, white, Canvas, Draw,
-};
+use super::skia::{draw_band, draws, Draw};
 use super::StrokeStyle;
 use crate::edges::Polyline;
 use rayon::prelude::*;
 use specula_raster::buffers::prefetch;
 use specula_raster::post::HdrImage;
-use std::sync::atomic::{AtomicUsize, Ordering};
 
-/// How many rows ahead the blend asks for the colour planes' lines.
-const PREFETCH_ROWS: usize = 2;
+/// How many bands of rows a frame's strokes are drawn in: a constant, so
+/// the bytes do not depend on the thread count, and enough for the
+/// threads of a desktop to share them out however the strokes lie.
+const BANDS: usize = 8;
 
-/// At most this many workers fill draws ([`raster`]) or bands of rows are
-/// composed or drawn ([`compose_bands`], [`draw_bands`]) in parallel: a
-/// canvas each, so at most this many image-sized canvases are kept.
-const MAX_BANDS: usize = 4;
+/// Rows a band's surface has beyond the rows it keeps, above and below: a
+/// path crossing the surface's edge is clipped there, and the rows next to
+/// a cut are where the coverage strays most from the whole image's (a
+/// supersample or so, as `the_banded_stroke_drawing_is_close_to_one_surface_and_alike_for_any_thread_count`
+/// in tests/lines.rs measures).
+const MARGIN: usize = 2;
+
+/// The band surfaces' bytes, kept from frame to frame (their allocations:
+/// each is cleared before a frame draws on it).
+#[derive(Debug, Default)]
+pub struct Canvases {
+    bands: Vec<Vec<u8>>,
+}
+
+impl Canvases {
+    /// Draws `lines` in `style` over `img`: c = c·(1 − a) + colour·a with
+    /// a the strokes' alpha, in bands of rows drawn in parallel.
+    pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
+        let (w, h) = (img.width as usize, img.height as usize);
+        if lines.is_empty() || w == 0 || h == 0 {
+            return;
+        }
+        let draws = draws(lines, style, w, h);
+        if draws.is_empty() {
+            return;
+        }
+        let rows = band_rows(&draws, h, BANDS);
+        self.bands.resize_with(rows.len() - 1, Vec::new);
+        let color = style.color;
+        split_bands(self.bands.iter_mut(), &rows, img)
+            .into_par_iter()
+            .for_each(|(kept, lo, hi, [r, g, b])| {
+                let in_band = || draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo);
+                // The rows the band's draws may change.
+                let (y0, y1) = in_band().fold((hi, lo), |(y0, y1), d| {
+                    (y0.min(d.rect[2]), y1.max(d.rect[3]))
+                });
+                let (y0, y1) = (y0.max(lo), y1.min(hi));
+                if y0 >= y1 {
+                    return;
+                }
+                // The surface: those rows and a margin, where tiny-skia's
+                // clipping at the surface's edges leaves its marks.
+                let (s0, s1) = (y0.saturating_sub(MARGIN), (y1 + MARGIN).min(h));
+                let mut bytes = std::mem::take(kept);
+                bytes.clear();
+                bytes.resize(w * (s1 - s0), 0);
+                let bytes = draw_band(bytes, w, s0..s1, in_band());
+                if bytes.len() == w * (s1 - s0) {
+                    let own = &bytes[(y0 - s0) * w..(y1 - s0) * w];
+                    blend_rows(own, w, y0 - lo, [r, g, b], color);
+                }
+                *kept = bytes;
+            });
+    }
+}
 
 /// Splits rows `0..h` into at most `k` bands (returns the boundaries,
 /// from 0 to h) so that the largest band cost is least, a band's cost
@@ -68,298 +117,52 @@ fn band_rows(draws: &[Draw], h: usize, k: usize) -> Vec<usize> {
     split(hi)
 }
 
-/// c = c·(1 − a) + colour·a over one span of pixels, a from the alpha
-/// bytes of `px` (`BPP` bytes a pixel, alpha last; straight: the same a as
-/// [`draw`](super::draw)'s), skipping the 8-pixel groups with no coverage.
-fn blend_span<const BPP: usize>(
-    px: &[u8],
-    r: &mut [f32],
-    g: &mut [f32],
-    b: &mut [f32],
-    color: [f32; 3],
-) {
-    let groups = px
-        .chunks(8 * BPP)
-        .zip(r.chunks_mut(8))
-        .zip(g.chunks_mut(8))
-        .zip(b.chunks_mut(8));
-    for (((px, r), g), b) in groups {
-        // A transparent (premultiplied) pixel is all zero bytes.
-        if px.iter().fold(0, |acc, &byte| acc | byte) == 0 {
-            continue;
-        }
-        for (((p, r), g), b) in px.chunks_exact(BPP).zip(r).zip(g).zip(b) {
-            let alpha = p[BPP - 1];
-            if alpha != 0 {
-                let a = alpha as f32 / 255.0;
-                *r = *r * (1.0 - a) + color[0] * a;
-                *g = *g * (1.0 - a) + color[1] * a;
-                *b = *b * (1.0 - a) + color[2] * a;
-            }
-        }
-    }
+/// How many rows ahead [`blend_rows`] asks for the colour planes' lines.
+const PREFETCH_ROWS: usize = 2;
+
+/// Pixels a run of [`nonzero_runs`]: 64 bytes tested at once.
+const RUN: usize = 64;
+
+/// The runs of [`RUN`] pixels of a row of alpha holding a pixel with
+/// coverage, as their first pixel.
+fn nonzero_runs(row: &[u8]) -> impl Iterator<Item = usize> + '_ {
+    row.chunks(RUN)
+        .enumerate()
+        .filter(|(_, px)| px.iter().fold(0, |acc, &a| acc | a) != 0)
+        .map(|(i, _)| i * RUN)
 }
 
-/// [`blend_span`] over a row of alpha bytes, without branches (so it runs
-/// 8 pixels at a time): where the alpha is 0 the pixel is kept as it is
-/// (a select, not c·1 + colour·0, which would turn −0 into +0).
-fn blend_alpha(px: &[u8], r: &mut [f32], g: &mut [f32], b: &mut [f32], color: [f32; 3]) {
-    for (((&alpha, r), g), b) in px.iter().zip(r).zip(g).zip(b) {
-        let a = alpha as f32 / 255.0;
-        let keep = alpha == 0;
-        let (nr, ng, nb) = (
-            *r * (1.0 - a) + color[0] * a,
-            *g * (1.0 - a) + color[1] * a,
-            *b * (1.0 - a) + color[2] * a,
-        );
-        *r = if keep { *r } else { nr };
-        *g = if keep { *g } else { ng };
-        *b = if keep { *b } else { nb };
-    }
-}
-
-/// The image-sized canvases the overlay draws on, kept from frame to
-/// frame and transparent between frames.
-#[derive(Debug, Default)]
-pub struct Canvases {
-    canvases: Vec<Canvas>,
-    /// A worker's mask for the draws filled at their own size
-    /// ([`fill_local`]).
-    locals: Vec<Vec<u8>>,
-}
-
-impl Canvases {
-    /// Draws `lines` in `style` over `img`: c = c·(1 − a) + colour·a with
-    /// a the strokes' alpha, the same bytes as blending [`draw`](super::draw)'s
-    /// coverage (see `draw_bands`).
-    pub fn blend(&mut self, lines: &[Polyline], style: &StrokeStyle, img: &mut HdrImage) {
-        let (w, h) = (img.width as usize, img.height as usize);
-        if lines.is_empty() || w == 0 || h == 0 {
-            return;
-        }
-        let k = rayon::current_num_threads().clamp(1, MAX_BANDS);
-        if no_hairlines(style) {
-            if !self.keep_canvases(k, img.width, img.height, false) {
-                return;
+/// c = c·(1 − a) + colour·a over the rows of `alpha` (`w` pixels a
+/// row; the coverage, as [`draw`](super::draw)'s), which are the rows of
+/// the colour planes from `first`. Only the runs with coverage are
+/// blended, and the colour planes' lines under a later row's runs are
+/// asked for ahead: they come from memory.
+fn blend_rows(alpha: &[u8], w: usize, first: usize, [r, g, b]: [&mut [f32]; 3], color: [f32; 3]) {
+    // a = alpha / 255, looked up: the same bits as the division.
+    let unit: [f32; 256] = std::array::from_fn(|a| a as f32 / 255.0);
+    let rows: Vec<&[u8]> = alpha.chunks_exact(w).collect();
+    for (y, row) in rows.iter().enumerate() {
+        if let Some(ahead) = rows.get(y + PREFETCH_ROWS) {
+            let at = (first + y + PREFETCH_ROWS) * w;
+            for x in nonzero_runs(ahead) {
+                let px = at + x..at + (x + RUN).min(w);
+                prefetch(&r[px.clone()]);
+                prefetch(&g[px.clone()]);
+                prefetch(&b[px]);
             }
-            let coverage = raster(&mut self.canvases, &mut self.locals, lines, style, w, h);
-            compose_bands(k, &coverage, img, style.color);
-        } else {
-            let draws = draws(lines, style, w, h);
-            if draws.is_empty() {
-                return;
-            }
-            let rows = band_rows(&draws, h, k);
-            let hairlines = draws.iter().any(|d| d.outline.is_none());
-            if !self.keep_canvases(rows.len() - 1, img.width, img.height, hairlines) {
-                return;
-            }
-            draw_bands(&mut self.canvases, &draws, &rows, img, style.color);
         }
-    }
-
-    /// Keeps `k` canvases of `w × h` pixels, pixmaps if `hairlines` else
-    /// masks (the canvas's `Surface`); false if they cannot be made.
-    fn keep_canvases(&mut self, k: usize, w: u32, h: u32, hairlines: bool) -> bool {
-        let canvases = &mut self.canvases;
-        canvases.retain(|c| c.surface.size() == (w, h) && c.surface.hairlines() == hairlines);
-        while canvases.len() < k {
-            let Some(c) = Canvas::new(w, h, hairlines) else {
-                return false;
-            };
-            canvases.push(c);
-        }
-        canvases.truncate(k);
-        true
-    }
-}
-
-/// Strokes and fills every draw of `lines` in `style` (no hairline:
-/// [`no_hairlines`]) on a `w × h` image on its own, in parallel, each on
-/// a transparent mask, and returns their coverage in drawing order. A
-/// worker per canvas takes the next polyline, costliest first (its points
-/// and rows), until none is left: no draw is filled twice, and which
-/// worker fills a draw does not change its bytes.
-///
-/// A fill blends each pixel at most once (tiny-skia's supersampling
-/// blitter flushes a pixel row once, one run per pixel; its non-AA and
-/// tiled paths write disjoint spans), so on a transparent mask it leaves
-/// the pixel's coverage c itself: lerp(0, 255, c) = ⌊255·(c + 1)/256⌋ = c
-/// for c < 255, and 255 for c = 255 ([`lerp_alpha`]).
-fn raster(
-    canvases: &mut [Canvas],
-    locals: &mut Vec<Vec<u8>>,
-    lines: &[Polyline],
-    style: &StrokeStyle,
-    w: usize,
-    h: usize,
-) -> Vec<Coverage> {
-    let cost = |l: &Polyline| {
-        let (lo, hi) = l
-            .points
-            .iter()
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p[1]), hi.max(p[1]))
-            });
-        l.points.len() as f32 + (hi - lo).clamp(0.0, h as f32)
-    };
-    let costs: Vec<f32> = lines.iter().map(cost).collect();
-    let mut order: Vec<usize> = (0..lines.len()).collect();
-    order.sort_by(|&a, &b| costs[b].total_cmp(&costs[a]).then(a.cmp(&b)));
-    let next = AtomicUsize::new(0);
-    let paint = white();
-    locals.resize_with(canvases.len(), Vec::new);
-    let filled: Vec<Vec<(usize, Vec<Coverage>)>> = canvases
-        .par_iter_mut()
-        .zip(locals.par_iter_mut())
-        .map(|(canvas, local)| {
-            let mut out = Vec::new();
-            while let Some(&j) = order.get(next.fetch_add(1, Ordering::Relaxed)) {
-                let mut of_line = Vec::new();
-                for (centre, stroke) in strokes_of(&lines[j], style) {
-                    debug_assert!(stroke.width > 1.0, "a hairline on masks");
-                    let Some(d) = draw_of(centre, stroke, w, h) else {
-                        continue;
-                    };
-                    of_line.push(if d.local {
-                        fill_local(&d, local)
-                    } else {
-                        canvas.draw(&d, &paint);
-                        canvas.take()
-                    });
+        let at = (first + y) * w;
+        for x0 in nonzero_runs(row) {
+            for (i, &c) in row[x0..(x0 + RUN).min(w)].iter().enumerate() {
+                if c != 0 {
+                    let (a, x) = (unit[c as usize], at + x0 + i);
+                    r[x] = r[x] * (1.0 - a) + color[0] * a;
+                    g[x] = g[x] * (1.0 - a) + color[1] * a;
+                    b[x] = b[x] * (1.0 - a) + color[2] * a;
                 }
-                out.push((j, of_line));
-            }
-            out
-        })
-        .collect();
-    let mut by_line: Vec<Vec<Coverage>> = (0..lines.len()).map(|_| Vec::new()).collect();
-    for (j, c) in filled.into_iter().flatten() {
-        by_line[j] = c;
-    }
-    by_line.into_iter().flatten().collect()
-}
-
-/// Blends `coverage` (the draws' own, [`raster`], in drawing order) over
-/// `img` in `color`.
-///
-/// Row by row, in bands of rows run in parallel: a row's coverage spans
-/// are lerped, draw after draw in drawing order, into a row of alpha
-/// ([`lerp_alpha`], the very step the fill would have done on one mask),
-/// whose touched 8-pixel chunks are then blended and cleared. A pixel's
-/// alpha is then the sequence of draws over it on one mask, whatever the
-/// bands; and a row of alpha stays in cache, where an image-sized one
-/// would bring in a line per row.
-fn compose_bands(k: usize, coverage: &[Coverage], img: &mut HdrImage, color: [f32; 3]) {
-    let (w, h) = (img.width as usize, img.height as usize);
-    // The spans as (draw, span) by row, each row's in drawing order: a
-    // counting sort on the row; and the rows' bytes, to cut the bands.
-    let mut start = vec![0usize; h + 2];
-    let mut bytes = vec![0usize; h + 1];
-    for c in coverage {
-        for (y, _, a) in c.rows(0, h) {
-            start[y + 2] += 1;
-            bytes[y + 1] += a.len();
-        }
-    }
-    for y in 1..=h {
-        start[y + 1] += start[y];
-        bytes[y] += bytes[y - 1];
-    }
-    let mut by_row = vec![(0u32, 0u32); start[h + 1]];
-    for (j, c) in coverage.iter().enumerate() {
-        for (i, s) in c.spans.iter().enumerate() {
-            let y = s[0] as usize;
-            if y < h {
-                by_row[start[y + 1]] = (j as u32, i as u32);
-                start[y + 1] += 1;
             }
         }
     }
-    // Now row y's spans are by_row[start[y]..start[y + 1]].
-    let rows: Vec<usize> = (0..=k)
-        .map(|i| match i {
-            0 => 0,
-            _ if i == k => h,
-            _ => bytes.partition_point(|&b| b * k < bytes[h] * i).min(h),
-        })
-        .collect();
-    let words = w.div_ceil(8).div_ceil(64);
-    split_bands(0..k, &rows, img)
-        .into_par_iter()
-        .for_each(|(_, lo, hi, [r, g, b])| {
-            let (mut alpha, mut marks) = (vec![0u8; w], vec![0u64; words]);
-            // The spans of the row at hand, looked up once.
-            let mut here: Vec<(usize, &[u8])> = Vec::new();
-            let spans = |y: usize| {
-                by_row[start[y]..start[y + 1]].iter().map(|&(j, i)| {
-                    let c = &coverage[j as usize];
-                    let [_, x, at] = c.spans[i as usize];
-                    let end = c
-                        .spans
-                        .get(i as usize + 1)
-                        .map_or(c.alpha.len(), |s| s[2] as usize);
-                    (x as usize, &c.alpha[at as usize..end])
-                })
-            };
-            for y in lo..hi {
-                // The colour planes' lines of a later row, ahead: they
-                // come from memory, one row crossing of a line at a time.
-                let ahead = y + PREFETCH_ROWS;
-                // A span's first and last pixels' lines (most spans are a
-                // few pixels of a ring's side; the hardware prefetcher
-                // follows the long ones).
-                if ahead < hi {
-                    let at = (ahead - lo) * w;
-                    for (x, a) in spans(ahead) {
-                        let (first, last) = (at + x, at + x + a.len().max(1) - 1);
-                        for p in [&r[..], &g[..], &b[..]] {
-                            prefetch(&p[first]);
-                            prefetch(&p[last]);
-                        }
-                    }
-                }
-                let row = (y - lo) * w;
-                here.clear();
-                here.extend(spans(y));
-                // The spans' 8-pixel chunks marked; whether two spans share
-                // a chunk.
-                let mut shared = false;
-                for &(x, a) in &here {
-                    for c in x / 8..(x + a.len()).div_ceil(8) {
-                        shared |= marks[c / 64] & 1 << (c % 64) != 0;
-                        marks[c / 64] |= 1 << (c % 64);
-                    }
-                }
-                // Spans that share no chunk (most rows: the sides of the
-                // rings a row crosses) share no pixel, and a pixel under one
-                // span only has that span's coverage as its alpha
-                // (lerp_alpha(0, c) = c): they blend straight from their
-                // own bytes, without the row of alpha and its clearing.
-                if !shared {
-                    for &(x, a) in &here {
-                        let px = row + x..row + x + a.len();
-                        let (r, g, b) = (&mut r[px.clone()], &mut g[px.clone()], &mut b[px]);
-                        blend_alpha(a, r, g, b, color);
-                    }
-                    marks.fill(0);
-                    continue;
-                }
-                for &(x, a) in &here {
-                    lerp_alpha(&mut alpha[x..x + a.len()], a);
-                }
-                for x in runs(&marks, w) {
-                    let (r, g, b) = (
-                        &mut r[row + x.start..row + x.end],
-                        &mut g[row + x.start..row + x.end],
-                        &mut b[row + x.start..row + x.end],
-                    );
-                    blend_alpha(&alpha[x.clone()], r, g, b, color);
-                    alpha[x].fill(0);
-                }
-                marks.fill(0);
-            }
-        });
 }
 
 /// The items paired with consecutive bands of rows (`rows`, from 0 to the
@@ -382,80 +185,4 @@ fn split_bands<'b, T>(
         bands.push((item, rows[i], rows[i + 1], [r0, g0, b0]));
     }
     bands
-}
-
-/// Draws `draws` (hairlines among them) in bands of rows (`rows`)
-/// drawn in parallel, each on its own image-sized canvas: a band draws,
-/// in order, every draw that reaches its rows, at the draw's own image
-/// coordinates (so tiny-skia sees the very same paths and clip as on one
-/// pixmap), then blends its own rows. A pixel's alpha is then the same
-/// sequence of draws over it as on one pixmap, whatever the bands: the
-/// bytes do not depend on the thread count. A draw that spans two bands is
-/// drawn by both; the bands are cut where that costs least
-/// ([`band_rows`]).
-fn draw_bands(
-    canvases: &mut [Canvas],
-    draws: &[Draw],
-    rows: &[usize],
-    img: &mut HdrImage,
-    color: [f32; 3],
-) {
-    let paint = white();
-    split_bands(canvases.iter_mut(), rows, img)
-        .into_par_iter()
-        .for_each(|(canvas, lo, hi, planes)| {
-            for d in draws.iter().filter(|d| d.rect[2] < hi && d.rect[3] > lo) {
-                canvas.draw(d, &paint);
-            }
-            blend_band(canvas, lo, hi, planes, color);
-        });
-}
-
-/// Blends the alpha of `canvas`'s marked chunks in rows [lo, hi) over
-/// those rows of the colour planes (`[r, g, b]`, the band's rows only),
-/// clearing the canvas as it goes (and, after, any marks outside the rows:
-/// a draw over two bands is drawn whole by each).
-fn blend_band(
-    canvas: &mut Canvas,
-    lo: usize,
-    hi: usize,
-    [r, g, b]: [&mut [f32]; 3],
-    color: [f32; 3],
-) {
-    let w = canvas.surface.size().0 as usize;
-    let bpp = canvas.surface.bpp();
-    let [y0, y1] = [canvas.rows[0].max(lo), canvas.rows[1].min(hi)];
-    for y in y0..y1 {
-        // The colour planes' lines of a later row, ahead: they come
-        // from memory, one row crossing of a line at a time.
-        let ahead = y + PREFETCH_ROWS;
-        if ahead < y1 {
-            for x in canvas.spans(ahead) {
-                let at = (ahead - lo) * w;
-                prefetch(&r[at + x.start..at + x.end]);
-                prefetch(&g[at + x.start..at + x.end]);
-                prefetch(&b[at + x.start..at + x.end]);
-            }
-        }
-        canvas.take_marks(y);
-        let data = canvas.surface.data_mut();
-        let row = (y - lo) * w;
-        for x in runs(&canvas.row, w) {
-            let (r, g, b) = (
-                &mut r[row + x.start..row + x.end],
-                &mut g[row + x.start..row + x.end],
-                &mut b[row + x.start..row + x.end],
-            );
-            let px = &mut data[(y * w + x.start) * bpp..(y * w + x.end) * bpp];
-            match bpp {
-                4 => blend_span::<4>(px, r, g, b, color),
-                _ => blend_span::<1>(px, r, g, b, color),
-            }
-            px.fill(0);
-        }
-    }
-    let [r0, r1] = canvas.rows;
-    canvas.clear_rows(r0..y0.max(r0));
-    canvas.clear_rows(y1.max(r0)..r1);
-    canvas.rows = [canvas.surface.size().1 as usize, 0];
 }

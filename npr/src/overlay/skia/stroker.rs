@@ -37,8 +37,7 @@ const GENTLE_EXCESS: f64 = 1.0 / 64.0;
 /// boundary moved by ≤ 1/64 px: a supersample or two at a pixel, on few
 /// of the stroke's pixels; bounded by the same test.
 pub(super) fn gentle_outline(centre: &Path, stroke: &Stroke) -> Option<Path> {
-    // (A stroke of at most 1 px is a hairline to tiny-skia: no outline.)
-    if stroke.width.is_nan() || stroke.width <= 1.0 {
+    if stroke.width.is_nan() || stroke.width <= 0.0 {
         return None;
     }
     let bevel = match stroke.line_join {
