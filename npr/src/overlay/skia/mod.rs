@@ -149,9 +149,9 @@ pub(super) fn draw_of(centre: Path, stroke: Stroke, w: usize, h: usize) -> Optio
     })
 }
 
-/// The outline a stroke is filled as: a polyline whose
-/// turns are all gentle, [`gentle_outline`]; any other, tiny-skia's
-/// stroker (`Path::stroke` at resolution scale 1: a unit is a pixel).
+/// The outline a stroke is filled as: a polyline whose turns are all
+/// gentle, [`gentle_outline`]; any other, tiny-skia's stroker
+/// (`Path::stroke` at resolution scale 1: a unit is a pixel).
 fn outline_of(centre: &Path, stroke: &Stroke) -> Option<Path> {
     gentle_outline(centre, stroke).or_else(|| centre.stroke(stroke, 1.0))
 }
