@@ -145,6 +145,17 @@ pub trait Real:
     /// (or NaN) panics on the scalar types and is clamped into range on
     /// f32x8, never read out of bounds.
     fn gather(table: &[f32], index: Self) -> Self;
+    /// Per lane, `(table[index], table[index + 1])`: two neighbours read
+    /// together (a bilinear lookup's pair along a row). Index lanes hold
+    /// integral values in `0..table.len() - 1`; outside that, as
+    /// [`Real::gather`]: a panic on the scalar types, clamped on f32x8.
+    #[inline(always)]
+    fn gather_pair(table: &[f32], index: Self) -> (Self, Self) {
+        (
+            Self::gather(table, index),
+            Self::gather(table, index + Self::ONE),
+        )
+    }
 
     /// Clamps to [lo, hi] (for lo ≤ hi) as `self.max(lo).min(hi)`: a NaN
     /// `self` becomes `lo`.
@@ -429,6 +440,13 @@ impl Real for f32x8 {
         let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
         gather_f32x8(table, i)
     }
+    #[inline(always)]
+    fn gather_pair(table: &[f32], index: Self) -> (Self, Self) {
+        // Clamped as `gather`, to the last pair.
+        let last = wide::i32x8::splat(table.len() as i32 - 2);
+        let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
+        gather_pair_f32x8(table, i)
+    }
 }
 
 /// `if a > b { a } else { b }` per lane. `vmaxps a, b` is defined as
@@ -490,6 +508,58 @@ fn gather_f32x8(table: &[f32], i: wide::i32x8) -> f32x8 {
     f32x8::new(core::array::from_fn(|l| table[i[l] as usize]))
 }
 
+/// 8 pairs of neighbours at i32 indices already in `0..table.len() - 1`:
+/// each pair one 64-bit element of `vpgatherdq` (two gathers of 4 lanes,
+/// half the elements of two `vgatherdps`), then split into the first and
+/// second of each pair.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn gather_pair_f32x8(table: &[f32], i: wide::i32x8) -> (f32x8, f32x8) {
+    use core::arch::x86_64::{
+        __m256i, _mm256_castpd_ps, _mm256_castps_pd, _mm256_castsi256_ps, _mm256_castsi256_si128,
+        _mm256_extracti128_si256, _mm256_i32gather_epi64, _mm256_permute4x64_pd, _mm256_shuffle_ps,
+    };
+    assert!(table.len() >= 2);
+    let iv: __m256i = bytemuck::cast(i);
+    let base = table.as_ptr() as *const i64;
+    // SAFETY: AVX2 is enabled (cfg); every index lane is in
+    // 0..table.len() - 1 (clamped by the caller), so each 8-byte read
+    // (the float at the index and the next) is in bounds; a gather needs
+    // no alignment.
+    unsafe {
+        // Lanes 0–3 and 4–7: [a0 b0 a1 b1 | a2 b2 a3 b3], [a4 b4 … | …].
+        let lo = _mm256_castsi256_ps(_mm256_i32gather_epi64::<4>(
+            base,
+            _mm256_castsi256_si128(iv),
+        ));
+        let hi = _mm256_castsi256_ps(_mm256_i32gather_epi64::<4>(
+            base,
+            _mm256_extracti128_si256::<1>(iv),
+        ));
+        // Evens and odds: [a0 a1 a4 a5 | a2 a3 a6 a7], then the 64-bit
+        // quarters put in order (0, 2, 1, 3).
+        let firsts = _mm256_shuffle_ps::<0b10_00_10_00>(lo, hi);
+        let seconds = _mm256_shuffle_ps::<0b11_01_11_01>(lo, hi);
+        let order =
+            |v| _mm256_castpd_ps(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(v)));
+        (
+            bytemuck::cast(order(firsts)),
+            bytemuck::cast(order(seconds)),
+        )
+    }
+}
+
+/// Per-lane fallback of [`gather_pair_f32x8`].
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+#[inline(always)]
+fn gather_pair_f32x8(table: &[f32], i: wide::i32x8) -> (f32x8, f32x8) {
+    let i = i.to_array();
+    (
+        f32x8::new(core::array::from_fn(|l| table[i[l] as usize])),
+        f32x8::new(core::array::from_fn(|l| table[i[l] as usize + 1])),
+    )
+}
+
 /// The per-lane read, for the speed comparison in the tests.
 #[doc(hidden)]
 #[inline(always)]
@@ -531,6 +601,45 @@ mod tests {
                 mx[i]
             );
             assert_eq!(a[i].is_finite(), fin & (1 << i) != 0, "is_finite lane {i}");
+        }
+    }
+
+    #[test]
+    fn a_pair_gather_reads_each_lane_s_neighbours() {
+        // Every index of a table (its last pair included), in lanes of
+        // mixed order, against the scalar reads; and indices outside the
+        // table (negative, past the end, NaN) clamped to its first or last
+        // pair.
+        let table: Vec<f32> = (0..37).map(|i| (i as f32).mul_add(1.5, -7.25)).collect();
+        for start in 0..table.len() - 1 {
+            let idx: [f32; 8] =
+                core::array::from_fn(|l| ((start + 5 * l) % (table.len() - 1)) as f32);
+            let (a, b) = f32x8::gather_pair(&table, f32x8::load(&idx));
+            for (l, &at) in idx.iter().enumerate() {
+                let i = at as usize;
+                assert_eq!(
+                    lanes(a)[l].to_bits(),
+                    table[i].to_bits(),
+                    "first, index {i}"
+                );
+                assert_eq!(
+                    lanes(b)[l].to_bits(),
+                    table[i + 1].to_bits(),
+                    "second, index {i}"
+                );
+                let (sa, sb) = f32::gather_pair(&table, at);
+                assert_eq!((sa, sb), (table[i], table[i + 1]), "scalar, index {i}");
+            }
+        }
+        let out = [-3.0f32, 36.0, 1e9, f32::NAN, -0.0, 35.0, 0.0, -1e9];
+        let (a, b) = f32x8::gather_pair(&table, f32x8::load(&out));
+        let want = [0usize, 35, 35, 0, 0, 35, 0, 0];
+        for l in 0..8 {
+            assert_eq!(
+                (lanes(a)[l], lanes(b)[l]),
+                (table[want[l]], table[want[l] + 1]),
+                "lane {l}"
+            );
         }
     }
 

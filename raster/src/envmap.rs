@@ -79,9 +79,27 @@ fn oct_decode(s: f64, t: f64) -> [f64; 3] {
 struct OctLevel {
     size: usize,
     rgb: [Vec<f32>; 3],
+    /// `rgb` with each row's last texel repeated after it (rows of
+    /// size + 1): a lookup reads a texel and its right neighbour as one
+    /// pair ([`Real::gather_pair`]), the last texel's neighbour being
+    /// itself, as the clamp to the edge gives.
+    padded: [Vec<f32>; 3],
 }
 
 impl OctLevel {
+    fn new(size: usize, rgb: [Vec<f32>; 3]) -> OctLevel {
+        let pad = |plane: &Vec<f32>| {
+            let mut out = Vec::with_capacity(size * (size + 1));
+            for row in plane.chunks_exact(size) {
+                out.extend_from_slice(row);
+                out.push(row[size - 1]);
+            }
+            out
+        };
+        let padded = [pad(&rgb[0]), pad(&rgb[1]), pad(&rgb[2])];
+        OctLevel { size, rgb, padded }
+    }
+
     /// Bilinear radiance at octahedral (s, t), clamped at the edges.
     #[inline(always)]
     fn bilinear<R: Real>(&self, s: R, t: R) -> Rgb<R> {
@@ -91,21 +109,23 @@ impl OctLevel {
         let y = (t * R::splat(n) - R::HALF).clamp(R::ZERO, hi);
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let x1 = (x0 + R::ONE).min(hi);
         let y1 = (y0 + R::ONE).min(hi);
-        let row0 = y0 * R::splat(n);
-        let row1 = y1 * R::splat(n);
-        let (i00, i10, i01, i11) = (row0 + x0, row0 + x1, row1 + x0, row1 + x1);
+        // Texels x0 and x0 + 1 (x0 itself at the last column) of rows y0
+        // and y1, each pair read at once from the padded rows.
+        let stride = R::splat(n + 1.0);
+        let (i0, i1) = (y0 * stride + x0, y1 * stride + x0);
         let ch = |p: &[f32]| {
-            let a = R::gather(p, i00);
-            let b = R::gather(p, i10);
-            let c = R::gather(p, i01);
-            let d = R::gather(p, i11);
+            let (a, b) = R::gather_pair(p, i0);
+            let (c, d) = R::gather_pair(p, i1);
             let top = (b - a).mul_add(fx, a);
             let bot = (d - c).mul_add(fx, c);
             (bot - top).mul_add(fy, top)
         };
-        Rgb::new(ch(&self.rgb[0]), ch(&self.rgb[1]), ch(&self.rgb[2]))
+        Rgb::new(
+            ch(&self.padded[0]),
+            ch(&self.padded[1]),
+            ch(&self.padded[2]),
+        )
     }
 }
 
@@ -282,7 +302,7 @@ impl EnvMap {
         self.set_sun(sun);
         self.levels = levels
             .into_iter()
-            .map(|(size, rgb)| OctLevel { size, rgb })
+            .map(|(size, rgb)| OctLevel::new(size, rgb))
             .collect();
         self.sampler = crate::envmap_sample::EnvSampler::new(&self.source);
         true
@@ -521,7 +541,7 @@ fn prefilter(map: Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLeve
                     }
                 }
             }
-            OctLevel { size: n, rgb }
+            OctLevel::new(n, rgb)
         })
         .collect()
 }
