@@ -796,10 +796,8 @@ fn the_banded_stroke_drawing_is_close_to_one_surface_and_alike_for_any_thread_co
                 reference.b[i] = reference.b[i] * (1.0 - a) + c[2] * a;
             }
         }
-        assert!(
-            cov.iter().filter(|&&a| a > 0.0).count() > n / 20,
-            "frame {f}: few strokes"
-        );
+        let stroked = cov.iter().filter(|&&a| a > 0.0).count();
+        assert!(stroked > n / 20, "frame {f}: few strokes");
         // Against the plain drawing: a band clips the paths that cross
         // its surface's edges, and tiny-skia steps a clipped edge from
         // where the clip cut it, so along such an edge a pixel may gain or
@@ -807,7 +805,6 @@ fn the_banded_stroke_drawing_is_close_to_one_surface_and_alike_for_any_thread_co
         // the stroked pixels); a stroke lost or drawn twice at a band's
         // edge would differ by far more. Between thread counts: the same
         // bits.
-        let stroked = cov.iter().filter(|&&a| a > 0.0).count();
         let mut first: Option<Planes3> = None;
         for (threads, cv) in canvases.iter_mut() {
             let mut img = HdrImage {

@@ -78,8 +78,7 @@ fn oct_decode(s: f64, t: f64) -> [f64; 3] {
 #[derive(Clone, Debug)]
 struct OctLevel {
     size: usize,
-    rgb: [Vec<f32>; 3],
-    /// `rgb` with each row's last texel repeated after it (rows of
+    /// The planes with each row's last texel repeated after it (rows of
     /// size + 1): a lookup reads a texel and its right neighbour as one
     /// pair ([`Real::gather_pair`]), the last texel's neighbour being
     /// itself, as the clamp to the edge gives.
@@ -87,8 +86,9 @@ struct OctLevel {
 }
 
 impl OctLevel {
+    /// The level of `size`² texels from its planes (rows of `size`).
     fn new(size: usize, rgb: [Vec<f32>; 3]) -> OctLevel {
-        let pad = |plane: &Vec<f32>| {
+        let pad = |plane: Vec<f32>| {
             let mut out = Vec::with_capacity(size * (size + 1));
             for row in plane.chunks_exact(size) {
                 out.extend_from_slice(row);
@@ -96,8 +96,20 @@ impl OctLevel {
             }
             out
         };
-        let padded = [pad(&rgb[0]), pad(&rgb[1]), pad(&rgb[2])];
-        OctLevel { size, rgb, padded }
+        OctLevel {
+            size,
+            padded: rgb.map(pad),
+        }
+    }
+
+    /// The planes as [`OctLevel::new`] took them (rows of `size`).
+    fn planes(&self) -> [Vec<f32>; 3] {
+        self.padded.each_ref().map(|p| {
+            p.chunks_exact(self.size + 1)
+                .flat_map(|row| &row[..self.size])
+                .copied()
+                .collect()
+        })
     }
 
     /// Bilinear radiance at octahedral (s, t), clamped at the edges.
@@ -280,11 +292,7 @@ impl EnvMap {
 
     /// The prefiltered levels as (size, rgb planes), for the disk cache.
     pub fn derived(&self) -> Derived {
-        let levels = self
-            .levels
-            .iter()
-            .map(|l| (l.size, l.rgb.clone()))
-            .collect();
+        let levels = self.levels.iter().map(|l| (l.size, l.planes())).collect();
         (self.sh, levels, self.sun)
     }
 
