@@ -65,15 +65,23 @@ impl MeshData {
 /// `rings` from pole to pole; uv = (longitude, latitude) in [0, 1].
 pub(crate) fn sphere(radius: f32, segments: u32, rings: u32) -> MeshData {
     let mut m = MeshData::default();
+    // The seam's last column repeats the first, and each pole is one
+    // point, bit for bit (sin π and sin 2π round away from 0 in f32): the
+    // surface is closed, as shadow maps' solids need (raster's closed.rs).
+    let theta = |r: u32| match r {
+        0 => (0.0, 1.0),
+        r if r == rings => (0.0, -1.0),
+        r => (std::f32::consts::PI * r as f32 / rings as f32).sin_cos(),
+    };
+    let phi = |s: u32| match s {
+        s if s == segments => (0.0, 1.0),
+        s => (std::f32::consts::TAU * s as f32 / segments as f32).sin_cos(),
+    };
     for r in 0..=rings {
-        let theta = std::f32::consts::PI * r as f32 / rings as f32;
+        let (sin_theta, cos_theta) = theta(r);
         for s in 0..=segments {
-            let phi = std::f32::consts::TAU * s as f32 / segments as f32;
-            let n = Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.cos(),
-                theta.sin() * phi.sin(),
-            );
+            let (sin_phi, cos_phi) = phi(s);
+            let n = Vec3::new(sin_theta * cos_phi, cos_theta, sin_theta * sin_phi);
             m.positions.push(n * radius);
             m.normals.push(n);
             m.uvs.push(Vec2::new(

@@ -632,6 +632,24 @@ fn depth_only_maps_match_the_full_setup_bit_for_bit() {
     }
 }
 
+/// The shadows fixture's closed meshes are found as solids (whose back
+/// faces its depth passes cull): its generated spheres (poles and seams
+/// welded) and cubes (corners split per face), not the open floor.
+#[test]
+fn the_shadow_fixtures_spheres_and_cubes_are_closed_solids() {
+    let s = specula::scene::load_scene(&common::fixtures().join("scenes/shadows.toml"))
+        .expect("fixture scene");
+    let solids = s
+        .data
+        .solids()
+        .expect("a scene with shadows finds its solids");
+    assert_eq!(
+        solids.counts(),
+        (5, 4),
+        "(parts, solids): a floor, 2 spheres, 2 cubes"
+    );
+}
+
 /// The floor and unit box of [`floor_scene`] lit by the generated sky
 /// (`fixtures/env/sky.hdr`) alone, the floor's material `floor` (TOML
 /// lines), the sky's sun shadowed as `[environment.sun]` says (`sun`:

@@ -218,6 +218,37 @@ fn point_hard_shadows_match_embree() {
     crosscheck(2, "point");
 }
 
+/// A point light at the centre of the shadows scene's clay sphere: Embree
+/// finds every surface it faces outside the sphere shadowed, and so must
+/// the cube map. The sphere is a closed solid, whose back faces a depth
+/// pass culls when the light is outside it; from within its bounds they
+/// are drawn, and they are all the light sees.
+#[test]
+fn a_point_light_inside_a_closed_sphere_is_shadowed_by_it() {
+    let mut s = scene_with_light("shadows.toml", 2, hard(1024));
+    let mut parts = s.data.into_parts();
+    let Light::Point { position, .. } = &mut parts.lights[0] else {
+        panic!("the shadows scene's light 2 is a point light");
+    };
+    *position = [-1.3, 0.6, 0.2];
+    s.data = specula_raster::SceneData::new(parts).expect("valid scene");
+    let Agreement {
+        classified,
+        shadowed,
+        agree,
+        ..
+    } = agreement(&s, "inside");
+    assert!(classified > 10_000, "{classified} pixels facing the light");
+    assert_eq!(
+        shadowed, classified,
+        "Embree: everything it faces is behind the sphere"
+    );
+    assert_eq!(
+        agree, classified,
+        "the cube map shadows every pixel Embree does"
+    );
+}
+
 /// The shadows scene without its lights, lit by the generated sky
 /// (`fixtures/env/sky.hdr`), whose sun is taken out of the map and
 /// shadowed with hard maps.

@@ -1,7 +1,9 @@
-//! Depth-only passes (a shadow map's): the scene's main triangles, both
-//! faces, through a light's view-projection into a depth buffer, by the
-//! camera pass's vertex stage, setup, binning and scan, keeping only what
-//! depth needs.
+//! Depth-only passes (a shadow map's): the scene's main triangles through
+//! a light's view-projection into a depth buffer, by the camera pass's
+//! vertex stage, setup, binning and scan, keeping only what depth needs.
+//! Both faces are drawn, except those of closed solids the light is
+//! outside of, whose back faces are culled (`closed.rs`: the nearest depth
+//! is a front face's).
 //!
 //! Two cuts against the camera's pass (`frame::geometry_pass`), neither
 //! changing a depth bit (`tests/shadows.rs` compares every texel of each
@@ -19,7 +21,7 @@
 use crate::bin::{BinnedChunk, CHUNK};
 use crate::camera::View;
 use crate::clip::GuardBand;
-use crate::geometry::{Cull, GeometryPass};
+use crate::geometry::{mask_bits4, Cull, GeometryPass};
 use crate::scan::{rasterize_tile_depth, AlphaScan};
 use crate::scene::SceneData;
 use crate::setup::{outcode_f32, DepthPlanes, SetupContext, SetupCounts, TriPlanes};
@@ -44,12 +46,14 @@ pub enum DepthSetup {
 }
 
 /// A depth-only pass of the scene's main triangles seen through
-/// `view_proj` (both faces drawn) into `target`, in `out` (made on first
-/// use, reused after); its geometry time goes to `stats.times.shadow`.
+/// `view_proj` from `eye` (a point or spot light's position; `None` for a
+/// directional light) into `target`, in `out` (made on first use, reused
+/// after); its geometry time goes to `stats.times.shadow`.
 pub(crate) fn depth_pass<'a>(
     scene: &SceneData,
     target: &Target,
     view_proj: glam::Mat4,
+    eye: Option<glam::Vec3>,
     setup: DepthSetup,
     out: &'a mut Option<Visibility>,
     stats: &mut FrameStats,
@@ -70,6 +74,10 @@ pub(crate) fn depth_pass<'a>(
         v.vis = VisBuffer::new(target);
     }
     v.view = view;
+    match scene.solids() {
+        Some(solids) if solids.any() => solids.cull_back_mask(eye, &mut v.cull_back),
+        _ => v.cull_back.clear(),
+    }
     let triangles = scene.geometry.first().map_or(0..0, |p| p.triangles.clone());
     let stage = match v.stages.first() {
         Some((s, _)) => s.clone(),
@@ -98,8 +106,9 @@ pub(crate) fn depth_pass<'a>(
     v
 }
 
-/// `geometry_pass` of a first pass with `Cull::None` and no alpha
-/// materials, keeping depth alone (see the module doc).
+/// `geometry_pass` of a first pass with `Cull::None` (but the back faces
+/// of the triangles in `out.cull_back`) and no alpha materials, keeping
+/// depth alone (see the module doc).
 fn depth_only_pass(
     scene: &SceneData,
     target: &Target,
@@ -120,6 +129,7 @@ fn depth_only_pass(
             }
         });
     let outcodes = &out.outcodes;
+    let cull_back = &out.cull_back[..];
     stats.times.vertex += ms_since(t);
 
     let t = Instant::now();
@@ -148,6 +158,10 @@ fn depth_only_pass(
             let mut counts = SetupCounts::default();
             let base = c * CHUNK;
             let id = |i: usize| ids.start as u32 + (base + i) as u32;
+            let cull = |bits: u32, i: usize| match bits >> i & 1 {
+                0 => Cull::None,
+                _ => Cull::Back,
+            };
             // Setup's trivial reject: all three vertices beyond one plane.
             let outside = |&[a, b, c]: &[u32; 3]| {
                 outcodes[a as usize] & outcodes[b as usize] & outcodes[c as usize] != 0
@@ -165,10 +179,11 @@ fn depth_only_pass(
                 }
                 let v = Vertices4::gather(clip, tris4.try_into().expect("chunks of LANES"));
                 let planes4 = planes4.try_into().expect("chunks of LANES");
+                let bits = mask_bits4(cull_back, range.start + base + q * LANES);
                 ctx.setup_x4_vertices(
                     id(q * LANES),
                     &v,
-                    [Cull::None; LANES],
+                    [cull(bits, 0), cull(bits, 1), cull(bits, 2), cull(bits, 3)],
                     None,
                     planes4,
                     raster,
@@ -177,7 +192,8 @@ fn depth_only_pass(
             }
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
                 let v = tri.map(|k| clip[k as usize]);
-                if let Some(p) = ctx.setup(id(i), v, Cull::None, raster, &mut counts) {
+                let bits = mask_bits4(cull_back, range.start + base + i);
+                if let Some(p) = ctx.setup(id(i), v, cull(bits, 0), raster, &mut counts) {
                     *plane = DepthPlanes {
                         origin: p.origin,
                         z: p.z,

@@ -22,6 +22,7 @@ mod blend;
 pub mod buffers;
 pub mod camera;
 pub mod clip;
+pub mod closed;
 mod depth_pass;
 pub mod envmap;
 pub mod envmap_reference;

@@ -8,6 +8,7 @@
 
 use crate::alpha::{AlphaMode, MaterialAlpha};
 use crate::camera::Camera;
+use crate::closed::ClosedSolids;
 use crate::geometry::{validate_passes, GeometryPass, PassError, SceneMesh};
 use crate::shader::SurfaceShader;
 use crate::shadow::{ShadowSettings, ShadowSettingsError};
@@ -138,6 +139,9 @@ impl Material {
 #[derive(Clone, Debug)]
 pub struct SceneData {
     parts: SceneParts,
+    /// The mesh's closed solids, when a light casts shadows (their depth
+    /// passes skip the solids' back faces).
+    solids: Option<Arc<ClosedSolids>>,
 }
 
 /// Why [`SceneData::new`] refused a scene's parts.
@@ -197,7 +201,22 @@ impl SceneData {
     /// and the materials' lights accepted).
     pub fn new(parts: SceneParts) -> Result<SceneData, SceneDataError> {
         check(&parts)?;
-        Ok(SceneData { parts })
+        let shadows = parts.shadows.iter().any(Option::is_some) || parts.sun_shadows.is_some();
+        let solids = shadows.then(|| {
+            let opaque: Vec<bool> = parts.materials.iter().map(|m| m.alpha.is_none()).collect();
+            Arc::new(ClosedSolids::of(
+                &parts.positions,
+                &parts.triangles,
+                &parts.tri_material,
+                &opaque,
+            ))
+        });
+        Ok(SceneData { parts, solids })
+    }
+
+    /// The mesh's closed solids: made when some light casts shadows.
+    pub fn solids(&self) -> Option<&ClosedSolids> {
+        self.solids.as_deref()
     }
 
     /// The parts back, to change and build again.

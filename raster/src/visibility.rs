@@ -38,6 +38,11 @@ pub struct Visibility {
     /// outcodes (`depth_pass.rs`); empty elsewhere.
     pub(crate) depth_planes: Vec<DepthPlanes>,
     pub(crate) outcodes: Vec<u8>,
+    /// A depth pass's triangles that it draws front faces only (a bit a
+    /// triangle, in scene order: those of the closed solids its light is
+    /// outside of, [`ClosedSolids::cull_back_mask`](crate::closed::ClosedSolids::cull_back_mask)); the rest it draws
+    /// both ways. Empty elsewhere.
+    pub(crate) cull_back: Vec<u64>,
     /// Block depth bounds after the first pass, for the later ones, and
     /// each tile's part of them, taken in the first pass's raster sweep.
     occluder: DepthBounds,
@@ -127,6 +132,7 @@ impl Visibility {
             chunks: Vec::new(),
             depth_planes: Vec::new(),
             outcodes: Vec::new(),
+            cull_back: Vec::new(),
             occluder: DepthBounds::default(),
             tile_bounds: Vec::new(),
             stages: Vec::new(),
@@ -200,6 +206,7 @@ pub(crate) fn geometry_pass(
     };
     let mask: &[u64] = front.as_deref().map_or(&[], Vec::as_slice);
     let masked = !mask.is_empty();
+    let cull_back = &out.cull_back[..];
     let set_up: Vec<(SetupCounts, f64)> = scene.triangles[range.clone()]
         .par_chunks(CHUNK)
         .zip(out.planes[ids.start as usize..ids.end as usize].par_chunks_mut(CHUNK))
@@ -211,6 +218,9 @@ pub(crate) fn geometry_pass(
             let mut counts = SetupCounts::default();
             let base = c * CHUNK;
             let cull = |i: usize| match pass.cull {
+                Cull::None if shadow && mask_bits4(cull_back, range.start + base + i) & 1 != 0 => {
+                    Cull::Back
+                }
                 Cull::Back
                     if scene.materials[scene.tri_material[range.start + base + i] as usize]
                         .double_sided =>

@@ -130,7 +130,8 @@ fn render_face(
     stats: &mut FrameStats,
 ) {
     let target = Target::new(face.size, face.size).expect("map size checked at load");
-    let v = depth_pass(scene, &target, face.clip, setup, pass, stats);
+    let eye = face.perspective.then_some(face.origin);
+    let v = depth_pass(scene, &target, face.clip, eye, setup, pass, stats);
     let n = face.size as usize;
     face.depth.resize(n * n, 0.0);
     let (perspective, near, span) = (face.perspective, face.near, face.span);
