@@ -70,8 +70,7 @@ impl ClosedSolids {
             .collect();
         let count = count as usize;
 
-        // Open until shown otherwise: a part is closed when none of its
-        // edges fails.
+        // Closed until shown otherwise.
         let mut closed = vec![true; count];
         for (t, m) in tri_material.iter().enumerate() {
             if !opaque[*m as usize] {
@@ -136,17 +135,20 @@ impl ClosedSolids {
 /// Per vertex, the index of the first vertex at exactly its position
 /// (−0 and +0 alike).
 fn weld(positions: &[Vec3]) -> Vec<u32> {
-    let mut order: Vec<([u32; 3], u32)> = (positions.iter().enumerate())
+    // Sorted by position bits (x, y, z), then index: one integer key each.
+    let mut order: Vec<u128> = (positions.iter().enumerate())
         .map(|(i, p)| {
             let p = *p + Vec3::ZERO;
-            ([p.x.to_bits(), p.y.to_bits(), p.z.to_bits()], i as u32)
+            let bits = |v: f32| v.to_bits() as u128;
+            bits(p.x) << 96 | bits(p.y) << 64 | bits(p.z) << 32 | i as u128
         })
         .collect();
     order.par_sort_unstable();
     let mut weld = vec![0u32; positions.len()];
     let mut first = 0u32;
-    for (k, &(at, i)) in order.iter().enumerate() {
-        if k == 0 || at != order[k - 1].0 {
+    for (k, &key) in order.iter().enumerate() {
+        let i = key as u32;
+        if k == 0 || key >> 32 != order[k - 1] >> 32 {
             first = i;
         }
         weld[i as usize] = first;
@@ -154,37 +156,44 @@ fn weld(positions: &[Vec3]) -> Vec<u32> {
     weld
 }
 
-/// The triangles on an edge that is not shared by exactly two of them
-/// running opposite ways, given the triangles' `welded` corners (indices
-/// below `vertices`). Triangles with two corners alike have no area and
-/// no edges.
+/// At least one triangle of each part with an edge that is not shared by
+/// exactly two of its triangles running opposite ways (those whose edge's
+/// reverse is missing or repeated), given the triangles' `welded` corners
+/// (indices below `vertices`). Triangles with two corners alike have no
+/// area and no edges.
 fn unpaired_edges(welded: &[[u32; 3]], vertices: usize) -> Vec<u32> {
-    let edges = |&[a, b, c]: &[u32; 3]| {
-        let distinct = a != b && b != c && a != c;
-        [(a, b), (b, c), (c, a)]
-            .into_iter()
-            .filter(move |_| distinct)
-    };
-    // Each vertex's outgoing edges (their ends), in one array.
+    let has_area = |&[a, b, c]: &[u32; 3]| a != b && b != c && a != c;
+    // Each vertex's outgoing edges (their ends), in one array: a triangle
+    // (a, b, c) leaves a toward b, b toward c and c toward a.
     let mut start = vec![0u32; vertices + 1];
-    for (from, _) in welded.iter().flat_map(edges) {
-        start[from as usize + 1] += 1;
+    for t in welded.iter().filter(|t| has_area(t)) {
+        for &from in t {
+            start[from as usize + 1] += 1;
+        }
     }
     for v in 0..vertices {
         start[v + 1] += start[v];
     }
     let mut fill = start.clone();
     let mut to = vec![0u32; start[vertices] as usize];
-    for (from, end) in welded.iter().flat_map(edges) {
-        to[fill[from as usize] as usize] = end;
-        fill[from as usize] += 1;
+    for &[a, b, c] in welded.iter().filter(|t| has_area(t)) {
+        for (from, end) in [(a, b), (b, c), (c, a)] {
+            to[fill[from as usize] as usize] = end;
+            fill[from as usize] += 1;
+        }
     }
-    let once = |from: u32, end: u32| {
-        let out = &to[start[from as usize] as usize..start[from as usize + 1] as usize];
-        out.iter().filter(|&&e| e == end).count() == 1
+    // An edge a → b pairs when b → a is there exactly once. Checking that
+    // for every edge also catches a doubled a → b (at its reverse's
+    // check), whose triangles are in the same part.
+    let reversed_once = |&[a, b, c]: &[u32; 3]| {
+        let once = |from: u32, end: u32| {
+            let out = &to[start[from as usize] as usize..start[from as usize + 1] as usize];
+            out.iter().filter(|&&e| e == end).count() == 1
+        };
+        once(b, a) && once(c, b) && once(a, c)
     };
     (welded.par_iter().enumerate())
-        .filter(|(_, t)| !edges(t).all(|(a, b)| once(a, b) && once(b, a)))
+        .filter(|(_, t)| has_area(t) && !reversed_once(t))
         .map(|(k, _)| k as u32)
         .collect()
 }
