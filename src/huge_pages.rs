@@ -60,7 +60,7 @@ fn map_huge(len: usize) -> *mut u8 {
             return std::ptr::null_mut();
         }
         let map = map.cast::<u8>();
-        let lead = map.align_offset(HUGE_PAGE);
+        let lead = map.addr().next_multiple_of(HUGE_PAGE) - map.addr();
         if lead > 0 {
             libc::munmap(map.cast(), lead);
         }
