@@ -20,6 +20,7 @@ pub mod eval;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod gltf;
+pub mod huge_pages;
 pub mod image_file;
 pub mod label;
 pub mod lines;

@@ -25,6 +25,11 @@ use std::time::Instant;
 /// (a TOML error shows the offending line), which may be megabytes long.
 const MESSAGE_LINE_MAX: usize = 1000;
 
+/// Large buffers on transparent huge pages: fewer page faults from process
+/// start to image (src/huge_pages.rs).
+#[global_allocator]
+static ALLOC: specula::huge_pages::HugePageAlloc = specula::huge_pages::HugePageAlloc;
+
 #[derive(Parser)]
 #[command(
     name = "specula",

@@ -3,9 +3,12 @@
 //! process start to image for the benchmark scene).
 //!
 //! One file per mesh in the table cache folder (table_cache.rs, which says
-//! where it is and how to turn it off), `mesh-<key>.bin`, the key a SHA-256
-//! of the format's version, the OBJ's path as given (messages carry it) and
-//! its bytes. The file holds the [`MeshData`] the parse made, except the MTL
+//! where it is and how to turn it off), `mesh-<key>.bin`, the key a BLAKE3
+//! hash of the format's version, the OBJ's path as given (messages carry
+//! it) and its bytes. BLAKE3 rather than SHA-256 because every load hashes
+//! the whole OBJ before it can look for the file, and BLAKE3 is several
+//! times faster on long inputs while still cryptographic: any change of
+//! the file changes the key. The file holds the [`MeshData`] the parse made, except the MTL
 //! materials: it lists the MTL files the OBJ named, each with a SHA-256 of
 //! its bytes, and a hit re-reads them, checks the hashes and parses them
 //! again (they are small), so an edited MTL is a miss. Only parses whose
@@ -19,7 +22,6 @@
 
 use crate::mesh::{MeshData, MtlSource};
 use glam::{Vec2, Vec3};
-use sha2::{Digest, Sha256};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
@@ -68,14 +70,14 @@ pub(crate) fn load_obj_cached(
 
 /// The cache key of an OBJ at `path` with `bytes`.
 pub(crate) fn key(path: &Path, bytes: &[u8]) -> String {
-    let mut h = Sha256::new();
+    let mut h = blake3::Hasher::new();
     let path = path.as_os_str().as_encoded_bytes();
     for part in [VERSION, path] {
-        h.update((part.len() as u64).to_le_bytes());
+        h.update(&(part.len() as u64).to_le_bytes());
         h.update(part);
     }
     h.update(bytes);
-    h.finalize().iter().map(|b| format!("{b:02x}")).collect()
+    h.finalize().to_hex().to_string()
 }
 
 fn file(dir: &Path, key: &str) -> PathBuf {
