@@ -6,9 +6,11 @@
 //! aside, along the silhouette). Its back faces are culled in setup, not
 //! binned or scanned.
 //!
-//! A part is a set of triangles joined through shared positions (vertices
+//! A part is a set of triangles joined across shared edges (vertices
 //! welded by their exact position, so a seam that splits a vertex's normal
-//! or uv does not cut a part). It is a solid when
+//! or uv does not cut a part; two triangles join across an edge they run
+//! opposite ways, when no other triangle runs it the second way). It is a
+//! solid when
 //! - every edge between two distinct positions is shared by exactly two of
 //!   its triangles, once in each direction (closed, consistently wound and
 //!   manifold along its edges); triangles with two welded corners alike
@@ -18,9 +20,10 @@
 //! - every material on it is opaque: a masked or blended face may show the
 //!   back faces behind it.
 //!
-//! A point or spot light inside a solid's bounds (or on them) keeps both
-//! faces of that solid: it may be inside, where every face it sees is a
-//! back face and each of them casts.
+//! A point or spot light inside a solid's bounds, or nearer to them than
+//! the corners of its map's near plane, keeps both faces of that solid: it
+//! may be inside, where every face it sees is a back face and each of them
+//! casts, or its near plane may cut the front faces away.
 
 use glam::Vec3;
 use rayon::prelude::*;
@@ -36,10 +39,11 @@ pub struct ClosedSolids {
 }
 
 impl ClosedSolids {
-    /// The parts of `triangles` over `positions` (finite, indices in
-    /// range: [`SceneData::new`](crate::SceneData::new) checks them) and
-    /// which are solids, triangle `t` having material `tri_material[t]`,
-    /// opaque where `opaque[tri_material[t]]`.
+    /// The parts of `triangles` over `positions` (indices in range:
+    /// [`SceneData::new`](crate::SceneData::new) checks them; a part with
+    /// a non-finite position has a NaN volume and is no solid) and which
+    /// are solids, triangle `t` having material `tri_material[t]`, opaque
+    /// where `opaque[tri_material[t]]`.
     pub fn of(
         positions: &[Vec3],
         triangles: &[[u32; 3]],
@@ -50,17 +54,29 @@ impl ClosedSolids {
         let welded: Vec<[u32; 3]> = (triangles.par_iter())
             .map(|t| t.map(|i| weld[i as usize]))
             .collect();
-        let mut parts = Parts::new(positions.len());
-        for &[a, b, c] in &welded {
-            parts.join(a, b);
-            parts.join(a, c);
+        let edges = OutEdges::of(&welded, positions.len());
+        // Triangles joined across their paired edges; those with an edge
+        // whose reverse is missing or repeated noted (a doubled edge is
+        // caught at its reverse, whose part holds both).
+        let mut parts = Parts::new(triangles.len());
+        let mut unpaired = Vec::new();
+        for (t, &[a, b, c]) in welded.iter().enumerate() {
+            if !has_area(&[a, b, c]) {
+                continue;
+            }
+            for (from, to) in [(a, b), (b, c), (c, a)] {
+                match edges.between(to, from) {
+                    &[(_, u)] => parts.join(t as u32, u),
+                    _ => unpaired.push(t),
+                }
+            }
         }
         // Parts numbered in the order of their first triangle.
-        let mut index = vec![u32::MAX; positions.len()];
+        let mut index = vec![u32::MAX; triangles.len()];
         let mut count = 0;
-        let part: Vec<u32> = (welded.iter())
+        let part: Vec<u32> = (0..triangles.len() as u32)
             .map(|t| {
-                let root = parts.find(t[0]) as usize;
+                let root = parts.find(t) as usize;
                 if index[root] == u32::MAX {
                     index[root] = count;
                     count += 1;
@@ -77,8 +93,8 @@ impl ClosedSolids {
                 closed[part[t] as usize] = false;
             }
         }
-        for t in unpaired_edges(&welded, positions.len()) {
-            closed[part[t as usize] as usize] = false;
+        for t in unpaired {
+            closed[part[t] as usize] = false;
         }
 
         // Bounds, and signed volumes about a point of each part (any point
@@ -112,12 +128,18 @@ impl ClosedSolids {
     }
 
     /// Into `mask` (a bit per triangle, 64 a word): the triangles whose
-    /// back faces a depth pass from `eye` (a point or spot light's
-    /// position; `None` for a directional light, outside everything) may
-    /// cull: those of the solids whose bounds do not hold `eye`.
-    pub fn cull_back_mask(&self, eye: Option<Vec3>, mask: &mut Vec<u64>) {
-        let outside =
-            |&(lo, hi): &(Vec3, Vec3)| eye.is_none_or(|e| e.cmplt(lo).any() || e.cmpgt(hi).any());
+    /// back faces a depth pass from `eye` may cull: those of the solids
+    /// whose bounds, grown by `reach`, do not hold `eye`. For a point or
+    /// spot light `eye` is its position and `reach` the distance from it
+    /// to its map's near plane's corners; `None` for a directional light,
+    /// outside everything.
+    pub fn cull_back_mask(&self, eye: Option<(Vec3, f32)>, mask: &mut Vec<u64>) {
+        let outside = |&(lo, hi): &(Vec3, Vec3)| {
+            eye.is_none_or(|(e, reach)| {
+                let r = Vec3::splat(reach);
+                e.cmplt(lo - r).any() || e.cmpgt(hi + r).any()
+            })
+        };
         let cull: Vec<bool> = (self.solid.iter())
             .map(|s| s.as_ref().is_some_and(outside))
             .collect();
@@ -156,49 +178,61 @@ fn weld(positions: &[Vec3]) -> Vec<u32> {
     weld
 }
 
-/// At least one triangle of each part with an edge that is not shared by
-/// exactly two of its triangles running opposite ways (those whose edge's
-/// reverse is missing or repeated), given the triangles' `welded` corners
-/// (indices below `vertices`). Triangles with two corners alike have no
-/// area and no edges.
-fn unpaired_edges(welded: &[[u32; 3]], vertices: usize) -> Vec<u32> {
-    let has_area = |&[a, b, c]: &[u32; 3]| a != b && b != c && a != c;
-    // Each vertex's outgoing edges (their ends), in one array: a triangle
-    // (a, b, c) leaves a toward b, b toward c and c toward a.
-    let mut start = vec![0u32; vertices + 1];
-    for t in welded.iter().filter(|t| has_area(t)) {
-        for &from in t {
-            start[from as usize + 1] += 1;
-        }
-    }
-    for v in 0..vertices {
-        start[v + 1] += start[v];
-    }
-    let mut fill = start.clone();
-    let mut to = vec![0u32; start[vertices] as usize];
-    for &[a, b, c] in welded.iter().filter(|t| has_area(t)) {
-        for (from, end) in [(a, b), (b, c), (c, a)] {
-            to[fill[from as usize] as usize] = end;
-            fill[from as usize] += 1;
-        }
-    }
-    // An edge a → b pairs when b → a is there exactly once. Checking that
-    // for every edge also catches a doubled a → b (at its reverse's
-    // check), whose triangles are in the same part.
-    let reversed_once = |&[a, b, c]: &[u32; 3]| {
-        let once = |from: u32, end: u32| {
-            let out = &to[start[from as usize] as usize..start[from as usize + 1] as usize];
-            out.iter().filter(|&&e| e == end).count() == 1
-        };
-        once(b, a) && once(c, b) && once(a, c)
-    };
-    (welded.par_iter().enumerate())
-        .filter(|(_, t)| has_area(t) && !reversed_once(t))
-        .map(|(k, _)| k as u32)
-        .collect()
+/// Whether a triangle of welded corners has area (three distinct
+/// corners); one without has no edges.
+fn has_area(&[a, b, c]: &[u32; 3]) -> bool {
+    a != b && b != c && a != c
 }
 
-/// Disjoint sets of welded vertices (union by size, paths halved).
+/// The directed edges of the triangles with area, by the corner they
+/// leave: a triangle (a, b, c) leaves a toward b, b toward c and c toward
+/// a. Each corner's edges are sorted by the corner they reach.
+struct OutEdges {
+    /// Corner v's edges are `edges[start[v]..start[v + 1]]`.
+    start: Vec<u32>,
+    /// (the corner reached, the triangle).
+    edges: Vec<(u32, u32)>,
+}
+
+impl OutEdges {
+    fn of(welded: &[[u32; 3]], vertices: usize) -> OutEdges {
+        let mut start = vec![0u32; vertices + 1];
+        for t in welded.iter().filter(|t| has_area(t)) {
+            for &from in t {
+                start[from as usize + 1] += 1;
+            }
+        }
+        for v in 0..vertices {
+            start[v + 1] += start[v];
+        }
+        let mut fill = start.clone();
+        let mut edges = vec![(0u32, 0u32); start[vertices] as usize];
+        for (t, &[a, b, c]) in welded.iter().enumerate() {
+            if !has_area(&[a, b, c]) {
+                continue;
+            }
+            for (from, to) in [(a, b), (b, c), (c, a)] {
+                edges[fill[from as usize] as usize] = (to, t as u32);
+                fill[from as usize] += 1;
+            }
+        }
+        for v in 0..vertices {
+            edges[start[v] as usize..start[v + 1] as usize].sort_unstable();
+        }
+        OutEdges { start, edges }
+    }
+
+    /// The edges from `from` to `to`.
+    fn between(&self, from: u32, to: u32) -> &[(u32, u32)] {
+        let out =
+            &self.edges[self.start[from as usize] as usize..self.start[from as usize + 1] as usize];
+        let first = out.partition_point(|e| e.0 < to);
+        let end = first + out[first..].partition_point(|e| e.0 == to);
+        &out[first..end]
+    }
+}
+
+/// Disjoint sets of triangles (union by size, paths halved).
 struct Parts {
     parent: Vec<u32>,
     size: Vec<u32>,
@@ -307,7 +341,9 @@ mod tests {
         let mut doubled = t.clone();
         doubled.push(t[0]);
         doubled.push([t[0][0], t[0][2], t[0][1]]);
-        assert_eq!(solids_of(&p, &doubled).counts(), (1, 0));
+        // Its edges run twice each way: the copies join nothing, and the
+        // cube around them is open there.
+        assert_eq!(solids_of(&p, &doubled).counts().1, 0);
     }
 
     #[test]
@@ -321,21 +357,41 @@ mod tests {
     }
 
     #[test]
-    fn a_light_within_a_solids_bounds_keeps_its_back_faces() {
+    fn a_light_within_a_solids_bounds_or_their_reach_keeps_its_back_faces() {
         let (mut p, mut t) = (Vec::new(), Vec::new());
         cube(Vec3::ZERO, &ALL, &mut p, &mut t);
         let s = solids_of(&p, &t);
         let mut mask = Vec::new();
-        for (eye, culled) in [
-            (Vec3::ZERO, false),
-            (Vec3::splat(0.5), false),
-            (Vec3::new(0.0, 0.0, 0.6), true),
-            (Vec3::new(-2.0, 0.1, 0.1), true),
+        for (eye, reach, culled) in [
+            (Vec3::ZERO, 0.0, false),
+            (Vec3::splat(0.5), 0.0, false),
+            (Vec3::new(0.0, 0.0, 0.6), 0.0, true),
+            (Vec3::new(0.0, 0.0, 0.6), 0.2, false),
+            (Vec3::new(-2.0, 0.1, 0.1), 1.0, true),
         ] {
-            s.cull_back_mask(Some(eye), &mut mask);
+            s.cull_back_mask(Some((eye, reach)), &mut mask);
             let expect = if culled { (1 << 12) - 1 } else { 0 };
-            assert_eq!(mask, vec![expect], "light at {eye}");
+            assert_eq!(mask, vec![expect], "light at {eye}, reach {reach}");
         }
+    }
+
+    #[test]
+    fn parts_touching_at_a_corner_are_apart() {
+        // An outward cube and, sharing its corner (0.5, 0.5, 0.5), a
+        // smaller inside-out one: only the first is a solid.
+        let (mut p, mut t) = (Vec::new(), Vec::new());
+        cube(Vec3::ZERO, &ALL, &mut p, &mut t);
+        let first = t.len();
+        let (mut q, mut u) = (Vec::new(), Vec::new());
+        cube(Vec3::splat(1.0), &ALL, &mut q, &mut u);
+        let base = p.len() as u32;
+        p.extend(q);
+        t.extend(u.iter().map(|t| [base + t[0], base + t[2], base + t[1]]));
+        let s = solids_of(&p, &t);
+        assert_eq!(s.counts(), (2, 1));
+        let mut mask = Vec::new();
+        s.cull_back_mask(None, &mut mask);
+        assert_eq!(mask, vec![(1 << first) - 1]);
     }
 
     #[test]

@@ -46,14 +46,15 @@ pub enum DepthSetup {
 }
 
 /// A depth-only pass of the scene's main triangles seen through
-/// `view_proj` from `eye` (a point or spot light's position; `None` for a
-/// directional light) into `target`, in `out` (made on first use, reused
+/// `view_proj` from `eye` (a point or spot light's position and the
+/// distance from it to the near plane's corners; `None` for a directional
+/// light) into `target`, in `out` (made on first use, reused
 /// after); its geometry time goes to `stats.times.shadow`.
 pub(crate) fn depth_pass<'a>(
     scene: &SceneData,
     target: &Target,
     view_proj: glam::Mat4,
-    eye: Option<glam::Vec3>,
+    eye: Option<(glam::Vec3, f32)>,
     setup: DepthSetup,
     out: &'a mut Option<Visibility>,
     stats: &mut FrameStats,

@@ -130,7 +130,11 @@ fn render_face(
     stats: &mut FrameStats,
 ) {
     let target = Target::new(face.size, face.size).expect("map size checked at load");
-    let eye = face.perspective.then_some(face.origin);
+    // A perspective face's near plane: at `near` along its axis, half as
+    // wide as tan_half × near (its texel is 2 tan_half / size).
+    let tan_half = 0.5 * face.texel * face.size as f32;
+    let corner = face.near * (1.0 + 2.0 * tan_half * tan_half).sqrt();
+    let eye = face.perspective.then_some((face.origin, corner));
     let v = depth_pass(scene, &target, face.clip, eye, setup, pass, stats);
     let n = face.size as usize;
     face.depth.resize(n * n, 0.0);
