@@ -648,6 +648,29 @@ fn the_shadow_fixtures_spheres_and_cubes_are_closed_solids() {
         (5, 4),
         "(parts, solids): a floor, 2 spheres, 2 cubes"
     );
+
+    // Their depth passes cull back faces (the shadow passes alone: the
+    // camera pass is not drawn here).
+    let mut maps = Default::default();
+    let mut buffers = Default::default();
+    let mut stats = FrameStats::default();
+    let view = s.data.camera.view(320, 180);
+    specula_raster::shadow_pass::render_maps(
+        &s.data,
+        &view,
+        specula_raster::shadow_pass::DepthSetup::DepthOnly,
+        &mut maps,
+        &mut buffers,
+        &mut stats,
+    );
+    let c = &stats.shadow_counts;
+    assert!(stats.shadow_passes > 0);
+    assert!(
+        c.culled_backface > c.triangles / 10,
+        "{} of {} triangles culled as back faces",
+        c.culled_backface,
+        c.triangles
+    );
 }
 
 /// The floor and unit box of [`floor_scene`] lit by the generated sky

@@ -104,6 +104,7 @@ pub(crate) fn depth_pass<'a>(
     let t = own.times;
     stats.times.shadow += t.vertex + t.setup + t.bin + t.raster;
     stats.shadow_passes += 1;
+    stats.shadow_counts.add(&own.counts);
     v
 }
 

@@ -31,6 +31,8 @@ pub struct FrameStats {
     pub blended_samples: u64,
     /// Shadow-map depth passes drawn (a cube map is 6).
     pub shadow_passes: u32,
+    /// Setup's counts over those depth passes (not in `counts`).
+    pub shadow_counts: SetupCounts,
 }
 
 pub(crate) fn ms_since(t: Instant) -> f64 {
