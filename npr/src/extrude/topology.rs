@@ -56,8 +56,9 @@ pub(super) const NONE: u32 = u32::MAX;
 impl Topology {
     pub(super) fn new(positions: &[Vec3], triangles: &[[u32; 3]]) -> Topology {
         // Welded on a grid of 1e-6 of the extent, as the stroke edges
-        // (edges/): a UV sphere's seam copies differ in the last bits
-        // (sin 2π ≠ 0) and must not make it open.
+        // (edges/): a mesh from elsewhere may repeat a seam's positions
+        // with different last bits (sin 2π ≠ 0 in f32), which must not
+        // make it open.
         let extent = positions
             .iter()
             .filter(|p| p.is_finite())
