@@ -25,8 +25,19 @@
 //! may be inside, where every face it sees is a back face and each of them
 //! casts, or its near plane may cut the front faces away.
 
+use crate::geometry::{mask_bits4, Cull};
 use glam::Vec3;
 use rayon::prelude::*;
+
+/// How a depth pass culls triangle `t` given its [`ClosedSolids::cull_back_mask`]:
+/// back faces where the triangle's bit is set, nothing elsewhere.
+#[inline(always)]
+pub(crate) fn depth_cull(mask: &[u64], t: usize) -> Cull {
+    match mask_bits4(mask, t) & 1 {
+        0 => Cull::None,
+        _ => Cull::Back,
+    }
+}
 
 /// Each triangle's part, and the bounds of the parts that are solids.
 #[derive(Clone, Debug, Default)]

@@ -21,7 +21,8 @@
 use crate::bin::{BinnedChunk, CHUNK};
 use crate::camera::View;
 use crate::clip::GuardBand;
-use crate::geometry::{mask_bits4, Cull, GeometryPass};
+use crate::closed::depth_cull;
+use crate::geometry::{Cull, GeometryPass};
 use crate::scan::{rasterize_tile_depth, AlphaScan};
 use crate::scene::SceneData;
 use crate::setup::{outcode_f32, DepthPlanes, SetupContext, SetupCounts, TriPlanes};
@@ -160,10 +161,7 @@ fn depth_only_pass(
             let mut counts = SetupCounts::default();
             let base = c * CHUNK;
             let id = |i: usize| ids.start as u32 + (base + i) as u32;
-            let cull = |bits: u32, i: usize| match bits >> i & 1 {
-                0 => Cull::None,
-                _ => Cull::Back,
-            };
+            let cull = |i: usize| depth_cull(cull_back, range.start + base + i);
             // Setup's trivial reject: all three vertices beyond one plane.
             let outside = |&[a, b, c]: &[u32; 3]| {
                 outcodes[a as usize] & outcodes[b as usize] & outcodes[c as usize] != 0
@@ -181,11 +179,11 @@ fn depth_only_pass(
                 }
                 let v = Vertices4::gather(clip, tris4.try_into().expect("chunks of LANES"));
                 let planes4 = planes4.try_into().expect("chunks of LANES");
-                let bits = mask_bits4(cull_back, range.start + base + q * LANES);
+                let i = q * LANES;
                 ctx.setup_x4_vertices(
-                    id(q * LANES),
+                    id(i),
                     &v,
-                    [cull(bits, 0), cull(bits, 1), cull(bits, 2), cull(bits, 3)],
+                    [cull(i), cull(i + 1), cull(i + 2), cull(i + 3)],
                     None,
                     planes4,
                     raster,
@@ -194,8 +192,7 @@ fn depth_only_pass(
             }
             for (i, (tri, plane)) in tris.iter().zip(planes.iter_mut()).enumerate().skip(quads) {
                 let v = tri.map(|k| clip[k as usize]);
-                let bits = mask_bits4(cull_back, range.start + base + i);
-                if let Some(p) = ctx.setup(id(i), v, cull(bits, 0), raster, &mut counts) {
+                if let Some(p) = ctx.setup(id(i), v, cull(i), raster, &mut counts) {
                     *plane = DepthPlanes {
                         origin: p.origin,
                         z: p.z,

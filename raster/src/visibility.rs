@@ -8,6 +8,7 @@
 use crate::bin::{BinnedChunk, CHUNK};
 use crate::camera::View;
 use crate::clip::GuardBand;
+use crate::closed::depth_cull;
 use crate::geometry::{mask_bits4, Cull, FrameContext, GeometryPass, VertexStage};
 use crate::occlusion::{tile_minima, DepthBounds, TileMinima};
 use crate::scan::{rasterize_tile, rasterize_tile_alpha, AlphaScan};
@@ -218,9 +219,7 @@ pub(crate) fn geometry_pass(
             let mut counts = SetupCounts::default();
             let base = c * CHUNK;
             let cull = |i: usize| match pass.cull {
-                Cull::None if shadow && mask_bits4(cull_back, range.start + base + i) & 1 != 0 => {
-                    Cull::Back
-                }
+                Cull::None if shadow => depth_cull(cull_back, range.start + base + i),
                 Cull::Back
                     if scene.materials[scene.tri_material[range.start + base + i] as usize]
                         .double_sided =>
