@@ -11,9 +11,11 @@
 //! - the prefiltered radiance chain, one level per perceptual roughness
 //!   0, 1/5, …, 1 (α = roughness²), each the GGX lobe's weighted mean of
 //!   the radiance around the mirror direction with n = v = r \[Karis13\],
-//!   importance sampled, each sample read from the source mip whose texel
-//!   matches the sample's solid angle \[Colbert07\]; stored as octahedral
-//!   maps (planar f32 per channel) so a packet reads them with gathers;
+//!   importance sampled (256 samples a texel at roughness 1/5, doubled
+//!   at each coarser level; level 1 a quarter of level 0's side, then
+//!   halving), each sample read from the source mip whose texel matches
+//!   the sample's solid angle \[Colbert07\]; stored as octahedral maps
+//!   (planar f32 per channel) so a packet reads them with gathers;
 //! - a compact, very bright source (a sun) taken out of the map
 //!   ([`crate::envmap_sun`]): the prefiltered chain and the SH are made
 //!   of the map without it, and it is shaded as a light
@@ -42,8 +44,16 @@ pub enum IblMethod {
 /// Perceptual roughness of the prefiltered levels: level k is at k / 5.
 pub const PREFILTER_LEVELS: usize = 6;
 
-/// GGX samples per prefiltered texel.
-const PREFILTER_SAMPLES: u32 = 64;
+/// GGX samples per texel of prefiltered level 1; each coarser level
+/// doubles them. A level has a quarter of the texels of the one before,
+/// so each costs half as much, and the broadest lobes, whose estimates
+/// converge slowest, get the most samples.
+const PREFILTER_SAMPLES: u32 = 256;
+
+/// GGX samples per texel of prefiltered level `k` ≥ 1.
+fn level_samples(k: usize) -> u32 {
+    PREFILTER_SAMPLES << (k - 1)
+}
 
 /// Octahedral map of a unit direction (y folds): (x, z) / (|x|+|y|+|z|),
 /// the lower half folded over the diagonals, to [0, 1]².
@@ -496,6 +506,16 @@ fn level0_size(width: usize, height: usize) -> usize {
     (width / 2).min(height).next_power_of_two().clamp(16, 1024)
 }
 
+/// Side of prefiltered level `k` after a sharpest level of `level0`:
+/// level 1 a quarter of it (its lobe, α = 0.04, is still several of its
+/// texels wide), then halving, down to 16.
+fn level_size(level0: usize, k: usize) -> usize {
+    match k {
+        0 => level0,
+        k => (level0 >> (k + 1)).max(16),
+    }
+}
+
 /// The prefiltered chain of `map` (module docs).
 fn prefilter(map: Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLevel> {
     use rayon::prelude::*;
@@ -506,7 +526,7 @@ fn prefilter(map: Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLeve
     }
     let map = &mips[0];
     let sizes: Vec<usize> = (0..PREFILTER_LEVELS)
-        .map(|k| (level0_size(map.width, map.height) >> k).max(16))
+        .map(|k| level_size(level0_size(map.width, map.height), k))
         .collect();
     let total: u64 = sizes.iter().map(|&n| n as u64).sum();
     let done = std::sync::atomic::AtomicU64::new(0);
@@ -519,6 +539,12 @@ fn prefilter(map: Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLeve
             let roughness = k as f64 / (PREFILTER_LEVELS - 1) as f64;
             // 1e-3: the models' α floor (ALPHA_MIN).
             let alpha = (roughness * roughness).max(1e-3);
+            let top = (mips.len() - 1) as f64;
+            let samples = if k > 0 {
+                ggx_samples(alpha, level_samples(k), omega_p, top)
+            } else {
+                Vec::new()
+            };
             let rows: Vec<Vec<[f32; 3]>> = (0..n)
                 .into_par_iter()
                 .map(|j| {
@@ -532,7 +558,7 @@ fn prefilter(map: Equirect, progress: &(dyn Fn(u64, u64) + Sync)) -> Vec<OctLeve
                                 let (u, v) = dir_to_uv(r.map(|x| x as f32));
                                 map.bilinear(u, v)
                             } else {
-                                ggx_filtered(&mips, r, alpha, omega_p)
+                                ggx_filtered(&mips, r, &samples)
                             }
                         })
                         .collect();
@@ -559,11 +585,49 @@ fn radical_inverse(i: u32) -> f64 {
     i.reverse_bits() as f64 * (1.0 / 4_294_967_296.0)
 }
 
-/// The GGX-weighted radiance around unit `r` with n = v = r: samples h
-/// from D(h) cos θh, l = 2(v·h)h − v, weights n·l \[Karis13\]; each read
-/// trilinearly from the source mip whose texel solid angle matches the
-/// sample's Ωs = 1/(N p(l)), p(l) = D(h)/4.
-fn ggx_filtered(mips: &[Equirect], r: [f64; 3], alpha: f64, omega_p: f64) -> [f32; 3] {
+/// One sample of a level's GGX lobe about the local z axis (n = v = z):
+/// the light direction l = 2 (v·h) h − v for h drawn from D(h) cos θh,
+/// its weight n·l, and the source mip to read it from.
+struct LobeSample {
+    l: [f64; 3],
+    nl: f64,
+    lod: f64,
+}
+
+/// The `count` samples of the GGX lobe of `alpha` (Hammersley points,
+/// the same for every texel of a level) that reach above the surface,
+/// each read from the source mip whose texel solid angle matches the
+/// sample's Ωs = 1/(N p(l)), p(l) = D(h)/4, where a source texel
+/// averages `omega_p` and the coarsest mip is `top`.
+fn ggx_samples(alpha: f64, count: u32, omega_p: f64, top: f64) -> Vec<LobeSample> {
+    let a2 = alpha * alpha;
+    (0..count)
+        .filter_map(|i| {
+            let (x1, x2) = ((i as f64 + 0.5) / count as f64, radical_inverse(i));
+            let cos_h = ((1.0 - x1) / (1.0 + (a2 - 1.0) * x1)).sqrt();
+            let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
+            let phi = std::f64::consts::TAU * x2;
+            let h = [sin_h * phi.cos(), sin_h * phi.sin(), cos_h];
+            let nl = 2.0 * cos_h * cos_h - 1.0;
+            if nl <= 0.0 {
+                return None;
+            }
+            let dd = cos_h * cos_h * (a2 - 1.0) + 1.0;
+            let d = a2 / (std::f64::consts::PI * dd * dd);
+            let omega_s = 1.0 / (count as f64 * d * 0.25);
+            Some(LobeSample {
+                l: [2.0 * cos_h * h[0], 2.0 * cos_h * h[1], nl],
+                nl,
+                lod: (0.5 * (omega_s / omega_p).log2() + 1.0).clamp(0.0, top),
+            })
+        })
+        .collect()
+}
+
+/// The GGX-weighted radiance around unit `r` with n = v = r: the
+/// level's `samples` turned to r's frame, each read trilinearly from its
+/// mip, weighted by n·l \[Karis13\].
+fn ggx_filtered(mips: &[Equirect], r: [f64; 3], samples: &[LobeSample]) -> [f32; 3] {
     let n = V3::new(r[0], r[1], r[2]);
     let up = if n.y.abs() < 0.999 {
         V3::new(0.0, 1.0, 0.0)
@@ -572,33 +636,15 @@ fn ggx_filtered(mips: &[Equirect], r: [f64; 3], alpha: f64, omega_p: f64) -> [f3
     };
     let t = up.cross(n).normalize();
     let b = n.cross(t);
-    let a2 = alpha * alpha;
     let mut sum = [0.0f64; 3];
     let mut wsum = 0.0;
-    let top = (mips.len() - 1) as f64;
-    for i in 0..PREFILTER_SAMPLES {
-        let (x1, x2) = (
-            (i as f64 + 0.5) / PREFILTER_SAMPLES as f64,
-            radical_inverse(i),
-        );
-        let cos_h = ((1.0 - x1) / (1.0 + (a2 - 1.0) * x1)).sqrt();
-        let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
-        let phi = std::f64::consts::TAU * x2;
-        let h = t * (sin_h * phi.cos()) + b * (sin_h * phi.sin()) + n * cos_h;
-        let l = h * (2.0 * cos_h) - n;
-        let nl = l.dot(n);
-        if nl <= 0.0 {
-            continue;
-        }
-        let dd = cos_h * cos_h * (a2 - 1.0) + 1.0;
-        let d = a2 / (std::f64::consts::PI * dd * dd);
-        let omega_s = 1.0 / (PREFILTER_SAMPLES as f64 * d * 0.25);
-        let lod = (0.5 * (omega_s / omega_p).log2() + 1.0).clamp(0.0, top);
-        let c = trilinear(mips, [l.x, l.y, l.z], lod);
+    for s in samples {
+        let l = t * s.l[0] + b * s.l[1] + n * s.l[2];
+        let c = trilinear(mips, [l.x, l.y, l.z], s.lod);
         for k in 0..3 {
-            sum[k] += c[k] as f64 * nl;
+            sum[k] += c[k] as f64 * s.nl;
         }
-        wsum += nl;
+        wsum += s.nl;
     }
     if wsum <= 0.0 {
         return mips[0].nearest(0.5, 0.5);
@@ -672,8 +718,10 @@ mod tests {
             levels.iter().map(|(n, _)| *n).collect::<Vec<_>>()
         };
         assert_eq!(sides(8976, 8), [16; PREFILTER_LEVELS]);
-        assert_eq!(sides(128, 64), [64, 32, 16, 16, 16, 16]);
-        assert_eq!(sides(64, 128), [32, 16, 16, 16, 16, 16]);
+        assert_eq!(sides(256, 128), [128, 32, 16, 16, 16, 16]);
+        assert_eq!(sides(128, 256), [64, 16, 16, 16, 16, 16]);
+        assert_eq!(level_size(1024, 1), 256);
+        assert_eq!(level_size(1024, 5), 16);
     }
 
     /// The disk's clamped cosine against midpoint quadrature over the
