@@ -586,11 +586,10 @@ fn radical_inverse(i: u32) -> f64 {
 }
 
 /// One sample of a level's GGX lobe about the local z axis (n = v = z):
-/// the light direction l = 2 (v·h) h − v for h drawn from D(h) cos θh,
-/// its weight n·l, and the source mip to read it from.
+/// the light direction l = 2 (v·h) h − v for h drawn from D(h) cos θh
+/// (its z, n·l, is its weight), and the source mip to read it from.
 struct LobeSample {
     l: [f64; 3],
-    nl: f64,
     lod: f64,
 }
 
@@ -607,7 +606,6 @@ fn ggx_samples(alpha: f64, count: u32, omega_p: f64, top: f64) -> Vec<LobeSample
             let cos_h = ((1.0 - x1) / (1.0 + (a2 - 1.0) * x1)).sqrt();
             let sin_h = (1.0 - cos_h * cos_h).max(0.0).sqrt();
             let phi = std::f64::consts::TAU * x2;
-            let h = [sin_h * phi.cos(), sin_h * phi.sin(), cos_h];
             let nl = 2.0 * cos_h * cos_h - 1.0;
             if nl <= 0.0 {
                 return None;
@@ -616,8 +614,11 @@ fn ggx_samples(alpha: f64, count: u32, omega_p: f64, top: f64) -> Vec<LobeSample
             let d = a2 / (std::f64::consts::PI * dd * dd);
             let omega_s = 1.0 / (count as f64 * d * 0.25);
             Some(LobeSample {
-                l: [2.0 * cos_h * h[0], 2.0 * cos_h * h[1], nl],
-                nl,
+                l: [
+                    2.0 * cos_h * (sin_h * phi.cos()),
+                    2.0 * cos_h * (sin_h * phi.sin()),
+                    nl,
+                ],
                 lod: (0.5 * (omega_s / omega_p).log2() + 1.0).clamp(0.0, top),
             })
         })
@@ -642,9 +643,9 @@ fn ggx_filtered(mips: &[Equirect], r: [f64; 3], samples: &[LobeSample]) -> [f32;
         let l = t * s.l[0] + b * s.l[1] + n * s.l[2];
         let c = trilinear(mips, [l.x, l.y, l.z], s.lod);
         for k in 0..3 {
-            sum[k] += c[k] as f64 * s.nl;
+            sum[k] += c[k] as f64 * s.l[2];
         }
-        wsum += s.nl;
+        wsum += s.l[2];
     }
     if wsum <= 0.0 {
         return mips[0].nearest(0.5, 0.5);
