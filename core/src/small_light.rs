@@ -24,9 +24,9 @@
 //! (the stencil straddles the node: a kink there shows) and centred on each
 //! row's midpoint (the stencil stays inside the row).
 
+use crate::light::{PolygonLocal, MAX_POLYGON_VERTICES};
 use crate::ltc::ggx::{LtcGgx, Y_AXIS};
 use crate::ltc::reference::{integrate_polygon, Tolerance};
-use crate::ltc::{form_factor_signed_mapped, sided};
 use crate::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
 use crate::table::Table2;
 use crate::vec3::V3;
@@ -158,13 +158,19 @@ fn frame(n: V3<f64>) -> (V3<f64>, V3<f64>) {
     (t, n.cross(t))
 }
 
-/// `table`'s LTC value of the lobe (F = 1: n ∫ D) at roughness `alpha`,
-/// unit local view `wo`, over the local polygon `q` (one-sided).
+/// `table`'s LTC value of the lobe (F = 1: n ∫ D, corrected as the
+/// runtime does: ltc/ggx.rs) at roughness `alpha`, unit local view `wo`,
+/// over the local polygon `q` (one-sided).
 pub(crate) fn ltc_value(table: &Table2<6>, alpha: f64, wo: V3<f64>, q: &[V3<f64>]) -> f64 {
     let y = (1.0 - wo.z.clamp(0.0, 1.0)).sqrt();
-    let [m00, m02, m20, m22, n, n_w] = table.lookup(alpha.sqrt(), y);
-    let l = LtcGgx::from_inverse([m00, m02, m20, m22], n, n_w, wo);
-    n * sided(form_factor_signed_mapped(q, |v| l.map(v)), false)
+    let l = LtcGgx::from_table(table, alpha, alpha.sqrt(), y, wo);
+    let mut poly = PolygonLocal {
+        vertices: [V3::zero(); MAX_POLYGON_VERTICES],
+        len: q.len(),
+        two_sided: false,
+    };
+    poly.vertices[..q.len()].copy_from_slice(q);
+    l.n * l.integral(&poly)
 }
 
 /// The reference value of the lobe over the local polygon `q`.

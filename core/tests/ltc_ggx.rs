@@ -191,19 +191,18 @@ fn ltc_error_of_the_lobes_that_share_the_ggx_fit() {
     assert!(quantile(&all, 0.9) < BECKMANN_P90 && quantile(&all, 1.0) < BECKMANN_MAX);
 }
 
-/// Measured: separable Smith p90 1.3 %, max 9.0 % (the table's n is the
+/// Measured: separable Smith p90 1.2 %, max 9.0 % (the table's n is the
 /// height-correlated albedo, up to 1.5 % above the separable one at
-/// grazing views); Beckmann p90 10.5 %, max 30 %, which is why scenes and
+/// grazing views, where large polygons get no correction); Beckmann p90 10.5 %, max 30 %, which is why scenes and
 /// eval refuse polygon lights on non-GGX microfacet materials.
 const SEPARABLE_P90: f64 = 0.02;
 const SEPARABLE_MAX: f64 = 0.11;
 const BECKMANN_P90: f64 = 0.14;
 const BECKMANN_MAX: f64 = 0.36;
 
-/// Measured p90 and max with a margin: 1.13 % and 7.5 % over 1008 cases
-/// with the committed table (median 0.13 %; by view, p90 0.18–0.31 % at
-/// 0–45°, 0.73 % at 60°, 1.2 % at 70°, 2.5 % at 80°, 3.1 % at 85°; max
-/// 0.8 % up to 45°, 6.1 % at 80°, 7.5 % at 85°).
+/// Measured p90 and max with a margin: 1.02 % and 7.5 % over 1008 cases
+/// with the committed table and the lobe's correction (by view in
+/// docs/accuracy.md).
 const P90_BOUND: f64 = 0.015;
 const MAX_BOUND: f64 = 0.09;
 
@@ -271,7 +270,7 @@ fn metallic_roughness_through_the_ltc_against_the_reference() {
         100.0 * quantile(&errs, 0.9),
         100.0 * quantile(&errs, 1.0)
     );
-    // Measured: median 0.05 %, p90 1.7 %, max 12.9 % (the diffuse part's
+    // Measured: median 0.03 %, p90 1.4 %, max 12.9 % (the diffuse part's
     // (1 − F) taken at its hemispherical mean; see the model's docs).
     assert!(quantile(&errs, 0.9) < 0.025 && quantile(&errs, 1.0) < 0.16);
 }
@@ -323,19 +322,26 @@ fn small_light_per_pixel_error_on_a_sphere_and_a_floor() {
 }
 
 /// The LTC / reference ratio along a view sweep (light in the mirror
-/// direction, views 0–85°): its second difference centred on the table's
-/// row nodes against centred inside the rows (root mean square). The aim
-/// is a ratio of at most 1 (no kinks at row boundaries); the committed
-/// table is held to what it measures.
+/// direction): its second difference centred on the table's row nodes
+/// against centred inside the rows (root mean square), over views 0–85°
+/// and over 0–65°, where the lobe's correction holds the ratio to the
+/// reference. The aim is a ratio of at most 1 (no kinks at row
+/// boundaries); it is not met over 0–85° (docs/accuracy.md, "Seams"), so
+/// the test holds the committed table where it is: the ratio over 0–85°,
+/// and the kinks' size over 0–65°.
 #[test]
 fn the_view_sweep_has_no_kinks_at_row_boundaries() {
-    let y_hi = (1.0 - 85f64.to_radians().cos()).sqrt();
+    let y = |deg: f64| (1.0 - deg.to_radians().cos()).sqrt();
     for alpha in [0.2, 0.3, 0.4, 0.5] {
-        let k = small_light::kinks(table(), alpha, 0.0, y_hi);
+        let k = small_light::kinks(table(), alpha, 0.0, y(85.0));
+        let low = small_light::kinks(table(), alpha, 0.0, y(65.0));
         eprintln!(
-            "α {alpha}: second difference rms across rows {:.2e}, within rows {:.2e}",
+            "α {alpha}: second difference rms across rows {:.2e}, within rows {:.2e} (0–85°); \
+             {:.2e} and {:.2e} (0–65°)",
             k.across_rms(),
-            k.within_rms()
+            k.within_rms(),
+            low.across_rms(),
+            low.within_rms()
         );
         assert!(
             k.across_rms() <= KINK_RATIO * k.within_rms(),
@@ -343,12 +349,20 @@ fn the_view_sweep_has_no_kinks_at_row_boundaries() {
             k.across_rms(),
             k.within_rms()
         );
+        assert!(
+            low.across_rms() <= KINK_LOW,
+            "α {alpha}: {:.2e} across rows at views up to 65°",
+            low.across_rms()
+        );
     }
 }
 
-/// Bounds that hold the committed table where it is (its figures and the
-/// aims, a mean of 2 % and a ratio of 1, are in docs/accuracy.md, "Per
-/// pixel under a small light, and seams"): a refit must not do worse.
-const SMALL_LIGHT_MEAN: f64 = 0.075;
-const SMALL_LIGHT_WORST: f64 = 0.5;
-const KINK_RATIO: f64 = 12.5;
+/// Bounds that hold the committed table and its correction where they
+/// are (their figures and the aims, a mean of 2 % and a ratio of 1, are
+/// in docs/accuracy.md, "Per pixel under a small light, and seams"): a
+/// change must not do worse. The per-pixel bounds are the aim itself.
+const SMALL_LIGHT_MEAN: f64 = 0.02;
+const SMALL_LIGHT_WORST: f64 = 0.02;
+const KINK_RATIO: f64 = 6.0;
+/// Root mean square of the second differences across rows, views 0–65°.
+const KINK_LOW: f64 = 5e-4;

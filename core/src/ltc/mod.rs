@@ -12,5 +12,4 @@ pub mod ggx;
 mod polygon;
 pub mod reference;
 
-pub(crate) use polygon::form_factor_signed_mapped;
 pub use polygon::{form_factor, form_factor_signed, sided};

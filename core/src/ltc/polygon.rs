@@ -210,6 +210,143 @@ pub(crate) fn edge_integral_pair<R: Real>(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V
     }
 }
 
+/// The whole vector of [`edge_integral`]'s term, θ n̂ (its z is
+/// [`edge_integral`]): the edge's part of 2π × the polygon's vector form
+/// factor.
+#[inline(always)]
+pub(crate) fn edge_vector<R: Real>(a: V3<R>, b: V3<R>) -> V3<R> {
+    let (n, c) = edge_normal(a, b);
+    let n2 = n.length_squared();
+    if R::EXACT {
+        let s = n2.sqrt();
+        return n * (s.atan2(c) / s.max(R::splat(MIN_SQ).sqrt()));
+    }
+    let inv = R::ONE / c.mul_add(c, n2).max(R::splat(MIN_SQ)).sqrt();
+    let g = inv * theta_over_sin((c * inv).abs());
+    let obtuse = c.lt(R::ZERO);
+    let g = if obtuse.any() {
+        R::select(obtuse, R::PI / n2.max(R::splat(MIN_SQ)).sqrt() - g, g)
+    } else {
+        g
+    };
+    n * g
+}
+
+/// ([`edge_integral`] of `a0 → b0`, [`edge_vector`] of `a1 → b1`), each
+/// equal to the single form, sharing the polynomial's steps as
+/// [`edge_integral_pair`] does.
+#[inline(always)]
+fn edge_integral_and_vector<R: Real>(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V3<R>) -> (R, V3<R>) {
+    if R::EXACT {
+        return (edge_integral(a0, b0), edge_vector(a1, b1));
+    }
+    let (n0, c0) = edge_normal(a0, b0);
+    let (n1, c1) = edge_normal(a1, b1);
+    let (q0, q1) = (n0.length_squared(), n1.length_squared());
+    let (t0, x0) = arc_terms(n0.z, q0, c0);
+    let inv1 = R::ONE / c1.mul_add(c1, q1).max(R::splat(MIN_SQ)).sqrt();
+    let x1 = (c1 * inv1).abs();
+    let (p0, p1) = theta_over_sin_pair(x0, x1);
+    let (r0, g1) = (t0 * p0, inv1 * p1);
+    let (o0, o1) = (c0.lt(R::ZERO), c1.lt(R::ZERO));
+    if (o0 | o1).any() {
+        let g1 = R::select(o1, R::PI / q1.max(R::splat(MIN_SQ)).sqrt() - g1, g1);
+        (reflect_obtuse(o0, n0.z, q0, r0), n1 * g1)
+    } else {
+        (r0, n1 * g1)
+    }
+}
+
+/// What a polygon's edge loop sums: the signed form factor (a scalar, each
+/// edge's [`edge_integral`]) or the vector form factor (each edge's
+/// [`edge_vector`]; a join along the horizon has only a z part). One
+/// clipping loop serves both, so the scalar keeps its operations (and bits).
+pub(crate) trait EdgeSum<R: Real>: Copy {
+    fn zero() -> Self;
+    /// The term of the great arc from `a` to `b`.
+    fn edge(a: V3<R>, b: V3<R>) -> Self;
+    /// The terms of the arcs `a0 → b0` (scalar) and `a1 → b1` (this sum).
+    fn edge_pair(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V3<R>) -> (R, Self);
+    /// The term of the arc from `a` to `b` along the horizon.
+    fn horizon(a: V3<R>, b: V3<R>) -> Self;
+    /// `self + t` in the lanes of `m`, `self` elsewhere.
+    fn add_where(self, m: R::Mask, t: Self) -> Self;
+    fn add(self, t: Self) -> Self;
+    /// `self` in the lanes of `m`, zero elsewhere.
+    fn keep(self, m: R::Mask) -> Self;
+    fn scale(self, k: R) -> Self;
+}
+
+impl<R: Real> EdgeSum<R> for R {
+    #[inline(always)]
+    fn zero() -> R {
+        R::ZERO
+    }
+    #[inline(always)]
+    fn edge(a: V3<R>, b: V3<R>) -> R {
+        edge_integral(a, b)
+    }
+    #[inline(always)]
+    fn edge_pair(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V3<R>) -> (R, R) {
+        edge_integral_pair(a0, b0, a1, b1)
+    }
+    #[inline(always)]
+    fn horizon(a: V3<R>, b: V3<R>) -> R {
+        horizon_integral(a, b)
+    }
+    #[inline(always)]
+    fn add_where(self, m: R::Mask, t: R) -> R {
+        self + R::select(m, t, R::ZERO)
+    }
+    #[inline(always)]
+    fn add(self, t: R) -> R {
+        self + t
+    }
+    #[inline(always)]
+    fn keep(self, m: R::Mask) -> R {
+        R::select(m, self, R::ZERO)
+    }
+    #[inline(always)]
+    fn scale(self, k: R) -> R {
+        self * k
+    }
+}
+
+impl<R: Real> EdgeSum<R> for V3<R> {
+    #[inline(always)]
+    fn zero() -> V3<R> {
+        V3::zero()
+    }
+    #[inline(always)]
+    fn edge(a: V3<R>, b: V3<R>) -> V3<R> {
+        edge_vector(a, b)
+    }
+    #[inline(always)]
+    fn edge_pair(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V3<R>) -> (R, V3<R>) {
+        edge_integral_and_vector(a0, b0, a1, b1)
+    }
+    #[inline(always)]
+    fn horizon(a: V3<R>, b: V3<R>) -> V3<R> {
+        V3::new(R::ZERO, R::ZERO, horizon_integral(a, b))
+    }
+    #[inline(always)]
+    fn add_where(self, m: R::Mask, t: V3<R>) -> V3<R> {
+        self + V3::select(m, t, V3::zero())
+    }
+    #[inline(always)]
+    fn add(self, t: V3<R>) -> V3<R> {
+        self + t
+    }
+    #[inline(always)]
+    fn keep(self, m: R::Mask) -> V3<R> {
+        V3::select(m, self, V3::zero())
+    }
+    #[inline(always)]
+    fn scale(self, k: R) -> V3<R> {
+        self * k
+    }
+}
+
 /// [`edge_integral`] for two points on the horizon (z = 0): the signed
 /// angle from `a` to `b` about +z.
 #[inline(always)]
@@ -253,6 +390,26 @@ pub(crate) fn form_factor_signed_mapped<R: Real>(
     vertices: &[V3<R>],
     map: impl Fn(V3<R>) -> V3<R>,
 ) -> R {
+    mapped_sum(vertices, map)
+}
+
+/// The vector form factor of the mapped polygon's part above the horizon,
+/// (1/π) ∫ ω dω = (1/2π) Σ θᵢ n̂ᵢ over the clipped polygon's edges, signed
+/// as [`form_factor_signed_mapped`] (which is its z): its direction is
+/// where the part lies, its length about how much of the hemisphere's
+/// cosine it holds (1 for the whole upper hemisphere).
+#[inline(always)]
+pub(crate) fn form_factor_vector_mapped<R: Real>(
+    vertices: &[V3<R>],
+    map: impl Fn(V3<R>) -> V3<R>,
+) -> V3<R> {
+    mapped_sum(vertices, map)
+}
+
+/// The clipping loop of [`form_factor_signed_mapped`] and
+/// [`form_factor_vector_mapped`].
+#[inline(always)]
+fn mapped_sum<R: Real, T: EdgeSum<R>>(vertices: &[V3<R>], map: impl Fn(V3<R>) -> V3<R>) -> T {
     let n = vertices.len();
     // Lanes where every vertex is above, lanes where any is.
     let mut all: R::Mask = R::ZERO.le(R::ZERO);
@@ -263,19 +420,19 @@ pub(crate) fn form_factor_signed_mapped<R: Real>(
         any = any | above;
     }
     if !any.any() {
-        return R::ZERO;
+        return T::zero();
     }
-    let mut sum = R::ZERO;
+    let mut sum = T::zero();
     let mut a = map(vertices[n - 1]);
     if (all | !any).all() {
         // Every lane sees all of it or none of it: no clipping.
         for &v in vertices {
             let b = map(v);
             // Edges summed b → a: positive for counter-clockwise from the origin.
-            sum += edge_integral(b, a);
+            sum = sum.add(T::edge(b, a));
             a = b;
         }
-        sum = R::select(all, sum, R::ZERO);
+        sum = sum.keep(all);
     } else {
         // End of the last part above the horizon, and the start of the first.
         let mut last = V3::zero();
@@ -293,22 +450,22 @@ pub(crate) fn form_factor_signed_mapped<R: Real>(
             } else {
                 (a, b)
             };
-            sum += R::select(part, edge_integral(end, start), R::ZERO);
+            sum = sum.add_where(part, T::edge(end, start));
             // Join along the horizon from the previous part's end to this
             // start, where this part starts at a crossing (elsewhere the
             // previous part ended at this start, a zero join).
             let join = part & have & !above_a;
             if join.any() {
-                sum += R::select(join, horizon_integral(start, last), R::ZERO);
+                sum = sum.add_where(join, T::horizon(start, last));
             }
             first = V3::select(part & !have, start, first);
             last = V3::select(part, end, last);
             have = have | part;
             a = b;
         }
-        sum += R::select(have, horizon_integral(first, last), R::ZERO);
+        sum = sum.add_where(have, T::horizon(first, last));
     }
-    sum * R::splat(0.5 * core::f64::consts::FRAC_1_PI)
+    sum.scale(R::splat(0.5 * core::f64::consts::FRAC_1_PI))
 }
 
 /// ([`form_factor_signed`], [`form_factor_signed_mapped`]) of the same
@@ -322,6 +479,26 @@ pub(crate) fn form_factor_pair_signed<R: Real>(
     vertices: &[V3<R>],
     map: impl Fn(V3<R>) -> V3<R>,
 ) -> (R, R) {
+    form_factor_pair(vertices, map)
+}
+
+/// [`form_factor_signed`] and [`form_factor_vector_mapped`] of the same
+/// polygon, in one pass where neither needs clipping, as
+/// [`form_factor_pair_signed`].
+#[inline(always)]
+pub(crate) fn form_factor_pair_vector<R: Real>(
+    vertices: &[V3<R>],
+    map: impl Fn(V3<R>) -> V3<R>,
+) -> (R, V3<R>) {
+    form_factor_pair(vertices, map)
+}
+
+/// The loop of [`form_factor_pair_signed`] and [`form_factor_pair_vector`].
+#[inline(always)]
+fn form_factor_pair<R: Real, T: EdgeSum<R>>(
+    vertices: &[V3<R>],
+    map: impl Fn(V3<R>) -> V3<R>,
+) -> (R, T) {
     let t: R::Mask = R::ZERO.le(R::ZERO);
     let (mut all, mut any, mut all_m, mut any_m) = (t, !t, t, !t);
     for &v in vertices {
@@ -332,29 +509,23 @@ pub(crate) fn form_factor_pair_signed<R: Real>(
         any_m = any_m | above_m;
     }
     if !((all | !any) & (all_m | !any_m)).all() {
-        return (
-            form_factor_signed(vertices),
-            form_factor_signed_mapped(vertices, map),
-        );
+        return (form_factor_signed(vertices), mapped_sum(vertices, map));
     }
     if !(any | any_m).any() {
-        return (R::ZERO, R::ZERO);
+        return (R::ZERO, T::zero());
     }
-    let (mut sum, mut sum_m) = (R::ZERO, R::ZERO);
+    let (mut sum, mut sum_m) = (R::ZERO, T::zero());
     let mut a = vertices[vertices.len() - 1];
     let mut a_m = map(a);
     for &b in vertices {
         let b_m = map(b);
-        let (e, e_m) = edge_integral_pair(b, a, b_m, a_m);
+        let (e, e_m) = T::edge_pair(b, a, b_m, a_m);
         sum += e;
-        sum_m += e_m;
+        sum_m = sum_m.add(e_m);
         (a, a_m) = (b, b_m);
     }
     let k = R::splat(0.5 * core::f64::consts::FRAC_1_PI);
-    (
-        R::select(all, sum, R::ZERO) * k,
-        R::select(all_m, sum_m, R::ZERO) * k,
-    )
+    (R::select(all, sum, R::ZERO) * k, sum_m.keep(all_m).scale(k))
 }
 
 /// The form factor of a polygon light: of its front only

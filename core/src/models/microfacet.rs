@@ -249,6 +249,10 @@ impl Brdf for Microfacet {
     fn prepare_polygons<R: Real>(&self, p: &MicrofacetPrepared<R>) -> MicrofacetPolygons<R> {
         let params = &self.params;
         let ltc = LtcGgx::new(R::splat(params.alpha as f64), p.o.wo);
+        let ltc = match params.smith {
+            Smith::Separable => ltc.with_separable_smith(),
+            _ => ltc,
+        };
         let f0 = params.f0().map(|c| R::splat(c as f64));
         let specular = Rgb::new(
             ltc.schlick_albedo(f0[0]),

@@ -551,7 +551,7 @@ impl Brdf for Disney {
         let spec = if d.alpha_x != d.alpha_y && d.alpha_x.max(d.alpha_y) <= 1.0 {
             self.anisotropic_ltc(o.wo)
         } else {
-            LtcGgx::new(R::splat(d.spec_ltc_alpha), o.wo)
+            LtcGgx::new(R::splat(d.spec_ltc_alpha), o.wo).with_separable_smith()
         };
         let c = p.lanes.cspec0;
         let specular = Rgb::new(
