@@ -38,7 +38,7 @@
 //! for the polygon. r is held to [1/4, 4] (ω̄ near the horizon). p is
 //! the lobe with F = 1 divided by the table's n, with height-correlated
 //! Smith (the fitted lobe) or separable Smith
-//! ([`LtcGgx::with_separable_smith`]); D(ω̄) comes from the mapped
+//! (`LtcGgx::with_separable_smith`); D(ω̄) comes from the mapped
 //! direction's length (the transform's Jacobian). Anisotropic lobes
 //! (disney/polygons.rs stretches the transform) and other cosines (the
 //! coat's) go uncorrected.
