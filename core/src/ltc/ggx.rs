@@ -26,7 +26,7 @@
 //! fit's scatter from row to row into kinks. Where the transform stands
 //! for a GGX lobe (`lobe`), the integral I = ∫_P D is multiplied by
 //!
-//!   1 + w (r − 1),  r = p(ω̄) / D(ω̄),  w = max(0, 1 − 3 |F|),
+//!   1 + w (r − 1),  r = p(ω̄) / D(ω̄),  w = max(0, 1 − 2 |F|)²,
 //!
 //! where F is the vector form factor of the mapped, clipped polygon
 //! (polygon.rs) and ω̄ the direction it points to, mapped back by M: the
@@ -35,13 +35,16 @@
 //! in its size; w fades the correction out as the polygon fills more of
 //! the cosine (|F| → 1 for the whole hemisphere), where I is already the
 //! normalized lobe's share and a ratio at one direction would not stand
-//! for the polygon. r is held to [1/4, 4] (ω̄ near the horizon). p is
+//! for the polygon; w is squared so that a growing polygon never gets
+//! darker. r is held to [1/4, 4] (ω̄ near the horizon). p is
 //! the lobe with F = 1 divided by the table's n, with height-correlated
 //! Smith (the fitted lobe) or separable Smith
 //! (`LtcGgx::with_separable_smith`); D(ω̄) comes from the mapped
-//! direction's length (the transform's Jacobian). Anisotropic lobes
-//! (disney/polygons.rs stretches the transform) and other cosines (the
-//! coat's) go uncorrected.
+//! direction's length (the transform's Jacobian). Only isotropic GGX
+//! lobes are corrected: anisotropic ones (disney/polygons.rs stretches the
+//! transform, or Disney's α beyond 1) and other cosines (Disney's
+//! clearcoat fit, ltc/coat.rs) are not; the glTF clearcoat, a GGX lobe
+//! about its own normal, is.
 //!
 //! **Measured error**: core/tests/ltc_ggx.rs measures the table against
 //! the reference as a fraction of n over many polygons and views, and per
@@ -235,6 +238,14 @@ impl<R: Real> LtcGgx<R> {
         self
     }
 
+    /// The same lookup without the lobe's correction (a transform that no
+    /// longer stands for the isotropic GGX lobe).
+    #[inline(always)]
+    pub(crate) fn without_lobe(mut self) -> LtcGgx<R> {
+        self.lobe = None;
+        self
+    }
+
     /// Any isotropic LTC fitted with the view in the xz-plane (as this
     /// table's and ltc/coat.rs's cells are): c M⁻¹'s entries m00, m02,
     /// m20, m22 (m11 = 1), the magnitudes n and n_w, turned to the
@@ -286,8 +297,9 @@ impl<R: Real> LtcGgx<R> {
     /// that the polygon receives, in [0, 1]. M⁻¹ has a positive
     /// determinant, so the polygon keeps its orientation (its front).
     /// With the lobe's correction where the transform has a lobe (still
-    /// in [0, 1]: the integral is at most |F|, so the factor, at most
-    /// 1 + 3 w, keeps it below |F| (4 − 9 |F|) ≤ 4/9).
+    /// in [0, 1]: the integral is at most |F| and r at most 4, so where
+    /// the correction acts the product is at most |F| (1 + 3 (1 − 2 |F|)²)
+    /// ≤ 1/2).
     #[inline(always)]
     pub fn integral(&self, poly: &PolygonLocal<R>) -> R {
         match &self.lobe {
@@ -304,7 +316,7 @@ impl<R: Real> LtcGgx<R> {
 
     /// The polygon's form factor (sided) and [`LtcGgx::integral`], in
     /// one pass where the polygon needs no clipping
-    /// ([`form_factor_pair_signed`]).
+    /// ([`form_factor_pair_signed`], [`form_factor_pair_vector`]).
     #[inline(always)]
     pub(crate) fn form_factor_and_integral(&self, poly: &PolygonLocal<R>) -> (R, R) {
         match &self.lobe {
@@ -336,21 +348,23 @@ impl<R: Real> Lobe<R> {
     #[inline(always)]
     fn corrected(&self, n: R, f: V3<R>, two_sided: bool) -> R {
         let i = sided(f.z, two_sided);
-        // f, turned toward the polygon's lit side (its back for a
-        // two-sided light seen from behind), in the cosine's space; ω' =
-        // R(φo) (c M⁻¹)⁻¹ f is the direction in local coordinates.
-        let f = V3::select(f.z.lt(R::ZERO), -f, f);
+        // F's direction u, turned toward the polygon's lit side (its back
+        // for a two-sided light seen from behind), in the cosine's space;
+        // ω' = R(φo) (c M⁻¹)⁻¹ u is the direction in local coordinates.
         let len2 = f.length_squared();
+        let inv_len = len2.max(R::splat(TINY)).rsqrt();
+        let len = len2 * inv_len;
+        let u = f * R::select(f.z.lt(R::ZERO), -inv_len, inv_len);
         let [i00, i02, i20, i22] = self.inv;
-        let tx = i00.mul_add(f.x, i02 * f.z);
-        let tz = i20.mul_add(f.x, i22 * f.z);
+        let tx = i00.mul_add(u.x, i02 * u.z);
+        let tz = i20.mul_add(u.x, i22 * u.z);
         let (c, s) = (self.cos_phi, self.sin_phi);
-        let w = V3::new(c.mul_add(tx, -(s * f.y)), s.mul_add(tx, c * f.y), tz);
+        let w = V3::new(c.mul_add(tx, -(s * u.y)), s.mul_add(tx, c * u.y), tz);
         let l2 = w.length_squared().max(R::splat(TINY));
         let inv_l = l2.rsqrt();
         let l3 = l2 * l2 * inv_l;
-        // D at ω̂ = ω'/|ω'|: (f̂.z/π) det(c M⁻¹) |ω'/|f||³ = f.z det |ω'|³
-        // / (π |f|⁴).
+        // D at ω̂ = ω'/|ω'| (Jacobian of the transform): (u.z/π)
+        // det(c M⁻¹) |ω'|³.
         // The lobe there (F = 1): f cos θi = D(h) V μi, with the half
         // vector h = ω̂ + ωo unnormalized (|h|² = h2), so D(h) = α² h2² /
         // (π (h.z² (α² − 1) + h2)²), and height-correlated Smith's V = 1 /
@@ -369,12 +383,13 @@ impl<R: Real> Lobe<R> {
         } else {
             R::splat(2.0) * mu_i.mul_add(self.ao, mu_o * ai)
         };
-        let num = a2 * h2 * h2 * mu_i * len2 * len2;
-        let den = den * den * vis_den * n * f.z * self.det * l3;
+        let num = a2 * h2 * h2 * mu_i;
+        let den = den * den * vis_den * n * u.z * self.det * l3;
         let valid = len2.gt(R::splat(TINY)) & den.gt(R::splat(TINY));
         let ratio = (num / den.max(R::splat(TINY))).clamp(R::splat(RATIO_MIN), R::splat(RATIO_MAX));
         let r = R::select(valid, ratio, R::ONE);
-        let weight = R::splat(FADE).mul_add(-(len2.sqrt()), R::ONE).max(R::ZERO);
+        let fade = R::splat(FADE).mul_add(-len, R::ONE).max(R::ZERO);
+        let weight = fade * fade;
         i * weight.mul_add(r - R::ONE, R::ONE)
     }
 }
@@ -386,6 +401,8 @@ const MU_MIN: f64 = 1e-3;
 /// The correction's ratio is held to [RATIO_MIN, RATIO_MAX].
 const RATIO_MIN: f64 = 0.25;
 const RATIO_MAX: f64 = 4.0;
-/// The correction's weight, 1 − FADE |F|: full for small parts, none from
-/// |F| = 1/FADE on.
-const FADE: f64 = 3.0;
+/// The correction's weight, max(0, 1 − FADE |F|)²: full for small parts,
+/// none from |F| = 1/FADE on, slope-continuous there, and squared so that
+/// a growing polygon never gets darker (with I ≈ |F| and r ≤ 4,
+/// I (1 + w (r − 1)) increases with |F|; a linear fade does not).
+const FADE: f64 = 2.0;

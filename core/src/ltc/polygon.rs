@@ -597,6 +597,27 @@ mod tests {
                 assert_eq!(l0.to_array()[i].to_bits(), s0.to_array()[i].to_bits());
                 assert_eq!(l1.to_array()[i].to_bits(), s1.to_array()[i].to_bits());
             }
+            // The same for an edge and the vector of its LTC image
+            // (form_factor_pair_vector against form_factor_vector_mapped).
+            let (e0, v1) = edge_integral_and_vector(a0, b0, a1, b1);
+            let want = edge_vector(a1, b1);
+            assert_eq!(e0.to_bits(), edge_integral(a0, b0).to_bits());
+            for (x, y) in [(v1.x, want.x), (v1.y, want.y), (v1.z, want.z)] {
+                assert_eq!(x.to_bits(), y.to_bits());
+            }
+            let (l0, lv) = edge_integral_and_vector(
+                lane(p[0], 1),
+                lane(p[1], 2),
+                lane(p[2], 3),
+                lane(p[3], 4),
+            );
+            let sv = edge_vector(lane(p[2], 3), lane(p[3], 4));
+            for i in 0..8 {
+                assert_eq!(l0.to_array()[i].to_bits(), s0.to_array()[i].to_bits());
+                for (x, y) in [(lv.x, sv.x), (lv.y, sv.y), (lv.z, sv.z)] {
+                    assert_eq!(x.to_array()[i].to_bits(), y.to_array()[i].to_bits());
+                }
+            }
         }
     }
 
@@ -654,7 +675,8 @@ mod tests {
             ],
         ];
         for q in cases {
-            // Counter-clockwise seen from the origin (Newell normal away).
+            // Counter-clockwise seen from the origin: reversed where the
+            // Newell normal points away from it.
             let mut q = q;
             let mut nrm = v(0.0, 0.0, 0.0);
             for k in 0..q.len() {

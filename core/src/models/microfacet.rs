@@ -249,9 +249,13 @@ impl Brdf for Microfacet {
     fn prepare_polygons<R: Real>(&self, p: &MicrofacetPrepared<R>) -> MicrofacetPolygons<R> {
         let params = &self.params;
         let ltc = LtcGgx::new(R::splat(params.alpha as f64), p.o.wo);
-        let ltc = match params.smith {
-            Smith::Separable => ltc.with_separable_smith(),
-            _ => ltc,
+        let ltc = match (params.ndf, params.smith) {
+            (Ndf::Ggx, Smith::Separable) => ltc.with_separable_smith(),
+            (Ndf::Ggx, _) => ltc,
+            // Other lobes (refused under polygon lights by scenes and
+            // eval; measured through the GGX fit by the tests) are not
+            // the GGX lobe the correction follows.
+            _ => ltc.without_lobe(),
         };
         let f0 = params.f0().map(|c| R::splat(c as f64));
         let specular = Rgb::new(
@@ -271,7 +275,7 @@ impl Brdf for Microfacet {
     }
 
     /// The specular lobe by the GGX LTC at this α (ltc/ggx.rs; separable
-    /// Smith uses the height-correlated fit, measured p90 1.3 %, max 9 %;
+    /// Smith uses the height-correlated fit, corrected toward its own lobe;
     /// Beckmann and GTR lobes would get the GGX fit at the same α, off by
     /// up to 30 %, so scenes and eval refuse polygon lights on them), with
     /// Schlick's split at F0 (`f0`: exact

@@ -551,7 +551,14 @@ impl Brdf for Disney {
         let spec = if d.alpha_x != d.alpha_y && d.alpha_x.max(d.alpha_y) <= 1.0 {
             self.anisotropic_ltc(o.wo)
         } else {
-            LtcGgx::new(R::splat(d.spec_ltc_alpha), o.wo).with_separable_smith()
+            let l = LtcGgx::new(R::splat(d.spec_ltc_alpha), o.wo);
+            // An anisotropic lobe beyond α = 1 goes through the isotropic
+            // fit uncorrected: the correction follows an isotropic lobe.
+            if d.alpha_x == d.alpha_y {
+                l.with_separable_smith()
+            } else {
+                l.without_lobe()
+            }
         };
         let c = p.lanes.cspec0;
         let specular = Rgb::new(

@@ -48,9 +48,8 @@ impl Disney {
         let a_ref = (R::splat(d.alpha_x * d.alpha_y) * m2)
             .mul_add(R::ONE, p * (R::ONE - m2))
             .sqrt();
-        let mut l = LtcGgx::new(a_ref, wo);
         // The stretch below leaves the isotropic lobe: no correction.
-        l.lobe = None;
+        let mut l = LtcGgx::new(a_ref, wo).without_lobe();
         // √C = (C + s I)/t with s = αx αy, t = αx + αy; L⁻¹ = α_ref t /
         // (s t²) · [[q + s, −κ], [−κ, p + s]] (det(C + s I) = s t²).
         let s = R::splat(d.alpha_x * d.alpha_y);
