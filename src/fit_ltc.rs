@@ -36,8 +36,9 @@ use std::f64::consts::PI;
 /// Stratified points per distribution in the error estimate (a 32 × 32
 /// grid, jittered by a fixed Hammersley offset).
 const SIDE: usize = 32;
-/// Smallest μo fitted (the last view node is μo = 0, a view on the horizon).
-pub(crate) const MU_MIN: f64 = 1e-3;
+/// Smallest μo fitted (the last view node is μo = 0, a view on the
+/// horizon): the one the runtime's lobe correction uses.
+pub(crate) use specula_core::ltc::ggx::MU_MIN;
 
 /// The lobe at one (α, μo): everything the cost needs.
 pub(crate) struct Lobe {

@@ -191,17 +191,19 @@ fn ltc_error_of_the_lobes_that_share_the_ggx_fit() {
     assert!(quantile(&all, 0.9) < BECKMANN_P90 && quantile(&all, 1.0) < BECKMANN_MAX);
 }
 
-/// Measured: separable Smith p90 1.3 %, max 9.0 % (the table's n is the
-/// height-correlated albedo, up to 1.5 % above the separable one at
-/// grazing views, where large polygons get no correction); Beckmann p90 10.5 %, max 30 %, which is why scenes and
-/// eval refuse polygon lights on non-GGX microfacet materials.
+/// Bounds above the measured figures (docs/accuracy.md): separable Smith
+/// shares the height-correlated fit (its n is the height-correlated
+/// albedo, above the separable one at grazing views, where large polygons
+/// get no correction); Beckmann through the GGX fit is far off, which is
+/// why scenes and eval refuse polygon lights on non-GGX microfacet
+/// materials.
 const SEPARABLE_P90: f64 = 0.02;
 const SEPARABLE_MAX: f64 = 0.11;
 const BECKMANN_P90: f64 = 0.14;
 const BECKMANN_MAX: f64 = 0.36;
 
-/// Measured p90 and max with a margin: 1.01 % and 7.5 % over 1008 cases
-/// with the committed table and the lobe's correction (by view in
+/// The measured p90 and max with a margin, over the 1008 cases, of the
+/// committed table with the lobe's correction (figures by view in
 /// docs/accuracy.md).
 const P90_BOUND: f64 = 0.015;
 const MAX_BOUND: f64 = 0.09;
@@ -270,8 +272,8 @@ fn metallic_roughness_through_the_ltc_against_the_reference() {
         100.0 * quantile(&errs, 0.9),
         100.0 * quantile(&errs, 1.0)
     );
-    // Measured: median 0.03 %, p90 1.3 %, max 10.2 % (the diffuse part's
-    // (1 − F) taken at its hemispherical mean; see the model's docs).
+    // Figures in docs/accuracy.md; the tail is the diffuse part's (1 − F)
+    // taken at its hemispherical mean (see the model's docs).
     assert!(quantile(&errs, 0.9) < 0.025 && quantile(&errs, 1.0) < 0.16);
 }
 

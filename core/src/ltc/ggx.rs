@@ -173,6 +173,8 @@ pub struct LtcGgx<R> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Lobe<R> {
     wo: V3<R>,
+    /// μo, floored at [`MU_MIN`].
+    mu_o: R,
     a2: R,
     /// √(μo² + α²(1 − μo²)): μo times Smith's Λ-root of the view.
     ao: R,
@@ -217,6 +219,7 @@ impl<R: Real> LtcGgx<R> {
         let k = det.rcp();
         l.lobe = Some(Lobe {
             wo,
+            mu_o: mu,
             a2,
             ao: (mu * mu).mul_add(R::ONE - a2, a2).sqrt(),
             cos_phi: l.ry.y,
@@ -372,7 +375,7 @@ impl<R: Real> Lobe<R> {
         // r = f cos θi / (n D): one division, π cancelling.
         let wi = w * inv_l;
         let mu_i = wi.z.max(R::ZERO);
-        let mu_o = self.wo.z.max(R::splat(MU_MIN));
+        let mu_o = self.mu_o;
         let h = wi + self.wo;
         let h2 = h.length_squared();
         let a2 = self.a2;
@@ -396,8 +399,9 @@ impl<R: Real> Lobe<R> {
 
 /// Floor of the correction's squared lengths and denominators.
 const TINY: f64 = 1e-30;
-/// Smallest μo the lobe is evaluated at (the fit's, src/fit_ltc.rs).
-const MU_MIN: f64 = 1e-3;
+/// Smallest μo the lobe is evaluated at, by the correction here and by
+/// the fit (src/fit_ltc.rs).
+pub const MU_MIN: f64 = 1e-3;
 /// The correction's ratio is held to [RATIO_MIN, RATIO_MAX].
 const RATIO_MIN: f64 = 0.25;
 const RATIO_MAX: f64 = 4.0;

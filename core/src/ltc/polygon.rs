@@ -141,9 +141,22 @@ fn arc_exact<R: Real>(nz: R, n2: R, c: R) -> R {
 /// [`arc`]'s lane form.
 #[inline(always)]
 fn arc_terms<R: Real>(nz: R, n2: R, c: R) -> (R, R) {
-    // 1/|a||b|, correctly rounded (module docs: precision).
-    let inv = R::ONE / c.mul_add(c, n2).max(R::splat(MIN_SQ)).sqrt();
+    let inv = inv_lengths(n2, c);
     (nz * inv, (c * inv).abs())
+}
+
+/// 1/|a||b| = 1/√(c² + |n|²), correctly rounded (module docs: precision).
+#[inline(always)]
+fn inv_lengths<R: Real>(n2: R, c: R) -> R {
+    R::ONE / c.mul_add(c, n2).max(R::splat(MIN_SQ)).sqrt()
+}
+
+/// The factor g of an edge's vector term n g: θ/(sin θ |a||b|) = `g`
+/// where the arc is acute, π/|n| − `g` where `obtuse` (as
+/// [`reflect_obtuse`] for the z term).
+#[inline(always)]
+fn reflect_obtuse_factor<R: Real>(obtuse: R::Mask, n2: R, g: R) -> R {
+    R::select(obtuse, R::PI / n2.max(R::splat(MIN_SQ)).sqrt() - g, g)
 }
 
 /// π n.z/|n| − r where `obtuse` (cos θ < 0; module docs), else r.
@@ -221,11 +234,11 @@ pub(crate) fn edge_vector<R: Real>(a: V3<R>, b: V3<R>) -> V3<R> {
         let s = n2.sqrt();
         return n * (s.atan2(c) / s.max(R::splat(MIN_SQ).sqrt()));
     }
-    let inv = R::ONE / c.mul_add(c, n2).max(R::splat(MIN_SQ)).sqrt();
+    let inv = inv_lengths(n2, c);
     let g = inv * theta_over_sin((c * inv).abs());
     let obtuse = c.lt(R::ZERO);
     let g = if obtuse.any() {
-        R::select(obtuse, R::PI / n2.max(R::splat(MIN_SQ)).sqrt() - g, g)
+        reflect_obtuse_factor(obtuse, n2, g)
     } else {
         g
     };
@@ -244,13 +257,13 @@ fn edge_integral_and_vector<R: Real>(a0: V3<R>, b0: V3<R>, a1: V3<R>, b1: V3<R>)
     let (n1, c1) = edge_normal(a1, b1);
     let (q0, q1) = (n0.length_squared(), n1.length_squared());
     let (t0, x0) = arc_terms(n0.z, q0, c0);
-    let inv1 = R::ONE / c1.mul_add(c1, q1).max(R::splat(MIN_SQ)).sqrt();
+    let inv1 = inv_lengths(q1, c1);
     let x1 = (c1 * inv1).abs();
     let (p0, p1) = theta_over_sin_pair(x0, x1);
     let (r0, g1) = (t0 * p0, inv1 * p1);
     let (o0, o1) = (c0.lt(R::ZERO), c1.lt(R::ZERO));
     if (o0 | o1).any() {
-        let g1 = R::select(o1, R::PI / q1.max(R::splat(MIN_SQ)).sqrt() - g1, g1);
+        let g1 = reflect_obtuse_factor(o1, q1, g1);
         (reflect_obtuse(o0, n0.z, q0, r0), n1 * g1)
     } else {
         (r0, n1 * g1)
