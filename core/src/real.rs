@@ -141,9 +141,10 @@ pub trait Real:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Per lane, `table[index]` as a lane value: the one memory read of
     /// table lookups (table.rs). Index lanes hold integral values in
-    /// `0..table.len()` (exact in f32 up to 2²⁴); an index outside that
-    /// (or NaN) panics on the scalar types and is clamped into range on
-    /// f32x8, never read out of bounds.
+    /// `0..table.len()` (exact in f32 up to 2²⁴). Outside that, never a
+    /// read out of bounds: on the scalar types an index past the end
+    /// panics and a negative or NaN one reads `table[0]` (the cast to
+    /// usize saturates); f32x8 clamps each lane into range.
     fn gather(table: &[f32], index: Self) -> Self;
     /// Per lane, the 2 × 2 block of RGB texels at `index`, `index + 1`,
     /// `index + stride` and `index + stride + 1` of a table of texels of
@@ -151,9 +152,9 @@ pub trait Real:
     /// `[row][column][channel]` lane values: a bilinear lookup's
     /// footprint, every channel read at once. The table holds one float
     /// more after its last texel (f32x8 reads 16 bytes a texel). Index
-    /// lanes hold integral values below `(table.len() - 1) / 3 - stride
-    /// − 1`, from 0; outside that, as [`Real::gather`]: a panic on the
-    /// scalar types, clamped on f32x8.
+    /// lanes hold integral values from 0 to the last block's,
+    /// `(table.len() - 1) / 3 - stride - 2`; outside that, the scalar
+    /// types read as [`Real::gather`] does and f32x8 clamps.
     #[inline(always)]
     fn gather_rgb_block(table: &[f32], index: Self, stride: usize) -> [[[Self; 3]; 2]; 2] {
         let at = |offset: usize| {
@@ -442,16 +443,23 @@ impl Real for f32x8 {
     fn gather(table: &[f32], index: Self) -> Self {
         // Indices clamped into range (NaN truncates to i32::MIN, then 0):
         // two integer ops that make the read sound whatever the caller did.
-        let last = wide::i32x8::splat(table.len() as i32 - 1);
+        let last = table
+            .len()
+            .checked_sub(1)
+            .expect("a table of one value or more");
+        let last = wide::i32x8::splat(i32::try_from(last).unwrap_or(i32::MAX));
         let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
         gather_f32x8(table, i)
     }
     #[inline(always)]
     fn gather_rgb_block(table: &[f32], index: Self, stride: usize) -> [[[Self; 3]; 2]; 2] {
-        // Clamped as `gather`, to the last block.
+        // Clamped as `gather`, to the last block (a bound past i32's range
+        // capped, which only lowers it).
         let texels = table.len().saturating_sub(1) / 3;
-        assert!(texels > stride + 1);
-        let last = wide::i32x8::splat((texels - stride - 2) as i32);
+        let last = texels
+            .checked_sub(stride.saturating_add(2))
+            .expect("a table of at least two rows and two texels");
+        let last = wide::i32x8::splat(i32::try_from(last).unwrap_or(i32::MAX));
         let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
         gather_rgb_block_f32x8(table, i, stride)
     }
@@ -519,8 +527,8 @@ fn gather_f32x8(table: &[f32], i: wide::i32x8) -> f32x8 {
 /// The 2 × 2 RGB texel blocks of 8 lanes at i32 indices already in
 /// range ([`Real::gather_rgb_block`]), by loads and transposes instead
 /// of gathers: one index per lane moved to a register, four texels read
-/// at fixed offsets from it, 16 bytes each (the fourth float is the next
-/// texel's, unused). A texel of lanes l and l + 4 makes one 256-bit row,
+/// at fixed offsets from it, 16 bytes each (the fourth float, the next
+/// texel's or the table's last, unused). A texel of lanes l and l + 4 makes one 256-bit row,
 /// and a 4 × 4 transpose within each 128-bit half turns four such rows
 /// into the channels.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
@@ -530,7 +538,7 @@ fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f3
         __m256, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps,
         _mm_loadu_ps,
     };
-    assert!(table.len().saturating_sub(1) / 3 > stride + 1);
+    assert!(table.len().saturating_sub(1) / 3 >= stride.saturating_add(2));
     let i = i.to_array();
     let base = table.as_ptr();
     // SAFETY: AVX is enabled (cfg); every index lane is at most
@@ -653,11 +661,11 @@ mod tests {
         let out = [-3.0f32, 29.0, 1e9, f32::NAN, -0.0, 28.0, 0.0, -1e9];
         let got = f32x8::gather_rgb_block(&table, f32x8::load(&out), stride);
         let want = [0usize, 28, 28, 0, 0, 28, 0, 0];
-        for l in 0..8 {
+        for (l, &i) in want.iter().enumerate() {
             for (row, col, c) in block_entries() {
                 assert_eq!(
                     lanes(got[row][col][c])[l],
-                    texel(want[l], row, col, c),
+                    texel(i, row, col, c),
                     "lane {l}"
                 );
             }
