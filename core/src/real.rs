@@ -141,20 +141,27 @@ pub trait Real:
     fn select(m: Self::Mask, a: Self, b: Self) -> Self;
     /// Per lane, `table[index]` as a lane value: the one memory read of
     /// table lookups (table.rs). Index lanes hold integral values in
-    /// `0..table.len()` (exact in f32 up to 2²⁴); an index outside that
-    /// (or NaN) panics on the scalar types and is clamped into range on
-    /// f32x8, never read out of bounds.
+    /// `0..table.len()` (exact in f32 up to 2²⁴). Outside that, never a
+    /// read out of bounds: on the scalar types an index past the end
+    /// panics and a negative or NaN one reads `table[0]` (the cast to
+    /// usize saturates); f32x8 clamps each lane into range.
     fn gather(table: &[f32], index: Self) -> Self;
-    /// Per lane, `(table[index], table[index + 1])`: two neighbours read
-    /// together (a bilinear lookup's pair along a row). Index lanes hold
-    /// integral values in `0..table.len() - 1`; outside that, as
-    /// [`Real::gather`]: a panic on the scalar types, clamped on f32x8.
+    /// Per lane, the 2 × 2 block of RGB texels at `index`, `index + 1`,
+    /// `index + stride` and `index + stride + 1` of a table of texels of
+    /// three floats each (rows of `stride` texels), as
+    /// `[row][column][channel]` lane values: a bilinear lookup's
+    /// footprint, every channel read at once. The table holds one float
+    /// more after its last texel (f32x8 reads 16 bytes a texel). Index
+    /// lanes hold integral values from 0 to the last block's,
+    /// `(table.len() - 1) / 3 - stride - 2`; outside that, the scalar
+    /// types read as [`Real::gather`] does and f32x8 clamps.
     #[inline(always)]
-    fn gather_pair(table: &[f32], index: Self) -> (Self, Self) {
-        (
-            Self::gather(table, index),
-            Self::gather(table, index + Self::ONE),
-        )
+    fn gather_rgb_block(table: &[f32], index: Self, stride: usize) -> [[[Self; 3]; 2]; 2] {
+        let at = |offset: usize| {
+            let base = (index + Self::splat(offset as f64)) * Self::splat(3.0);
+            core::array::from_fn(|c| Self::gather(table, base + Self::splat(c as f64)))
+        };
+        [[at(0), at(1)], [at(stride), at(stride + 1)]]
     }
 
     /// Clamps to [lo, hi] (for lo ≤ hi) as `self.max(lo).min(hi)`: a NaN
@@ -436,16 +443,23 @@ impl Real for f32x8 {
     fn gather(table: &[f32], index: Self) -> Self {
         // Indices clamped into range (NaN truncates to i32::MIN, then 0):
         // two integer ops that make the read sound whatever the caller did.
-        let last = wide::i32x8::splat(table.len() as i32 - 1);
+        // The bound capped to i32's range (which only lowers it); an empty
+        // table stops at `gather_f32x8`'s assert.
+        let last = wide::i32x8::splat(table.len().min(i32::MAX as usize) as i32 - 1);
         let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
         gather_f32x8(table, i)
     }
     #[inline(always)]
-    fn gather_pair(table: &[f32], index: Self) -> (Self, Self) {
-        // Clamped as `gather`, to the last pair.
-        let last = wide::i32x8::splat(table.len() as i32 - 2);
+    fn gather_rgb_block(table: &[f32], index: Self, stride: usize) -> [[[Self; 3]; 2]; 2] {
+        // Clamped as `gather`, to the last block (a bound past i32's range
+        // capped, which only lowers it).
+        let texels = table.len().saturating_sub(1) / 3;
+        let last = texels
+            .checked_sub(stride.saturating_add(2))
+            .expect("a table of at least two rows and two texels");
+        let last = wide::i32x8::splat(i32::try_from(last).unwrap_or(i32::MAX));
         let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
-        gather_pair_f32x8(table, i)
+        gather_rgb_block_f32x8(table, i, stride)
     }
 }
 
@@ -508,56 +522,64 @@ fn gather_f32x8(table: &[f32], i: wide::i32x8) -> f32x8 {
     f32x8::new(core::array::from_fn(|l| table[i[l] as usize]))
 }
 
-/// 8 pairs of neighbours at i32 indices already in `0..table.len() - 1`:
-/// each pair one 64-bit element of `vpgatherdq` (two gathers of 4 lanes,
-/// half the elements of two `vgatherdps`), then split into the first and
-/// second of each pair.
-#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+/// The 2 × 2 RGB texel blocks of 8 lanes at i32 indices already in
+/// range ([`Real::gather_rgb_block`]), by loads and transposes instead
+/// of gathers: one index per lane moved to a register, four texels read
+/// at fixed offsets from it, 16 bytes each (the fourth float, the next
+/// texel's or the table's last, unused). A texel of lanes l and l + 4 makes one 256-bit row,
+/// and a 4 × 4 transpose within each 128-bit half turns four such rows
+/// into the channels.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
 #[inline(always)]
-fn gather_pair_f32x8(table: &[f32], i: wide::i32x8) -> (f32x8, f32x8) {
+fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f32x8; 3]; 2]; 2] {
     use core::arch::x86_64::{
-        __m256i, _mm256_castpd_ps, _mm256_castps_pd, _mm256_castsi256_ps, _mm256_castsi256_si128,
-        _mm256_extracti128_si256, _mm256_i32gather_epi64, _mm256_permute4x64_pd, _mm256_shuffle_ps,
+        __m256, _mm256_set_m128, _mm256_shuffle_ps, _mm256_unpackhi_ps, _mm256_unpacklo_ps,
+        _mm_loadu_ps,
     };
-    assert!(table.len() >= 2);
-    let iv: __m256i = bytemuck::cast(i);
-    let base = table.as_ptr() as *const i64;
-    // SAFETY: AVX2 is enabled (cfg); every index lane is in
-    // 0..table.len() - 1 (clamped by the caller), so each 8-byte read
-    // (the float at the index and the next) is in bounds; a gather needs
-    // no alignment.
+    assert!(table.len().saturating_sub(1) / 3 >= stride.saturating_add(2));
+    let i = i.to_array();
+    let base = table.as_ptr();
+    // SAFETY: AVX is enabled (cfg); every index lane is at most
+    // (table.len() - 1) / 3 - stride - 2 (clamped by the caller), so the
+    // texels at offsets 0, 1, stride and stride + 1 from it start at float
+    // 3 (table.len() - 1) / 3 - 3 at the latest, and their 16 bytes end
+    // within the table; the loads need no alignment.
     unsafe {
-        // Lanes 0–3 and 4–7: [a0 b0 a1 b1 | a2 b2 a3 b3], [a4 b4 … | …].
-        let lo = _mm256_castsi256_ps(_mm256_i32gather_epi64::<4>(
-            base,
-            _mm256_castsi256_si128(iv),
-        ));
-        let hi = _mm256_castsi256_ps(_mm256_i32gather_epi64::<4>(
-            base,
-            _mm256_extracti128_si256::<1>(iv),
-        ));
-        // Evens and odds: [a0 a1 a4 a5 | a2 a3 a6 a7], then the 64-bit
-        // quarters put in order (0, 2, 1, 3).
-        let firsts = _mm256_shuffle_ps::<0b10_00_10_00>(lo, hi);
-        let seconds = _mm256_shuffle_ps::<0b11_01_11_01>(lo, hi);
-        let order =
-            |v| _mm256_castpd_ps(_mm256_permute4x64_pd::<0b11_01_10_00>(_mm256_castps_pd(v)));
-        (
-            bytemuck::cast(order(firsts)),
-            bytemuck::cast(order(seconds)),
-        )
+        let channels = |offset: usize| -> [f32x8; 3] {
+            let at = |l: usize| _mm_loadu_ps(base.add((i[l] as usize + offset) * 3));
+            let row = |l: usize| -> __m256 { _mm256_set_m128(at(l + 4), at(l)) };
+            // [r0 r1 g0 g1 | r4 r5 g4 g5] and [b0 b1 · · | b4 b5 · ·] of
+            // lanes 0, 1 (then 2, 3), then each channel's halves together.
+            let (a, b, c, d) = (row(0), row(1), row(2), row(3));
+            let (ab_lo, ab_hi) = (_mm256_unpacklo_ps(a, b), _mm256_unpackhi_ps(a, b));
+            let (cd_lo, cd_hi) = (_mm256_unpacklo_ps(c, d), _mm256_unpackhi_ps(c, d));
+            [
+                _mm256_shuffle_ps::<0b01_00_01_00>(ab_lo, cd_lo),
+                _mm256_shuffle_ps::<0b11_10_11_10>(ab_lo, cd_lo),
+                _mm256_shuffle_ps::<0b01_00_01_00>(ab_hi, cd_hi),
+            ]
+            .map(bytemuck::cast)
+        };
+        [
+            [channels(0), channels(1)],
+            [channels(stride), channels(stride + 1)],
+        ]
     }
 }
 
-/// Per-lane fallback of [`gather_pair_f32x8`].
-#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+/// Per-lane fallback of [`gather_rgb_block_f32x8`].
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
 #[inline(always)]
-fn gather_pair_f32x8(table: &[f32], i: wide::i32x8) -> (f32x8, f32x8) {
+fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f32x8; 3]; 2]; 2] {
     let i = i.to_array();
-    (
-        f32x8::new(core::array::from_fn(|l| table[i[l] as usize])),
-        f32x8::new(core::array::from_fn(|l| table[i[l] as usize + 1])),
-    )
+    let at = |offset: usize| {
+        core::array::from_fn(|c| {
+            f32x8::new(core::array::from_fn(|l| {
+                table[(i[l] as usize + offset) * 3 + c]
+            }))
+        })
+    };
+    [[at(0), at(1)], [at(stride), at(stride + 1)]]
 }
 
 /// The per-lane read, for the speed comparison in the tests.
@@ -605,42 +627,52 @@ mod tests {
     }
 
     #[test]
-    fn a_pair_gather_reads_each_lane_s_neighbours() {
-        // Every index of a table (its last pair included), in lanes of
-        // mixed order, against the scalar reads; and indices outside the
-        // table (negative, past the end, NaN) clamped to its first or last
-        // pair.
-        let table: Vec<f32> = (0..37).map(|i| (i as f32).mul_add(1.5, -7.25)).collect();
-        for start in 0..table.len() - 1 {
-            let idx: [f32; 8] =
-                core::array::from_fn(|l| ((start + 5 * l) % (table.len() - 1)) as f32);
-            let (a, b) = f32x8::gather_pair(&table, f32x8::load(&idx));
+    fn an_rgb_block_gather_reads_each_lane_s_footprint() {
+        // Every index of a table (its last block included), in lanes of
+        // mixed order, against the texels themselves and the scalar read;
+        // and indices outside the table (negative, past the end, NaN)
+        // clamped to its first or last block.
+        let (stride, texels) = (7, 37);
+        let table: Vec<f32> = (0..3 * texels + 1)
+            .map(|i| (i as f32).mul_add(1.5, -7.25))
+            .collect();
+        let blocks = texels - stride - 1;
+        let texel =
+            |i: usize, row: usize, col: usize, c: usize| table[3 * (i + row * stride + col) + c];
+        for start in 0..blocks {
+            let idx: [f32; 8] = core::array::from_fn(|l| ((start + 5 * l) % blocks) as f32);
+            let got = f32x8::gather_rgb_block(&table, f32x8::load(&idx), stride);
             for (l, &at) in idx.iter().enumerate() {
                 let i = at as usize;
-                assert_eq!(
-                    lanes(a)[l].to_bits(),
-                    table[i].to_bits(),
-                    "first, index {i}"
-                );
-                assert_eq!(
-                    lanes(b)[l].to_bits(),
-                    table[i + 1].to_bits(),
-                    "second, index {i}"
-                );
-                let (sa, sb) = f32::gather_pair(&table, at);
-                assert_eq!((sa, sb), (table[i], table[i + 1]), "scalar, index {i}");
+                let scalar = f32::gather_rgb_block(&table, at, stride);
+                for (row, col, c) in block_entries() {
+                    let want = texel(i, row, col, c);
+                    assert_eq!(
+                        lanes(got[row][col][c])[l].to_bits(),
+                        want.to_bits(),
+                        "lane {l}, texel {i} + ({row}, {col}), channel {c}"
+                    );
+                    assert_eq!(scalar[row][col][c], want, "scalar, texel {i}");
+                }
             }
         }
-        let out = [-3.0f32, 36.0, 1e9, f32::NAN, -0.0, 35.0, 0.0, -1e9];
-        let (a, b) = f32x8::gather_pair(&table, f32x8::load(&out));
-        let want = [0usize, 35, 35, 0, 0, 35, 0, 0];
-        for l in 0..8 {
-            assert_eq!(
-                (lanes(a)[l], lanes(b)[l]),
-                (table[want[l]], table[want[l] + 1]),
-                "lane {l}"
-            );
+        let out = [-3.0f32, 29.0, 1e9, f32::NAN, -0.0, 28.0, 0.0, -1e9];
+        let got = f32x8::gather_rgb_block(&table, f32x8::load(&out), stride);
+        let want = [0usize, 28, 28, 0, 0, 28, 0, 0];
+        for (l, &i) in want.iter().enumerate() {
+            for (row, col, c) in block_entries() {
+                assert_eq!(
+                    lanes(got[row][col][c])[l],
+                    texel(i, row, col, c),
+                    "lane {l}"
+                );
+            }
         }
+    }
+
+    /// Every (row, column, channel) of an RGB texel block.
+    fn block_entries() -> impl Iterator<Item = (usize, usize, usize)> {
+        (0..2).flat_map(|r| (0..2).flat_map(move |col| (0..3).map(move |c| (r, col, c))))
     }
 
     /// The renderer's sources never call an instruction whose result is

@@ -15,7 +15,7 @@
 //!   at each coarser level; level 1 a quarter of level 0's side, then
 //!   halving), each sample read from the source mip whose texel matches
 //!   the sample's solid angle \[Colbert07\]; stored as octahedral maps
-//!   (planar f32 per channel) so a packet reads them with gathers;
+//!   (RGB texels) so a packet reads a footprint's channels at once;
 //! - a compact, very bright source (a sun) taken out of the map
 //!   ([`crate::envmap_sun`]): the prefiltered chain and the SH are made
 //!   of the map without it, and it is shaded as a light
@@ -84,40 +84,43 @@ fn oct_decode(s: f64, t: f64) -> [f64; 3] {
     [x / l, y / l, z / l]
 }
 
-/// One prefiltered level: a square octahedral map, a plane per channel.
+/// One prefiltered level: a square octahedral map of RGB texels.
 #[derive(Clone, Debug)]
 struct OctLevel {
     size: usize,
-    /// The planes with each row's last texel repeated after it (rows of
-    /// size + 1): a lookup reads a texel and its right neighbour as one
-    /// pair ([`Real::gather_pair`]), the last texel's neighbour being
+    /// The texels, three floats each, in size + 1 rows of size + 1: each
+    /// row's last texel repeated after it, the last row repeated below,
+    /// and one float more at the end ([`Real::gather_rgb_block`]). A
+    /// lookup reads a bilinear footprint, every channel at once, from one
+    /// index; at the last column or row the neighbour is the texel
     /// itself, as the clamp to the edge gives.
-    padded: [Vec<f32>; 3],
+    texels: Vec<f32>,
 }
 
 impl OctLevel {
     /// The level of `size`² texels from its planes (rows of `size`).
     fn new(size: usize, rgb: [Vec<f32>; 3]) -> OctLevel {
-        let pad = |plane: Vec<f32>| {
-            let mut out = Vec::with_capacity(size * (size + 1));
-            for row in plane.chunks_exact(size) {
-                out.extend_from_slice(row);
-                out.push(row[size - 1]);
+        let stride = size + 1;
+        let mut texels = Vec::with_capacity(3 * stride * stride + 1);
+        for y in 0..size {
+            for x in (0..size).chain([size - 1]) {
+                let i = y * size + x;
+                texels.extend([rgb[0][i], rgb[1][i], rgb[2][i]]);
             }
-            out
-        };
-        OctLevel {
-            size,
-            padded: rgb.map(pad),
         }
+        texels.extend_from_within(texels.len() - 3 * stride..);
+        texels.push(0.0);
+        OctLevel { size, texels }
     }
 
     /// The planes as [`OctLevel::new`] took them (rows of `size`).
     fn planes(&self) -> [Vec<f32>; 3] {
-        self.padded.each_ref().map(|p| {
-            p.chunks_exact(self.size + 1)
-                .flat_map(|row| &row[..self.size])
-                .copied()
+        core::array::from_fn(|c| {
+            self.texels
+                .chunks_exact(3 * (self.size + 1))
+                .take(self.size)
+                .flat_map(|row| row[..3 * self.size].chunks_exact(3))
+                .map(|t| t[c])
                 .collect()
         })
     }
@@ -131,23 +134,20 @@ impl OctLevel {
         let y = (t * R::splat(n) - R::HALF).clamp(R::ZERO, hi);
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
-        let y1 = (y0 + R::ONE).min(hi);
-        // Texels x0 and x0 + 1 (x0 itself at the last column) of rows y0
-        // and y1, each pair read at once from the padded rows.
-        let stride = R::splat(n + 1.0);
-        let (i0, i1) = (y0 * stride + x0, y1 * stride + x0);
-        let ch = |p: &[f32]| {
-            let (a, b) = R::gather_pair(p, i0);
-            let (c, d) = R::gather_pair(p, i1);
-            let top = (b - a).mul_add(fx, a);
-            let bot = (d - c).mul_add(fx, c);
+        // Texels x0 and x0 + 1 of rows y0 and y0 + 1, the padding standing
+        // in for x0 + 1 and y0 + 1 at the last column and row.
+        let stride = self.size + 1;
+        let [[a, b], [c, d]] = R::gather_rgb_block(
+            &self.texels,
+            y0.mul_add(R::splat(stride as f64), x0),
+            stride,
+        );
+        let ch = |k: usize| {
+            let top = (b[k] - a[k]).mul_add(fx, a[k]);
+            let bot = (d[k] - c[k]).mul_add(fx, c[k]);
             (bot - top).mul_add(fy, top)
         };
-        Rgb::new(
-            ch(&self.padded[0]),
-            ch(&self.padded[1]),
-            ch(&self.padded[2]),
-        )
+        Rgb::new(ch(0), ch(1), ch(2))
     }
 }
 

@@ -217,8 +217,10 @@ impl<R: Real> BrdfVisitor for LightLoop<'_, '_, R> {
 /// disk's clamped cosine (`disk_cos_factor`), at most L_sun · ρ(wo),
 /// times `sun_visibility` of that part (its shadow factor).
 /// `frame` is the shading frame (world space, unit normal) and `wo` the
-/// unit view direction in world space.
-#[inline(always)]
+/// unit view direction in world space. Out of line: inlined, its code
+/// changed how the shading function that every frame runs was compiled
+/// and slowed frames without a map (docs/PERFORMANCE.md).
+#[inline(never)]
 pub fn env_split_sum<B: Brdf, R: Real>(
     brdf: &B,
     prepared: &B::Prepared<R>,
