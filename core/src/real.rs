@@ -451,13 +451,12 @@ impl Real for f32x8 {
     }
     #[inline(always)]
     fn gather_rgb_block(table: &[f32], index: Self, stride: usize) -> [[[Self; 3]; 2]; 2] {
-        // Clamped as `gather`, to the last block (a bound past i32's range
-        // capped, which only lowers it).
+        // Clamped as `gather`, to the last block, the bound capped to
+        // i32's range; a table too small for one block stops at
+        // `gather_rgb_block_f32x8`'s assert.
         let texels = table.len().saturating_sub(1) / 3;
-        let last = texels
-            .checked_sub(stride.saturating_add(2))
-            .expect("a table of at least two rows and two texels");
-        let last = wide::i32x8::splat(i32::try_from(last).unwrap_or(i32::MAX));
+        let last = texels.saturating_sub(stride.saturating_add(2));
+        let last = wide::i32x8::splat(last.min(i32::MAX as usize) as i32);
         let i = index.fast_trunc_int().max(wide::i32x8::ZERO).min(last);
         gather_rgb_block_f32x8(table, i, stride)
     }
@@ -526,9 +525,9 @@ fn gather_f32x8(table: &[f32], i: wide::i32x8) -> f32x8 {
 /// range ([`Real::gather_rgb_block`]), by loads and transposes instead
 /// of gathers: one index per lane moved to a register, four texels read
 /// at fixed offsets from it, 16 bytes each (the fourth float, the next
-/// texel's or the table's last, unused). A texel of lanes l and l + 4 makes one 256-bit row,
-/// and a 4 × 4 transpose within each 128-bit half turns four such rows
-/// into the channels.
+/// texel's or the table's last, unused). A texel of lanes l and l + 4
+/// makes one 256-bit row, and a 4 × 4 transpose within each 128-bit half
+/// turns four such rows into the channels.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
 #[inline(always)]
 fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f32x8; 3]; 2]; 2] {
