@@ -470,7 +470,9 @@ shadow_map_size = 2048
 /// The 8-lane lookup gives each lane the scalar lookup's bits when the
 /// lanes spread over a directional light's cascades and a point light's
 /// cube faces (hard and PCF), for PCF radii that take each of its paths
-/// (depth windows, texel grid, taps), and for PCSS (lane by lane).
+/// (depth windows, texel grid, taps), and for PCSS (lane by lane); on
+/// single maps (orthographic and perspective), in the light loop's form
+/// too; with points and normals that are now and then not finite.
 #[test]
 #[allow(clippy::needless_range_loop)]
 fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
@@ -534,11 +536,19 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
                 c[2][l] = lo.z + (hi.z - lo.z) * next();
                 let n = Vec3::new(next() - 0.5, 2.0, next() - 0.5).normalize();
                 (c[3][l], c[4][l], c[5][l]) = (n.x, n.y, n.z);
+                // Now and then a coordinate of the point or the normal
+                // that is not finite.
+                if next() < 0.02 {
+                    let bad = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY];
+                    c[(next() * 6.0) as usize][l] = bad[(next() * 3.0) as usize];
+                }
             }
             let lanes = (next() * 256.0) as u32 | 1;
             let p = V3::new(f32x8::load(&c[0]), f32x8::load(&c[1]), f32x8::load(&c[2]));
             let n = V3::new(f32x8::load(&c[3]), f32x8::load(&c[4]), f32x8::load(&c[5]));
             let got = ls.visibility_lanes(&p, &n, lanes);
+            // The light loop's form, its common end inline.
+            let inline = ls.visibility_at(&p, &n, lanes);
             for l in 0..8 {
                 let want = if lanes & (1 << l) != 0 {
                     ls.visibility(
@@ -553,6 +563,11 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
                     (got.lane(l) as f32).to_bits(),
                     want.to_bits(),
                     "{file} light {k}, {cascades} cascades, {filter} {radius}: lane {l}"
+                );
+                assert_eq!(
+                    (inline.lane(l) as f32).to_bits(),
+                    want.to_bits(),
+                    "{file} light {k}, {cascades} cascades, {filter} {radius}: lane {l} inline"
                 );
             }
         }

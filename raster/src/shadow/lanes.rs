@@ -3,7 +3,7 @@
 //! PCSS and maps too large for f32 gather indices lane by lane.
 
 use super::settings::ShadowFilter;
-use super::{Face, LightShadow, Pick};
+use super::{DepthWindows, Face, LightShadow, Pick};
 use glam::Vec3;
 use specula_core::{Mask, Real, V3};
 
@@ -17,11 +17,50 @@ impl LightShadow {
     pub fn visibility_where<R: Real>(&self, part: &V3<R>, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
         let reached =
             part.x.abs().gt(R::ZERO) | part.y.abs().gt(R::ZERO) | part.z.abs().gt(R::ZERO);
-        let lanes = lanes & reached.bits();
+        self.visibility_at(p, n, lanes & reached.bits())
+    }
+
+    /// [`LightShadow::visibility_lanes`] of the lanes in `lanes`, with the
+    /// common lookups' end inline in the caller: on a single hard or PCF
+    /// map, the projection and the near bounds' "every lane wholly lit"
+    /// verdict, the rest out of line. The same bits.
+    #[inline(always)]
+    pub fn visibility_at<R: Real>(&self, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
         if lanes == 0 {
             return R::ONE;
         }
-        self.visibility_lanes(p, n, lanes)
+        match self.packet_face() {
+            Some(face) => self.visibility_packet_split(face, p, n, lanes),
+            None => self.visibility_lanes(p, n, lanes),
+        }
+    }
+
+    /// The face of a light whose lookups run on all lanes at once with
+    /// one face (hard or PCF, a single map small enough for f32 gather
+    /// indices), if this light is one.
+    #[inline(always)]
+    fn packet_face(&self) -> Option<&Face> {
+        match self.faces.as_slice() {
+            [face] if self.settings.filter != ShadowFilter::Pcss && face.size <= MAX_PACKET_MAP => {
+                Some(face)
+            }
+            _ => None,
+        }
+    }
+
+    /// [`LightShadow::visibility_packet`] with the common end inline:
+    /// the projection and, for PCF, the near bounds' verdict "every lane
+    /// wholly lit" ([`Face::pcf_all_lit`]) here, in the caller's light
+    /// loop; the rest of the lookup out of line
+    /// ([`LightShadow::finish_packet`]). The same bits.
+    #[inline(always)]
+    fn visibility_packet_split<R: Real>(&self, face: &Face, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
+        let at = self.project(face, p, n, lanes);
+        let s = &self.settings;
+        if s.filter == ShadowFilter::Pcf && face.pcf_all_lit(&at, s.filter_radius) {
+            return R::ONE;
+        }
+        self.finish_packet(face, &at)
     }
 
     /// [`LightShadow::visibility`] of each lane of `p`, `n` in `lanes`
@@ -82,14 +121,45 @@ impl LightShadow {
     /// same order (no fused multiply-adds), so the same bits.
     #[inline(always)]
     fn visibility_packet<R: Real>(&self, face: &Face, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
+        let at = self.project(face, p, n, lanes);
+        self.filter_packet(face, &at)
+    }
+
+    /// [`LightShadow::filter_packet`] out of line: the part of a lookup
+    /// that the light loop does not inline.
+    #[inline(never)]
+    fn finish_packet<R: Real>(&self, face: &Face, at: &MapPoint<R>) -> R {
+        self.filter_packet(face, at)
+    }
+
+    /// The lanes' factors from their map coordinates `at` (1 on lanes
+    /// that do not use the map).
+    #[inline(always)]
+    fn filter_packet<R: Real>(&self, face: &Face, at: &MapPoint<R>) -> R {
+        let s = &self.settings;
+        let MapPoint { u, v, d, use_map } = at.masked();
+        let f = match s.filter {
+            ShadowFilter::Hard => face.lit_lanes(round_lanes(u), round_lanes(v), d),
+            _ => match face.pcf_decided(u, v, d, s.filter_radius, use_map) {
+                Some(f) => f,
+                None => face
+                    .pcf_grid(u, v, d, s.filter_radius, use_map)
+                    .unwrap_or_else(|| face.pcf_lanes(u, v, d, s.filter_radius)),
+            },
+        };
+        R::select(use_map, f, R::ONE)
+    }
+
+    /// The lanes' texel coordinates and biased depths on `face`, as the
+    /// scalar lookup computes them, and the lanes in `lanes` that use the
+    /// map. A lane whose point or normal is not finite does not: its
+    /// shifted point has a NaN or infinite coordinate, which every row of
+    /// the projection takes (times 0 it is NaN), so its x is not within
+    /// ±1 (the scalar lookup's finiteness test, without its cost).
+    #[inline(always)]
+    fn project<R: Real>(&self, face: &Face, p: &V3<R>, n: &V3<R>, lanes: u32) -> MapPoint<R> {
         let s = &self.settings;
         let k = |x: f32| R::splat(x as f64);
-        let finite = p.x.is_finite()
-            & p.y.is_finite()
-            & p.z.is_finite()
-            & n.x.is_finite()
-            & n.y.is_finite()
-            & n.z.is_finite();
         let texel = if face.perspective {
             k(face.texel) * face.depth_of_lanes(p).max(k(face.near))
         } else {
@@ -111,29 +181,54 @@ impl LightShadow {
         let row = |a: f32, b: f32, c: f32, d: f32| k(a) * p.x + k(b) * p.y + k(c) * p.z + k(d);
         let cx = row(c0.x, c1.x, c2.x, c3.x);
         let cy = row(c0.y, c1.y, c2.y, c3.y);
-        let cw = row(c0.w, c1.w, c2.w, c3.w);
-        let (x, y) = (cx / cw, cy / cw);
-        let inside = cw.gt(R::ZERO) & x.abs().le(R::ONE) & y.abs().le(R::ONE);
-        let use_map = finite & inside & R::mask_from_bits(lanes);
+        // An affine map's w is 0·x + 0·y + 0·z + 1 = 1 at every finite
+        // point, and x / 1 = x: its division is skipped (the other lanes
+        // are out of the map by their x, as above).
+        let affine = [c0.w, c1.w, c2.w] == [0.0; 3] && c3.w == 1.0;
+        let inside = |x: R, y: R| x.abs().le(R::ONE) & y.abs().le(R::ONE);
+        let (x, y, inside) = if affine {
+            (cx, cy, inside(cx, cy))
+        } else {
+            let cw = row(c0.w, c1.w, c2.w, c3.w);
+            let (x, y) = (cx / cw, cy / cw);
+            (x, y, cw.gt(R::ZERO) & inside(x, y))
+        };
         let size = k(face.size as f32);
         let half = R::HALF;
-        let u = R::select(use_map, (x + R::ONE) * half * size - half, R::ZERO);
-        let v = R::select(use_map, (R::ONE - y) * half * size - half, R::ZERO);
-        let d = R::select(
-            use_map,
-            face.depth_of_lanes(&p) - k(s.bias) * texel,
-            R::ZERO,
-        );
-        let f = match s.filter {
-            ShadowFilter::Hard => face.lit_lanes(round_lanes(u), round_lanes(v), d),
-            _ => match face.pcf_decided(u, v, d, s.filter_radius, use_map) {
-                Some(f) => f,
-                None => face
-                    .pcf_grid(u, v, d, s.filter_radius, use_map)
-                    .unwrap_or_else(|| face.pcf_lanes(u, v, d, s.filter_radius)),
-            },
-        };
-        R::select(use_map, f, R::ONE)
+        MapPoint {
+            u: (x + R::ONE) * half * size - half,
+            v: (R::ONE - y) * half * size - half,
+            d: face.depth_of_lanes(&p) - k(s.bias) * texel,
+            use_map: inside & R::mask_from_bits(lanes),
+        }
+    }
+}
+
+/// A packet's lanes on one face: continuous texel coordinates (texel
+/// centres at integers), the biased depth to compare, and the lanes that
+/// read the map (the others get the factor 1; their coordinates may be
+/// anything, even NaN, until [`MapPoint::masked`]).
+#[derive(Clone, Copy)]
+struct MapPoint<R: Real> {
+    u: R,
+    v: R,
+    d: R,
+    use_map: R::Mask,
+}
+
+impl<R: Real> MapPoint<R> {
+    /// The point with 0 on the lanes that do not use the map, as the
+    /// filters read it (a verdict on `use_map`'s lanes alone, as
+    /// [`Face::pcf_all_lit`]'s, needs no mask: its reads clamp NaN).
+    #[inline(always)]
+    fn masked(self) -> Self {
+        let m = |x: R| R::select(self.use_map, x, R::ZERO);
+        MapPoint {
+            u: m(self.u),
+            v: m(self.v),
+            d: m(self.d),
+            use_map: self.use_map,
+        }
     }
 }
 
@@ -206,22 +301,23 @@ impl Face {
         top * (R::ONE - fy) + bottom * fy
     }
 
-    /// [`Face::pcf`] of every lane in `lanes` without reading its taps,
-    /// when each such lane is wholly lit or wholly shadowed: `Some(1)`
-    /// where `d` is at most the nearest depth of the window that holds
-    /// every texel its taps read ([`DepthWindows`](super::DepthWindows)),
-    /// `Some(0)` where it is beyond the farthest; `None` when a lane is
-    /// neither (or the face has no bounds), and the taps decide. (Lanes
-    /// outside `lanes` get 1 or 0 alike: the caller drops them.)
-    ///
-    /// Exact, so the same bits as [`Face::pcf_lanes`]: all comparisons 0
-    /// give 0; all 1 give 1, since every bilinear weight pair
-    /// fl(1 − x) + x rounds to 1 for 0 ≤ x ≤ 1 (fl(1 − x) is exact for
-    /// x ≥ ½; below, its error is at most a quarter ulp of 1, which the
-    /// sum rounds away), and 9 × 1 / 9 = 1.
+    /// Whether the near bounds alone show every lane of `at` that uses
+    /// the map wholly lit: [`Face::pcf_decided`]'s first verdict, which
+    /// most lookups end on (its far bounds and taps are then not read).
     #[inline(always)]
-    fn pcf_decided<R: Real>(&self, u: R, v: R, d: R, radius: f32, lanes: R::Mask) -> Option<R> {
-        let b = self.bounds.as_ref()?;
+    fn pcf_all_lit<R: Real>(&self, at: &MapPoint<R>, radius: f32) -> bool {
+        let Some(b) = self.bounds.as_ref() else {
+            return false;
+        };
+        let (i, fits) = self.window_of(b, at.u, at.v, radius);
+        let lit = fits & at.d.le(R::gather(&b.near, i));
+        (!at.use_map | lit).all()
+    }
+
+    /// The index of the window of `b` that holds the texels of PCF taps
+    /// of `radius` around (u, v), and the lanes whose taps it holds.
+    #[inline(always)]
+    fn window_of<R: Real>(&self, b: &DepthWindows, u: R, v: R, radius: f32) -> (R, R::Mask) {
         let last = R::splat((self.size - 1) as f64);
         let reach = R::splat((b.window - 1) as f64);
         // The taps' texels along one axis: from the lowest tap's x0 to the
@@ -235,8 +331,26 @@ impl Face {
         };
         let (x, fits_x) = span(u);
         let (y, fits_y) = span(v);
-        let i = y * R::splat(self.size as f64) + x;
-        let fits = fits_x & fits_y;
+        (y * R::splat(self.size as f64) + x, fits_x & fits_y)
+    }
+
+    /// [`Face::pcf`] of every lane in `lanes` without reading its taps,
+    /// when each such lane is wholly lit or wholly shadowed: `Some(1)`
+    /// where `d` is at most the nearest depth of the window that holds
+    /// every texel its taps read ([`DepthWindows`]), `Some(0)` where it is
+    /// beyond the farthest; `None` when a lane is neither (or the face has
+    /// no bounds), and the taps decide. (Lanes outside `lanes` get 1 or 0
+    /// alike: the caller drops them.)
+    ///
+    /// Exact, so the same bits as [`Face::pcf_lanes`]: all comparisons 0
+    /// give 0; all 1 give 1, since every bilinear weight pair
+    /// fl(1 − x) + x rounds to 1 for 0 ≤ x ≤ 1 (fl(1 − x) is exact for
+    /// x ≥ ½; below, its error is at most a quarter ulp of 1, which the
+    /// sum rounds away), and 9 × 1 / 9 = 1.
+    #[inline(always)]
+    fn pcf_decided<R: Real>(&self, u: R, v: R, d: R, radius: f32, lanes: R::Mask) -> Option<R> {
+        let b = self.bounds.as_ref()?;
+        let (i, fits) = self.window_of(b, u, v, radius);
         // Mostly lit: then the far bounds are not read.
         let lit = fits & d.le(R::gather(&b.near, i));
         if (!lanes | lit).all() {
