@@ -16,35 +16,41 @@ impl DepthWindows {
         self.near.resize(n * n, 0.0);
         self.far.resize(n * n, 0.0);
         // Down the columns first, an output row per task reading the w
-        // rows from its own; then along each row in place (from a copy).
+        // rows from its own into two scratch rows; then along those rows.
         self.near
             .par_chunks_mut(n)
             .zip(self.far.par_chunks_mut(n))
             .enumerate()
-            .for_each_init(Vec::new, |row, (y, (near, far))| {
-                let rows = &depth[y * n..(y + w).min(n) * n];
-                sweep(near, rows, n, w, f32::min);
-                sweep(far, rows, n, w, f32::max);
-                for (out, pick) in [(near, f32::min as fn(f32, f32) -> f32), (far, f32::max)] {
-                    row.clear();
-                    row.extend_from_slice(out);
-                    sweep(out, row, 1, w, pick);
-                }
-            });
+            .for_each_init(
+                || (Vec::new(), Vec::new()),
+                |(lo, hi), (y, (near, far))| {
+                    let rows = &depth[y * n..(y + w).min(n) * n];
+                    lo.resize(n, 0.0);
+                    hi.resize(n, 0.0);
+                    sweep(lo, hi, rows, rows, n, w);
+                    sweep(near, far, lo, hi, 1, w);
+                },
+            );
     }
 }
 
-/// `out[x]` = `pick` over `v[x + i·stride]` for i in 0..`w`, of those
-/// that exist (a window is cut to `v`, as a lookup's reads are clamped to
-/// the map), for every x < `out.len()` ≤ `v.len()`. Whole slices at a
-/// time, so the loops are vector loops.
-fn sweep(out: &mut [f32], v: &[f32], stride: usize, w: usize, pick: fn(f32, f32) -> f32) {
-    let len = out.len();
-    out.copy_from_slice(&v[..len]);
+/// `near[x]` = the least of `lo[x + i·stride]` and `far[x]` the greatest
+/// of `hi[x + i·stride]` for i in 0..`w`, of those that exist (a window is
+/// cut to the input, as a lookup's reads are clamped to the map), for
+/// every x < `near.len()` = `far.len()` ≤ the inputs' length (the same
+/// for both). Both bounds in one pass over whole slices, so the loops
+/// are vector loops. Depths are never NaN (finite, or infinity where
+/// nothing was drawn), so a plain comparison picks.
+fn sweep(near: &mut [f32], far: &mut [f32], lo: &[f32], hi: &[f32], stride: usize, w: usize) {
+    let len = near.len();
+    near.copy_from_slice(&lo[..len]);
+    far.copy_from_slice(&hi[..len]);
     for i in 1..w {
-        let from = &v[(i * stride).min(v.len())..];
-        for (o, &z) in out.iter_mut().zip(from) {
-            *o = pick(*o, z);
+        let start = (i * stride).min(lo.len());
+        let pairs = near.iter_mut().zip(far.iter_mut());
+        for ((a, b), (&l, &h)) in pairs.zip(lo[start..].iter().zip(&hi[start..])) {
+            *a = if l < *a { l } else { *a };
+            *b = if h > *b { h } else { *b };
         }
     }
 }
