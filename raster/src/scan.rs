@@ -24,7 +24,7 @@ pub fn rasterize_tile(
     let depth: &mut [f32; TILE_PIXELS] = depth.try_into().expect("a tile of depth");
     let ids: &mut [u32; TILE_PIXELS] = ids.try_into().expect("a tile of ids");
     let (tx, ty) = target.tile_origin(t);
-    for_each_triangle(t, chunks, planes, |rt, p| {
+    for_each_triangle::<_, CAMERA_AHEAD>(t, chunks, planes, |rt, p| {
         scan_triangle(rt, p, tx as i32, ty as i32, depth, ids)
     });
 }
@@ -40,7 +40,7 @@ pub(crate) fn rasterize_tile_depth(
 ) {
     let depth: &mut [f32; TILE_PIXELS] = depth.try_into().expect("a tile of depth");
     let (tx, ty) = target.tile_origin(t);
-    for_each_triangle(t, chunks, planes, |rt, p| {
+    for_each_triangle::<_, DEPTH_AHEAD>(t, chunks, planes, |rt, p| {
         let keep = |_, _, pass| pass;
         depth_test_groups(rt, p, tx as i32, ty as i32, depth, keep, |_, _| {});
     });
@@ -65,7 +65,7 @@ pub(crate) fn rasterize_tile_alpha(
     let ids: &mut [u32; TILE_PIXELS] = ids.try_into().expect("a tile of ids");
     let (tx, ty) = target.tile_origin(t);
     let (tx, ty) = (tx as i32, ty as i32);
-    for_each_triangle(t, chunks, planes, |rt, p| match alpha.of(rt.tri) {
+    for_each_triangle::<_, CAMERA_AHEAD>(t, chunks, planes, |rt, p| match alpha.of(rt.tri) {
         None => scan_triangle(rt, p, tx, ty, depth, ids),
         Some((tri, a)) => match a.mode {
             AlphaMode::Mask { cutoff } => {
@@ -87,28 +87,44 @@ pub(crate) fn rasterize_tile_alpha(
 
 /// Calls `scan(rt, planes)` for every triangle binned to tile `t`, in
 /// scene order.
+///
+/// How far ahead a camera pass's scan fetches a tile's triangles.
+const CAMERA_AHEAD: usize = 2;
+/// How far ahead a depth pass's scan fetches a tile's triangles.
+const DEPTH_AHEAD: usize = 8;
+
+/// A tile's triangles are scattered through their chunks (a few from each)
+/// and their planes through the frame's: the triangle `AHEAD` places on,
+/// across chunk boundaries, is fetched ahead, and the planes of the one
+/// half as far (whose triangle is in cache by then). A depth pass's
+/// scan of a small triangle is much shorter than a miss and looks
+/// further ahead ([`DEPTH_AHEAD`]) than the camera's ([`CAMERA_AHEAD`]),
+/// whose longer scans a deeper look-ahead only slows.
 #[inline(always)]
-fn for_each_triangle<P>(
+fn for_each_triangle<P, const AHEAD: usize>(
     t: usize,
     chunks: &[BinnedChunk],
     planes: &[P],
     mut scan: impl FnMut(&RasterTri, &P),
 ) {
-    for chunk in chunks {
-        let items = chunk.tile_items(t);
-        for (k, &i) in items.iter().enumerate() {
-            // A tile's triangles are scattered through the chunk, and their
-            // planes through the frame's: fetch the triangle two ahead and
-            // the planes of the next one (whose triangle is in cache by now).
-            if let Some(&ahead) = items.get(k + 2) {
-                prefetch(&chunk.tris[ahead as usize]);
-            }
-            if let Some(&next) = items.get(k + 1) {
-                prefetch(&planes[chunk.tris[next as usize].tri as usize]);
-            }
-            let rt = &chunk.tris[i as usize];
-            scan(rt, &planes[rt.tri as usize]);
+    const { assert!(AHEAD >= 2) };
+    let (tri_ahead, planes_ahead) = (AHEAD, AHEAD / 2);
+    let tris = || {
+        chunks
+            .iter()
+            .flat_map(move |c| c.tile_items(t).iter().map(move |&i| &c.tris[i as usize]))
+    };
+    let mut tris_on = tris();
+    tris_on.by_ref().take(tri_ahead).for_each(prefetch);
+    let mut planes_on = tris().skip(planes_ahead);
+    for rt in tris() {
+        if let Some(next) = tris_on.next() {
+            prefetch(next);
         }
+        if let Some(next) = planes_on.next() {
+            prefetch(&planes[next.tri as usize]);
+        }
+        scan(rt, &planes[rt.tri as usize]);
     }
 }
 
