@@ -13,7 +13,10 @@
 //!   scan writes no ids;
 //! - triangles whose three vertices lie beyond one plane of the light's
 //!   frustum (setup's own outside test, on outcodes taken once a vertex)
-//!   skip setup four at a time, before their vertices are gathered.
+//!   skip setup four at a time, before their vertices are gathered;
+//! - the scan draws each tile into a scratch tile and writes it at once,
+//!   as linear depth, into the row-major map: no tile-major depth buffer
+//!   of the map's size is cleared, written and read back.
 //!
 //! A scene with masked or blended materials takes the full pass: its
 //! alpha test reads the barycentric planes.
@@ -28,7 +31,7 @@ use crate::scene::SceneData;
 use crate::setup::{outcode_f32, DepthPlanes, SetupContext, SetupCounts, TriPlanes};
 use crate::setup_x4::{Vertices4, LANES};
 use crate::stats::{count_setup_sweep, ms_since, FrameStats};
-use crate::target::{Target, VisBuffer, TILE_PIXELS};
+use crate::target::{Target, VisBuffer, TILE, TILE_PIXELS};
 use crate::visibility::{geometry_pass, Visibility};
 use rayon::prelude::*;
 use std::sync::Arc;
@@ -46,20 +49,57 @@ pub enum DepthSetup {
     Full,
 }
 
+/// How a depth pass's NDC depth becomes a map's linear depth (along the
+/// light's axis; infinity where nothing was drawn, NDC depth ≤ 0).
+#[derive(Clone, Copy, Debug)]
+pub(crate) enum LinearDepth {
+    /// NDC depth = near / depth.
+    Perspective { near: f32 },
+    /// NDC depth = 1 − (depth − near) / span.
+    Orthographic { near: f32, span: f32 },
+}
+
+impl LinearDepth {
+    /// `out[i]` = the linear depth of NDC depth `z[i]`, for every i <
+    /// `out.len()` ≤ `z.len()`.
+    fn convert(self, out: &mut [f32], z: &[f32]) {
+        match self {
+            LinearDepth::Perspective { near } => {
+                for (d, &z) in out.iter_mut().zip(z) {
+                    *d = if z <= 0.0 { f32::INFINITY } else { near / z };
+                }
+            }
+            LinearDepth::Orthographic { near, span } => {
+                for (d, &z) in out.iter_mut().zip(z) {
+                    *d = if z <= 0.0 {
+                        f32::INFINITY
+                    } else {
+                        near + (1.0 - z) * span
+                    };
+                }
+            }
+        }
+    }
+}
+
 /// A depth-only pass of the scene's main triangles seen through
 /// `view_proj` from `eye` (a point or spot light's position and the
 /// distance from it to the near plane's corners; `None` for a directional
-/// light) into `target`, in `out` (made on first use, reused
-/// after); its geometry time goes to `stats.times.shadow`.
-pub(crate) fn depth_pass<'a>(
+/// light) into `map` (row-major, `target`'s width × height) as `linear`
+/// depth, with its buffers in `out` (made on first use, reused after);
+/// its geometry time goes to `stats.times.shadow`.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn depth_pass(
     scene: &SceneData,
     target: &Target,
     view_proj: glam::Mat4,
     eye: Option<(glam::Vec3, f32)>,
     setup: DepthSetup,
-    out: &'a mut Option<Visibility>,
+    out: &mut Option<Visibility>,
+    map: &mut [f32],
+    linear: LinearDepth,
     stats: &mut FrameStats,
-) -> &'a Visibility {
+) {
     let view = View {
         view_proj,
         eye: glam::Vec3::ZERO,
@@ -72,9 +112,6 @@ pub(crate) fn depth_pass<'a>(
         height: target.height as f32,
     };
     let v = out.get_or_insert_with(|| Visibility::empty(target, view.clone()));
-    if v.vis.id.len() != target.buffer_len() {
-        v.vis = VisBuffer::new(target);
-    }
     v.view = view;
     match scene.solids() {
         Some(solids) if solids.any() => solids.cull_back_mask(eye, &mut v.cull_back),
@@ -95,28 +132,67 @@ pub(crate) fn depth_pass<'a>(
     };
     let mut own = FrameStats::default();
     if setup == DepthSetup::Full || AlphaScan::new(scene, false).is_some() {
+        if v.vis.id.len() != target.buffer_len() {
+            v.vis = VisBuffer::new(target);
+        }
         v.planes
             .resize(pass.ids().end as usize, TriPlanes::default());
         // The first pass of its buffer: it clears it and tests against nothing.
         geometry_pass(scene, target, &pass, 0, false, &mut true, v, &mut own, true);
+        let t = Instant::now();
+        let depth = &v.vis.depth;
+        write_map(target, map, linear, |tile, out| {
+            out.copy_from_slice(&depth[tile * TILE_PIXELS..(tile + 1) * TILE_PIXELS]);
+        });
+        own.times.raster += ms_since(t);
     } else {
-        depth_only_pass(scene, target, &pass, v, &mut own);
+        // This path never reads the tile-major buffer: free one a full
+        // pass left.
+        v.vis = VisBuffer::default();
+        depth_only_pass(scene, target, &pass, v, map, linear, &mut own);
     }
     let t = own.times;
     stats.times.shadow += t.vertex + t.setup + t.bin + t.raster;
     stats.shadow_passes += 1;
     stats.shadow_counts.add(&own.counts);
-    v
+}
+
+/// Fills `map` (row-major, `target`'s size) with the `linear` depth of
+/// each tile, a band of tile rows per task: `tile(t, depth)` puts tile
+/// `t`'s NDC depth (row-major in the tile) into `depth`.
+fn write_map(
+    target: &Target,
+    map: &mut [f32],
+    linear: LinearDepth,
+    tile: impl Fn(usize, &mut [f32; TILE_PIXELS]) + Sync,
+) {
+    let width = target.width as usize;
+    let tiles_x = target.tiles_x as usize;
+    map.par_chunks_mut(width * TILE)
+        .enumerate()
+        .for_each(|(ty, band)| {
+            let mut depth = [0.0; TILE_PIXELS];
+            for tx in 0..tiles_x {
+                tile(ty * tiles_x + tx, &mut depth);
+                let x0 = tx * TILE;
+                let run = TILE.min(width - x0);
+                for (r, row) in band.chunks_exact_mut(width).enumerate() {
+                    linear.convert(&mut row[x0..x0 + run], &depth[r * TILE..]);
+                }
+            }
+        });
 }
 
 /// `geometry_pass` of a first pass with `Cull::None` (but the back faces
 /// of the triangles in `out.cull_back`) and no alpha materials, keeping
-/// depth alone (see the module doc).
+/// depth alone, written to `map` as `linear` depth (see the module doc).
 fn depth_only_pass(
     scene: &SceneData,
     target: &Target,
     pass: &GeometryPass,
     out: &mut Visibility,
+    map: &mut [f32],
+    linear: LinearDepth,
     stats: &mut FrameStats,
 ) {
     let t = Instant::now();
@@ -209,13 +285,9 @@ fn depth_only_pass(
 
     let t = Instant::now();
     let planes = &out.depth_planes;
-    out.vis
-        .depth
-        .par_chunks_mut(TILE_PIXELS)
-        .enumerate()
-        .for_each(|(tile, depth)| {
-            depth.fill(0.0);
-            rasterize_tile_depth(target, tile, chunks, planes, depth);
-        });
+    write_map(target, map, linear, |tile, depth| {
+        depth.fill(0.0);
+        rasterize_tile_depth(target, tile, chunks, planes, depth);
+    });
     stats.times.raster += ms_since(t);
 }

@@ -112,6 +112,7 @@ impl Target {
 
 /// Depth (NDC z in [0, 1]) and triangle id per pixel: the output of the
 /// visibility pass.
+#[derive(Default)]
 pub struct VisBuffer {
     pub depth: Vec<f32>,
     pub id: Vec<u32>,

@@ -12,14 +12,13 @@ pub use crate::depth_pass::DepthSetup;
 pub use pixels::{pixel_shadows, pixel_sun_shadows};
 
 use crate::camera::View;
-use crate::depth_pass::depth_pass;
+use crate::depth_pass::{depth_pass, LinearDepth};
 use crate::scene::SceneData;
 use crate::shadow::{Face, LightShadow, ShadowMaps, ShadowSettings};
 use crate::stats::FrameStats;
-use crate::target::{Target, TILE};
+use crate::target::Target;
 use crate::visibility::{ShadowBuffers, Visibility};
 use fit::{light_faces, Bounds};
-use rayon::prelude::*;
 use specula_core::light::Light;
 
 /// Renders every shadowed light's maps of `scene` for the camera's `view`
@@ -135,34 +134,27 @@ fn render_face(
     let tan_half = 0.5 * face.texel * face.size as f32;
     let corner = face.near * (1.0 + 2.0 * tan_half * tan_half).sqrt();
     let eye = face.perspective.then_some((face.origin, corner));
-    let v = depth_pass(scene, &target, face.clip, eye, setup, pass, stats);
     let n = face.size as usize;
     face.depth.resize(n * n, 0.0);
-    let (perspective, near, span) = (face.perspective, face.near, face.span);
-    face.depth
-        .par_chunks_mut(n)
-        .enumerate()
-        .for_each(|(y, row)| {
-            // The row's runs of up to a tile's width lie together in the
-            // tile-major buffer.
-            for (t, run) in row.chunks_mut(TILE).enumerate() {
-                let start = target.index((t * TILE) as u32, y as u32);
-                let z = &v.vis.depth[start..start + run.len()];
-                if perspective {
-                    for (d, &z) in run.iter_mut().zip(z) {
-                        *d = if z <= 0.0 { f32::INFINITY } else { near / z };
-                    }
-                } else {
-                    for (d, &z) in run.iter_mut().zip(z) {
-                        *d = if z <= 0.0 {
-                            f32::INFINITY
-                        } else {
-                            near + (1.0 - z) * span
-                        };
-                    }
-                }
-            }
-        });
+    let linear = if face.perspective {
+        LinearDepth::Perspective { near: face.near }
+    } else {
+        LinearDepth::Orthographic {
+            near: face.near,
+            span: face.span,
+        }
+    };
+    depth_pass(
+        scene,
+        &target,
+        face.clip,
+        eye,
+        setup,
+        pass,
+        &mut face.depth,
+        linear,
+        stats,
+    );
     match window {
         Some(window) => {
             let mut bounds = face.bounds.take().unwrap_or_default();
