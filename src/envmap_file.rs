@@ -232,7 +232,10 @@ pub fn load_env_map(name: &str, bytes: &[u8], s: &EnvSettings) -> Result<EnvMap,
 
 /// The cache name of a map's derived data: the prefilter format's
 /// version, a hash of the file and the intensity (the rotation and the
-/// rest are applied at lookup).
+/// rest are applied at lookup). The version names how the data are
+/// computed, not only how they are stored: any change to the SH, the
+/// chain's sampling or the sun's extraction bumps it, or a cache written
+/// by the code before (a user's, a developer's) is read as if current.
 fn cache_key(bytes: &[u8], intensity: f32) -> String {
     use sha2::{Digest, Sha256};
     let mut h = Sha256::new();
@@ -240,7 +243,7 @@ fn cache_key(bytes: &[u8], intensity: f32) -> String {
     h.update(intensity.to_le_bytes());
     let d = h.finalize();
     let hex: String = d[..12].iter().map(|b| format!("{b:02x}")).collect();
-    format!("envmap-v4-{hex}")
+    format!("envmap-v5-{hex}")
 }
 
 /// Layout of a cached file (f32 little-endian): the 27 SH values, a flag

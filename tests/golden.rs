@@ -7,6 +7,8 @@
 //! golden PNGs after an intended change: fixtures/golden/SCENE.png (the
 //! SIMD path's image) and SCENE.scalar.png only where the scalar path's
 //! pixels differ from it.
+//! Environment maps' derived data are computed afresh (a table cache of
+//! this run's own), never read from the user's cache.
 //! A failing check writes the new image, a copy of the golden one and a
 //! FLIP heat map of the two into the target folder and prints their paths.
 
@@ -96,6 +98,10 @@ fn every_fixture_scene_renders_its_golden_pixels() {
         eprintln!("skipped: the golden hashes are for x86-64 builds with AVX2 and FMA");
         return;
     }
+    // Maps' derived data from this build, not from a table cache another
+    // build wrote under the same key. This binary's only test, so no
+    // other thread reads the environment while it is set.
+    std::env::set_var("SPECULA_CACHE_DIR", temp_dir("golden-table-cache"));
     let bless = std::env::var_os("SPECULA_BLESS").is_some_and(|v| v == "1");
     let hash_path = fixtures().join(HASHES);
     let golden: Hashes = std::fs::read_to_string(&hash_path)
