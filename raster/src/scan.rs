@@ -85,14 +85,14 @@ pub(crate) fn rasterize_tile_alpha(
     });
 }
 
-/// Calls `scan(rt, planes)` for every triangle binned to tile `t`, in
-/// scene order.
-///
 /// How far ahead a camera pass's scan fetches a tile's triangles.
 const CAMERA_AHEAD: usize = 2;
 /// How far ahead a depth pass's scan fetches a tile's triangles.
 const DEPTH_AHEAD: usize = 8;
 
+/// Calls `scan(rt, planes)` for every triangle binned to tile `t`, in
+/// scene order.
+///
 /// A tile's triangles are scattered through their chunks (a few from each)
 /// and their planes through the frame's: the triangle `AHEAD` places on,
 /// across chunk boundaries, is fetched ahead, and the planes of the one

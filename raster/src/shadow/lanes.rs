@@ -41,11 +41,17 @@ impl LightShadow {
     #[inline(always)]
     fn packet_face(&self) -> Option<&Face> {
         match self.faces.as_slice() {
-            [face] if self.settings.filter != ShadowFilter::Pcss && face.size <= MAX_PACKET_MAP => {
-                Some(face)
-            }
+            [face] if self.packet_lookups() => Some(face),
             _ => None,
         }
+    }
+
+    /// Whether this light's lookups run on all lanes at once: hard or PCF,
+    /// on maps small enough for f32 gather indices (a light's faces share
+    /// their size).
+    #[inline(always)]
+    fn packet_lookups(&self) -> bool {
+        self.settings.filter != ShadowFilter::Pcss && self.faces[0].size <= MAX_PACKET_MAP
     }
 
     /// [`LightShadow::visibility_packet`] with the common end inline:
@@ -71,10 +77,10 @@ impl LightShadow {
     /// runs once under its lanes' mask. PCSS (whose search and filter
     /// widths differ per lane) and larger maps go lane by lane.
     pub fn visibility_lanes<R: Real>(&self, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
-        if self.settings.filter != ShadowFilter::Pcss && self.faces[0].size <= MAX_PACKET_MAP {
-            if self.faces.len() == 1 {
-                return self.visibility_packet(&self.faces[0], p, n, lanes);
-            }
+        if let Some(face) = self.packet_face() {
+            return self.visibility_packet(face, p, n, lanes);
+        }
+        if self.packet_lookups() {
             let masks = self.face_masks(p, lanes);
             let mut out = R::ONE;
             for (face, m) in self.faces.iter().zip(masks) {
