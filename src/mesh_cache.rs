@@ -70,14 +70,69 @@ pub(crate) fn load_obj_cached(
 
 /// The cache key of an OBJ at `path` with `bytes`.
 pub(crate) fn key(path: &Path, bytes: &[u8]) -> String {
+    let mut h = key_hasher(path);
+    h.update(bytes);
+    h.finalize().to_hex().to_string()
+}
+
+/// The hasher of a key, fed all but the OBJ's bytes.
+fn key_hasher(path: &Path) -> blake3::Hasher {
     let mut h = blake3::Hasher::new();
     let path = path.as_os_str().as_encoded_bytes();
     for part in [VERSION, path] {
         h.update(&(part.len() as u64).to_le_bytes());
         h.update(part);
     }
-    h.update(bytes);
-    h.finalize().to_hex().to_string()
+    h
+}
+
+/// Bytes of the OBJ read at a time while [`cached_file`] hashes it.
+const KEY_CHUNK: usize = 1 << 20;
+
+/// The cached mesh of the OBJ file at `full` (named `path` in the scene,
+/// as [`load_obj`] names it), found without reading the file into memory:
+/// its bytes are hashed through one reused chunk (both cores hash each
+/// chunk), so a hit touches no fresh memory for them. `None` when the
+/// cache is off, the file is below [`MIN_OBJ_BYTES`] or cannot be read,
+/// or the cache misses; the caller then reads and parses the file with
+/// [`load_obj`], which keys the bytes it read (not these: the file may
+/// have changed in between). On a hit, also the file's length.
+pub(crate) fn cached_file(
+    path: &Path,
+    full: &Path,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Option<(MeshData, u64)> {
+    let dir = crate::table_cache::cache_dir()?;
+    if std::fs::metadata(full).ok()?.len() < MIN_OBJ_BYTES as u64 {
+        return None;
+    }
+    cached_file_in(&dir, path, full, read)
+}
+
+/// [`cached_file`] with the cache in `dir`, whatever the file's size.
+fn cached_file_in(
+    dir: &Path,
+    path: &Path,
+    full: &Path,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Option<(MeshData, u64)> {
+    use std::io::Read;
+    let mut file = std::fs::File::open(full).ok()?;
+    let mut h = key_hasher(path);
+    let mut chunk = vec![0u8; KEY_CHUNK];
+    let mut len = 0u64;
+    loop {
+        let n = match file.read(&mut chunk) {
+            Ok(0) => break,
+            Ok(n) => n,
+            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+            Err(_) => return None,
+        };
+        h.update(&chunk[..n]);
+        len += n as u64;
+    }
+    let key = h.finalize().to_hex().to_string();
+    Some((load(dir, &key, path, read)?, len))
 }
 
 fn file(dir: &Path, key: &str) -> PathBuf {
@@ -92,8 +147,9 @@ pub(crate) fn load(
     path: &Path,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Option<MeshData> {
-    let bytes = std::fs::read(file(dir, key)).ok()?;
-    let (mut mesh, mtls) = decode(&bytes)?;
+    let f = std::fs::File::open(file(dir, key)).ok()?;
+    let len = f.metadata().ok()?.len();
+    let (mut mesh, mtls) = decode(std::io::BufReader::new(f), len)?;
     let obj_dir = path.parent().unwrap_or(Path::new(""));
     for src in &mtls {
         let p = obj_dir.join(&src.name);
@@ -172,60 +228,55 @@ fn encode(m: &MeshData, mtls: &[MtlSource]) -> Vec<u8> {
     w
 }
 
-/// Bounds-checked reading of [`encode`]'s layout.
-struct Reader<'a> {
-    rest: &'a [u8],
+/// Bounds-checked reading of [`encode`]'s layout from a stream of `left`
+/// bytes: arrays are read straight into the vectors they become.
+struct Reader<R> {
+    src: R,
+    left: u64,
 }
 
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Option<&'a [u8]> {
-        if n > self.rest.len() {
-            return None;
-        }
-        let (a, b) = self.rest.split_at(n);
-        self.rest = b;
-        Some(a)
+impl<R: std::io::Read> Reader<R> {
+    fn take(&mut self, n: usize) -> Option<Vec<u8>> {
+        let mut b = vec![0; n];
+        self.fill(&mut b)?;
+        Some(b)
+    }
+    /// Reads exactly `b.len()` bytes, no more than are left.
+    fn fill(&mut self, b: &mut [u8]) -> Option<()> {
+        self.left = self.left.checked_sub(b.len() as u64)?;
+        self.src.read_exact(b).ok()
     }
     fn u32(&mut self) -> Option<u32> {
-        Some(u32::from_le_bytes(self.take(4)?.try_into().ok()?))
+        let mut b = [0; 4];
+        self.fill(&mut b)?;
+        Some(u32::from_le_bytes(b))
     }
     /// A count of items of `size` bytes each, no more than the bytes left.
     fn count(&mut self, size: usize) -> Option<usize> {
         let n = self.u32()? as usize;
-        (n.checked_mul(size)? <= self.rest.len()).then_some(n)
+        ((n as u64).checked_mul(size as u64)? <= self.left).then_some(n)
     }
     fn string(&mut self) -> Option<String> {
         let n = self.count(1)?;
-        String::from_utf8(self.take(n)?.to_vec()).ok()
+        String::from_utf8(self.take(n)?).ok()
     }
-    fn f32s<const N: usize>(&mut self, n: usize) -> Option<Vec<[f32; N]>> {
-        let b = self.take(n.checked_mul(4 * N)?)?;
-        Some(
-            b.chunks_exact(4 * N)
-                .map(|c| {
-                    std::array::from_fn(|k| {
-                        f32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap())
-                    })
-                })
-                .collect(),
-        )
-    }
-    fn u32s<const N: usize>(&mut self, n: usize) -> Option<Vec<[u32; N]>> {
-        let b = self.take(n.checked_mul(4 * N)?)?;
-        Some(
-            b.chunks_exact(4 * N)
-                .map(|c| {
-                    std::array::from_fn(|k| {
-                        u32::from_le_bytes(c[4 * k..4 * k + 4].try_into().unwrap())
-                    })
-                })
-                .collect(),
-        )
+    /// `n` arrays of `N` little-endian 4-byte words (f32 or u32).
+    fn words<T: bytemuck::Pod, const N: usize>(&mut self, n: usize) -> Option<Vec<[T; N]>> {
+        const { assert!(std::mem::size_of::<T>() == 4) };
+        let mut v = vec![[T::zeroed(); N]; n];
+        self.fill(bytemuck::cast_slice_mut(v.as_flattened_mut()))?;
+        if cfg!(target_endian = "big") {
+            for w in bytemuck::cast_slice_mut::<T, u32>(v.as_flattened_mut()) {
+                *w = u32::from_le(*w);
+            }
+        }
+        Some(v)
     }
 }
 
-fn decode(bytes: &[u8]) -> Option<(MeshData, Vec<MtlSource>)> {
-    let mut r = Reader { rest: bytes };
+/// The mesh and MTL list [`encode`] wrote, from `src` of `len` bytes.
+fn decode(src: impl std::io::Read, len: u64) -> Option<(MeshData, Vec<MtlSource>)> {
+    let mut r = Reader { src, left: len };
     if r.take(MAGIC.len())? != MAGIC {
         return None;
     }
@@ -237,20 +288,28 @@ fn decode(bytes: &[u8]) -> Option<(MeshData, Vec<MtlSource>)> {
         mtls.push(MtlSource { name, hash });
     }
     let n = r.count(24)?;
-    let positions = r.f32s::<3>(n)?.into_iter().map(Vec3::from_array).collect();
-    let normals = r.f32s::<3>(n)?.into_iter().map(Vec3::from_array).collect();
+    let positions = r
+        .words::<f32, 3>(n)?
+        .into_iter()
+        .map(Vec3::from_array)
+        .collect();
+    let normals = r
+        .words::<f32, 3>(n)?
+        .into_iter()
+        .map(Vec3::from_array)
+        .collect();
     let n_uv = r.count(8)?;
     if n_uv != 0 && n_uv != n {
         return None;
     }
     let uvs = r
-        .f32s::<2>(n_uv)?
+        .words::<f32, 2>(n_uv)?
         .into_iter()
         .map(Vec2::from_array)
         .collect();
     let n_tri = r.count(16)?;
-    let triangles: Vec<[u32; 3]> = r.u32s::<3>(n_tri)?;
-    let tri_material: Vec<u32> = r.u32s::<1>(n_tri)?.into_iter().map(|[i]| i).collect();
+    let triangles: Vec<[u32; 3]> = r.words::<u32, 3>(n_tri)?;
+    let tri_material: Vec<u32> = r.words::<u32, 1>(n_tri)?.into_iter().map(|[i]| i).collect();
     let n_names = r.count(1)?;
     let mut material_names = Vec::with_capacity(n_names);
     for _ in 0..n_names {
@@ -266,7 +325,7 @@ fn decode(bytes: &[u8]) -> Option<(MeshData, Vec<MtlSource>)> {
         .collect::<Option<Vec<_>>>()?;
     let in_range = triangles.iter().flatten().all(|&i| (i as usize) < n)
         && tri_material.iter().all(|&i| (i as usize) < n_names);
-    if !r.rest.is_empty() || !in_range {
+    if r.left != 0 || !in_range {
         return None;
     }
     let mesh = MeshData {
@@ -378,6 +437,36 @@ mod tests {
         let got = both(Some(dir.path()));
         assert!(!matches!(got, Ok((_, true))));
         assert_eq!(got.map(|(m, _)| m), uncached.map(|(m, _)| m));
+    }
+
+    #[test]
+    fn a_file_is_found_in_the_cache_by_its_hashed_chunks() {
+        let cache = tempfile::tempdir().unwrap();
+        let scene = tempfile::tempdir().unwrap();
+        // Several chunks and a part of one, so the chunked hash is tested.
+        let (mut obj, mtl) = grid(100);
+        obj.resize((obj.len() / KEY_CHUNK + 2) * KEY_CHUNK + 12_345, b'\n');
+        let path = Path::new("scenes/grid.obj");
+        let full = scene.path().join("grid.obj");
+        std::fs::write(&full, &obj).unwrap();
+        let files: Files = Default::default();
+        files
+            .borrow_mut()
+            .insert(PathBuf::from("scenes/grid.mtl"), mtl);
+        let read = reader(&files);
+        let found = |name: &Path| cached_file_in(cache.path(), name, &full, &read);
+
+        assert!(found(path).is_none(), "nothing cached yet");
+        let (parsed, hit) = load_obj_cached(path, &obj, &read, Some(cache.path())).unwrap();
+        assert!(!hit);
+        let (cached, len) = found(path).expect("a hit once the parse is stored");
+        assert_eq!(all(&cached), all(&parsed));
+        assert_eq!(len, obj.len() as u64);
+        // Another name for the same bytes, and the file edited: misses.
+        assert!(found(Path::new("scenes/copy.obj")).is_none());
+        obj.extend_from_slice(b"v 0 0 0\n");
+        std::fs::write(&full, &obj).unwrap();
+        assert!(found(path).is_none(), "an edited file is a miss");
     }
 
     #[test]

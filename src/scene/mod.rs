@@ -72,7 +72,7 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
         read_paths.borrow_mut().push(full.clone());
         std::fs::read(full)
     };
-    let mut scene = load_scene_str(path, &text, &read)?;
+    let mut scene = load_scene_files(path, &text, &read, Some(&dir))?;
     for p in scene.inputs.iter_mut().skip(1) {
         *p = dir.join(&p);
     }
@@ -91,12 +91,24 @@ pub fn load_scene_str(
     text: &str,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<LoadedScene, SceneError> {
+    load_scene_files(path, text, read, None)
+}
+
+/// [`load_scene_str`], where `read` reads the files under `dir` when
+/// `dir` is given (a large OBJ is then looked up in the mesh cache
+/// without being read whole: `mesh_cache::cached_file`).
+fn load_scene_files(
+    path: &Path,
+    text: &str,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    dir: Option<&Path>,
+) -> Result<LoadedScene, SceneError> {
     let err = |message: String| SceneError {
         file: path.to_path_buf(),
         message,
     };
     let desc = parse(text).map_err(err)?;
-    build_scene(path, desc, read).map_err(|e| err(e.to_string()))
+    build_scene(path, desc, read, dir).map_err(|e| err(e.to_string()))
 }
 
 /// The scene's tables from its text. A TOML error says the line; a value
@@ -128,10 +140,12 @@ fn build_scene(
     path: &Path,
     desc: SceneFile,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    dir: Option<&Path>,
 ) -> Result<LoadedScene, BuildError> {
     let camera = build_camera(&desc.camera)?;
     check_output(&desc.output)?;
     let mut scene = SceneBuilder::new(path, read, camera, desc.output.background);
+    scene.dir = dir;
     scene.add_materials(&desc.materials)?;
     scene.add_meshes(&desc.meshes)?;
     scene.add_lights(&desc.lights, desc.render.area_lights)?;

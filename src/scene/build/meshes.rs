@@ -106,23 +106,37 @@ impl SceneBuilder<'_> {
     /// An OBJ file (and its MTLs), recorded as inputs; vertices the
     /// rasterizer will skip are worth a warning.
     fn load_obj(&mut self, field: &str, p: &Path) -> Result<MeshData, BuildError> {
-        let bytes = (self.read)(p).map_err(|source| BuildError::Read {
-            field: format!("{field}.obj"),
-            path: p.display().to_string(),
-            source,
-        })?;
-        memory::reserve(
-            &format!("{field}.obj ({} bytes)", bytes.len()),
-            memory::obj_bytes(bytes.len() as u64),
-        )
-        .map_err(BuildError::Memory)?;
-        self.inputs.push(p.to_path_buf());
-        let m = crate::mesh_cache::load_obj(p, &bytes, self.read).map_err(|source| {
-            BuildError::Obj {
-                field: format!("{field}.obj"),
-                source,
+        let reserve = |len: u64| {
+            memory::reserve(
+                &format!("{field}.obj ({len} bytes)"),
+                memory::obj_bytes(len),
+            )
+            .map_err(BuildError::Memory)
+        };
+        let cached = self
+            .dir
+            .and_then(|dir| crate::mesh_cache::cached_file(p, &dir.join(p), self.read));
+        let m = match cached {
+            Some((m, len)) => {
+                reserve(len)?;
+                m
             }
-        })?;
+            None => {
+                let bytes = (self.read)(p).map_err(|source| BuildError::Read {
+                    field: format!("{field}.obj"),
+                    path: p.display().to_string(),
+                    source,
+                })?;
+                reserve(bytes.len() as u64)?;
+                crate::mesh_cache::load_obj(p, &bytes, self.read).map_err(|source| {
+                    BuildError::Obj {
+                        field: format!("{field}.obj"),
+                        source,
+                    }
+                })?
+            }
+        };
+        self.inputs.push(p.to_path_buf());
         self.inputs.extend(m.mtl_files.iter().cloned());
         self.warnings.extend(m.warnings.iter().cloned());
         let limit = specula_raster::setup::MAX_CLIP_COORD as f32;

@@ -39,6 +39,8 @@ use std::path::{Path, PathBuf};
 pub(super) struct SceneBuilder<'a> {
     pub(super) path: &'a Path,
     pub(super) read: &'a dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+    /// The folder `read` reads files from, when they are files on disk.
+    pub(super) dir: Option<&'a Path>,
     pub(super) data: SceneParts,
     pub(super) materials: Materials,
     /// Whether some mesh brought texture coordinates.
@@ -60,6 +62,7 @@ impl<'a> SceneBuilder<'a> {
         SceneBuilder {
             path,
             read,
+            dir: None,
             data: SceneParts::empty(camera, background),
             materials: Materials {
                 list: Vec::new(),
