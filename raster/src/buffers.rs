@@ -10,6 +10,19 @@
 use crate::target::{Target, TILE};
 use std::marker::PhantomData;
 
+/// Resizes `v` to `n` elements, new ones zero. From empty (a first
+/// frame) it is one zeroed allocation: a large block comes from the
+/// system already zero, its pages faulted in where a pass first writes
+/// them, in parallel, where `resize` would first write every element on
+/// the calling thread.
+pub(crate) fn resize_zeroed<T: bytemuck::Zeroable + Clone>(v: &mut Vec<T>, n: usize) {
+    if v.is_empty() {
+        *v = bytemuck::zeroed_vec(n);
+    } else {
+        v.resize(n, T::zeroed());
+    }
+}
+
 /// One f32 per pixel per channel, row-major, `width × height`.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Planes3 {

@@ -28,7 +28,7 @@ use crate::closed::depth_cull;
 use crate::geometry::{Cull, GeometryPass};
 use crate::scan::{rasterize_tile_depth, AlphaScan};
 use crate::scene::SceneData;
-use crate::setup::{outcode_f32, DepthPlanes, SetupContext, SetupCounts, TriPlanes};
+use crate::setup::{outcode_f32, DepthPlanes, SetupContext, SetupCounts};
 use crate::setup_x4::{Vertices4, LANES};
 use crate::stats::{count_setup_sweep, ms_since, FrameStats};
 use crate::target::{Target, VisBuffer, TILE, TILE_PIXELS};
@@ -135,8 +135,7 @@ pub(crate) fn depth_pass(
         if v.vis.id.len() != target.buffer_len() {
             v.vis = VisBuffer::new(target);
         }
-        v.planes
-            .resize(pass.ids().end as usize, TriPlanes::default());
+        crate::buffers::resize_zeroed(&mut v.planes, pass.ids().end as usize);
         // The first pass of its buffer: it clears it and tests against nothing.
         geometry_pass(scene, target, &pass, 0, false, &mut true, v, &mut own, true);
         let t = Instant::now();
@@ -219,8 +218,7 @@ fn depth_only_pass(
     };
     let range = pass.triangles.start as usize..pass.triangles.end as usize;
     let ids = pass.ids();
-    out.depth_planes
-        .resize(ids.end as usize, DepthPlanes::default());
+    crate::buffers::resize_zeroed(&mut out.depth_planes, ids.end as usize);
     let n_chunks = range.len().div_ceil(CHUNK);
     if out.chunks.len() < n_chunks {
         out.chunks.resize_with(n_chunks, BinnedChunk::default);

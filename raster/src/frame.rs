@@ -13,7 +13,6 @@ use crate::buffers::{BufferSet, FrameBuffers, Planes3, TileWriter};
 use crate::post::LdrEncoding;
 use crate::resolve::ResolveContext;
 use crate::scene::SceneData;
-use crate::setup::TriPlanes;
 use crate::shading_pass::{shade_tile, ShadeTargets};
 use crate::shadow::ShadowMaps;
 use crate::shadow_pass::{self, DepthSetup};
@@ -52,7 +51,7 @@ pub fn visibility_into(
         .map(|p| p.ids().end)
         .max()
         .unwrap_or(0);
-    out.planes.resize(ids as usize, TriPlanes::default());
+    crate::buffers::resize_zeroed(&mut out.planes, ids as usize);
     // Instances of stages this scene no longer has (a frame reused for
     // another scene) go.
     out.stages
@@ -163,7 +162,7 @@ fn shade_impl(
             }
             shade_impl(scene, target, v, path, buffers, None, stats);
             let w = target.width as usize;
-            bytes.resize(target.pixel_count() * 3, 0);
+            crate::buffers::resize_zeroed(bytes, target.pixel_count() * 3);
             let c = &buffers.color;
             bytes
                 .par_chunks_mut(w * 3)
@@ -204,7 +203,7 @@ fn shade_impl(
         ],
         id: TileWriter::new(id, target),
         ldr: ldr.map(|(enc, bytes)| {
-            bytes.resize(target.pixel_count() * 3, 0);
+            crate::buffers::resize_zeroed(bytes, target.pixel_count() * 3);
             let px: &mut [[u8; 3]] = bytes.as_mut_slice().as_chunks_mut().0;
             (enc, TileWriter::new(px, target))
         }),

@@ -89,6 +89,12 @@ pub struct TriPlanes {
     pub facing: f32,
 }
 
+// SAFETY: every field is f32, whose all-zero bits are 0.0 (the Default).
+unsafe impl bytemuck::Zeroable for TriPlanes {}
+
+// SAFETY: every field is f32, whose all-zero bits are 0.0 (the Default).
+unsafe impl bytemuck::Zeroable for DepthPlanes {}
+
 impl TriPlanes {
     #[inline]
     pub fn eval(p: &[f32; 3], origin: [f32; 2], x: f32, y: f32) -> f32 {

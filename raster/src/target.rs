@@ -125,6 +125,17 @@ impl VisBuffer {
             id: vec![MISS; t.buffer_len()],
         }
     }
+
+    /// Buffers for `t` left zero, not cleared to [`MISS`]: for a frame
+    /// whose first geometry pass clears each tile before it draws (as the
+    /// frame's passes do). Zero costs no writes: a large block comes from
+    /// the system already zero.
+    pub(crate) fn uncleared(t: &Target) -> VisBuffer {
+        VisBuffer {
+            depth: vec![0.0; t.buffer_len()],
+            id: vec![0; t.buffer_len()],
+        }
+    }
 }
 
 #[cfg(test)]

@@ -123,10 +123,11 @@ pub struct ShadowBuffers {
 }
 
 impl Visibility {
-    /// Buffers for `target` seen through `view`, nothing drawn yet.
+    /// Buffers for `target` seen through `view`, nothing drawn yet (the
+    /// visibility buffer not cleared: a frame's first pass clears it).
     pub(crate) fn empty(target: &Target, view: View) -> Visibility {
         Visibility {
-            vis: VisBuffer::new(target),
+            vis: VisBuffer::uncleared(target),
             planes: Vec::new(),
             view,
             clip: Vec::new(),

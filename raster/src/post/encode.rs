@@ -91,7 +91,7 @@ impl LdrEncoding {
 /// caller overwrites all of it).
 pub(super) fn size_output(out: &mut Vec<u8>, len: usize) {
     out.truncate(len);
-    out.resize(len, 0);
+    crate::buffers::resize_zeroed(out, len);
 }
 
 /// p[i..i + 8] as one vector load (filling an array lane by lane and

@@ -13,8 +13,8 @@ impl DepthWindows {
     pub(crate) fn fill(&mut self, depth: &[f32], n: usize, window: u32) {
         let w = window as usize;
         self.window = window;
-        self.near.resize(n * n, 0.0);
-        self.far.resize(n * n, 0.0);
+        crate::buffers::resize_zeroed(&mut self.near, n * n);
+        crate::buffers::resize_zeroed(&mut self.far, n * n);
         // Down the columns first, an output row per task reading the w
         // rows from its own into two scratch rows; then along those rows.
         self.near

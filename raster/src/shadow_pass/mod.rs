@@ -135,7 +135,7 @@ fn render_face(
     let corner = face.near * (1.0 + 2.0 * tan_half * tan_half).sqrt();
     let eye = face.perspective.then_some((face.origin, corner));
     let n = face.size as usize;
-    face.depth.resize(n * n, 0.0);
+    crate::buffers::resize_zeroed(&mut face.depth, n * n);
     let linear = if face.perspective {
         LinearDepth::Perspective { near: face.near }
     } else {
