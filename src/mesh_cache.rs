@@ -86,53 +86,39 @@ fn key_hasher(path: &Path) -> blake3::Hasher {
     h
 }
 
-/// Bytes of the OBJ read at a time while [`cached_file`] hashes it.
-const KEY_CHUNK: usize = 1 << 20;
-
-/// The cached mesh of the OBJ file at `full` (named `path` in the scene,
-/// as [`load_obj`] names it), found without reading the file into memory:
-/// its bytes are hashed through one reused chunk (both cores hash each
-/// chunk), so a hit touches no fresh memory for them. `None` when the
-/// cache is off, the file is below [`MIN_OBJ_BYTES`] or cannot be read,
-/// or the cache misses; the caller then reads and parses the file with
+/// The cache key of the OBJ file at `file` (named `path` in the scene,
+/// as [`load_obj`] names it) and the file's length, without reading the
+/// file into memory: its bytes are hashed through a small buffer as they
+/// are read. `None` when the cache is off, the file is below
+/// [`MIN_OBJ_BYTES`] or cannot be read. Look the key up with
+/// [`load_cached`]; on a miss the caller reads and parses the file with
 /// [`load_obj`], which keys the bytes it read (not these: the file may
-/// have changed in between). On a hit, also the file's length.
-pub(crate) fn cached_file(
-    path: &Path,
-    full: &Path,
-    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Option<(MeshData, u64)> {
-    let dir = crate::table_cache::cache_dir()?;
-    if std::fs::metadata(full).ok()?.len() < MIN_OBJ_BYTES as u64 {
+/// have changed in between).
+pub(crate) fn file_key(path: &Path, file: &Path) -> Option<(String, u64)> {
+    crate::table_cache::cache_dir()?;
+    if std::fs::metadata(file).ok()?.len() < MIN_OBJ_BYTES as u64 {
         return None;
     }
-    cached_file_in(&dir, path, full, read)
+    key_of_file(path, file)
 }
 
-/// [`cached_file`] with the cache in `dir`, whatever the file's size.
-fn cached_file_in(
-    dir: &Path,
-    path: &Path,
-    full: &Path,
-    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
-) -> Option<(MeshData, u64)> {
-    use std::io::Read;
-    let mut file = std::fs::File::open(full).ok()?;
+/// [`file_key`] whatever the cache and the file's size.
+fn key_of_file(path: &Path, file: &Path) -> Option<(String, u64)> {
+    let f = std::fs::File::open(file).ok()?;
+    let len = f.metadata().ok()?.len();
     let mut h = key_hasher(path);
-    let mut chunk = vec![0u8; KEY_CHUNK];
-    let mut len = 0u64;
-    loop {
-        let n = match file.read(&mut chunk) {
-            Ok(0) => break,
-            Ok(n) => n,
-            Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
-            Err(_) => return None,
-        };
-        h.update(&chunk[..n]);
-        len += n as u64;
-    }
-    let key = h.finalize().to_hex().to_string();
-    Some((load(dir, &key, path, read)?, len))
+    h.update_reader(f).ok()?;
+    Some((h.finalize().to_hex().to_string(), len))
+}
+
+/// The cached mesh of `key` (from [`file_key`]) for the OBJ named `path`,
+/// or None on a miss.
+pub(crate) fn load_cached(
+    key: &str,
+    path: &Path,
+    read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
+) -> Option<MeshData> {
+    load(&crate::table_cache::cache_dir()?, key, path, read)
 }
 
 fn file(dir: &Path, key: &str) -> PathBuf {
@@ -237,6 +223,7 @@ struct Reader<R> {
 
 impl<R: std::io::Read> Reader<R> {
     fn take(&mut self, n: usize) -> Option<Vec<u8>> {
+        (n as u64 <= self.left).then_some(())?;
         let mut b = vec![0; n];
         self.fill(&mut b)?;
         Some(b)
@@ -263,6 +250,9 @@ impl<R: std::io::Read> Reader<R> {
     /// `n` arrays of `N` little-endian 4-byte words (f32 or u32).
     fn words<T: bytemuck::Pod, const N: usize>(&mut self, n: usize) -> Option<Vec<[T; N]>> {
         const { assert!(std::mem::size_of::<T>() == 4) };
+        (n as u64)
+            .checked_mul(4 * N as u64)
+            .filter(|&b| b <= self.left)?;
         let mut v = vec![[T::zeroed(); N]; n];
         self.fill(bytemuck::cast_slice_mut(v.as_flattened_mut()))?;
         if cfg!(target_endian = "big") {
@@ -311,7 +301,7 @@ fn decode(src: impl std::io::Read, len: u64) -> Option<(MeshData, Vec<MtlSource>
     let triangles: Vec<[u32; 3]> = r.words::<u32, 3>(n_tri)?;
     let tri_material: Vec<u32> = r.words::<u32, 1>(n_tri)?.into_iter().map(|[i]| i).collect();
     let n_names = r.count(1)?;
-    let mut material_names = Vec::with_capacity(n_names);
+    let mut material_names = Vec::new();
     for _ in 0..n_names {
         material_names.push(match r.take(1)?[0] {
             0 => None,
@@ -440,33 +430,41 @@ mod tests {
     }
 
     #[test]
-    fn a_file_is_found_in_the_cache_by_its_hashed_chunks() {
+    fn a_file_hashed_as_it_is_read_has_its_bytes_key() {
         let cache = tempfile::tempdir().unwrap();
         let scene = tempfile::tempdir().unwrap();
-        // Several chunks and a part of one, so the chunked hash is tested.
+        // A file of many of the hash's reads, and a part of one.
         let (mut obj, mtl) = grid(100);
-        obj.resize((obj.len() / KEY_CHUNK + 2) * KEY_CHUNK + 12_345, b'\n');
+        obj.resize(obj.len() + 3 * 65_536 + 12_345, b'\n');
         let path = Path::new("scenes/grid.obj");
-        let full = scene.path().join("grid.obj");
-        std::fs::write(&full, &obj).unwrap();
+        let file = scene.path().join("grid.obj");
+        std::fs::write(&file, &obj).unwrap();
         let files: Files = Default::default();
         files
             .borrow_mut()
             .insert(PathBuf::from("scenes/grid.mtl"), mtl);
         let read = reader(&files);
-        let found = |name: &Path| cached_file_in(cache.path(), name, &full, &read);
 
-        assert!(found(path).is_none(), "nothing cached yet");
+        let (k, len) = key_of_file(path, &file).unwrap();
+        assert_eq!(k, key(path, &obj));
+        assert_eq!(len, obj.len() as u64);
+        assert!(
+            load(cache.path(), &k, path, &read).is_none(),
+            "nothing cached yet"
+        );
         let (parsed, hit) = load_obj_cached(path, &obj, &read, Some(cache.path())).unwrap();
         assert!(!hit);
-        let (cached, len) = found(path).expect("a hit once the parse is stored");
+        let cached = load(cache.path(), &k, path, &read).expect("a hit once the parse is stored");
         assert_eq!(all(&cached), all(&parsed));
-        assert_eq!(len, obj.len() as u64);
-        // Another name for the same bytes, and the file edited: misses.
-        assert!(found(Path::new("scenes/copy.obj")).is_none());
+        // Another name for the same bytes, and the file edited: other keys.
+        assert_ne!(
+            key_of_file(Path::new("scenes/copy.obj"), &file).unwrap().0,
+            k
+        );
         obj.extend_from_slice(b"v 0 0 0\n");
-        std::fs::write(&full, &obj).unwrap();
-        assert!(found(path).is_none(), "an edited file is a miss");
+        std::fs::write(&file, &obj).unwrap();
+        assert_eq!(key_of_file(path, &file).unwrap().0, key(path, &obj));
+        assert_ne!(key_of_file(path, &file).unwrap().0, k);
     }
 
     #[test]
@@ -500,6 +498,13 @@ mod tests {
         let mut huge = good.clone();
         huge[8..12].copy_from_slice(&u32::MAX.to_le_bytes());
         damaged.push(huge);
+        // A vertex count far beyond the file, after the one MTL entry.
+        let at = 8 + 4 + 4 + "grid.mtl".len() + 32;
+        let n = (parsed.positions.len() as u32).to_le_bytes();
+        assert_eq!(good[at..at + 4], n, "layout of the test's damage");
+        let mut huge_vertices = good.clone();
+        huge_vertices[at..at + 4].copy_from_slice(&(u32::MAX / 2).to_le_bytes());
+        damaged.push(huge_vertices);
         let mut trailing = good.clone();
         trailing.push(0);
         damaged.push(trailing);

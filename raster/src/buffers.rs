@@ -10,14 +10,17 @@
 use crate::target::{Target, TILE};
 use std::marker::PhantomData;
 
-/// Resizes `v` to `n` elements, new ones zero. From empty (a first
-/// frame) it is one zeroed allocation: a large block comes from the
+/// Resizes `v` to `n` elements, new ones zero. An empty `v` (a first
+/// frame's) becomes one zeroed allocation: a large block comes from the
 /// system already zero, its pages faulted in where a pass first writes
 /// them, in parallel, where `resize` would first write every element on
 /// the calling thread.
 pub(crate) fn resize_zeroed<T: bytemuck::Zeroable + Clone>(v: &mut Vec<T>, n: usize) {
     if v.is_empty() {
-        *v = bytemuck::zeroed_vec(n);
+        *v = bytemuck::try_zeroed_vec(n).unwrap_or_else(|()| {
+            let layout = std::alloc::Layout::array::<T>(n).expect("capacity overflow");
+            std::alloc::handle_alloc_error(layout)
+        });
     } else {
         v.resize(n, T::zeroed());
     }

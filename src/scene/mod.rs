@@ -72,7 +72,7 @@ pub fn load_scene(path: &Path) -> Result<LoadedScene, SceneError> {
         read_paths.borrow_mut().push(full.clone());
         std::fs::read(full)
     };
-    let mut scene = load_scene_files(path, &text, &read, Some(&dir))?;
+    let mut scene = load_scene_in(path, &text, &read, Some(&dir))?;
     for p in scene.inputs.iter_mut().skip(1) {
         *p = dir.join(&p);
     }
@@ -91,13 +91,13 @@ pub fn load_scene_str(
     text: &str,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,
 ) -> Result<LoadedScene, SceneError> {
-    load_scene_files(path, text, read, None)
+    load_scene_in(path, text, read, None)
 }
 
 /// [`load_scene_str`], where `read` reads the files under `dir` when
 /// `dir` is given (a large OBJ is then looked up in the mesh cache
-/// without being read whole: `mesh_cache::cached_file`).
-fn load_scene_files(
+/// without being read whole: `mesh_cache::file_key`).
+fn load_scene_in(
     path: &Path,
     text: &str,
     read: &dyn Fn(&Path) -> std::io::Result<Vec<u8>>,

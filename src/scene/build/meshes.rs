@@ -113,21 +113,26 @@ impl SceneBuilder<'_> {
             )
             .map_err(BuildError::Memory)
         };
-        let cached = self
+        // A file on disk: found in the mesh cache without reading it whole.
+        let keyed = self
             .dir
-            .and_then(|dir| crate::mesh_cache::cached_file(p, &dir.join(p), self.read));
+            .and_then(|dir| crate::mesh_cache::file_key(p, &dir.join(p)));
+        let mut cached = None;
+        if let Some((key, len)) = &keyed {
+            reserve(*len)?;
+            cached = crate::mesh_cache::load_cached(key, p, self.read);
+        }
         let m = match cached {
-            Some((m, len)) => {
-                reserve(len)?;
-                m
-            }
+            Some(m) => m,
             None => {
                 let bytes = (self.read)(p).map_err(|source| BuildError::Read {
                     field: format!("{field}.obj"),
                     path: p.display().to_string(),
                     source,
                 })?;
-                reserve(bytes.len() as u64)?;
+                if keyed.is_none() {
+                    reserve(bytes.len() as u64)?;
+                }
                 crate::mesh_cache::load_obj(p, &bytes, self.read).map_err(|source| {
                     BuildError::Obj {
                         field: format!("{field}.obj"),
