@@ -96,16 +96,16 @@ fn key_hasher(path: &Path) -> blake3::Hasher {
 /// have changed in between).
 pub(crate) fn file_key(path: &Path, file: &Path) -> Option<(String, u64)> {
     crate::table_cache::cache_dir()?;
-    if std::fs::metadata(file).ok()?.len() < MIN_OBJ_BYTES as u64 {
-        return None;
-    }
-    key_of_file(path, file)
+    key_of_file(path, file, MIN_OBJ_BYTES as u64)
 }
 
-/// [`file_key`] whatever the cache and the file's size.
-fn key_of_file(path: &Path, file: &Path) -> Option<(String, u64)> {
+/// [`file_key`] whatever the cache, for files of at least `min` bytes.
+fn key_of_file(path: &Path, file: &Path, min: u64) -> Option<(String, u64)> {
     let f = std::fs::File::open(file).ok()?;
     let len = f.metadata().ok()?.len();
+    if len < min {
+        return None;
+    }
     let mut h = key_hasher(path);
     h.update_reader(f).ok()?;
     Some((h.finalize().to_hex().to_string(), len))
@@ -445,7 +445,7 @@ mod tests {
             .insert(PathBuf::from("scenes/grid.mtl"), mtl);
         let read = reader(&files);
 
-        let (k, len) = key_of_file(path, &file).unwrap();
+        let (k, len) = key_of_file(path, &file, 0).unwrap();
         assert_eq!(k, key(path, &obj));
         assert_eq!(len, obj.len() as u64);
         assert!(
@@ -458,13 +458,15 @@ mod tests {
         assert_eq!(all(&cached), all(&parsed));
         // Another name for the same bytes, and the file edited: other keys.
         assert_ne!(
-            key_of_file(Path::new("scenes/copy.obj"), &file).unwrap().0,
+            key_of_file(Path::new("scenes/copy.obj"), &file, 0)
+                .unwrap()
+                .0,
             k
         );
         obj.extend_from_slice(b"v 0 0 0\n");
         std::fs::write(&file, &obj).unwrap();
-        assert_eq!(key_of_file(path, &file).unwrap().0, key(path, &obj));
-        assert_ne!(key_of_file(path, &file).unwrap().0, k);
+        assert_eq!(key_of_file(path, &file, 0).unwrap().0, key(path, &obj));
+        assert_ne!(key_of_file(path, &file, 0).unwrap().0, k);
     }
 
     #[test]

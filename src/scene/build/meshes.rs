@@ -117,11 +117,13 @@ impl SceneBuilder<'_> {
         let keyed = self
             .dir
             .and_then(|dir| crate::mesh_cache::file_key(p, &dir.join(p)));
-        let mut cached = None;
-        if let Some((key, len)) = &keyed {
-            reserve(*len)?;
-            cached = crate::mesh_cache::load_cached(key, p, self.read);
-        }
+        let cached = match &keyed {
+            Some((key, len)) => {
+                reserve(*len)?;
+                crate::mesh_cache::load_cached(key, p, self.read)
+            }
+            None => None,
+        };
         let m = match cached {
             Some(m) => m,
             None => {
