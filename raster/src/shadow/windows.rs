@@ -54,3 +54,43 @@ fn sweep(near: &mut [f32], far: &mut [f32], lo: &[f32], hi: &[f32], stride: usiz
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// Every window's bounds against the least and greatest depth found
+    /// by visiting its texels one by one (cut to the map), on maps whose
+    /// sides are and are not multiples of eight, windows wider than the
+    /// map included, with empty texels (infinity) among the depths.
+    #[test]
+    fn window_bounds_are_the_least_and_greatest_texel() {
+        let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        for (n, window) in [(1, 1), (5, 3), (8, 5), (13, 5), (24, 1), (37, 9), (9, 16)] {
+            let depth: Vec<f32> = (0..n * n)
+                .map(|_| match rng.random_range(0..5) {
+                    0 => f32::INFINITY,
+                    _ => rng.random_range(0.1..50.0),
+                })
+                .collect();
+            let mut bounds = DepthWindows::default();
+            bounds.fill(&depth, n, window);
+            let (w, depth) = (window as usize, &depth);
+            for y in 0..n {
+                for x in 0..n {
+                    let texels = (y..(y + w).min(n))
+                        .flat_map(|j| (x..(x + w).min(n)).map(move |i| depth[j * n + i]));
+                    let lo = texels.clone().fold(f32::INFINITY, f32::min);
+                    let hi = texels.fold(f32::NEG_INFINITY, f32::max);
+                    let at = y * n + x;
+                    assert_eq!(
+                        (bounds.near[at], bounds.far[at]),
+                        (lo, hi),
+                        "n {n}, window {w}, texel ({x}, {y})"
+                    );
+                }
+            }
+        }
+    }
+}
