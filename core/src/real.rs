@@ -527,7 +527,8 @@ fn gather_f32x8(table: &[f32], i: wide::i32x8) -> f32x8 {
 /// at fixed offsets from it, 16 bytes each (the fourth float, the next
 /// texel's or the table's last, unused). A texel of lanes l and l + 4
 /// makes one 256-bit row, and a 4 × 4 transpose within each 128-bit half
-/// turns four such rows into the channels.
+/// turns four such rows into the channels. When all eight indices are
+/// one, the block's twelve floats are broadcast instead.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
 #[inline(always)]
 fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f32x8; 3]; 2]; 2] {
@@ -536,8 +537,17 @@ fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f3
         _mm_loadu_ps,
     };
     assert!(table.len().saturating_sub(1) / 3 >= stride.saturating_add(2));
+    let same = i.simd_eq(wide::i32x8::splat(i.to_array()[0])).to_bitmask() == 0xFF;
     let i = i.to_array();
     let base = table.as_ptr();
+    if same {
+        // Neighbouring pixels reading a coarse level, mostly.
+        let texel = |offset: usize| -> [f32x8; 3] {
+            let at = (i[0] as usize + offset) * 3;
+            core::array::from_fn(|c| f32x8::splat(table[at + c]))
+        };
+        return [[texel(0), texel(1)], [texel(stride), texel(stride + 1)]];
+    }
     // SAFETY: AVX is enabled (cfg); every index lane is at most
     // (table.len() - 1) / 3 - stride - 2 (clamped by the caller), so the
     // texels at offsets 0, 1, stride and stride + 1 from it start at float
@@ -628,9 +638,10 @@ mod tests {
     #[test]
     fn an_rgb_block_gather_reads_each_lane_s_footprint() {
         // Every index of a table (its last block included), in lanes of
-        // mixed order, against the texels themselves and the scalar read;
-        // and indices outside the table (negative, past the end, NaN)
-        // clamped to its first or last block.
+        // mixed order and in all eight lanes at once (the broadcast
+        // path), against the texels themselves and the scalar read; and
+        // indices outside the table (negative, past the end, NaN)
+        // clamped to its first or last block, mixed and all alike.
         let (stride, texels) = (7, 37);
         let table: Vec<f32> = (0..3 * texels + 1)
             .map(|i| (i as f32).mul_add(1.5, -7.25))
@@ -638,8 +649,10 @@ mod tests {
         let blocks = texels - stride - 1;
         let texel =
             |i: usize, row: usize, col: usize, c: usize| table[3 * (i + row * stride + col) + c];
-        for start in 0..blocks {
-            let idx: [f32; 8] = core::array::from_fn(|l| ((start + 5 * l) % blocks) as f32);
+        let mixed = (0..blocks).map(|start| core::array::from_fn(|l| (start + 5 * l) % blocks));
+        let alike = (0..blocks).map(|i| [i; 8]);
+        for idx in mixed.chain(alike) {
+            let idx: [f32; 8] = idx.map(|i| i as f32);
             let got = f32x8::gather_rgb_block(&table, f32x8::load(&idx), stride);
             for (l, &at) in idx.iter().enumerate() {
                 let i = at as usize;
@@ -655,16 +668,27 @@ mod tests {
                 }
             }
         }
-        let out = [-3.0f32, 29.0, 1e9, f32::NAN, -0.0, 28.0, 0.0, -1e9];
-        let got = f32x8::gather_rgb_block(&table, f32x8::load(&out), stride);
-        let want = [0usize, 28, 28, 0, 0, 28, 0, 0];
-        for (l, &i) in want.iter().enumerate() {
-            for (row, col, c) in block_entries() {
-                assert_eq!(
-                    lanes(got[row][col][c])[l],
-                    texel(i, row, col, c),
-                    "lane {l}"
-                );
+        let outside = [
+            (
+                [-3.0f32, 29.0, 1e9, f32::NAN, -0.0, 28.0, 0.0, -1e9],
+                [0usize, 28, 28, 0, 0, 28, 0, 0],
+            ),
+            ([1e9, 29.0, 31.0, 5e8, 40.0, 28.5, 2e9, 100.0], [28; 8]),
+            (
+                [-1.0, f32::NAN, -1e9, 0.0, -0.0, 0.5, -7.0, f32::NAN],
+                [0; 8],
+            ),
+        ];
+        for (out, want) in outside {
+            let got = f32x8::gather_rgb_block(&table, f32x8::load(&out), stride);
+            for (l, &i) in want.iter().enumerate() {
+                for (row, col, c) in block_entries() {
+                    assert_eq!(
+                        lanes(got[row][col][c])[l],
+                        texel(i, row, col, c),
+                        "lane {l} of {out:?}"
+                    );
+                }
             }
         }
     }
