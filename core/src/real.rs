@@ -528,7 +528,7 @@ fn gather_f32x8(table: &[f32], i: wide::i32x8) -> f32x8 {
 /// texel's or the table's last, unused). A texel of lanes l and l + 4
 /// makes one 256-bit row, and a 4 × 4 transpose within each 128-bit half
 /// turns four such rows into the channels. When all eight indices are
-/// one, the block's twelve floats are broadcast instead.
+/// equal, the block's twelve floats are broadcast instead.
 #[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
 #[inline(always)]
 fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f32x8; 3]; 2]; 2] {
@@ -540,20 +540,21 @@ fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f3
     let same = i.simd_eq(wide::i32x8::splat(i.to_array()[0])).to_bitmask() == 0xFF;
     let i = i.to_array();
     let base = table.as_ptr();
-    if same {
-        // Neighbouring pixels reading a coarse level, mostly.
-        let texel = |offset: usize| -> [f32x8; 3] {
-            let at = (i[0] as usize + offset) * 3;
-            core::array::from_fn(|c| f32x8::splat(table[at + c]))
-        };
-        return [[texel(0), texel(1)], [texel(stride), texel(stride + 1)]];
-    }
     // SAFETY: AVX is enabled (cfg); every index lane is at most
     // (table.len() - 1) / 3 - stride - 2 (clamped by the caller), so the
     // texels at offsets 0, 1, stride and stride + 1 from it start at float
-    // 3 (table.len() - 1) / 3 - 3 at the latest, and their 16 bytes end
-    // within the table; the loads need no alignment.
+    // 3 (table.len() - 1) / 3 - 3 at the latest, and their 16 bytes (the
+    // broadcast path reads the first 12 of them) end within the table;
+    // the loads need no alignment.
     unsafe {
+        if same {
+            // Neighbouring pixels reading a coarse level, mostly.
+            let texel = |offset: usize| -> [f32x8; 3] {
+                let at = base.add((i[0] as usize + offset) * 3);
+                core::array::from_fn(|c| f32x8::splat(*at.add(c)))
+            };
+            return [[texel(0), texel(1)], [texel(stride), texel(stride + 1)]];
+        }
         let channels = |offset: usize| -> [f32x8; 3] {
             let at = |l: usize| _mm_loadu_ps(base.add((i[l] as usize + offset) * 3));
             let row = |l: usize| -> __m256 { _mm256_set_m128(at(l + 4), at(l)) };
@@ -638,8 +639,9 @@ mod tests {
     #[test]
     fn an_rgb_block_gather_reads_each_lane_s_footprint() {
         // Every index of a table (its last block included), in lanes of
-        // mixed order and in all eight lanes at once (the broadcast
-        // path), against the texels themselves and the scalar read; and
+        // mixed order, in all eight lanes at once (the broadcast path)
+        // and in seven lanes with any one lane apart (which must not take
+        // it), against the texels themselves and the scalar read; and
         // indices outside the table (negative, past the end, NaN)
         // clamped to its first or last block, mixed and all alike.
         let (stride, texels) = (7, 37);
@@ -651,7 +653,14 @@ mod tests {
             |i: usize, row: usize, col: usize, c: usize| table[3 * (i + row * stride + col) + c];
         let mixed = (0..blocks).map(|start| core::array::from_fn(|l| (start + 5 * l) % blocks));
         let alike = (0..blocks).map(|i| [i; 8]);
-        for idx in mixed.chain(alike) {
+        let odd_one = (0..8).flat_map(|l| {
+            [(3, 20), (20, 3), (0, blocks - 1)].map(|(most, one)| {
+                let mut v = [most; 8];
+                v[l] = one;
+                v
+            })
+        });
+        for idx in mixed.chain(alike).chain(odd_one) {
             let idx: [f32; 8] = idx.map(|i| i as f32);
             let got = f32x8::gather_rgb_block(&table, f32x8::load(&idx), stride);
             for (l, &at) in idx.iter().enumerate() {

@@ -63,10 +63,12 @@ mod tests {
     /// Every window's bounds against the least and greatest depth found
     /// by visiting its texels one by one (cut to the map), on maps whose
     /// sides are and are not multiples of eight, windows wider than the
-    /// map included, with empty texels (infinity) among the depths.
+    /// map included, with empty texels (infinity) among the depths; one
+    /// set of bounds refilled for every map, as frames reuse theirs.
     #[test]
     fn window_bounds_are_the_least_and_greatest_texel() {
         let mut rng = rand::rngs::StdRng::seed_from_u64(7);
+        let mut bounds = DepthWindows::default();
         for (n, window) in [(1, 1), (5, 3), (8, 5), (13, 5), (24, 1), (37, 9), (9, 16)] {
             let depth: Vec<f32> = (0..n * n)
                 .map(|_| match rng.random_range(0..5) {
@@ -74,7 +76,6 @@ mod tests {
                     _ => rng.random_range(0.1..50.0),
                 })
                 .collect();
-            let mut bounds = DepthWindows::default();
             bounds.fill(&depth, n, window);
             let (w, depth) = (window as usize, &depth);
             for y in 0..n {
