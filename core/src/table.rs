@@ -358,3 +358,160 @@ impl<const C: usize> Table2<C> {
         Table1::from_nodes(self.x, values)
     }
 }
+
+/// A 2-D table interpolated linearly along x and by a uniform cubic
+/// B-spline along y: the value is C² in y, so a function of it has no
+/// kinks at the rows (a bilinear table's value bends at every row).
+///
+/// Each x node's column of n values f_0 … f_{n−1} becomes n + 2 spline
+/// coefficients c_0 … c_{n+1} (stored row k is the coefficient of the
+/// B-spline centred on node k − 1), whose value at node j is
+/// s_j = (c_j + 4 c_{j+1} + c_{j+2}) / 6. They are solved in f64 from
+///
+/// - `smoothing` λ = 0: s_j = f_j at every node, with not-a-knot ends (the
+///   third derivative continuous at nodes 1 and n − 2:
+///   c_0 − 4c_1 + 6c_2 − 4c_3 + c_4 = 0 and its mirror), which assume
+///   nothing of the function's slope or curvature at the ends;
+/// - λ > 0: the least squares Σ_j (s_j − f_j)² + λ Σ_k (Δ³c_k)², a
+///   penalized spline. Quadratics pass unchanged (Δ³ of their
+///   coefficients is zero); a scatter alternating from node to node is
+///   scaled by 1/(1 + 576 λ) away from the ends (Δ³ of (−1)^k is 8 and
+///   the node value of a unit alternating c is 1/3), while a wave of
+///   period P rows, ω = 2π/P, is scaled by 1/(1 + λ (2 sin(ω/2))⁶ /
+///   ((2 + cos ω)/3)²): nearly 1 for slow trends.
+///
+/// Between nodes j and j + 1 at weight w (the y axis's `locate`) the value
+/// is Σ_k b_k(w) c_{j+k}, k = 0 … 3, with the cubic B-spline's weights
+/// b = ((1 − w)³, 3w³ − 6w² + 4, −3w³ + 3w² + 3w + 1, w³) / 6. The x axis
+/// and the clamping are [`Table2`]'s.
+#[derive(Clone, Debug, PartialEq)]
+pub struct SplineY<const C: usize> {
+    x: Axis,
+    y: Axis,
+    /// Coefficient c of column i, stored row k at `data[(k * nx + i) * C + c]`.
+    data: Vec<f32>,
+}
+
+impl<const C: usize> SplineY<C> {
+    /// The spline of `table`'s columns with smoothing λ ≥ 0 (type docs).
+    /// The y axis needs four nodes.
+    pub fn new(table: &Table2<C>, smoothing: f64) -> SplineY<C> {
+        let (nx, ny) = (table.x.n, table.y.n);
+        assert!(ny >= 4, "a cubic spline along y needs four nodes");
+        assert!(smoothing >= 0.0, "smoothing is a non-negative weight");
+        let m = ny + 2;
+        let k = nx * C;
+        assert!(m * k <= MAX_LEN, "table too large for f32 indices");
+        // A c = b for every (column, channel) at once: A is m × m, b m × k.
+        const NODE: [f64; 3] = [1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0];
+        let mut a = vec![0.0f64; m * m];
+        let mut b = vec![0.0f64; m * k];
+        let f = |j: usize, t: usize| table.data[j * k + t] as f64;
+        if smoothing == 0.0 {
+            const NOT_A_KNOT: [f64; 5] = [1.0, -4.0, 6.0, -4.0, 1.0];
+            a[..5].copy_from_slice(&NOT_A_KNOT);
+            a[m * m - 5..].copy_from_slice(&NOT_A_KNOT);
+            for j in 0..ny {
+                a[(j + 1) * m + j..(j + 1) * m + j + 3].copy_from_slice(&NODE);
+                for t in 0..k {
+                    b[(j + 1) * k + t] = f(j, t);
+                }
+            }
+        } else {
+            // The normal equations (BᵀB + λ DᵀD) c = Bᵀ f, B the node rows
+            // and D the third differences.
+            const D3: [f64; 4] = [-1.0, 3.0, -3.0, 1.0];
+            for j in 0..ny {
+                for (p, bp) in NODE.iter().enumerate() {
+                    for (q, bq) in NODE.iter().enumerate() {
+                        a[(j + p) * m + j + q] += bp * bq;
+                    }
+                    for t in 0..k {
+                        b[(j + p) * k + t] += bp * f(j, t);
+                    }
+                }
+            }
+            for j in 0..m - 3 {
+                for (p, dp) in D3.iter().enumerate() {
+                    for (q, dq) in D3.iter().enumerate() {
+                        a[(j + p) * m + j + q] += smoothing * dp * dq;
+                    }
+                }
+            }
+        }
+        solve_in_place(&mut a, &mut b, m, k);
+        SplineY {
+            x: table.x,
+            y: table.y,
+            data: b.into_iter().map(|v| v as f32).collect(),
+        }
+    }
+
+    /// The interpolant at (x, y), per lane and channel (type docs).
+    #[inline(always)]
+    pub fn lookup<R: Real>(&self, x: R, y: R) -> [R; C] {
+        let (i, wx) = self.x.locate(x);
+        let (j, w) = self.y.locate(y);
+        let c_ = R::splat(C as f64);
+        let row = R::splat((self.x.n * C) as f64);
+        let base = j.mul_add(row, i * c_);
+        let sixth = R::splat(1.0 / 6.0);
+        let v = R::ONE - w;
+        let w2 = w * w;
+        let b0 = v * v * v * sixth;
+        let b3 = w2 * w * sixth;
+        let b1 = (w2 * (w - R::splat(2.0))).mul_add(R::HALF, R::splat(2.0 / 3.0));
+        let b2 = R::ONE - b0 - b1 - b3;
+        core::array::from_fn(|c| {
+            let b = base + R::splat(c as f64);
+            let at = |r: R| {
+                let v0 = R::gather(&self.data, r);
+                lerp(v0, R::gather(&self.data, r + c_), wx)
+            };
+            let (r1, r2) = (b + row, b + row + row);
+            at(b).mul_add(b0, at(r1) * b1) + at(r2).mul_add(b2, at(r2 + row) * b3)
+        })
+    }
+}
+
+/// Solves A X = B in place by Gaussian elimination with partial pivoting:
+/// A is m × m and B m × k, both row-major; X overwrites B.
+fn solve_in_place(a: &mut [f64], b: &mut [f64], m: usize, k: usize) {
+    for col in 0..m {
+        let pivot = (col..m)
+            .max_by(|&p, &q| a[p * m + col].abs().total_cmp(&a[q * m + col].abs()))
+            .unwrap_or(col);
+        if pivot != col {
+            for t in 0..m {
+                a.swap(col * m + t, pivot * m + t);
+            }
+            for t in 0..k {
+                b.swap(col * k + t, pivot * k + t);
+            }
+        }
+        let d = a[col * m + col];
+        assert!(d != 0.0, "singular spline system");
+        for r in col + 1..m {
+            let f = a[r * m + col] / d;
+            if f == 0.0 {
+                continue;
+            }
+            for t in col..m {
+                a[r * m + t] -= f * a[col * m + t];
+            }
+            for t in 0..k {
+                b[r * k + t] -= f * b[col * k + t];
+            }
+        }
+    }
+    for col in (0..m).rev() {
+        let d = a[col * m + col];
+        for t in 0..k {
+            let mut s = b[col * k + t];
+            for r in col + 1..m {
+                s -= a[col * m + r] * b[r * k + t];
+            }
+            b[col * k + t] = s / d;
+        }
+    }
+}

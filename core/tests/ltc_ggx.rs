@@ -325,12 +325,13 @@ fn small_light_per_pixel_error_on_a_sphere_and_a_floor() {
 
 /// The LTC / reference ratio along a view sweep (light in the mirror
 /// direction): its second difference centred on the table's row nodes
-/// against centred inside the rows (root mean square), over views 0–85°
-/// and over 0–65°, where the lobe's correction holds the ratio to the
-/// reference. The aim is a ratio of at most 1 (no kinks at row
-/// boundaries); it is not met over 0–85° (docs/accuracy.md, "Seams"), so
-/// the test holds the committed table where it is: the ratio over 0–85°,
-/// and the kinks' size over 0–65°.
+/// against centred inside the rows (root mean square), over views 0–65°
+/// and 0–85°. The aim is a ratio of at most 1 (no kinks at row
+/// boundaries). Over 0–65° the spline along the view meets it (within the
+/// statistical spread of two equal measures, `KINK_RATIO_LOW`); over
+/// 0–85° the sweep also crosses the corners where the lobe's correction
+/// reaches its bound, past 80° (docs/accuracy.md, "Seams"), and the test
+/// holds the ratio where it is.
 #[test]
 fn the_view_sweep_has_no_kinks_at_row_boundaries() {
     let y = |deg: f64| (1.0 - deg.to_radians().cos()).sqrt();
@@ -346,15 +347,21 @@ fn the_view_sweep_has_no_kinks_at_row_boundaries() {
             low.within_rms()
         );
         assert!(
-            k.across_rms() <= KINK_RATIO * k.within_rms(),
-            "α {alpha}: {:.2e} across vs {:.2e} within",
-            k.across_rms(),
-            k.within_rms()
+            low.across_rms() <= KINK_RATIO_LOW * low.within_rms(),
+            "α {alpha}: {:.2e} across vs {:.2e} within rows at views up to 65°",
+            low.across_rms(),
+            low.within_rms()
         );
         assert!(
             low.across_rms() <= KINK_LOW,
             "α {alpha}: {:.2e} across rows at views up to 65°",
             low.across_rms()
+        );
+        assert!(
+            k.across_rms() <= KINK_RATIO * k.within_rms(),
+            "α {alpha}: {:.2e} across vs {:.2e} within",
+            k.across_rms(),
+            k.within_rms()
         );
     }
 }
@@ -365,6 +372,9 @@ fn the_view_sweep_has_no_kinks_at_row_boundaries() {
 /// change must not do worse. The per-pixel bounds are the aim itself.
 const SMALL_LIGHT_MEAN: f64 = 0.02;
 const SMALL_LIGHT_WORST: f64 = 0.02;
-const KINK_RATIO: f64 = 6.0;
+/// The aim of 1 with room for the spread of two equal root mean squares
+/// over some 50 rows.
+const KINK_RATIO_LOW: f64 = 1.05;
+const KINK_RATIO: f64 = 3.5;
 /// Root mean square of the second differences across rows, views 0–65°.
-const KINK_LOW: f64 = 5e-4;
+const KINK_LOW: f64 = 1.5e-4;

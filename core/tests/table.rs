@@ -1,8 +1,9 @@
 //! The table type against plainly written interpolants: round trip at the
 //! nodes, the documented interpolant in f64, the tabulated function between
-//! nodes, f32 and f32x8 lanes against f64, and exact integrals.
+//! nodes, f32 and f32x8 lanes against f64, exact integrals, and the spline
+//! along y against polynomials and its documented damping.
 
-use specula_core::table::{Axis, Nodes, Table1, Table2, Warp};
+use specula_core::table::{Axis, Nodes, SplineY, Table1, Table2, Warp};
 use specula_core::{f32x8, Real};
 
 fn axes(n: usize) -> Vec<Axis> {
@@ -241,4 +242,134 @@ fn cubic_slice_reproduces_quadratics_in_the_node_coordinate() {
             );
         }
     }
+}
+
+/// u = (y − lo)/(hi − lo) in node units of a linear `Ends` axis.
+fn node_coordinate(a: &Axis, y: f64) -> f64 {
+    (y - a.lo) / (a.hi - a.lo) * (a.n - 1) as f64
+}
+
+#[test]
+fn spline_y_reproduces_cubics_through_the_nodes_and_quadratics_when_smoothed() {
+    let ax = Axis::new(4, 0.0, 1.0, Warp::Linear, Nodes::Ends);
+    let ay = Axis::new(11, -1.0, 2.0, Warp::Linear, Nodes::Ends);
+    // Polynomials in the node coordinate u (0 … 10), linear in x.
+    let cubic = |x: f64, u: f64| 0.5 + x + 0.3 * u - 0.08 * u * u + 0.006 * u * u * u;
+    let quadratic = |x: f64, u: f64| 2.0 - x + 0.4 * u - 0.05 * u * u;
+    for (poly, smoothing) in [(&cubic as &dyn Fn(f64, f64) -> f64, 0.0), (&quadratic, 0.3)] {
+        let t = Table2::build(ax, ay, |x, y| [poly(x, node_coordinate(&ay, y))]);
+        let s = SplineY::new(&t, smoothing);
+        for k in 0..=300 {
+            // End intervals included: not-a-knot and the penalty assume
+            // nothing there.
+            let y = -1.0 + 3.0 * k as f64 / 300.0;
+            for x in [0.0, 0.37, 1.0] {
+                let want = poly(x, node_coordinate(&ay, y));
+                let got = s.lookup(x, y)[0];
+                assert!(
+                    (got - want).abs() < 2e-6 * want.abs().max(1.0),
+                    "λ {smoothing}, ({x}, {y}): {got} vs {want}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn spline_y_is_twice_differentiable_across_rows() {
+    let ax = Axis::new(3, 0.0, 1.0, Warp::Linear, Nodes::Ends);
+    let ay = Axis::new(9, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
+    // Nodes scattered by a fixed pseudo-random pattern: no smooth function
+    // behind them to lean on.
+    let t = Table2::build(ax, ay, |x, y| {
+        let j = (y.sqrt() * 8.0).round();
+        [x + ((j * 12.9898).sin() * 43758.5453).fract()]
+    });
+    for smoothing in [0.0, 0.3] {
+        let s = SplineY::new(&t, smoothing);
+        let v = |u: f64| s.lookup(0.5, u * u)[0];
+        for j in 1..8 {
+            // One-sided value, slope and curvature in u on each side.
+            let (u, e) = (j as f64 / 8.0, 1e-4);
+            let left = [
+                v(u),
+                (v(u) - v(u - e)) / e,
+                (v(u) - 2.0 * v(u - e) + v(u - 2.0 * e)) / (e * e),
+            ];
+            let right = [
+                v(u),
+                (v(u + e) - v(u)) / e,
+                (v(u + 2.0 * e) - 2.0 * v(u + e) + v(u)) / (e * e),
+            ];
+            // Slope and curvature scale as 8 and 64 per unit of value;
+            // one-sided differences are off by O(e) of the next derivative.
+            let tol = [1e-12, 0.05, 30.0];
+            for d in 0..3 {
+                assert!(
+                    (left[d] - right[d]).abs() <= tol[d],
+                    "λ {smoothing}, row {j}, derivative {d}: {} vs {}",
+                    left[d],
+                    right[d]
+                );
+            }
+        }
+        // The nodes are kept without smoothing.
+        if smoothing == 0.0 {
+            for j in 0..9 {
+                let want = t.node_value(1, j)[0] as f64;
+                assert!((v(j as f64 / 8.0) - want).abs() < 1e-6, "node {j}");
+            }
+        }
+    }
+}
+
+#[test]
+fn smoothing_damps_an_alternating_scatter_as_documented() {
+    let ax = Axis::new(2, 0.0, 1.0, Warp::Linear, Nodes::Ends);
+    let ay = Axis::new(64, 0.0, 1.0, Warp::Linear, Nodes::Ends);
+    let eps = 1e-3;
+    let smooth = |y: f64| 1.0 + y - 0.5 * y * y;
+    let t = Table2::build(ax, ay, |_, y| {
+        let j = node_coordinate(&ay, y).round() as i32;
+        [smooth(y) + eps * if j % 2 == 0 { 1.0 } else { -1.0 }]
+    });
+    for smoothing in [0.01, 0.3, 3.0] {
+        let s = SplineY::new(&t, smoothing);
+        let want = eps / (1.0 + 576.0 * smoothing);
+        // Away from the ends, each node keeps 1/(1 + 576 λ) of the scatter.
+        for j in 20..44 {
+            let y = ay.node(j);
+            let left = (s.lookup(0.0, y)[0] - smooth(y)).abs();
+            assert!(
+                (left - want).abs() < 0.02 * want + 1e-6,
+                "λ {smoothing}, node {j}: {left:.3e} left vs {want:.3e}"
+            );
+        }
+    }
+}
+
+#[test]
+fn spline_y_lanes_agree_with_f64() {
+    let ax = Axis::new(7, 0.0, 1.0, Warp::Linear, Nodes::Ends);
+    let ay = Axis::new(12, 0.0, 1.0, Warp::Linear, Nodes::Ends);
+    let t = Table2::build(ax, ay, |x, y| [(3.0 * y).sin() + x, (x * y).exp()]);
+    let s = SplineY::new(&t, 0.3);
+    let mut worst = 0.0f64;
+    for k in 0..64 {
+        let xs: [f32; 8] =
+            core::array::from_fn(|l| ((k * 8 + l) as f32 * 0.618).fract() * 1.2 - 0.1);
+        let ys: [f32; 8] =
+            core::array::from_fn(|l| ((k * 8 + l) as f32 * 0.414).fract() * 1.2 - 0.1);
+        let lanes = s.lookup(f32x8::from(xs), f32x8::from(ys));
+        for l in 0..8 {
+            let want = s.lookup(xs[l] as f64, ys[l] as f64);
+            let scalar = s.lookup(xs[l], ys[l]);
+            for c in 0..2 {
+                let got = lanes[c].lane(l);
+                worst = worst.max((got - want[c]).abs());
+                assert_eq!(got, scalar[c] as f64, "lane {l} channel {c}");
+            }
+        }
+    }
+    assert!(worst < 2e-6, "{worst}");
 }

@@ -22,8 +22,8 @@
 //! **The lobe's correction.** A transformed cosine D follows the lobe p
 //! only roughly away from its peak, so under a small light (whose
 //! integral is about p(ω) times its solid angle) the plain LTC value is
-//! off by D(ω)/p(ω), and bilinear interpolation of the nodes turns the
-//! fit's scatter from row to row into kinks. Where the transform stands
+//! off by D(ω)/p(ω), and that error scatters from node to node with the
+//! fit. Where the transform stands
 //! for a GGX lobe (`lobe`), the integral I = ∫_P D is multiplied by
 //!
 //!   1 + w (r − 1),  r = p(ω̄) / D(ω̄),  w = max(0, 1 − 2 |F|)²,
@@ -63,11 +63,21 @@
 //! row, 6 channels per node: c M⁻¹'s entries m00, m02, m20, m22 (M⁻¹ scaled
 //! so that its m11 is 1: the form factor does not see the scale), n, n_w.
 //! Axes (table.rs, nodes
-//! on the ends of each range, bilinear):
+//! on the ends of each range):
 //! - x = √α over [√ALPHA_MIN, 1] ([`X_AXIS`]), α clamped into it;
 //! - y = √(1 − μo) over [0, 1] ([`Y_AXIS`]): about uniform in θo (θo/√2
 //!   near the normal, 1 − μo/2 near grazing), so grazing views get as many
 //!   nodes as any others.
+//!
+//! **Interpolation.** Linear in x; along y the runtime reads [`spline`],
+//! a cubic B-spline (table.rs, [`SplineY`]) fitted to each column with a
+//! small penalty on its third differences ([`SMOOTHING`]). A bilinear
+//! lookup bends at every row, and the LTC / reference ratio under a small
+//! light then kinks there (a seam on a smooth sphere); a spline through
+//! the nodes is C² but bends around the fit's scatter from row to row,
+//! putting its curvature at the nodes again. The smoothed spline is C²
+//! and damps that scatter (its effect on the errors: docs/accuracy.md,
+//! "Seams").
 
 use crate::brdf::{ShadingFrame, ALPHA_MIN};
 use crate::light::PolygonLocal;
@@ -76,7 +86,7 @@ use crate::ltc::polygon::{
     form_factor_vector_mapped, sided,
 };
 use crate::real::Real;
-use crate::table::{Axis, Nodes, Table2, Warp};
+use crate::table::{Axis, Nodes, SplineY, Table2, Warp};
 use crate::vec3::V3;
 use std::sync::OnceLock;
 
@@ -149,6 +159,19 @@ pub fn table() -> &'static Table2<CHANNELS> {
     T.get_or_init(|| decode(DATA).expect("core/data/ltc_ggx.bin is malformed"))
 }
 
+/// The committed table as the runtime reads it: smoothed and splined
+/// along the view (module docs, "Axes"), formed once.
+pub fn spline() -> &'static SplineY<CHANNELS> {
+    static S: OnceLock<SplineY<CHANNELS>> = OnceLock::new();
+    S.get_or_init(|| SplineY::new(table(), SMOOTHING))
+}
+
+/// The view spline's smoothing λ (table.rs, [`SplineY`]): it damps the
+/// fit's scatter from row to row (alternating by 1/(1 + 576 λ)), which
+/// any spline through the nodes would bend around, and keeps trends over
+/// eight rows or more within 7 %.
+pub const SMOOTHING: f64 = 0.3;
+
 /// What a GGX material looks up once per pixel (once for all of its
 /// polygon lights): the map from local coordinates into the cosine's,
 /// M⁻¹ R(−φo) (the rotation taking the view into the xz-plane, then M⁻¹),
@@ -197,14 +220,14 @@ impl<R: Real> LtcGgx<R> {
         let mu = wo.z.clamp(R::ZERO, R::ONE);
         let x = alpha.max(R::ZERO).sqrt();
         let y = (R::ONE - mu).sqrt();
-        LtcGgx::from_table(table(), alpha, x, y, wo)
+        LtcGgx::from_table(spline(), alpha, x, y, wo)
     }
 
     /// The lookup in `table` at x = √α, y = √(1 − μo), with the lobe's
     /// correction for roughness `alpha` (clamped into the table).
     #[inline(always)]
     pub(crate) fn from_table(
-        table: &Table2<CHANNELS>,
+        table: &SplineY<CHANNELS>,
         alpha: R,
         x: R,
         y: R,
