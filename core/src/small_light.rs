@@ -1,6 +1,8 @@
 //! How a GGX LTC table does per pixel under a small light, measured against
 //! the reference quadrature (ltc/reference.rs): what core/tests/ltc_ggx.rs
-//! bounds and what `specula fit-ltc --check` prints.
+//! bounds and what `specula fit-ltc --check` prints. The table is read as
+//! the runtime reads the committed one ([`Lookup`]: splined along the
+//! view, with the lobe's correction).
 //!
 //! **The light**: a one-sided 0.3 × 0.3 square (about 0.08 sr seen from
 //! distance 1) facing down.
@@ -25,10 +27,10 @@
 //! row's midpoint (the stencil stays inside the row).
 
 use crate::light::{PolygonLocal, MAX_POLYGON_VERTICES};
-use crate::ltc::ggx::{LtcGgx, SMOOTHING, Y_AXIS};
+use crate::ltc::ggx::{Lookup, LtcGgx, Y_AXIS};
 use crate::ltc::reference::{integrate_polygon, Tolerance};
 use crate::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
-use crate::table::{SplineY, Table2};
+use crate::table::Table2;
 use crate::vec3::V3;
 use crate::Brdf;
 
@@ -161,7 +163,7 @@ fn frame(n: V3<f64>) -> (V3<f64>, V3<f64>) {
 /// `table`'s LTC value of the lobe (F = 1: n ∫ D, corrected as the
 /// runtime does: ltc/ggx.rs) at roughness `alpha`, unit local view `wo`,
 /// over the local polygon `q` (one-sided).
-pub(crate) fn ltc_value(table: &SplineY<6>, alpha: f64, wo: V3<f64>, q: &[V3<f64>]) -> f64 {
+pub(crate) fn ltc_value(table: &Lookup, alpha: f64, wo: V3<f64>, q: &[V3<f64>]) -> f64 {
     let y = (1.0 - wo.z.clamp(0.0, 1.0)).sqrt();
     let l = LtcGgx::from_table(table, alpha, alpha.sqrt(), y, wo);
     let mut poly = PolygonLocal {
@@ -189,10 +191,10 @@ pub(crate) fn reference_value(m: &Microfacet, wo: V3<f64>, q: &[V3<f64>]) -> f64
 }
 
 /// The scene's per-pixel error of `table` (read as the runtime reads the
-/// committed one: ltc/ggx.rs, "Interpolation") at roughness `alpha` on an
+/// committed one: [`Lookup`]) at roughness `alpha` on an
 /// `n` × `n` grid, over the pixels at least `lit` of the brightest.
 pub fn pixel_error(table: &Table2<6>, alpha: f64, scene: Scene, n: usize, lit: f64) -> PixelError {
-    let table = &SplineY::new(table, SMOOTHING);
+    let table = &Lookup::new(table);
     let m = lobe(alpha);
     let (px, corners) = pixels(scene, n);
     let values: Vec<(f64, f64, [f64; 3])> = px
@@ -241,7 +243,7 @@ pub fn pixel_error(table: &Table2<6>, alpha: f64, scene: Scene, n: usize, lit: f
 
 /// LTC / reference at roughness `alpha` and table view coordinate
 /// y = √(1 − μo), the light in the mirror direction (module docs).
-pub(crate) fn sweep_ratio(table: &SplineY<6>, m: &Microfacet, alpha: f64, y: f64) -> f64 {
+pub(crate) fn sweep_ratio(table: &Lookup, m: &Microfacet, alpha: f64, y: f64) -> f64 {
     let mu = 1.0 - y * y;
     let s = (1.0 - mu * mu).max(0.0).sqrt();
     let wo = V3::new(s, 0.0, mu);
@@ -260,9 +262,10 @@ pub(crate) fn sweep_ratio(table: &SplineY<6>, m: &Microfacet, alpha: f64, y: f64
 }
 
 /// The view sweep's second differences at roughness `alpha` over the rows
-/// whose nodes lie in [`y_lo`, `y_hi`] (module docs).
+/// whose nodes lie in [`y_lo`, `y_hi`] (module docs), `table` read as the
+/// runtime reads the committed one.
 pub fn kinks(table: &Table2<6>, alpha: f64, y_lo: f64, y_hi: f64) -> Kinks {
-    let table = &SplineY::new(table, SMOOTHING);
+    let table = &Lookup::new(table);
     let m = lobe(alpha);
     let dy = 1.0 / (Y_AXIS.n - 1) as f64;
     let h = dy / 2.0;

@@ -24,6 +24,8 @@
 //! y. Node values are read with [`Real::gather`]; the f64 lookup evaluates
 //! exactly this interpolant on the stored f32 values, which the tests check
 //! against a plainly written one.
+//! [`SplineY`] reads a 2-D table by a cubic B-spline along y instead,
+//! for functions whose kinks at the rows would show.
 //!
 //! [`Table1::build`] and [`Table2::build`] evaluate a closure at the nodes,
 //! so a round trip (lookup at a node == the closure there, to f32) is a test.
@@ -360,30 +362,35 @@ impl<const C: usize> Table2<C> {
 }
 
 /// A 2-D table interpolated linearly along x and by a uniform cubic
-/// B-spline along y: the value is C² in y, so a function of it has no
-/// kinks at the rows (a bilinear table's value bends at every row).
+/// B-spline along y: the value is C² in the y axis's node coordinate p
+/// (in y itself where the axis is [`Warp::Linear`]), so a function of it
+/// has no kinks at the rows (a bilinear table's value bends at every row).
 ///
 /// Each x node's column of n values f_0 … f_{n−1} becomes n + 2 spline
 /// coefficients c_0 … c_{n+1} (stored row k is the coefficient of the
 /// B-spline centred on node k − 1), whose value at node j is
 /// s_j = (c_j + 4 c_{j+1} + c_{j+2}) / 6. They are solved in f64 from
 ///
-/// - `smoothing` λ = 0: s_j = f_j at every node, with not-a-knot ends (the
+/// - `smoothing` λ = 0 (per channel): s_j = f_j at every node, with not-a-knot ends (the
 ///   third derivative continuous at nodes 1 and n − 2:
 ///   c_0 − 4c_1 + 6c_2 − 4c_3 + c_4 = 0 and its mirror), which assume
 ///   nothing of the function's slope or curvature at the ends;
-/// - λ > 0: the least squares Σ_j (s_j − f_j)² + λ Σ_k (Δ³c_k)², a
-///   penalized spline. Quadratics pass unchanged (Δ³ of their
-///   coefficients is zero); a scatter alternating from node to node is
-///   scaled by 1/(1 + 576 λ) away from the ends (Δ³ of (−1)^k is 8 and
-///   the node value of a unit alternating c is 1/3), while a wave of
-///   period P rows, ω = 2π/P, is scaled by 1/(1 + λ (2 sin(ω/2))⁶ /
-///   ((2 + cos ω)/3)²): nearly 1 for slow trends.
+/// - λ > 0: the least squares Σ_j v_j (s_j − f_j)² + λ Σ_k (Δ³c_k)², a
+///   penalized spline with node weights v_j (`weight`). Quadratics pass
+///   unchanged (Δ³ of their coefficients is zero); with unit weights a
+///   scatter alternating from node to node is scaled by 1/(1 + 576 λ)
+///   away from the ends (Δ³ of (−1)^k is 8 and the node value of a unit
+///   alternating c is 1/3), while a wave of period P rows, ω = 2π/P, is
+///   scaled by 1/(1 + λ (2 sin(ω/2))⁶ / ((2 + cos ω)/3)²): nearly 1 for
+///   slow trends. λ is meant to be of order 0.01–10: as λ → 0 the system
+///   becomes singular (two coefficients are then fixed by nothing), it
+///   does not tend to the λ = 0 spline.
 ///
 /// Between nodes j and j + 1 at weight w (the y axis's `locate`) the value
 /// is Σ_k b_k(w) c_{j+k}, k = 0 … 3, with the cubic B-spline's weights
 /// b = ((1 − w)³, 3w³ − 6w² + 4, −3w³ + 3w² + 3w + 1, w³) / 6. The x axis
-/// and the clamping are [`Table2`]'s.
+/// and the clamping are [`Table2`]'s. Unlike a bilinear lookup, the value
+/// can leave the range of the nodes around it.
 #[derive(Clone, Debug, PartialEq)]
 pub struct SplineY<const C: usize> {
     x: Axis,
@@ -393,57 +400,37 @@ pub struct SplineY<const C: usize> {
 }
 
 impl<const C: usize> SplineY<C> {
-    /// The spline of `table`'s columns with smoothing λ ≥ 0 (type docs).
-    /// The y axis needs four nodes.
-    pub fn new(table: &Table2<C>, smoothing: f64) -> SplineY<C> {
+    /// The spline of `table`'s columns with smoothing λ ≥ 0 per channel
+    /// and, where λ > 0, node j's weight `weight(j)` > 0 (type docs). The
+    /// y axis needs four nodes and weights linear in its node coordinate
+    /// ([`Interp::Warped`]).
+    pub fn new(
+        table: &Table2<C>,
+        smoothing: [f64; C],
+        weight: impl Fn(usize) -> f64,
+    ) -> SplineY<C> {
         let (nx, ny) = (table.x.n, table.y.n);
         assert!(ny >= 4, "a cubic spline along y needs four nodes");
-        assert!(smoothing >= 0.0, "smoothing is a non-negative weight");
+        assert!(
+            table.y.interp == Interp::Warped,
+            "a uniform spline needs weights linear in the node coordinate"
+        );
         let m = ny + 2;
-        let k = nx * C;
-        assert!(m * k <= MAX_LEN, "table too large for f32 indices");
-        // A c = b for every (column, channel) at once: A is m × m, b m × k.
-        const NODE: [f64; 3] = [1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0];
-        let mut a = vec![0.0f64; m * m];
-        let mut b = vec![0.0f64; m * k];
-        let f = |j: usize, t: usize| table.data[j * k + t] as f64;
-        if smoothing == 0.0 {
-            const NOT_A_KNOT: [f64; 5] = [1.0, -4.0, 6.0, -4.0, 1.0];
-            a[..5].copy_from_slice(&NOT_A_KNOT);
-            a[m * m - 5..].copy_from_slice(&NOT_A_KNOT);
-            for j in 0..ny {
-                a[(j + 1) * m + j..(j + 1) * m + j + 3].copy_from_slice(&NODE);
-                for t in 0..k {
-                    b[(j + 1) * k + t] = f(j, t);
-                }
-            }
-        } else {
-            // The normal equations (BᵀB + λ DᵀD) c = Bᵀ f, B the node rows
-            // and D the third differences.
-            const D3: [f64; 4] = [-1.0, 3.0, -3.0, 1.0];
-            for j in 0..ny {
-                for (p, bp) in NODE.iter().enumerate() {
-                    for (q, bq) in NODE.iter().enumerate() {
-                        a[(j + p) * m + j + q] += bp * bq;
-                    }
-                    for t in 0..k {
-                        b[(j + p) * k + t] += bp * f(j, t);
-                    }
-                }
-            }
-            for j in 0..m - 3 {
-                for (p, dp) in D3.iter().enumerate() {
-                    for (q, dq) in D3.iter().enumerate() {
-                        a[(j + p) * m + j + q] += smoothing * dp * dq;
-                    }
+        assert!(m * nx * C <= MAX_LEN, "table too large for f32 indices");
+        let mut data = vec![0.0f32; m * nx * C];
+        for (c, &lambda) in smoothing.iter().enumerate() {
+            let column = |j: usize, i: usize| table.node_value(i, j)[c] as f64;
+            let coefficients = fit_columns(nx, ny, lambda, &weight, column);
+            for (row, values) in coefficients.chunks_exact(nx).enumerate() {
+                for (i, v) in values.iter().enumerate() {
+                    data[(row * nx + i) * C + c] = *v as f32;
                 }
             }
         }
-        solve_in_place(&mut a, &mut b, m, k);
         SplineY {
             x: table.x,
             y: table.y,
-            data: b.into_iter().map(|v| v as f32).collect(),
+            data,
         }
     }
 
@@ -472,6 +459,60 @@ impl<const C: usize> SplineY<C> {
             at(b).mul_add(b0, at(r1) * b1) + at(r2).mul_add(b2, at(r2 + row) * b3)
         })
     }
+}
+
+/// The n + 2 spline coefficients of each of `nx` columns of `ny` node
+/// values `f(j, i)` (node j of column i), with smoothing `lambda` and node
+/// weights ([`SplineY`]): row-major, coefficient row by column.
+fn fit_columns(
+    nx: usize,
+    ny: usize,
+    lambda: f64,
+    weight: impl Fn(usize) -> f64,
+    f: impl Fn(usize, usize) -> f64,
+) -> Vec<f64> {
+    assert!(lambda >= 0.0, "smoothing is a non-negative weight");
+    let m = ny + 2;
+    // A c = b for every column at once: A is m × m, b m × nx.
+    const NODE: [f64; 3] = [1.0 / 6.0, 4.0 / 6.0, 1.0 / 6.0];
+    let mut a = vec![0.0f64; m * m];
+    let mut b = vec![0.0f64; m * nx];
+    if lambda == 0.0 {
+        const NOT_A_KNOT: [f64; 5] = [1.0, -4.0, 6.0, -4.0, 1.0];
+        a[..5].copy_from_slice(&NOT_A_KNOT);
+        a[m * m - 5..].copy_from_slice(&NOT_A_KNOT);
+        for j in 0..ny {
+            a[(j + 1) * m + j..(j + 1) * m + j + 3].copy_from_slice(&NODE);
+            for i in 0..nx {
+                b[(j + 1) * nx + i] = f(j, i);
+            }
+        }
+    } else {
+        // The normal equations (BᵀVB + λ DᵀD) c = BᵀV f, B the node rows,
+        // V the node weights and D the third differences.
+        const D3: [f64; 4] = [-1.0, 3.0, -3.0, 1.0];
+        for j in 0..ny {
+            let v = weight(j);
+            assert!(v > 0.0, "node weights are positive");
+            for (p, bp) in NODE.iter().enumerate() {
+                for (q, bq) in NODE.iter().enumerate() {
+                    a[(j + p) * m + j + q] += v * bp * bq;
+                }
+                for i in 0..nx {
+                    b[(j + p) * nx + i] += v * bp * f(j, i);
+                }
+            }
+        }
+        for j in 0..m - 3 {
+            for (p, dp) in D3.iter().enumerate() {
+                for (q, dq) in D3.iter().enumerate() {
+                    a[(j + p) * m + j + q] += lambda * dp * dq;
+                }
+            }
+        }
+    }
+    solve_in_place(&mut a, &mut b, m, nx);
+    b
 }
 
 /// Solves A X = B in place by Gaussian elimination with partial pivoting:

@@ -9,7 +9,7 @@
 mod common;
 
 use common::{facing_square, poly, polygons, quantile, v};
-use specula_core::ltc::ggx::{decode, encode, table, Cell, N};
+use specula_core::ltc::ggx::{decode, encode, lookup, table, Cell, N, X_AXIS};
 use specula_core::ltc::reference::{integrate_polygon, Tolerance};
 use specula_core::models::microfacet::{Fresnel, Microfacet, MicrofacetParams, Ndf, Smith};
 use specula_core::models::MetallicRoughness;
@@ -325,13 +325,11 @@ fn small_light_per_pixel_error_on_a_sphere_and_a_floor() {
 
 /// The LTC / reference ratio along a view sweep (light in the mirror
 /// direction): its second difference centred on the table's row nodes
-/// against centred inside the rows (root mean square), over views 0–65°
-/// and 0–85°. The aim is a ratio of at most 1 (no kinks at row
-/// boundaries). Over 0–65° the spline along the view meets it (within the
-/// statistical spread of two equal measures, `KINK_RATIO_LOW`); over
-/// 0–85° the sweep also crosses the corners where the lobe's correction
-/// reaches its bound, past 80° (docs/accuracy.md, "Seams"), and the test
-/// holds the ratio where it is.
+/// against centred inside the rows (root mean square), over views 0–85°
+/// and 0–65°. The aim is a ratio of at most 1 (no kinks at row
+/// boundaries; docs/accuracy.md, "Seams"). Over 0–65°, where the ratio
+/// is smooth and slowly curved, the two measures are equal up to their
+/// statistical spread (`KINK_RATIO_LOW`).
 #[test]
 fn the_view_sweep_has_no_kinks_at_row_boundaries() {
     let y = |deg: f64| (1.0 - deg.to_radians().cos()).sqrt();
@@ -366,6 +364,48 @@ fn the_view_sweep_has_no_kinks_at_row_boundaries() {
     }
 }
 
+/// The runtime's lookup of the committed table (the transform splined
+/// along the view, which unlike a bilinear lookup can leave its nodes'
+/// range) keeps every transform valid: m00, m22 and the determinant of c
+/// M⁻¹ positive (no reflection, which would flip a polygon's winding),
+/// and 0 ≤ n_w ≤ n ≤ 1; over the whole table and densely in the corner of
+/// mirror-like roughness and grazing views, where the transform
+/// degenerates.
+#[test]
+fn the_runtime_lookup_keeps_every_transform_valid() {
+    let l = lookup();
+    let (lo, hi) = (X_AXIS.lo, X_AXIS.hi);
+    let grids = [
+        ((lo, hi), (0.0, 1.0), 400),
+        ((lo, lo + 0.05), (0.99, 1.0), 300),
+    ];
+    let mut worst = f64::MAX;
+    let mut top = 0.0f64;
+    for ((x0, x1), (y0, y1), n) in grids {
+        for a in 0..=n {
+            let x = x0 + (x1 - x0) * a as f64 / n as f64;
+            for b in 0..=n {
+                let y = y0 + (y1 - y0) * b as f64 / n as f64;
+                let [m00, m02, m20, m22, albedo, albedo_w] = l.get(x, y);
+                let det = m00 * m22 - m02 * m20;
+                worst = worst.min(det / (m00 * m22 + (m02 * m20).abs()));
+                assert!(
+                    m00 > 0.0 && m22 > 0.0 && det > 0.0,
+                    "(x {x}, y {y}): m00 {m00:e}, m22 {m22:e}, det {det:e}"
+                );
+                assert!(
+                    albedo_w >= 0.0 && albedo_w <= albedo && albedo <= 1.0,
+                    "(x {x}, y {y}): n {albedo}, n_w {albedo_w}"
+                );
+                top = top.max(albedo);
+            }
+        }
+    }
+    eprintln!(
+        "runtime lookup: smallest det / (|m00 m22| + |m02 m20|) {worst:.3e}, largest n {top}"
+    );
+}
+
 /// Bounds that hold the committed table and its correction where they
 /// are (their figures and the aims, a mean of 2 % and a ratio of 1, are
 /// in docs/accuracy.md, "Per pixel under a small light, and seams"): a
@@ -375,6 +415,6 @@ const SMALL_LIGHT_WORST: f64 = 0.02;
 /// The aim of 1 with room for the spread of two equal root mean squares
 /// over some 50 rows.
 const KINK_RATIO_LOW: f64 = 1.05;
-const KINK_RATIO: f64 = 3.5;
+const KINK_RATIO: f64 = 1.0;
 /// Root mean square of the second differences across rows, views 0–65°.
 const KINK_LOW: f64 = 1.5e-4;

@@ -26,7 +26,7 @@
 //! fit. Where the transform stands
 //! for a GGX lobe (`lobe`), the integral I = ∫_P D is multiplied by
 //!
-//!   1 + w (r − 1),  r = p(ω̄) / D(ω̄),  w = max(0, 1 − 2 |F|)²,
+//!   1 + w (r − 1),  r ≈ p(ω̄) / D(ω̄),  w = max(0, 1 − 2 |F|)²,
 //!
 //! where F is the vector form factor of the mapped, clipped polygon
 //! (polygon.rs) and ω̄ the direction it points to, mapped back by M: the
@@ -36,7 +36,10 @@
 //! the cosine (|F| → 1 for the whole hemisphere), where I is already the
 //! normalized lobe's share and a ratio at one direction would not stand
 //! for the polygon; w is squared so that a growing polygon never gets
-//! darker. r is held to [1/4, 4] (ω̄ near the horizon). p is
+//! darker. The ratio q = p(ω̄)/D(ω̄) grows without bound as ω̄ nears the
+//! horizon, so r is q bent softly into (1/4, 4): q on [1/2, 2], 4 − 4/q
+//! above, 1/(4 − 4q) below, slope-continuous at both knees (a hard clamp
+//! would put a corner in the view sweep where q crosses it). p is
 //! the lobe with F = 1 divided by the table's n, with height-correlated
 //! Smith (the fitted lobe) or separable Smith
 //! (`LtcGgx::with_separable_smith`); D(ω̄) comes from the mapped
@@ -69,15 +72,19 @@
 //!   near the normal, 1 − μo/2 near grazing), so grazing views get as many
 //!   nodes as any others.
 //!
-//! **Interpolation.** Linear in x; along y the runtime reads [`spline`],
-//! a cubic B-spline (table.rs, [`SplineY`]) fitted to each column with a
-//! small penalty on its third differences ([`SMOOTHING`]). A bilinear
-//! lookup bends at every row, and the LTC / reference ratio under a small
-//! light then kinks there (a seam on a smooth sphere); a spline through
-//! the nodes is C² but bends around the fit's scatter from row to row,
-//! putting its curvature at the nodes again. The smoothed spline is C²
-//! and damps that scatter (its effect on the errors: docs/accuracy.md,
-//! "Seams").
+//! **Interpolation** ([`lookup`], [`Lookup`]). Linear in x. Along y the
+//! transform's four channels are read by a cubic B-spline (table.rs,
+//! [`SplineY`]) fitted to each column with a small penalty on its third
+//! differences ([`SMOOTHING`]; the grazing row held to its node,
+//! [`GRAZING_WEIGHT`]). A bilinear lookup bends at every row, and the LTC
+//! / reference ratio under a small light then kinks there (a seam on a
+//! smooth sphere); a spline through the nodes is C² but bends around the
+//! fit's scatter from row to row, putting its curvature at the nodes
+//! again. The smoothed spline is C² and damps that scatter (its effect on
+//! the errors: docs/accuracy.md, "Seams"). n and n_w are quadratures
+//! with no scatter to damp: they take the spline through their nodes
+//! (λ = 0; bilinear, they would leave kinks where the correction fades),
+//! held to n ≤ 1 and n_w ≥ 0.
 
 use crate::brdf::{ShadingFrame, ALPHA_MIN};
 use crate::light::PolygonLocal;
@@ -159,18 +166,55 @@ pub fn table() -> &'static Table2<CHANNELS> {
     T.get_or_init(|| decode(DATA).expect("core/data/ltc_ggx.bin is malformed"))
 }
 
-/// The committed table as the runtime reads it: smoothed and splined
-/// along the view (module docs, "Axes"), formed once.
-pub fn spline() -> &'static SplineY<CHANNELS> {
-    static S: OnceLock<SplineY<CHANNELS>> = OnceLock::new();
-    S.get_or_init(|| SplineY::new(table(), SMOOTHING))
+/// The committed table as the runtime reads it (module docs,
+/// "Interpolation"), formed once.
+pub fn lookup() -> &'static Lookup {
+    static S: OnceLock<Lookup> = OnceLock::new();
+    S.get_or_init(|| Lookup::new(table()))
+}
+
+/// A table as the runtime reads it: the transform's four channels by a
+/// smoothed spline along the view, n and n_w by the spline through their
+/// nodes (module docs, "Interpolation").
+#[derive(Clone, Debug)]
+pub struct Lookup(SplineY<CHANNELS>);
+
+impl Lookup {
+    /// The lookup of `table` (the committed one or a candidate fit).
+    pub fn new(table: &Table2<CHANNELS>) -> Lookup {
+        let s = SMOOTHING;
+        Lookup(SplineY::new(table, [s, s, s, s, 0.0, 0.0], |j| {
+            if j == N - 1 {
+                GRAZING_WEIGHT
+            } else {
+                1.0
+            }
+        }))
+    }
+
+    /// The six channels (m00, m02, m20, m22, n, n_w) at x = √α,
+    /// y = √(1 − μo), per lane; n held to at most 1 and n_w to at least 0
+    /// (a spline through nodes at 1 − 1e-6 or 1e-24 can pass them).
+    #[inline(always)]
+    pub fn get<R: Real>(&self, x: R, y: R) -> [R; CHANNELS] {
+        let [m00, m02, m20, m22, n, n_w] = self.0.lookup(x, y);
+        [m00, m02, m20, m22, n.min(R::ONE), n_w.max(R::ZERO)]
+    }
 }
 
 /// The view spline's smoothing λ (table.rs, [`SplineY`]): it damps the
-/// fit's scatter from row to row (alternating by 1/(1 + 576 λ)), which
-/// any spline through the nodes would bend around, and keeps trends over
-/// eight rows or more within 7 %.
+/// fit's scatter from row to row (an alternating one by 1/(1 + 576 λ)),
+/// which any spline through the nodes would bend around, and keeps a wave
+/// of period eight rows at 93 %.
 pub const SMOOTHING: f64 = 0.3;
+
+/// The weight of the last row (μo = 0) in the view spline's fit, the
+/// others' being 1. There the transform degenerates (m00 → 0 as the lobe
+/// flattens onto the horizon at small α) and, at unit weight, the penalty
+/// pulls the spline across zero just before it, turning the transform
+/// into a reflection; held to the node, it keeps m00, m22 and the
+/// determinant positive (core/tests/ltc_ggx.rs sweeps the lookup).
+pub const GRAZING_WEIGHT: f64 = 100.0;
 
 /// What a GGX material looks up once per pixel (once for all of its
 /// polygon lights): the map from local coordinates into the cosine's,
@@ -220,20 +264,14 @@ impl<R: Real> LtcGgx<R> {
         let mu = wo.z.clamp(R::ZERO, R::ONE);
         let x = alpha.max(R::ZERO).sqrt();
         let y = (R::ONE - mu).sqrt();
-        LtcGgx::from_table(spline(), alpha, x, y, wo)
+        LtcGgx::from_table(lookup(), alpha, x, y, wo)
     }
 
     /// The lookup in `table` at x = √α, y = √(1 − μo), with the lobe's
     /// correction for roughness `alpha` (clamped into the table).
     #[inline(always)]
-    pub(crate) fn from_table(
-        table: &SplineY<CHANNELS>,
-        alpha: R,
-        x: R,
-        y: R,
-        wo: V3<R>,
-    ) -> LtcGgx<R> {
-        let [m00, m02, m20, m22, n, n_w] = table.lookup(x, y);
+    pub(crate) fn from_table(table: &Lookup, alpha: R, x: R, y: R, wo: V3<R>) -> LtcGgx<R> {
+        let [m00, m02, m20, m22, n, n_w] = table.get(x, y);
         let mut l = LtcGgx::from_inverse([m00, m02, m20, m22], n, n_w, wo);
         let alpha = alpha.clamp(R::splat(ALPHA_MIN as f64), R::ONE);
         let a2 = alpha * alpha;
@@ -412,8 +450,24 @@ impl<R: Real> Lobe<R> {
         let num = a2 * h2 * h2 * mu_i;
         let den = den * den * vis_den * n * u.z * self.det * l3;
         let valid = len2.gt(R::splat(TINY)) & den.gt(R::splat(TINY));
-        let ratio = (num / den.max(R::splat(TINY))).clamp(R::splat(RATIO_MIN), R::splat(RATIO_MAX));
-        let r = R::select(valid, ratio, R::ONE);
+        let den = den.max(R::splat(TINY));
+        // The soft bound of q = num / den (`KNEE`) as one quotient a / b:
+        // above the knee (2k num − k² den) / num, below it den / (2k den
+        // − k² num), both positive there.
+        let (k, k2, bound) = (R::splat(KNEE), R::splat(KNEE * KNEE), R::splat(2.0 * KNEE));
+        let above = num.gt(k * den);
+        let below = (k * num).lt(den);
+        let a = R::select(
+            above,
+            bound.mul_add(num, -(k2 * den)),
+            R::select(below, den, num),
+        );
+        let b = R::select(
+            above,
+            num,
+            R::select(below, bound.mul_add(den, -(k2 * num)), den),
+        );
+        let r = R::select(valid, a / b, R::ONE);
         let fade = R::splat(FADE).mul_add(-len, R::ONE).max(R::ZERO);
         let weight = fade * fade;
         i * weight.mul_add(r - R::ONE, R::ONE)
@@ -425,9 +479,10 @@ const TINY: f64 = 1e-30;
 /// Smallest μo the lobe is evaluated at, by the correction here and by
 /// the fit (src/fit_ltc.rs).
 pub const MU_MIN: f64 = 1e-3;
-/// The correction's ratio is held to [RATIO_MIN, RATIO_MAX].
-const RATIO_MIN: f64 = 0.25;
-const RATIO_MAX: f64 = 4.0;
+/// The knee k of the correction's soft bound: r = q on [1/k, k],
+/// 2k − k²/q above, 1/(2k − k² q) below; r stays in (1/(2k), 2k) with a
+/// continuous slope (module docs).
+const KNEE: f64 = 2.0;
 /// The correction's weight, max(0, 1 − FADE |F|)²: full for small parts,
 /// none from |F| = 1/FADE on, slope-continuous there, and squared so that
 /// a growing polygon never gets darker (with I ≈ |F| and r ≤ 4,

@@ -88,7 +88,7 @@ impl<'a> SceneBuilder<'a> {
             .iter()
             .any(|l| matches!(l, Light::Polygon { .. }));
         if polygon_lights {
-            specula_core::ltc::ggx::table();
+            specula_core::ltc::ggx::lookup();
         }
         if (polygon_lights || self.data.environment.is_some() || self.data.env_map.is_some())
             && self.materials.list.iter().any(is_split_sum_model)
