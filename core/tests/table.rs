@@ -256,23 +256,32 @@ fn spline_y_reproduces_cubics_through_the_nodes_and_quadratics_when_smoothed() {
     // Polynomials in the node coordinate u (0 … 10), linear in x.
     let cubic = |x: f64, u: f64| 0.5 + x + 0.3 * u - 0.08 * u * u + 0.006 * u * u * u;
     let quadratic = |x: f64, u: f64| 2.0 - x + 0.4 * u - 0.05 * u * u;
-    for (poly, smoothing) in [(&cubic as &dyn Fn(f64, f64) -> f64, 0.0), (&quadratic, 0.3)] {
-        let t = Table2::build(ax, ay, |x, y| [poly(x, node_coordinate(&ay, y))]);
-        let s = SplineY::new(&t, [smoothing], |_| 1.0);
-        for k in 0..=300 {
-            // End intervals included: not-a-knot and the penalty assume
-            // nothing there.
-            let y = -1.0 + 3.0 * k as f64 / 300.0;
-            for x in [0.0, 0.37, 1.0] {
-                let want = poly(x, node_coordinate(&ay, y));
-                let got = s.lookup(x, y)[0];
+    let t = Table2::build(ax, ay, |x, y| {
+        let u = node_coordinate(&ay, y);
+        [cubic(x, u), quadratic(x, u), cubic(x, u)]
+    });
+    // Channel 0 through the nodes, channel 1 smoothed: each channel takes
+    // its own λ (a smoothed cubic is not reproduced: channel 2 shows it).
+    let s = SplineY::new(&t, [0.0, 0.3, 0.3], |_| 1.0);
+    let mut cubic_smoothed_off = 0.0f64;
+    for k in 0..=300 {
+        // End intervals included: not-a-knot and the penalty assume
+        // nothing there.
+        let y = -1.0 + 3.0 * k as f64 / 300.0;
+        let u = node_coordinate(&ay, y);
+        for x in [0.0, 0.37, 1.0] {
+            let got = s.lookup(x, y);
+            for (c, want) in [(0, cubic(x, u)), (1, quadratic(x, u))] {
                 assert!(
-                    (got - want).abs() < 2e-6 * want.abs().max(1.0),
-                    "λ {smoothing}, ({x}, {y}): {got} vs {want}"
+                    (got[c] - want).abs() < 2e-6 * want.abs().max(1.0),
+                    "channel {c}, ({x}, {y}): {} vs {want}",
+                    got[c]
                 );
             }
+            cubic_smoothed_off = cubic_smoothed_off.max((got[2] - cubic(x, u)).abs());
         }
     }
+    assert!(cubic_smoothed_off > 1e-3, "{cubic_smoothed_off}");
 }
 
 #[test]
@@ -294,18 +303,19 @@ fn spline_y_is_twice_differentiable_across_rows() {
             let slope_l = (v(u) - v(u - e)) / e;
             let slope_r = (v(u + e) - v(u)) / e;
             let left = [
-                v(u - e) + e * slope_l,
+                2.0 * v(u - e) - v(u - 2.0 * e),
                 slope_l,
                 (v(u) - 2.0 * v(u - e) + v(u - 2.0 * e)) / (e * e),
             ];
             let right = [
-                v(u + e) - e * slope_r,
+                2.0 * v(u + e) - v(u + 2.0 * e),
                 slope_r,
                 (v(u + 2.0 * e) - 2.0 * v(u + e) + v(u)) / (e * e),
             ];
-            // The value from each side extrapolated to the node; slope and
-            // curvature scale as 8 and 64 per unit of value, and one-sided
-            // differences are off by O(e) of the next derivative.
+            // The value extrapolated linearly to the node from each side
+            // (off by O(e²) of the curvature); slope and curvature scale as
+            // 8 and 64 per unit of value, and one-sided differences are off
+            // by O(e) of the next derivative.
             let tol = [1e-5, 0.05, 30.0];
             for d in 0..3 {
                 assert!(

@@ -37,7 +37,7 @@
 //! normalized lobe's share and a ratio at one direction would not stand
 //! for the polygon; w is squared so that a growing polygon never gets
 //! darker. The ratio q = p(ω̄)/D(ω̄) grows without bound as ω̄ nears the
-//! horizon, so r is q bent softly into (1/4, 4): q on [1/2, 2], 4 − 4/q
+//! horizon, so r is q bent softly into [1/4, 4]: q on [1/2, 2], 4 − 4/q
 //! above, 1/(4 − 4q) below, slope-continuous at both knees (a hard clamp
 //! would put a corner in the view sweep where q crosses it). p is
 //! the lobe with F = 1 divided by the table's n, with height-correlated
@@ -83,8 +83,11 @@
 //! again. The smoothed spline is C² and damps that scatter (its effect on
 //! the errors: docs/accuracy.md, "Seams"). n and n_w are quadratures
 //! with no scatter to damp: they take the spline through their nodes
-//! (λ = 0; bilinear, they would leave kinks where the correction fades),
-//! held to n ≤ 1 and n_w ≥ 0.
+//! (λ = 0; bilinear, they would leave kinks where the correction fades).
+//! At the smallest α, n drops steeply on the last row (the lobe's
+//! albedo at μo = 0) and the spline rings over the rows before it, above
+//! 1 and a little below the nodes; n is held to at most 1 (an albedo),
+//! which leaves a corner in n there, and n_w to at least 0.
 
 use crate::brdf::{ShadingFrame, ALPHA_MIN};
 use crate::light::PolygonLocal;
@@ -183,8 +186,9 @@ impl Lookup {
     /// The lookup of `table` (the committed one or a candidate fit).
     pub fn new(table: &Table2<CHANNELS>) -> Lookup {
         let s = SMOOTHING;
+        let last = table.y_axis().n - 1;
         Lookup(SplineY::new(table, [s, s, s, s, 0.0, 0.0], |j| {
-            if j == N - 1 {
+            if j == last {
                 GRAZING_WEIGHT
             } else {
                 1.0
@@ -194,7 +198,7 @@ impl Lookup {
 
     /// The six channels (m00, m02, m20, m22, n, n_w) at x = √α,
     /// y = √(1 − μo), per lane; n held to at most 1 and n_w to at least 0
-    /// (a spline through nodes at 1 − 1e-6 or 1e-24 can pass them).
+    /// (module docs, "Interpolation").
     #[inline(always)]
     pub fn get<R: Real>(&self, x: R, y: R) -> [R; CHANNELS] {
         let [m00, m02, m20, m22, n, n_w] = self.0.lookup(x, y);
@@ -211,9 +215,10 @@ pub const SMOOTHING: f64 = 0.3;
 /// The weight of the last row (μo = 0) in the view spline's fit, the
 /// others' being 1. There the transform degenerates (m00 → 0 as the lobe
 /// flattens onto the horizon at small α) and, at unit weight, the penalty
-/// pulls the spline across zero just before it, turning the transform
-/// into a reflection; held to the node, it keeps m00, m22 and the
-/// determinant positive (core/tests/ltc_ggx.rs sweeps the lookup).
+/// pulls the spline across zero up to and at that node, turning the
+/// transform into a reflection; held near the node, it keeps m00, m22
+/// and the determinant positive (core/tests/ltc_ggx.rs sweeps the
+/// lookup).
 pub const GRAZING_WEIGHT: f64 = 100.0;
 
 /// What a GGX material looks up once per pixel (once for all of its
@@ -449,25 +454,8 @@ impl<R: Real> Lobe<R> {
         };
         let num = a2 * h2 * h2 * mu_i;
         let den = den * den * vis_den * n * u.z * self.det * l3;
-        let valid = len2.gt(R::splat(TINY)) & den.gt(R::splat(TINY));
-        let den = den.max(R::splat(TINY));
-        // The soft bound of q = num / den (`KNEE`) as one quotient a / b:
-        // above the knee (2k num − k² den) / num, below it den / (2k den
-        // − k² num), both positive there.
-        let (k, k2, bound) = (R::splat(KNEE), R::splat(KNEE * KNEE), R::splat(2.0 * KNEE));
-        let above = num.gt(k * den);
-        let below = (k * num).lt(den);
-        let a = R::select(
-            above,
-            bound.mul_add(num, -(k2 * den)),
-            R::select(below, den, num),
-        );
-        let b = R::select(
-            above,
-            num,
-            R::select(below, bound.mul_add(den, -(k2 * num)), den),
-        );
-        let r = R::select(valid, a / b, R::ONE);
+        let valid = len2.gt(R::splat(TINY)) & den.gt(R::splat(TINY)) & den.lt(R::splat(1.0 / TINY));
+        let r = R::select(valid, soft_bound(num, den), R::ONE);
         let fade = R::splat(FADE).mul_add(-len, R::ONE).max(R::ZERO);
         let weight = fade * fade;
         i * weight.mul_add(r - R::ONE, R::ONE)
@@ -479,12 +467,81 @@ const TINY: f64 = 1e-30;
 /// Smallest μo the lobe is evaluated at, by the correction here and by
 /// the fit (src/fit_ltc.rs).
 pub const MU_MIN: f64 = 1e-3;
-/// The knee k of the correction's soft bound: r = q on [1/k, k],
-/// 2k − k²/q above, 1/(2k − k² q) below; r stays in (1/(2k), 2k) with a
-/// continuous slope (module docs).
+/// The knee k of the correction's soft bound ([`soft_bound`]).
 const KNEE: f64 = 2.0;
+
+/// The correction's ratio r from q = num / den (num ≥ 0, den > 0): q on
+/// [1/k, k], 2k − k²/q above, 1/(2k − k² q) below, for the knee k =
+/// [`KNEE`]; r lies in [1/(2k), 2k] (1/(2k) at num = 0) with a continuous
+/// slope. Written as one quotient a / b: above the knee (2k num − k² den)
+/// / num, below it den / (2k den − k² num), both denominators positive
+/// where they are taken.
+#[inline(always)]
+pub(crate) fn soft_bound<R: Real>(num: R, den: R) -> R {
+    let (k, k2, bound) = (R::splat(KNEE), R::splat(KNEE * KNEE), R::splat(2.0 * KNEE));
+    let above = num.gt(k * den);
+    let below = (k * num).lt(den);
+    let a = R::select(
+        above,
+        bound.mul_add(num, -(k2 * den)),
+        R::select(below, den, num),
+    );
+    let b = R::select(
+        above,
+        num,
+        R::select(below, bound.mul_add(den, -(k2 * num)), den),
+    );
+    a / b
+}
 /// The correction's weight, max(0, 1 − FADE |F|)²: full for small parts,
 /// none from |F| = 1/FADE on, slope-continuous there, and squared so that
 /// a growing polygon never gets darker (with I ≈ |F| and r ≤ 4,
 /// I (1 + w (r − 1)) increases with |F|; a linear fade does not).
 const FADE: f64 = 2.0;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::f32x8;
+
+    /// The documented piecewise map, written out.
+    fn map(q: f64) -> f64 {
+        if q > 2.0 {
+            4.0 - 4.0 / q
+        } else if q < 0.5 {
+            1.0 / (4.0 - 4.0 * q)
+        } else {
+            q
+        }
+    }
+
+    #[test]
+    fn the_soft_bound_is_the_documented_map_continuous_in_value_and_slope() {
+        for (num, den) in [(0.0, 1.0), (0.5, 1.0), (2.0, 1.0), (1e6, 1.0), (3.0, 1e-3)] {
+            let q = num / den;
+            assert!(
+                (soft_bound(num, den) - map(q)).abs() < 1e-12 * map(q),
+                "q {q}"
+            );
+        }
+        assert_eq!(soft_bound(0.0, 1.0), 0.25);
+        let e = 1e-6;
+        for knee in [0.5, 2.0] {
+            let (l, r) = (soft_bound(knee - e, 1.0), soft_bound(knee + e, 1.0));
+            assert!((r - l - 2.0 * e).abs() < 1e-9, "slope at the knee {knee}");
+        }
+        let mut last = 0.0;
+        for k in 0..2000 {
+            let q = 1e-3 * 1.01f64.powi(k);
+            let r = soft_bound(q, 1.0);
+            assert!((0.25..=4.0).contains(&r) && r > last, "q {q}: {r}");
+            assert!((r - map(q)).abs() < 1e-12 * map(q), "q {q}");
+            last = r;
+            let lanes = soft_bound(f32x8::splat(q as f32), f32x8::splat(1.0));
+            assert!(
+                (lanes.lane(3) - map(q)).abs() < 1e-6 * map(q),
+                "f32x8 q {q}"
+            );
+        }
+    }
+}
