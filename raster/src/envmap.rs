@@ -15,7 +15,8 @@
 //!   at each coarser level; level 1 a quarter of level 0's side, then
 //!   halving), each sample read from the source mip whose texel matches
 //!   the sample's solid angle \[Colbert07\]; stored as octahedral maps
-//!   (RGB texels) so a packet reads a footprint's channels at once;
+//!   (RGB texels) so a packet reads a footprint's channels at once; a
+//!   lobe is read between the two levels around [`level_position`];
 //! - a compact, very bright source (a sun) taken out of the map
 //!   ([`crate::envmap_sun`]): the prefiltered chain and the SH are made
 //!   of the map without it, and it is shaded as a light
@@ -421,13 +422,18 @@ impl EnvMap {
     }
 
     /// The prefiltered radiance around world direction `r` (of any
-    /// nonzero length) at perceptual `roughness` (linear between the two
-    /// nearest levels).
+    /// nonzero length) at perceptual `roughness`: a blend of the two
+    /// levels around [`level_position`]`(roughness)`.
     #[inline(always)]
     pub fn prefiltered<R: Real>(&self, r: V3<R>, roughness: R) -> Rgb<R> {
+        self.prefiltered_at(r, level_position(roughness))
+    }
+
+    /// The prefiltered radiance around world direction `r` at level
+    /// position `f` in 0..=5 (see [`level_position`]).
+    #[inline(always)]
+    pub fn prefiltered_at<R: Real>(&self, r: V3<R>, f: R) -> Rgb<R> {
         let (s, t) = oct_encode(self.to_map(r));
-        let top = (PREFILTER_LEVELS - 1) as f64;
-        let f = (roughness * R::splat(top)).clamp(R::ZERO, R::splat(top));
         // Each lane's two nearest levels weigh 1 − |f − k|; a level is read
         // when some lane weighs it (one or two levels per packet, usually).
         let mut acc = Rgb::zero();
@@ -439,6 +445,52 @@ impl EnvMap {
         }
         acc
     }
+}
+
+/// Where perceptual `roughness` falls in the prefiltered chain, in
+/// levels (0 = the mirror level, 5 = roughness 1): level k + w reads
+/// level k with weight 1 − w and level k + 1 with weight w.
+///
+/// From level 1 up the levels are 1/5 of roughness apart and the position
+/// is 5 × roughness. Below level 1 the blend is of the mirror image and a
+/// lobe of roughness 1/5, so the position is the mix whose spread matches
+/// the lobe's: the blend's resultant length (the mean cosine of its
+/// kernel about r) is linear in w, and the w at which it equals the
+/// roughness's own kernel's is within 0.01 of x³ (0.8 + 0.2 x), x = 5 ×
+/// roughness (`level_position_matches_the_kernels_spread` checks it
+/// against quadrature of the kernel). Linear in roughness there, a roughness of
+/// 0.05 read a quarter of the 1/5 level and blurred near-mirror
+/// reflections (docs/accuracy.md).
+#[inline(always)]
+pub fn level_position<R: Real>(roughness: R) -> R {
+    let top = (PREFILTER_LEVELS - 1) as f64;
+    let f = (roughness * R::splat(top)).clamp(R::ZERO, R::splat(top));
+    let low = f * f * f * f.mul_add(R::splat(0.2), R::splat(0.8));
+    R::select(f.lt(R::ONE), low, f)
+}
+
+/// The resultant length of a prefiltered level's kernel at GGX `alpha`:
+/// its mean cosine about r, the kernel being D(h) (n·l) over l with
+/// n = v = r (the prefiltering's weights), integrated over θh by the
+/// midpoint rule (dω_l = 4 cos θh dω_h; l is above the horizon for
+/// θh < 45°). What [`level_position`] matches; for checks and the
+/// accuracy tests, not the renderer.
+pub fn kernel_resultant(alpha: f64) -> f64 {
+    let a2 = alpha * alpha;
+    let steps = 200_000;
+    let dh = std::f64::consts::FRAC_PI_4 / steps as f64;
+    let (mut m0, mut m1) = (0.0, 0.0);
+    for i in 0..steps {
+        let th = (i as f64 + 0.5) * dh;
+        let c = th.cos();
+        let dd = c * c * (a2 - 1.0) + 1.0;
+        let d = a2 / (std::f64::consts::PI * dd * dd);
+        let nl = (2.0 * th).cos();
+        let w = d * nl * 4.0 * c * th.sin();
+        m0 += w;
+        m1 += w * nl;
+    }
+    m1 / m0
 }
 
 /// The nine real SH basis functions at unit `d`.
@@ -678,6 +730,31 @@ mod tests {
                 "{s} {t} -> {s2} {t2}"
             );
         }
+    }
+
+    /// Below level 1, `level_position` mixes the mirror level and level 1
+    /// in the proportion whose kernel has the roughness's own kernel's
+    /// resultant length (within 0.01 of a level); from level 1 up it is
+    /// linear in roughness, continuous at level 1.
+    #[test]
+    fn level_position_matches_the_kernels_spread() {
+        let alpha = |r: f64| (r * r).max(1e-3);
+        let r1 = kernel_resultant(alpha(0.2));
+        for i in 0..=40 {
+            let r = 0.2 * i as f64 / 40.0;
+            let exact = (1.0 - kernel_resultant(alpha(r))) / (1.0 - r1);
+            let got = level_position(r);
+            assert!(
+                (got - exact).abs() < 0.01,
+                "roughness {r}: level {got}, matching mix {exact}"
+            );
+        }
+        for i in 0..=40 {
+            let r = 0.2 + 0.8 * i as f64 / 40.0;
+            assert!((level_position(r) - 5.0 * r).abs() < 1e-12, "roughness {r}");
+        }
+        assert_eq!(level_position(-1.0), 0.0);
+        assert_eq!(level_position(2.0), 5.0);
     }
 
     #[test]
