@@ -426,13 +426,20 @@ impl EnvMap {
     /// levels around [`level_position`]`(roughness)`.
     #[inline(always)]
     pub fn prefiltered<R: Real>(&self, r: V3<R>, roughness: R) -> Rgb<R> {
-        self.prefiltered_at(r, level_position(roughness))
+        self.read_levels(r, level_position(roughness))
     }
 
     /// The prefiltered radiance around world direction `r` at level
-    /// position `f` in 0..=5 (see [`level_position`]).
+    /// position `f` (see [`level_position`]), held to 0..=5.
     #[inline(always)]
     pub fn prefiltered_at<R: Real>(&self, r: V3<R>, f: R) -> Rgb<R> {
+        let top = (PREFILTER_LEVELS - 1) as f64;
+        self.read_levels(r, f.clamp(R::ZERO, R::splat(top)))
+    }
+
+    /// [`EnvMap::prefiltered_at`] of an `f` already in 0..=5.
+    #[inline(always)]
+    fn read_levels<R: Real>(&self, r: V3<R>, f: R) -> Rgb<R> {
         let (s, t) = oct_encode(self.to_map(r));
         // Each lane's two nearest levels weigh 1 − |f − k|; a level is read
         // when some lane weighs it (one or two levels per packet, usually).
@@ -458,9 +465,8 @@ impl EnvMap {
 /// kernel about r) is linear in w, and the w at which it equals the
 /// roughness's own kernel's is within 0.01 of x³ (0.8 + 0.2 x), x = 5 ×
 /// roughness (`level_position_matches_the_kernels_spread` checks it
-/// against quadrature of the kernel). Linear in roughness there, a roughness of
-/// 0.05 read a quarter of the 1/5 level and blurred near-mirror
-/// reflections (docs/accuracy.md).
+/// against quadrature of the kernel; the split sum's error with it:
+/// docs/accuracy.md, "Near-mirror lobes").
 #[inline(always)]
 pub fn level_position<R: Real>(roughness: R) -> R {
     let top = (PREFILTER_LEVELS - 1) as f64;
@@ -475,6 +481,7 @@ pub fn level_position<R: Real>(roughness: R) -> R {
 /// midpoint rule (dω_l = 4 cos θh dω_h; l is above the horizon for
 /// θh < 45°). What [`level_position`] matches; for checks and the
 /// accuracy tests, not the renderer.
+#[doc(hidden)]
 pub fn kernel_resultant(alpha: f64) -> f64 {
     let a2 = alpha * alpha;
     let steps = 200_000;
