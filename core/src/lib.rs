@@ -29,6 +29,6 @@ mod vec3;
 
 pub use brdf::{Brdf, BrdfVisitor, EnvLobes, LaneParams, Outgoing, ShadingFrame};
 pub use models::Model;
-pub use real::{Mask, Real};
+pub use real::{Constant, Mask, Real};
 pub use vec3::{Rgb, V3};
 pub use wide::f32x8;

@@ -53,6 +53,30 @@ impl Mask for f32x8 {
     }
 }
 
+/// A number known only at run time that lanes broadcast often (a table's
+/// bounds and sizes): its f64 value and its rounding to f32, made once
+/// when the number is, so that f32 lanes read it as it is stored instead
+/// of converting it on every use ([`Real::constant`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Constant {
+    exact: f64,
+    single: f32,
+}
+
+impl Constant {
+    pub const fn new(v: f64) -> Constant {
+        Constant {
+            exact: v,
+            single: v as f32,
+        }
+    }
+
+    /// The f64 value.
+    pub const fn get(self) -> f64 {
+        self.exact
+    }
+}
+
 /// Arithmetic on one lane or a packet of lanes; see the module docs.
 pub trait Real:
     Copy
@@ -85,6 +109,8 @@ pub trait Real:
 
     /// Every lane set to `v` (rounded to the lane precision).
     fn splat(v: f64) -> Self;
+    /// `splat(c.get())`, without rounding on each use.
+    fn constant(c: Constant) -> Self;
     /// Lanes from the first `LANES` values of `s` (f32 storage for all precisions).
     fn load(s: &[f32]) -> Self;
     /// Writes the lanes to the first `LANES` values of `out`.
@@ -177,7 +203,7 @@ pub trait Real:
 }
 
 macro_rules! scalar_real {
-    ($t:ty, $exact:expr, $pi:expr, $inv_pi:expr, $rsqrt:expr, $recip:expr) => {
+    ($t:ty, $exact:expr, $pi:expr, $inv_pi:expr, $rsqrt:expr, $recip:expr, $constant:expr) => {
         impl Real for $t {
             type Mask = bool;
             const LANES: usize = 1;
@@ -191,6 +217,10 @@ macro_rules! scalar_real {
             #[inline(always)]
             fn splat(v: f64) -> Self {
                 v as $t
+            }
+            #[inline(always)]
+            fn constant(c: Constant) -> Self {
+                $constant(c)
             }
             #[inline(always)]
             fn load(s: &[f32]) -> Self {
@@ -314,7 +344,8 @@ scalar_real!(
     core::f32::consts::PI,
     core::f32::consts::FRAC_1_PI,
     |x: f32| 1.0 / x.sqrt(),
-    |x: f32| 1.0 / x
+    |x: f32| 1.0 / x,
+    |c: Constant| c.single
 );
 scalar_real!(
     f64,
@@ -322,7 +353,8 @@ scalar_real!(
     core::f64::consts::PI,
     core::f64::consts::FRAC_1_PI,
     |x: f64| 1.0 / x.sqrt(),
-    |x: f64| 1.0 / x
+    |x: f64| 1.0 / x,
+    |c: Constant| c.exact
 );
 
 impl Real for f32x8 {
@@ -338,6 +370,10 @@ impl Real for f32x8 {
     #[inline(always)]
     fn splat(v: f64) -> Self {
         f32x8::splat(v as f32)
+    }
+    #[inline(always)]
+    fn constant(c: Constant) -> Self {
+        f32x8::splat(c.single)
     }
     #[inline(always)]
     fn load(s: &[f32]) -> Self {
@@ -611,6 +647,32 @@ mod tests {
 
     fn lanes(v: f32x8) -> [f32; 8] {
         v.to_array()
+    }
+
+    /// A constant's lanes are those of `splat` of its value, bit for bit,
+    /// in every precision: rounding once when it is made is rounding on
+    /// every use.
+    #[test]
+    fn a_constant_splats_like_its_value() {
+        let values = [
+            0.1,
+            1.0 / 3.0,
+            -2.5e-42,
+            1.0e39,
+            -0.0,
+            f64::INFINITY,
+            f64::NAN,
+            16_777_217.0,
+        ];
+        for v in values {
+            let c = Constant::new(v);
+            assert_eq!(f64::constant(c).to_bits(), f64::splat(v).to_bits(), "{v}");
+            assert_eq!(f32::constant(c).to_bits(), f32::splat(v).to_bits(), "{v}");
+            let a = <f32x8 as Real>::constant(c).to_array();
+            let b = <f32x8 as Real>::splat(v).to_array();
+            assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits), "{v}");
+            assert_eq!(c.get().to_bits(), v.to_bits());
+        }
     }
 
     #[test]

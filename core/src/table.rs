@@ -31,7 +31,7 @@
 //! so a round trip (lookup at a node == the closure there, to f32) is a test.
 
 use crate::quadrature::GaussLegendre;
-use crate::real::Real;
+use crate::real::{Constant, Real};
 
 /// How an axis spaces its nodes over t ∈ [0, 1]; see the module docs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -74,10 +74,15 @@ pub struct Axis {
     pub warp: Warp,
     pub nodes: Nodes,
     pub interp: Interp,
-    /// 1 / (hi − lo) and the u spacing of the nodes, formed once here:
-    /// lookups run per pixel, and an f64 division there is not free.
-    inv_span: f64,
-    du: f64,
+    /// What lookups broadcast, formed once here: lookups run per pixel,
+    /// and an f64 division or an f64-to-f32 rounding there is not free.
+    /// lo, 1 / (hi − lo), the u spacing of the nodes, n, n − 1 and n − 2.
+    lo_c: Constant,
+    inv_span: Constant,
+    du: Constant,
+    count: Constant,
+    last: Constant,
+    last_but_one: Constant,
 }
 
 impl Warp {
@@ -113,11 +118,15 @@ impl Axis {
             warp,
             nodes,
             interp: Interp::Warped,
-            inv_span: 1.0 / (hi - lo),
-            du: match nodes {
+            lo_c: Constant::new(lo),
+            inv_span: Constant::new(1.0 / (hi - lo)),
+            du: Constant::new(match nodes {
                 Nodes::Ends => 1.0 / (n - 1) as f64,
                 Nodes::Centres => 1.0 / n as f64,
-            },
+            }),
+            count: Constant::new(n as f64),
+            last: Constant::new((n - 1) as f64),
+            last_but_one: Constant::new((n - 2) as f64),
         }
     }
 
@@ -133,8 +142,8 @@ impl Axis {
     #[inline(always)]
     fn node_u<R: Real>(&self, i: R) -> R {
         match self.nodes {
-            Nodes::Ends => i * R::splat(self.du),
-            Nodes::Centres => (i + R::HALF) * R::splat(self.du),
+            Nodes::Ends => i * R::constant(self.du),
+            Nodes::Centres => (i + R::HALF) * R::constant(self.du),
         }
     }
 
@@ -148,16 +157,16 @@ impl Axis {
     /// next node at x: steps 1–4 of the module docs.
     #[inline(always)]
     pub(crate) fn locate<R: Real>(&self, x: R) -> (R, R) {
-        let last = (self.n - 1) as f64;
-        let t = ((x - R::splat(self.lo)) * R::splat(self.inv_span)).clamp(R::ZERO, R::ONE);
+        let last = R::constant(self.last);
+        let t = ((x - R::constant(self.lo_c)) * R::constant(self.inv_span)).clamp(R::ZERO, R::ONE);
         let u = self.warp.apply(t);
         let p = match self.nodes {
-            Nodes::Ends => u * R::splat(last),
+            Nodes::Ends => u * last,
             Nodes::Centres => u
-                .mul_add(R::splat(self.n as f64), -R::HALF)
-                .clamp(R::ZERO, R::splat(last)),
+                .mul_add(R::constant(self.count), -R::HALF)
+                .clamp(R::ZERO, last),
         };
-        let i = p.floor().min(R::splat(last - 1.0));
+        let i = p.floor().min(R::constant(self.last_but_one));
         let w = match self.interp {
             Interp::Warped => p - i,
             Interp::Linear => {
@@ -309,7 +318,7 @@ impl<const C: usize> Table2<C> {
         let (i, wx) = self.x.locate(x);
         let (j, wy) = self.y.locate(y);
         let c_ = R::splat(C as f64);
-        let row = R::splat((self.x.n * C) as f64);
+        let row = R::constant(self.x.count) * c_;
         let base = j.mul_add(row, i * c_);
         core::array::from_fn(|c| {
             let b = base + R::splat(c as f64);
@@ -445,7 +454,7 @@ impl<const C: usize> SplineY<C> {
         let (i, wx) = self.x.locate(x);
         let (j, w) = self.y.locate(y);
         let c_ = R::splat(C as f64);
-        let row = R::splat((self.x.n * C) as f64);
+        let row = R::constant(self.x.count) * c_;
         let base = j.mul_add(row, i * c_);
         let sixth = R::splat(1.0 / 6.0);
         let v = R::ONE - w;

@@ -29,7 +29,7 @@
 
 use crate::envmap_sun::Sun;
 use crate::equirect::{clamp_texel, dir_to_uv, uv_to_dir, Equirect, MAX_TEXEL};
-use specula_core::{Mask, Real, Rgb, V3};
+use specula_core::{Constant, Mask, Real, Rgb, V3};
 
 /// How a map lights surfaces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -89,6 +89,10 @@ fn oct_decode(s: f64, t: f64) -> [f64; 3] {
 #[derive(Clone, Debug)]
 struct OctLevel {
     size: usize,
+    /// size, size − 1 and the row stride size + 1, as lanes broadcast them.
+    side: Constant,
+    last: Constant,
+    stride: Constant,
     /// The texels, three floats each, in size + 1 rows of size + 1: each
     /// row's last texel repeated after it, the last row repeated below,
     /// and one float more at the end ([`Real::gather_rgb_block`]). A
@@ -111,7 +115,13 @@ impl OctLevel {
         }
         texels.extend_from_within(texels.len() - 3 * stride..);
         texels.push(0.0);
-        OctLevel { size, texels }
+        OctLevel {
+            size,
+            side: Constant::new(size as f64),
+            last: Constant::new((size - 1) as f64),
+            stride: Constant::new(stride as f64),
+            texels,
+        }
     }
 
     /// The planes as [`OctLevel::new`] took them (rows of `size`).
@@ -129,10 +139,9 @@ impl OctLevel {
     /// Bilinear radiance at octahedral (s, t), clamped at the edges.
     #[inline(always)]
     fn bilinear<R: Real>(&self, s: R, t: R) -> Rgb<R> {
-        let n = self.size as f64;
-        let hi = R::splat(n - 1.0);
-        let x = (s * R::splat(n) - R::HALF).clamp(R::ZERO, hi);
-        let y = (t * R::splat(n) - R::HALF).clamp(R::ZERO, hi);
+        let (n, hi) = (R::constant(self.side), R::constant(self.last));
+        let x = (s * n - R::HALF).clamp(R::ZERO, hi);
+        let y = (t * n - R::HALF).clamp(R::ZERO, hi);
         let (x0, y0) = (x.floor(), y.floor());
         let (fx, fy) = (x - x0, y - y0);
         // Texels x0 and x0 + 1 of rows y0 and y0 + 1, the padding standing
@@ -140,7 +149,7 @@ impl OctLevel {
         let stride = self.size + 1;
         let [[a, b], [c, d]] = R::gather_rgb_block(
             &self.texels,
-            y0.mul_add(R::splat(stride as f64), x0),
+            y0.mul_add(R::constant(self.stride), x0),
             stride,
         );
         let ch = |k: usize| {
@@ -444,11 +453,14 @@ impl EnvMap {
         // Each lane's two nearest levels weigh 1 − |f − k|; a level is read
         // when some lane weighs it (one or two levels per packet, usually).
         let mut acc = Rgb::zero();
-        for (k, level) in self.levels.iter().enumerate() {
-            let wk = (R::ONE - (f - R::splat(k as f64)).abs()).max(R::ZERO);
+        // k counts in lanes: no integer conversion per level.
+        let mut k = R::ZERO;
+        for level in &self.levels {
+            let wk = (R::ONE - (f - k).abs()).max(R::ZERO);
             if wk.gt(R::ZERO).any() {
                 acc = level.bilinear(s, t).mul_add(wk, acc);
             }
+            k += R::ONE;
         }
         acc
     }
