@@ -673,6 +673,12 @@ mod tests {
             assert_eq!(a.map(f32::to_bits), b.map(f32::to_bits), "{v}");
             assert_eq!(c.get().to_bits(), v.to_bits());
         }
+        // Tables' axes are made in const items: the rounding at compile
+        // time is the one at run time.
+        const TENTH: Constant = Constant::new(0.1);
+        let tenth = std::hint::black_box(0.1f64);
+        assert_eq!(f32::constant(TENTH).to_bits(), (tenth as f32).to_bits());
+        assert_eq!(f64::constant(TENTH).to_bits(), tenth.to_bits());
     }
 
     #[test]

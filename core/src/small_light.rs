@@ -267,11 +267,11 @@ pub(crate) fn sweep_ratio(table: &Lookup, m: &Microfacet, alpha: f64, y: f64) ->
 pub fn kinks(table: &Table2<6>, alpha: f64, y_lo: f64, y_hi: f64) -> Kinks {
     let table = &Lookup::new(table);
     let m = lobe(alpha);
-    let dy = 1.0 / (Y_AXIS.n - 1) as f64;
+    let dy = 1.0 / (Y_AXIS.n() - 1) as f64;
     let h = dy / 2.0;
     let mut across = Vec::new();
     let mut within = Vec::new();
-    for j in 1..Y_AXIS.n - 1 {
+    for j in 1..Y_AXIS.n() - 1 {
         let y = Y_AXIS.node(j);
         if y < y_lo || y > y_hi {
             continue;

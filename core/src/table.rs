@@ -64,15 +64,16 @@ pub enum Interp {
     Linear,
 }
 
-/// One table axis; see the module docs.
+/// One table axis; see the module docs. Made by [`Axis::new`] only, so
+/// that the constants its lookups broadcast always follow its nodes.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Axis {
     /// Number of nodes, ≥ 2.
-    pub n: usize,
-    pub lo: f64,
-    pub hi: f64,
+    n: usize,
+    lo: f64,
+    hi: f64,
     pub warp: Warp,
-    pub nodes: Nodes,
+    nodes: Nodes,
     pub interp: Interp,
     /// What lookups broadcast, formed once here: lookups run per pixel,
     /// and an f64 division or an f64-to-f32 rounding there is not free.
@@ -128,6 +129,26 @@ impl Axis {
             last: Constant::new((n - 1) as f64),
             last_but_one: Constant::new((n - 2) as f64),
         }
+    }
+
+    /// Number of nodes.
+    pub const fn n(&self) -> usize {
+        self.n
+    }
+
+    /// The start of the range the nodes cover.
+    pub const fn lo(&self) -> f64 {
+        self.lo
+    }
+
+    /// The end of the range the nodes cover.
+    pub const fn hi(&self) -> f64 {
+        self.hi
+    }
+
+    /// Where the nodes sit.
+    pub const fn nodes(&self) -> Nodes {
+        self.nodes
     }
 
     /// The same axis, interpolated linearly in the user coordinate.

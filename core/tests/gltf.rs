@@ -281,8 +281,8 @@ fn rel(g: f64, w: f64) -> f64 {
 #[test]
 fn sheen_table_matches_generator_and_independent_quadrature() {
     let t = SheenTable::get();
-    for i in (0..SHEEN_MU_AXIS.n).step_by(5) {
-        for j in (0..SHEEN_ROUGHNESS_AXIS.n).step_by(5) {
+    for i in (0..SHEEN_MU_AXIS.n()).step_by(5) {
+        for j in (0..SHEEN_ROUGHNESS_AXIS.n()).step_by(5) {
             let (mu, r) = (SHEEN_MU_AXIS.node(i), SHEEN_ROUGHNESS_AXIS.node(j));
             let want = sheen_albedo_quadrature(mu, r);
             let got = t.e(mu, r);

@@ -425,12 +425,12 @@ fn gtr_sweep_builds_only_gamma_node_tables() {
     let built = tables_built_on_this_thread() - before;
     // Nodes whose cubic can touch [0, 3] in log₂ γ: from one below the
     // node at 0 to two above the node below 3.
-    let lo = (0..GAMMA_AXIS.n)
+    let lo = (0..GAMMA_AXIS.n())
         .rev()
         .find(|&k| GAMMA_AXIS.node(k) <= 0.0)
         .unwrap()
         - 1;
-    let hi = (0..GAMMA_AXIS.n)
+    let hi = (0..GAMMA_AXIS.n())
         .find(|&k| GAMMA_AXIS.node(k) >= 3.0)
         .unwrap()
         + 1;

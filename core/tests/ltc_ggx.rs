@@ -374,7 +374,7 @@ fn the_view_sweep_has_no_kinks_at_row_boundaries() {
 #[test]
 fn the_runtime_lookup_keeps_every_transform_valid() {
     let l = lookup();
-    let (lo, hi) = (X_AXIS.lo, X_AXIS.hi);
+    let (lo, hi) = (X_AXIS.lo(), X_AXIS.hi());
     let grids = [
         ((lo, hi), (0.0, 1.0), 400),
         ((lo, lo + 0.05), (0.99, 1.0), 300),

@@ -20,24 +20,24 @@ fn axes(n: usize) -> Vec<Axis> {
 
 /// Node i in the user coordinate, written out per warp and node rule.
 fn node_x(a: &Axis, i: usize) -> f64 {
-    let u = match a.nodes {
-        Nodes::Ends => i as f64 / (a.n - 1) as f64,
-        Nodes::Centres => (i as f64 + 0.5) / a.n as f64,
+    let u = match a.nodes() {
+        Nodes::Ends => i as f64 / (a.n() - 1) as f64,
+        Nodes::Centres => (i as f64 + 0.5) / a.n() as f64,
     };
     let t = match a.warp {
         Warp::Linear => u,
         Warp::Sqrt => u * u,
         Warp::Square => u.sqrt(),
     };
-    a.lo + (a.hi - a.lo) * t
+    a.lo() + (a.hi() - a.lo()) * t
 }
 
 /// The module docs' interpolant, with branches: clamp to the outer nodes,
 /// find the bracketing nodes by search, weight linear in u or in x.
 fn plain_interpolant(a: &Axis, values: &[f64], x: f64) -> f64 {
-    let xs: Vec<f64> = (0..a.n).map(|i| node_x(a, i)).collect();
+    let xs: Vec<f64> = (0..a.n()).map(|i| node_x(a, i)).collect();
     let warp = |x: f64| {
-        let t = ((x - a.lo) / (a.hi - a.lo)).clamp(0.0, 1.0);
+        let t = ((x - a.lo()) / (a.hi() - a.lo())).clamp(0.0, 1.0);
         match a.warp {
             Warp::Linear => t,
             Warp::Sqrt => t.sqrt(),
@@ -47,10 +47,10 @@ fn plain_interpolant(a: &Axis, values: &[f64], x: f64) -> f64 {
     if x <= xs[0] {
         return values[0];
     }
-    if x >= xs[a.n - 1] {
-        return values[a.n - 1];
+    if x >= xs[a.n() - 1] {
+        return values[a.n() - 1];
     }
-    let i = (0..a.n - 1).find(|&i| x < xs[i + 1]).unwrap();
+    let i = (0..a.n() - 1).find(|&i| x < xs[i + 1]).unwrap();
     let w = match a.interp {
         specula_core::table::Interp::Warped => {
             (warp(x) - warp(xs[i])) / (warp(xs[i + 1]) - warp(xs[i]))
@@ -68,7 +68,7 @@ fn f(x: f64) -> [f64; 2] {
 fn lookup_is_the_documented_interpolant_and_round_trips_at_nodes() {
     for a in axes(17) {
         let t = Table1::build(a, f);
-        for i in 0..a.n {
+        for i in 0..a.n() {
             let x = node_x(&a, i);
             let want = f(x).map(|v| v as f32);
             assert_eq!(t.node_value(i), want, "{a:?} node {i}");
@@ -81,7 +81,7 @@ fn lookup_is_the_documented_interpolant_and_round_trips_at_nodes() {
             }
         }
         let vals: [Vec<f64>; 2] =
-            core::array::from_fn(|c| (0..a.n).map(|i| t.node_value(i)[c] as f64).collect());
+            core::array::from_fn(|c| (0..a.n()).map(|i| t.node_value(i)[c] as f64).collect());
         for k in 0..=2000 {
             let x = -0.7 + 3.0 * k as f64 / 2000.0;
             let got = t.lookup(x);
@@ -111,7 +111,7 @@ fn lookup_follows_the_function_between_nodes() {
         }
         let t = Table1::build(a, f);
         for k in 0..=500 {
-            let x = node_x(&a, 0) + (node_x(&a, a.n - 1) - node_x(&a, 0)) * k as f64 / 500.0;
+            let x = node_x(&a, 0) + (node_x(&a, a.n() - 1) - node_x(&a, 0)) * k as f64 / 500.0;
             let (got, want) = (t.lookup(x), f(x));
             for c in 0..2 {
                 worst = worst.max((got[c] - want[c]).abs());
@@ -201,7 +201,7 @@ fn integrate_is_exact_for_the_interpolant() {
     let a = Axis::new(12, 0.0, 1.0, Warp::Sqrt, Nodes::Ends).linear_between_nodes();
     let t = Table1::build(a, |x| [1.0 - (-4.0 * x).exp()]);
     let mut want = 0.0;
-    for i in 0..a.n - 1 {
+    for i in 0..a.n() - 1 {
         let (x0, x1) = (node_x(&a, i), node_x(&a, i + 1));
         let (e0, e1) = (t.node_value(i)[0] as f64, t.node_value(i + 1)[0] as f64);
         let slope = (e1 - e0) / (x1 - x0);
@@ -246,7 +246,7 @@ fn cubic_slice_reproduces_quadratics_in_the_node_coordinate() {
 
 /// u = (y − lo)/(hi − lo) in node units of a linear `Ends` axis.
 fn node_coordinate(a: &Axis, y: f64) -> f64 {
-    (y - a.lo) / (a.hi - a.lo) * (a.n - 1) as f64
+    (y - a.lo()) / (a.hi() - a.lo()) * (a.n() - 1) as f64
 }
 
 #[test]

@@ -38,7 +38,7 @@ pub(crate) fn decode<const C: usize>(
     magic: &str,
     (x_axis, y_axis): (Axis, Axis),
 ) -> Result<Table2<C>, String> {
-    let (nx, ny) = (x_axis.n, y_axis.n);
+    let (nx, ny) = (x_axis.n(), y_axis.n());
     let first = bytes
         .iter()
         .position(|&b| b == b'\n')

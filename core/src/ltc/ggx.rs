@@ -186,7 +186,7 @@ impl Lookup {
     /// The lookup of `table` (the committed one or a candidate fit).
     pub fn new(table: &Table2<CHANNELS>) -> Lookup {
         let s = SMOOTHING;
-        let last = table.y_axis().n - 1;
+        let last = table.y_axis().n() - 1;
         Lookup(SplineY::new(table, [s, s, s, s, 0.0, 0.0], |j| {
             if j == last {
                 GRAZING_WEIGHT
