@@ -420,35 +420,19 @@ fn variant(
 /// direction and length are what a lobe's reading must have to be exact
 /// for radiance linear in direction.
 fn lobe_mean(wo: V3<f64>, alpha: f64) -> V3<f64> {
-    let lambda = |w: V3<f64>| {
-        let c2 = w.z * w.z;
-        let t2 = (1.0 - c2).max(0.0) / c2.max(1e-12);
-        0.5 * (-1.0 + (1.0 + alpha * alpha * t2).sqrt())
-    };
-    let vh = V3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
-    let lensq = vh.x * vh.x + vh.y * vh.y;
-    let t1 = if lensq > 0.0 {
-        V3::new(-vh.y, vh.x, 0.0) * (1.0 / lensq.sqrt())
-    } else {
-        V3::new(1.0, 0.0, 0.0)
-    };
-    let t2 = vh.cross(t1);
+    use specula_core::masking::lambda_ggx;
+    let lambda_o = lambda_ggx(alpha, wo.z);
     let (mut m, mut wsum) = (V3::new(0.0, 0.0, 0.0), 0.0);
     let g = 96;
     for i in 0..g {
         for j in 0..g {
             let (u1, u2) = ((i as f64 + 0.5) / g as f64, (j as f64 + 0.5) / g as f64);
-            let (r, phi) = (u1.sqrt(), std::f64::consts::TAU * u2);
-            let a = r * phi.cos();
-            let s = 0.5 * (1.0 + vh.z);
-            let b = (1.0 - s) * (1.0 - a * a).max(0.0).sqrt() + s * r * phi.sin();
-            let nh = t1 * a + t2 * b + vh * (1.0 - a * a - b * b).max(0.0).sqrt();
-            let h = V3::new(alpha * nh.x, alpha * nh.y, nh.z.max(0.0)).normalize();
+            let h = specula_raster::envmap_reference::sample_vndf(wo, alpha, u1, u2);
             let l = h * (2.0 * h.dot(wo)) - wo;
             if l.z <= 0.0 {
                 continue;
             }
-            let w = (1.0 + lambda(wo)) / (1.0 + lambda(wo) + lambda(l));
+            let w = (1.0 + lambda_o) / (1.0 + lambda_o + lambda_ggx(alpha, l.z));
             m += l * w;
             wsum += w;
         }

@@ -495,17 +495,15 @@ pub fn level_position<R: Real>(roughness: R) -> R {
 /// accuracy tests, not the renderer.
 #[doc(hidden)]
 pub fn kernel_resultant(alpha: f64) -> f64 {
-    let a2 = alpha * alpha;
     let steps = 200_000;
     let dh = std::f64::consts::FRAC_PI_4 / steps as f64;
     let (mut m0, mut m1) = (0.0, 0.0);
     for i in 0..steps {
         let th = (i as f64 + 0.5) * dh;
-        let c = th.cos();
-        let dd = c * c * (a2 - 1.0) + 1.0;
-        let d = a2 / (std::f64::consts::PI * dd * dd);
+        let (sin, c) = th.sin_cos();
+        let d = specula_core::ndf::d_ggx(alpha, c * c, sin * sin);
         let nl = (2.0 * th).cos();
-        let w = d * nl * 4.0 * c * th.sin();
+        let w = d * nl * 4.0 * c * sin;
         m0 += w;
         m1 += w * nl;
     }

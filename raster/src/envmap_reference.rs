@@ -60,8 +60,9 @@ fn d_ggx(alpha: f64, h: V3<f64>) -> f64 {
     a2 / (PI * t * t)
 }
 
-/// A GGX visible normal for view `wo` (local, above) \[Heitz18\].
-fn sample_vndf(wo: V3<f64>, alpha: f64, u1: f64, u2: f64) -> V3<f64> {
+/// A GGX visible normal for view `wo` (local, above) \[Heitz18\], from
+/// two uniform numbers in [0, 1).
+pub fn sample_vndf(wo: V3<f64>, alpha: f64, u1: f64, u2: f64) -> V3<f64> {
     let vh = V3::new(alpha * wo.x, alpha * wo.y, wo.z).normalize();
     let lensq = vh.x * vh.x + vh.y * vh.y;
     let t1 = if lensq > 1e-14 {
