@@ -143,7 +143,8 @@ pub(crate) struct FrameTimes {
     pub(crate) bin: f64,
     pub(crate) raster: f64,
     pub(crate) shade: f64,
-    /// The shadow maps' depth passes.
+    /// The shadow maps: fitting, depth passes, linear depth and PCF
+    /// window bounds (0 without shadowed lights).
     pub(crate) shadow: f64,
     /// The post stages: supersampling resolve + exposure + tone mapping +
     /// sRGB encode (in memory).

@@ -87,7 +87,7 @@ impl LinearDepth {
 /// distance from it to the near plane's corners; `None` for a directional
 /// light) into `map` (row-major, `target`'s width × height) as `linear`
 /// depth, with its buffers in `out` (made on first use, reused after);
-/// its geometry time goes to `stats.times.shadow`.
+/// counted in `stats` as a shadow pass (`render_maps` times them all).
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn depth_pass(
     scene: &SceneData,
@@ -150,8 +150,6 @@ pub(crate) fn depth_pass(
         v.vis = VisBuffer::default();
         depth_only_pass(scene, target, &pass, v, map, linear, &mut own);
     }
-    let t = own.times;
-    stats.times.shadow += t.vertex + t.setup + t.bin + t.raster;
     stats.shadow_passes += 1;
     stats.shadow_counts.add(&own.counts);
 }

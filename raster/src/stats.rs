@@ -14,7 +14,8 @@ pub struct PassTimes {
     pub bin: f64,
     pub raster: f64,
     pub shade: f64,
-    /// The shadow maps' depth passes (all stages).
+    /// The shadow maps: fitting each light's faces, their depth passes
+    /// (all stages), linear depth and PCF window bounds.
     pub shadow: f64,
 }
 

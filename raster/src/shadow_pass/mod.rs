@@ -15,17 +15,33 @@ use crate::camera::View;
 use crate::depth_pass::{depth_pass, LinearDepth};
 use crate::scene::SceneData;
 use crate::shadow::{Face, LightShadow, ShadowMaps, ShadowSettings};
-use crate::stats::FrameStats;
+use crate::stats::{ms_since, FrameStats};
 use crate::target::Target;
 use crate::visibility::{ShadowBuffers, Visibility};
 use fit::{light_faces, Bounds};
 use specula_core::light::Light;
+use std::time::Instant;
 
 /// Renders every shadowed light's maps of `scene` for the camera's `view`
 /// into `maps`, drawing each face with its buffers in `buffers` (those of
 /// an earlier frame are refilled); `setup` picks the depth passes' setup
-/// (the tests compare the two). `stats.times.shadow` gets their time.
+/// (the tests compare the two). `stats.times.shadow` gets the whole of it:
+/// the faces' fitting, their depth passes, linear depth and window bounds.
 pub fn render_maps(
+    scene: &SceneData,
+    view: &View,
+    setup: DepthSetup,
+    maps: &mut ShadowMaps,
+    buffers: &mut ShadowBuffers,
+    stats: &mut FrameStats,
+) {
+    let t = Instant::now();
+    render_lights(scene, view, setup, maps, buffers, stats);
+    stats.times.shadow += ms_since(t);
+}
+
+/// [`render_maps`] but for its timing.
+fn render_lights(
     scene: &SceneData,
     view: &View,
     setup: DepthSetup,
