@@ -36,19 +36,6 @@ pub fn render_maps(
     stats: &mut FrameStats,
 ) {
     let t = Instant::now();
-    render_lights(scene, view, setup, maps, buffers, stats);
-    stats.times.shadow += ms_since(t);
-}
-
-/// [`render_maps`] but for its timing.
-fn render_lights(
-    scene: &SceneData,
-    view: &View,
-    setup: DepthSetup,
-    maps: &mut ShadowMaps,
-    buffers: &mut ShadowBuffers,
-    stats: &mut FrameStats,
-) {
     let n = scene.lights.len();
     maps.lights.resize_with(n, || None);
     buffers.lights.resize_with(n, Vec::new);
@@ -57,6 +44,7 @@ fn render_lights(
         maps.lights.iter_mut().for_each(|l| *l = None);
         maps.sun = None;
         *buffers = ShadowBuffers::default();
+        // Nothing drawn: no time to count.
         return;
     };
     let lights = maps.lights.iter_mut().zip(&mut buffers.lights);
@@ -82,6 +70,7 @@ fn render_lights(
         }
         None => map.clear(),
     }
+    stats.times.shadow += ms_since(t);
 }
 
 /// One light's maps and the buffers of their depth passes.
