@@ -420,7 +420,9 @@ impl RunStats {
             ("shade", col(|t| t.shade)),
             ("post", col(|t| t.post)),
         ] {
-            if name == "shadow" && self.shadow_passes == 0 {
+            // Scenes without shadow maps; one whose shadowed lights cover
+            // nothing still shows the time spent finding that out.
+            if name == "shadow" && self.shadow_passes == 0 && v == 0.0 {
                 continue;
             }
             s += &format!("  {name:<11}{v:9.2}");

@@ -130,6 +130,8 @@ pub(crate) fn depth_pass(
         id_base: 0,
         material: None,
     };
+    // The pass's setup counts (its stage times are not read: `render_maps`
+    // times the shadow maps whole).
     let mut own = FrameStats::default();
     if setup == DepthSetup::Full || AlphaScan::new(scene, false).is_some() {
         if v.vis.id.len() != target.buffer_len() {
@@ -138,12 +140,10 @@ pub(crate) fn depth_pass(
         crate::buffers::resize_zeroed(&mut v.planes, pass.ids().end as usize);
         // The first pass of its buffer: it clears it and tests against nothing.
         geometry_pass(scene, target, &pass, 0, false, &mut true, v, &mut own, true);
-        let t = Instant::now();
         let depth = &v.vis.depth;
         write_map(target, map, linear, |tile, out| {
             out.copy_from_slice(&depth[tile * TILE_PIXELS..(tile + 1) * TILE_PIXELS]);
         });
-        own.times.raster += ms_since(t);
     } else {
         // This path never reads the tile-major buffer: free one a full
         // pass left.
@@ -192,7 +192,6 @@ fn depth_only_pass(
     linear: LinearDepth,
     stats: &mut FrameStats,
 ) {
-    let t = Instant::now();
     out.vertex_stage(scene, target, pass, false);
     let clip = &out.clip;
     out.outcodes.resize(clip.len(), 0);
@@ -206,7 +205,6 @@ fn depth_only_pass(
         });
     let outcodes = &out.outcodes;
     let cull_back = &out.cull_back[..];
-    stats.times.vertex += ms_since(t);
 
     let t = Instant::now();
     let ctx = SetupContext {
@@ -279,11 +277,9 @@ fn depth_only_pass(
     count_setup_sweep(stats, t, &set_up, chunks);
     let chunks = &*chunks;
 
-    let t = Instant::now();
     let planes = &out.depth_planes;
     write_map(target, map, linear, |tile, depth| {
         depth.fill(0.0);
         rasterize_tile_depth(target, tile, chunks, planes, depth);
     });
-    stats.times.raster += ms_since(t);
 }

@@ -1,6 +1,6 @@
 //! What a frame counts and times ([`FrameStats`]): each pass's wall
 //! time, summed over a frame's geometry passes per stage, setup's counts,
-//! and the shadow maps' depth passes.
+//! and the shadow maps (their time whole, their depth passes' counts).
 
 use crate::bin::BinnedChunk;
 use crate::setup::SetupCounts;

@@ -44,7 +44,8 @@ pub fn render_maps(
         maps.lights.iter_mut().for_each(|l| *l = None);
         maps.sun = None;
         *buffers = ShadowBuffers::default();
-        // Nothing drawn: no time to count.
+        // No finite position: nothing drawn, and the scan for bounds is
+        // too short to count.
         return;
     };
     let lights = maps.lights.iter_mut().zip(&mut buffers.lights);
