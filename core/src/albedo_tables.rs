@@ -8,9 +8,17 @@
 //! - E_diff(μo)    = (1 − F0) ρd (1 − C(μo)),   C = ∫ w (n·wi)/π dωi  (independent of α)
 //!
 //! Layout (table.rs): A, B are one 2-channel table over μo (x) and α (y),
-//! C a 1-channel table over μo, all at texel centres: μ_j = (j + ½)/N_MU,
-//! √α_k = (k + ½)/N_ALPHA (`Warp::Sqrt`, roughness spacing: the integrals
-//! change fastest at small α), bilinear, clamped past the outer centres.
+//! C a 1-channel table over μo, bilinear. Both axes have nodes on their
+//! ends, so that the normal view and roughness 0 and 1 (glTF's default)
+//! are nodes, not clamped to a neighbour: E falls steeply toward α = 1
+//! and toward μo = 1 there (a metal's albedo read at the texel centres
+//! √α = 1 − 1/64 and μo = 1 − 1/64 instead was 6 % high). α:
+//! √α_k = k/(N_ALPHA − 1) (`Warp::Sqrt`, roughness spacing: the
+//! integrals change fastest at small α). μo: from `MU_LO` to 1, evenly;
+//! below `MU_LO` (views within a degree of grazing) lanes read the first
+//! node, as the integrals at μo = 0 are limits the quadrature does not
+//! reach (at α = 0 its one half vector, the normal, is at 90° from the
+//! view).
 //!
 //! Computed once per process by deterministic quadrature (Hammersley points,
 //! importance-sampling D(h)(n·h)); see the tests for the measured error.
@@ -40,8 +48,10 @@ pub struct AlbedoTables {
     c: Table1<1>,
 }
 
-const MU_AXIS: Axis = Axis::new(N_MU, 0.0, 1.0, Warp::Linear, Nodes::Centres);
-const ALPHA_AXIS: Axis = Axis::new(N_ALPHA, 0.0, 1.0, Warp::Sqrt, Nodes::Centres);
+/// The lowest μo node (module docs).
+const MU_LO: f64 = 1.0 / 64.0;
+const MU_AXIS: Axis = Axis::new(N_MU, MU_LO, 1.0, Warp::Linear, Nodes::Ends);
+const ALPHA_AXIS: Axis = Axis::new(N_ALPHA, 0.0, 1.0, Warp::Sqrt, Nodes::Ends);
 
 /// Point `i` of an `n`-point Hammersley set in [0, 1)².
 fn hammersley(i: u32, n: u32) -> (f64, f64) {

@@ -226,6 +226,11 @@ fn albedo_quadrature(m: &MetallicRoughness, mu_o: f64) -> [f64; 3] {
     s
 }
 
+/// The split-sum tables' directional albedo against brute-force
+/// quadrature, within 1.5 % over the roughness range, its ends included
+/// (glTF's default roughness is 1, where the albedo falls fastest), and
+/// views from 81° to the normal. (At grazing views of narrow lobes the
+/// quadrature's grid, dense near the normal, is too coarse to judge.)
 #[test]
 fn uniform_environment_albedo_matches_quadrature() {
     AlbedoTables::get();
@@ -235,26 +240,30 @@ fn uniform_environment_albedo_matches_quadrature() {
         (0.7, 1.0, [1.0, 0.77, 0.34]),
         (0.9, 0.5, [0.5, 0.5, 0.5]),
         (0.35, 1.0, [0.95, 0.64, 0.54]),
+        (0.2, 1.0, [0.8, 0.6, 0.4]),
+        (1.0, 1.0, [0.8, 0.6, 0.4]),
+        (1.0, 0.0, [0.8, 0.6, 0.4]),
     ] {
         let m = MetallicRoughness {
             base_color: base,
             roughness,
             metallic,
         };
-        for mu in [0.15, 0.4, 0.7, 0.95] {
+        for mu in [0.15, 0.4, 0.7, 0.95, 0.999] {
             let want = albedo_quadrature(&m, mu);
             let wo = v64([(1.0 - mu * mu).sqrt(), 0.0, mu]);
             let got = m.albedo(N, wo);
             for (g, w) in [(got.x, want[0]), (got.y, want[1]), (got.z, want[2])] {
-                worst = worst.max((g - w).abs());
+                let e = (g - w).abs() / w;
+                worst = worst.max(e);
                 assert!(
-                    (g - w).abs() < 0.01,
+                    e < 0.015,
                     "r={roughness} m={metallic} mu={mu}: table {g} vs quadrature {w}"
                 );
             }
         }
     }
-    eprintln!("worst albedo table error: {worst:.2e}");
+    eprintln!("worst albedo table error: {:.2} %", 100.0 * worst);
 }
 
 #[test]
