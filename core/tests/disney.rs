@@ -434,7 +434,8 @@ fn diffuse_albedo_at_normal_view_has_its_closed_form() {
 }
 
 /// The per-material albedo table (its own quadrature, interpolated) against
-/// this file's quadrature.
+/// this file's quadrature, within 3e-3, from grazing views to the normal
+/// (a rough metal's albedo still changes there).
 #[test]
 fn albedo_table_matches_quadrature() {
     let cases = [
@@ -462,11 +463,17 @@ fn albedo_table_matches_quadrature() {
             specular_tint: 1.0,
             ..DisneyParams::default()
         },
+        DisneyParams {
+            roughness: 1.0,
+            metallic: 1.0,
+            base_color: [0.8, 0.6, 0.4],
+            ..DisneyParams::default()
+        },
     ];
     let mut worst = 0.0f64;
     for p in cases {
         let m = Disney::new(p.clone(), false);
-        for mu in [0.08, 0.2, 0.45, 0.7, 0.95] {
+        for mu in [0.08, 0.2, 0.45, 0.7, 0.95, 0.999] {
             for phi in [0.0, 0.5, 1.2, 2.0, 3.5] {
                 let wo = view(mu, phi);
                 let q = albedo(&m, &p, wo);
@@ -474,7 +481,7 @@ fn albedo_table_matches_quadrature() {
                 for (a, b) in [(t.x, q[0]), (t.y, q[1]), (t.z, q[2])] {
                     worst = worst.max((a - b).abs());
                     assert!(
-                        (a - b).abs() < 5e-3,
+                        (a - b).abs() < 3e-3,
                         "{p:?} μ {mu} φ {phi}: table {a} vs {b}"
                     );
                 }
