@@ -53,6 +53,13 @@ impl Equirect {
         self.at(i.max(0), j)
     }
 
+    /// The radiance toward unit map direction `d`: the texel containing
+    /// it, as the reference reads the map (for checks and tests).
+    pub fn radiance_toward(&self, d: [f32; 3]) -> [f32; 3] {
+        let (u, v) = dir_to_uv(d);
+        self.nearest(u, v)
+    }
+
     /// The next mip: 2×2 box (a single column or row is kept as is).
     pub(crate) fn half(&self) -> Equirect {
         let (w, h) = ((self.width / 2).max(1), (self.height / 2).max(1));
