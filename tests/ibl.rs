@@ -445,7 +445,8 @@ fn lobe_mean(wo: V3<f64>, alpha: f64) -> V3<f64> {
 /// `source` (a map without rotation) under the prefiltering's kernel,
 /// D(h) (n·l) with n = v = r, over a 160 × 160 midpoint grid of
 /// D(h) cos θh-distributed half vectors. Tells the chain's own error
-/// (sample count, level sizes, the source's mips) from the split sum's.
+/// (sample count, level sizes, the source's mips, the blend of two
+/// levels) from the split sum's.
 fn exact_prefiltered(
     source: &specula_raster::equirect::Equirect,
     r: V3<f64>,
@@ -495,10 +496,10 @@ fn level_of_resultant(r_w: f64, rk: &[f64; 6]) -> f64 {
 /// equivalent, and the base's lobe read along its mean direction at the
 /// level position of its mean's length (`lobe_mean`: exact for radiance
 /// linear in direction), and the base's lobe where the chain reads it but
-/// from the chain's kernel integrated by quadrature (`exact_prefiltered`:
-/// what is left is the split sum's, not the chain's). The reference
-/// takes 65536 samples a point, so
-/// its noise is a fraction of the errors. Run with
+/// from the chain's kernel integrated by quadrature at the lobe's own α
+/// (`exact_prefiltered`: the error left in that column is the split
+/// sum's, not the chain's). The reference takes 65536 samples a point,
+/// so its noise is a fraction of the errors. Run with
 /// `cargo test --release --test ibl -- --ignored --nocapture`.
 #[test]
 #[ignore]

@@ -11,8 +11,9 @@
 //! C a 1-channel table over μo, bilinear. Both axes have nodes on their
 //! ends, so that the normal view and roughness 0 and 1 (glTF's default)
 //! are nodes, not clamped to a neighbour: E falls steeply toward α = 1
-//! and toward μo = 1 there (a metal's albedo read at the texel centres
-//! √α = 1 − 1/64 and μo = 1 − 1/64 instead was 6 % high). α:
+//! and toward μo = 1 there, so a rough metal read at the nearest texel
+//! centres instead comes out visibly too bright (docs/accuracy.md,
+//! "The albedo at roughness 1"). α:
 //! √α_k = k/(N_ALPHA − 1) (`Warp::Sqrt`, roughness spacing: the
 //! integrals change fastest at small α). μo: from `MU_LO` to 1, evenly;
 //! below `MU_LO` (views within a degree of grazing) lanes read the first

@@ -298,12 +298,11 @@ fn rgb<R: Real>(c: [f64; 3]) -> Rgb<R> {
     Rgb::new(R::splat(c[0]), R::splat(c[1]), R::splat(c[2]))
 }
 
-/// μo nodes of the albedo table: even in √μ (dense at grazing), from
-/// `MU_LO` to the normal view. A node at μo = 1: the albedo of a rough
-/// lobe still changes there, and clamped to the last texel centre
-/// (√μ = 1 − 1/64) a rough metal's came out 1.5 % high at the normal.
-/// Below `MU_LO` (the old first centre, views within 0.02° of grazing)
-/// lanes read the first node.
+/// μo nodes of the albedo table: from `MU_LO` to the normal view, even
+/// in √((μo − `MU_LO`)/(1 − `MU_LO`)) (dense at grazing). A node at μo = 1, because the albedo of
+/// a rough lobe still changes there (a table clamped to its last texel
+/// centre reads a rough metal too bright near the normal). Below `MU_LO`
+/// (views within 0.02° of grazing) lanes read the first node.
 const N_MU: usize = 32;
 const MU_LO: f64 = 1.0 / 4096.0;
 const MU_AXIS: Axis = Axis::new(N_MU, MU_LO, 1.0, Warp::Sqrt, Nodes::Ends);
