@@ -455,11 +455,11 @@ fn exact_prefiltered(
     let frame = ShadingFrame::from_normal(r * (1.0 / r.length()));
     let g = 160;
     let (mut sum, mut wsum) = ([0.0f64; 3], 0.0);
+    // Visible normals seen along the normal are D(h) cos θh.
+    let up = V3::new(0.0, 0.0, 1.0);
     for i in 0..g {
         for j in 0..g {
             let (u1, u2) = ((i as f64 + 0.5) / g as f64, (j as f64 + 0.5) / g as f64);
-            // Visible normals seen along the normal are D(h) cos θh.
-            let up = V3::new(0.0, 0.0, 1.0);
             let h = specula_raster::envmap_reference::sample_vndf(up, alpha, u1, u2);
             let l = h * (2.0 * h.z) - up;
             if l.z <= 0.0 {
@@ -602,28 +602,30 @@ fn split_sum_against_reference_table() {
                     let v = variant(ss, &lobes, map, frame.n, wo_world, reading, base_r);
                     *acc += (lum(v) - lr).abs() / lr;
                 }
-                // The base's lobe read along its mean direction at the
-                // level position of its resultant length.
-                let m = lobe_mean(wo, (rs * rs).max(1e-3));
+                // The split sum's error with the base's lobe read as `p`
+                // instead of the chain's value where it reads it.
+                let alpha = (rs * rs).max(1e-3);
+                let dom = specula_raster::prefilter_direction(frame.n, wo_world, rs);
+                let at = map.prefiltered(dom, rs);
+                let s = lobes.specular;
+                let base_read_as = |p: [f64; 3]| {
+                    let v = [
+                        ss[0] + s.x * (p[0] - at.x),
+                        ss[1] + s.y * (p[1] - at.y),
+                        ss[2] + s.z * (p[2] - at.z),
+                    ];
+                    (lum(v) - lr).abs() / lr
+                };
+                // Along its mean direction at the level position of its
+                // resultant length.
+                let m = lobe_mean(wo, alpha);
                 let d = m * (1.0 / m.length());
                 let d_world = frame.t * d.x + frame.b * d.y + frame.n * d.z;
-                let f = level_of_resultant(m.length(), &rk);
-                let dom = specula_raster::prefilter_direction(frame.n, wo_world, rs);
-                let ds = map.prefiltered_at(d_world, f) - map.prefiltered(dom, rs);
-                let s = lobes.specular;
-                let v = [ss[0] + s.x * ds.x, ss[1] + s.y * ds.y, ss[2] + s.z * ds.z];
-                var_sum[3] += (lum(v) - lr).abs() / lr;
-                // The base's lobe read from the chain's kernel integrated
-                // exactly, where the chain reads it.
-                let p = exact_prefiltered(chain_source, dom, (rs * rs).max(1e-3));
-                let at = map.prefiltered(dom, rs);
-                let ds = [p[0] - at.x, p[1] - at.y, p[2] - at.z];
-                let v = [
-                    ss[0] + s.x * ds[0],
-                    ss[1] + s.y * ds[1],
-                    ss[2] + s.z * ds[2],
-                ];
-                var_sum[4] += (lum(v) - lr).abs() / lr;
+                let p = map.prefiltered_at(d_world, level_of_resultant(m.length(), &rk));
+                var_sum[3] += base_read_as([p.x, p.y, p.z]);
+                // From the chain's kernel integrated exactly, where the
+                // chain reads it.
+                var_sum[4] += base_read_as(exact_prefiltered(chain_source, dom, alpha));
             }
             let c = counted.max(1) as f64;
             println!(

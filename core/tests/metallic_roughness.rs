@@ -229,8 +229,8 @@ fn albedo_quadrature(m: &MetallicRoughness, mu_o: f64) -> [f64; 3] {
 /// The split-sum tables' directional albedo against brute-force
 /// quadrature, within 0.01 and 1.5 %, at roughness 0.2–1 (glTF's default
 /// roughness is 1, where the albedo falls fastest) and views from 81° to
-/// the normal. (At grazing views of narrow lobes the
-/// quadrature's grid, dense near the normal, is too coarse to judge.)
+/// the normal. (At grazing views of narrow lobes the quadrature's grid,
+/// dense near the normal, is too coarse to judge.)
 #[test]
 fn uniform_environment_albedo_matches_quadrature() {
     AlbedoTables::get();

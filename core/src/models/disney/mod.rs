@@ -299,10 +299,11 @@ fn rgb<R: Real>(c: [f64; 3]) -> Rgb<R> {
 }
 
 /// μo nodes of the albedo table: from `MU_LO` to the normal view, even
-/// in √((μo − `MU_LO`)/(1 − `MU_LO`)) (dense at grazing). A node at μo = 1, because the albedo of
-/// a rough lobe still changes there (a table clamped to its last texel
-/// centre reads a rough metal too bright near the normal). Below `MU_LO`
-/// (views within 0.02° of grazing) lanes read the first node.
+/// in √((μo − `MU_LO`)/(1 − `MU_LO`)) (dense at grazing). A node at
+/// μo = 1, because the albedo of a rough lobe still changes there (a
+/// table clamped to its last texel centre reads a rough metal too bright
+/// near the normal). Below `MU_LO` (views within 0.02° of grazing) lanes
+/// read the first node.
 const N_MU: usize = 32;
 const MU_LO: f64 = 1.0 / 4096.0;
 const MU_AXIS: Axis = Axis::new(N_MU, MU_LO, 1.0, Warp::Sqrt, Nodes::Ends);
