@@ -413,16 +413,19 @@ fn variant(
     ]
 }
 
-/// The mean of l over a GGX lobe of `alpha` seen from local `wo`, with
-/// F = 1 and height-correlated masking: ∫ l f cos θl dl / ∫ f cos θl dl,
-/// by a 96 × 96 midpoint grid over visible-normal samples \[Heitz18\]
-/// (weight G2/G1; the directions below the horizon weigh 0). Its
-/// direction and length are what a lobe's reading must have to be exact
-/// for radiance linear in direction.
-fn lobe_mean(wo: V3<f64>, alpha: f64) -> V3<f64> {
+/// The mean of `value(l)` over a GGX lobe of `alpha` seen from local
+/// `wo`, with F = 1 and height-correlated masking:
+/// ∫ value f cos θl dl / ∫ f cos θl dl, by a 96 × 96 midpoint grid over
+/// visible-normal samples \[Heitz18\] (weight G2/G1; the directions below
+/// the horizon weigh 0).
+fn lobe_average<const N: usize>(
+    wo: V3<f64>,
+    alpha: f64,
+    value: impl Fn(V3<f64>) -> [f64; N],
+) -> [f64; N] {
     use specula_core::masking::lambda_ggx;
     let lambda_o = lambda_ggx(alpha, wo.z);
-    let (mut m, mut wsum) = (V3::new(0.0, 0.0, 0.0), 0.0);
+    let (mut sum, mut wsum) = ([0.0; N], 0.0);
     let g = 96;
     for i in 0..g {
         for j in 0..g {
@@ -433,11 +436,40 @@ fn lobe_mean(wo: V3<f64>, alpha: f64) -> V3<f64> {
                 continue;
             }
             let w = (1.0 + lambda_o) / (1.0 + lambda_o + lambda_ggx(alpha, l.z));
-            m += l * w;
+            for (acc, v) in sum.iter_mut().zip(value(l)) {
+                *acc += v * w;
+            }
             wsum += w;
         }
     }
-    m * (1.0 / wsum)
+    sum.map(|x| x / wsum)
+}
+
+/// The lobe's mean direction ([`lobe_average`] of l): the direction and
+/// length a lobe's reading must have to be exact for radiance linear in
+/// direction.
+fn lobe_mean(wo: V3<f64>, alpha: f64) -> V3<f64> {
+    let [x, y, z] = lobe_average(wo, alpha, |l| [l.x, l.y, l.z]);
+    V3::new(x, y, z)
+}
+
+/// The lobe's mean radiance ([`lobe_average`] of `source`'s radiance
+/// toward l, l taken to the world by `frame`): what the chain's reading
+/// stands in for. With it in the chain's place the split sum's product,
+/// the lobe's albedo times its mean radiance, is exact but for the
+/// Fresnel factor's variation over the lobe.
+fn lobe_mean_radiance(
+    source: &Equirect,
+    frame: &ShadingFrame<f64>,
+    wo: V3<f64>,
+    alpha: f64,
+) -> [f64; 3] {
+    lobe_average(wo, alpha, |l| {
+        let d = frame.t * l.x + frame.b * l.y + frame.n * l.z;
+        source
+            .radiance_toward([d.x as f32, d.y as f32, d.z as f32])
+            .map(f64::from)
+    })
 }
 
 /// What the prefiltered chain approximates at world direction `r` and
@@ -498,7 +530,9 @@ fn level_of_resultant(r_w: f64, rk: &[f64; 6]) -> f64 {
 /// linear in direction), and the base's lobe where the chain reads it but
 /// from the chain's kernel integrated by quadrature at the lobe's own α
 /// (`exact_prefiltered`: the error left in that column is the split
-/// sum's, not the chain's). The reference takes 65536 samples a point,
+/// sum's, not the chain's), and the base's lobe read as the GGX lobe's
+/// own mean radiance (`lobe_mean_radiance`: what any reading of the
+/// chain at most reaches). The reference takes 65536 samples a point,
 /// so its noise is a fraction of the errors. Run with
 /// `cargo test --release --test ibl -- --ignored --nocapture`.
 #[test]
@@ -553,8 +587,9 @@ fn split_sum_against_reference_table() {
             let (mut sum, mut worst, mut noise) = (0.0f64, 0.0f64, 0.0f64);
             // Mean errors of the variants: along the mirror direction,
             // along Filament's, at the NDF's own α, along the lobe's mean,
-            // and the chain's kernel by quadrature.
-            let mut var_sum = [0.0f64; 5];
+            // the chain's kernel by quadrature, and the lobe's own mean
+            // radiance.
+            let mut var_sum = [0.0f64; 6];
             let n_points = 96;
             let mut counted = 0;
             for k in 0..n_points {
@@ -626,6 +661,8 @@ fn split_sum_against_reference_table() {
                 // From the chain's kernel integrated exactly, where the
                 // chain reads it.
                 var_sum[4] += base_read_as(exact_prefiltered(chain_source, dom, alpha));
+                // As the lobe's own mean radiance.
+                var_sum[5] += base_read_as(lobe_mean_radiance(chain_source, &frame, wo, alpha));
             }
             let c = counted.max(1) as f64;
             println!(
@@ -635,19 +672,20 @@ fn split_sum_against_reference_table() {
                 100.0 * noise / c
             );
             variants.push(format!(
-                "| {name} | {map_name} | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {:.1} % |",
+                "| {name} | {map_name} | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {:.1} % |",
                 100.0 * sum / c,
                 100.0 * var_sum[0] / c,
                 100.0 * var_sum[1] / c,
                 100.0 * var_sum[2] / c,
                 100.0 * var_sum[3] / c,
                 100.0 * var_sum[4] / c,
+                100.0 * var_sum[5] / c,
             ));
         }
     }
     println!();
-    println!("| material | map | as computed | along the mirror | Filament's lerp(r, n, α²) | at the NDF's own α | along the lobe's mean | the chain's kernel exactly |");
-    println!("|---|---|---|---|---|---|---|---|");
+    println!("| material | map | as computed | along the mirror | Filament's lerp(r, n, α²) | at the NDF's own α | along the lobe's mean | the chain's kernel exactly | the lobe's mean radiance |");
+    println!("|---|---|---|---|---|---|---|---|---|");
     for v in variants {
         println!("{v}");
     }
