@@ -531,8 +531,8 @@ fn level_of_resultant(r_w: f64, rk: &[f64; 6]) -> f64 {
 /// from the chain's kernel integrated by quadrature at the lobe's own α
 /// (`exact_prefiltered`: the error left in that column is the split
 /// sum's, not the chain's), and the base's lobe read as the GGX lobe's
-/// own mean radiance (`lobe_mean_radiance`: what any reading of the
-/// chain at most reaches). The reference takes 65536 samples a point,
+/// own mean radiance (`lobe_mean_radiance`: what a reading of the chain
+/// stands in for, so the error a better reading could remove). The reference takes 65536 samples a point,
 /// so its noise is a fraction of the errors. Run with
 /// `cargo test --release --test ibl -- --ignored --nocapture`.
 #[test]
