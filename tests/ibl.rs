@@ -464,12 +464,15 @@ fn lobe_mean_radiance(
     wo: V3<f64>,
     alpha: f64,
 ) -> [f64; 3] {
-    lobe_average(wo, alpha, |l| {
-        let d = frame.t * l.x + frame.b * l.y + frame.n * l.z;
-        source
-            .radiance_toward([d.x as f32, d.y as f32, d.z as f32])
-            .map(f64::from)
-    })
+    lobe_average(wo, alpha, |l| radiance_along(source, frame, l))
+}
+
+/// `source`'s radiance toward local direction `l` of `frame`.
+fn radiance_along(source: &Equirect, frame: &ShadingFrame<f64>, l: V3<f64>) -> [f64; 3] {
+    let d = frame.t * l.x + frame.b * l.y + frame.n * l.z;
+    source
+        .radiance_toward([d.x as f32, d.y as f32, d.z as f32])
+        .map(f64::from)
 }
 
 /// What the prefiltered chain approximates at world direction `r` and
@@ -479,11 +482,7 @@ fn lobe_mean_radiance(
 /// D(h) cos θh-distributed half vectors. Tells the chain's own error
 /// (sample count, level sizes, the source's mips, the blend of two
 /// levels) from the split sum's.
-fn exact_prefiltered(
-    source: &specula_raster::equirect::Equirect,
-    r: V3<f64>,
-    alpha: f64,
-) -> [f64; 3] {
+fn exact_prefiltered(source: &Equirect, r: V3<f64>, alpha: f64) -> [f64; 3] {
     let frame = ShadingFrame::from_normal(r * (1.0 / r.length()));
     let g = 160;
     let (mut sum, mut wsum) = ([0.0f64; 3], 0.0);
@@ -497,10 +496,9 @@ fn exact_prefiltered(
             if l.z <= 0.0 {
                 continue;
             }
-            let d = frame.t * l.x + frame.b * l.y + frame.n * l.z;
-            let c = source.radiance_toward([d.x as f32, d.y as f32, d.z as f32]);
+            let c = radiance_along(source, &frame, l);
             for k in 0..3 {
-                sum[k] += c[k] as f64 * l.z;
+                sum[k] += c[k] * l.z;
             }
             wsum += l.z;
         }
@@ -532,8 +530,9 @@ fn level_of_resultant(r_w: f64, rk: &[f64; 6]) -> f64 {
 /// (`exact_prefiltered`: the error left in that column is the split
 /// sum's, not the chain's), and the base's lobe read as the GGX lobe's
 /// own mean radiance (`lobe_mean_radiance`: what a reading of the chain
-/// stands in for, so the error a better reading could remove). The reference takes 65536 samples a point,
-/// so its noise is a fraction of the errors. Run with
+/// stands in for, so the error a better reading could remove). The
+/// reference takes 65536 samples a point, so its noise is a fraction of
+/// the errors. Run with
 /// `cargo test --release --test ibl -- --ignored --nocapture`.
 #[test]
 #[ignore]
@@ -671,16 +670,11 @@ fn split_sum_against_reference_table() {
                 100.0 * worst,
                 100.0 * noise / c
             );
-            variants.push(format!(
-                "| {name} | {map_name} | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {:.1} % | {:.1} % |",
-                100.0 * sum / c,
-                100.0 * var_sum[0] / c,
-                100.0 * var_sum[1] / c,
-                100.0 * var_sum[2] / c,
-                100.0 * var_sum[3] / c,
-                100.0 * var_sum[4] / c,
-                100.0 * var_sum[5] / c,
-            ));
+            let cells: String = std::iter::once(sum)
+                .chain(var_sum)
+                .map(|x| format!(" {:.1} % |", 100.0 * x / c))
+                .collect();
+            variants.push(format!("| {name} | {map_name} |{cells}"));
         }
     }
     println!();
