@@ -1,0 +1,3 @@
+// Depth only: the map is the depth attachment.
+void main() {
+}
