@@ -196,6 +196,10 @@ struct RenderArgs {
     /// Shade one pixel at a time in f32 instead of 8 at a time in f32x8.
     #[arg(long)]
     scalar: bool,
+    /// Shade 8 pixels at a time in f32x8 alone, without the AVX-512 light
+    /// pairs the processor may have (the same pixels; for timing).
+    #[arg(long, conflicts_with = "scalar")]
+    avx2_only: bool,
     /// Sample every texture map with this filter, whatever the scene says:
     /// nearest, bilinear, trilinear, anisotropic (16 taps) or
     /// anisotropic:N (N in 1..=16).
@@ -310,6 +314,8 @@ fn run_render(a: RenderArgs) -> Result<(), String> {
     settings.repeat = a.repeat;
     settings.path = if a.scalar {
         ShadePath::Scalar
+    } else if a.avx2_only {
+        ShadePath::SimdAvx2
     } else {
         ShadePath::Simd
     };

@@ -353,6 +353,7 @@ fn run_stats(
         threads,
         shading: match settings.path {
             ShadePath::Simd => "simd",
+            ShadePath::SimdAvx2 => "simd-avx2",
             ShadePath::Scalar => "scalar",
         },
         post_in_shading: settings.ldr_in_shading().is_some(),

@@ -1,7 +1,10 @@
 //! Golden images: every fixtures/scenes/*.toml rendered 320 pixels wide
 //! (the scene's aspect ratio, its own supersampling), through the SIMD and
 //! the scalar shading paths, the 8-bit pixels checked against the SHA-256
-//! in fixtures/golden/hashes.toml.
+//! in fixtures/golden/hashes.toml. Where the processor has AVX-512, each
+//! scene whose packets the SIMD path shades two lights per register
+//! (`specula_raster::frame::shades_light_pairs`) is rendered once more
+//! with f32x8 alone (`ShadePath::SimdAvx2`): the bytes must be the same.
 //!
 //! `SPECULA_BLESS=1 cargo test --test golden` rewrites the hashes and the
 //! golden PNGs after an intended change: fixtures/golden/SCENE.png (the
@@ -49,6 +52,13 @@ fn render(path: &Path, shading: ShadePath) -> (u32, u32, Vec<u8>) {
     s.keep_hdr = false;
     let r = render_scene(&scene, &s, 0.0).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
     (r.width, r.height, r.ldr)
+}
+
+/// Whether the SIMD path shades some of the scene's packets two lights
+/// per AVX-512 register.
+fn pairs_lights(path: &Path) -> bool {
+    let scene = load_scene(path).unwrap_or_else(|e| panic!("{e}"));
+    specula_raster::frame::shades_light_pairs(&scene.data)
 }
 
 /// The hash of an image: SHA-256 of its size (two little-endian u32) and
@@ -114,10 +124,19 @@ fn every_fixture_scene_renders_its_golden_pixels() {
     }
     let mut now: Hashes = BTreeMap::new();
     let mut failures = Vec::new();
+    let mut paired = Vec::new();
     for scene in scenes() {
         let name = scene.file_stem().unwrap().to_str().unwrap().to_string();
         for (label, shading) in [("simd", ShadePath::Simd), ("scalar", ShadePath::Scalar)] {
             let (w, h, rgb) = render(&scene, shading);
+            if shading == ShadePath::Simd && pairs_lights(&scene) {
+                paired.push(name.clone());
+                if render(&scene, ShadePath::SimdAvx2) != (w, h, rgb.clone()) {
+                    failures.push(format!(
+                        "{name}: the AVX-512 light pairs and f32x8 alone give different pixels"
+                    ));
+                }
+            }
             let hash = pixel_hash(w, h, &rgb);
             let dir = fixtures().join("golden");
             let own = dir.join(format!("{name}.{label}.png"));
@@ -173,6 +192,21 @@ fn every_fixture_scene_renders_its_golden_pixels() {
             }
             failures.push(msg);
         }
+    }
+    if specula_raster::frame::light_pairs_available() {
+        eprintln!(
+            "{} scene(s) shaded with AVX-512 light pairs, the same bytes as f32x8 alone checked: {}",
+            paired.len(),
+            paired.join(", ")
+        );
+        if paired.len() < 3 {
+            failures.push(format!(
+                "only {} fixture scene(s) take the light pairs: too few to check them",
+                paired.len()
+            ));
+        }
+    } else {
+        eprintln!("light pairs not checked: this processor has no AVX-512F/DQ/VL/BW");
     }
     if bless {
         write_hashes(&hash_path, &now);

@@ -6,9 +6,11 @@
 //!   (`visibility/embree_packet8` / `visibility/raster`);
 //! - shading: the scalar twin over the f32x8 path
 //!   (`shade/metallic_roughness/scalar` / `.../simd`), on one visibility
-//!   buffer, into reused frame buffers.
+//!   buffer, into reused frame buffers; and over the SIMD path as a
+//!   frame runs it, which where the processor has AVX-512 shades the
+//!   lights two per register (`ShadePath::Simd`; the same pixels).
 //!
-//! Per thread count, each round times the four calls (each the median of
+//! Per thread count, each round times the five calls (each the median of
 //! `K`); printed are the median times and the median per-round ratios with
 //! their quartiles.
 //!
@@ -42,6 +44,7 @@ fn main() {
         let embree = EmbreeScene::new(data, threads).expect("Embree scene");
         let mut color = FrameBuffers::new(&target, BufferSet::default());
         let mut color_scalar = FrameBuffers::new(&target, BufferSet::default());
+        let mut color_pairs = FrameBuffers::new(&target, BufferSet::default());
         let shade = |path: ShadePath, out: &mut FrameBuffers| {
             let mut st = FrameStats::default();
             p.install(|| shade_into(data, &target, &shaded, path, out, &mut st));
@@ -59,21 +62,38 @@ fn main() {
                 &mut || {
                     p.install(|| embree.trace_packet8(&view, near, far));
                 },
-                &mut || shade(ShadePath::Simd, &mut color),
+                &mut || shade(ShadePath::SimdAvx2, &mut color),
                 &mut || shade(ShadePath::Scalar, &mut color_scalar),
+                &mut || shade(ShadePath::Simd, &mut color_pairs),
             ],
         );
         println!(
             "{threads} thread(s), {n_rounds} rounds, the median of {k} call(s) an item a round"
         );
-        let names = ["raster", "embree_packet8", "shade simd", "shade scalar"];
+        let names = [
+            "raster",
+            "embree_packet8",
+            "shade f32x8",
+            "shade scalar",
+            "shade simd",
+        ];
         for (name, v) in names.iter().zip(&t) {
             let (lo, mid, hi) = quartiles(v);
-            println!("{name:>16}: {mid:8.2} ms  (quartiles {lo:.2}, {hi:.2})");
+            println!("{name:>27}: {mid:8.2} ms  (quartiles {lo:.2}, {hi:.2})");
         }
-        for (name, num, den) in [("Embree / raster", 1, 0), ("scalar / SIMD", 3, 2)] {
+        let pairs = specula_raster::frame::shades_light_pairs(data);
+        let simd = if pairs {
+            "scalar / SIMD (light pairs)"
+        } else {
+            "scalar / SIMD"
+        };
+        for (name, num, den) in [
+            ("Embree / raster", 1, 0),
+            ("scalar / f32x8", 3, 2),
+            (simd, 3, 4),
+        ] {
             let (lo, mid, hi) = quartiles(&ratios(&t[num], &t[den]));
-            println!("{name:>16}: {mid:6.2}×  (quartiles {lo:.2}, {hi:.2})");
+            println!("{name:>27}: {mid:6.2}×  (quartiles {lo:.2}, {hi:.2})");
         }
     }
 }

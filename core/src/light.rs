@@ -67,9 +67,14 @@ pub fn spot_scale_offset(cos_inner: f32, cos_outer: f32) -> (f32, f32) {
 /// inside the inner cone, 0 outside the outer one (KHR_lights_punctual).
 #[inline(always)]
 pub fn spot_attenuation<R: Real>(cd: R, scale: f32, offset: f32) -> R {
-    let a = cd
-        .mul_add(R::splat(scale as f64), R::splat(offset as f64))
-        .clamp(R::ZERO, R::ONE);
+    spot_attenuation_lanes(cd, R::splat(scale as f64), R::splat(offset as f64))
+}
+
+/// [`spot_attenuation`] with the scale and offset per lane (lanes of
+/// different lights).
+#[inline(always)]
+pub fn spot_attenuation_lanes<R: Real>(cd: R, scale: R, offset: R) -> R {
+    let a = cd.mul_add(scale, offset).clamp(R::ZERO, R::ONE);
     a * a
 }
 
@@ -78,8 +83,20 @@ pub fn spot_attenuation<R: Real>(cd: R, scale: f32, offset: f32) -> R {
 /// "Range Property"), from d² so no square root is needed.
 #[inline(always)]
 pub fn range_window<R: Real>(d2: R, range: f32) -> R {
-    let r2 = R::splat((range as f64) * (range as f64));
-    let q = d2 / r2;
+    range_window_lanes(d2, range_squared(range))
+}
+
+/// `range`² as [`range_window`] broadcasts it.
+#[inline(always)]
+pub fn range_squared<R: Real>(range: f32) -> R {
+    R::splat((range as f64) * (range as f64))
+}
+
+/// [`range_window`] with the squared range per lane (lanes of different
+/// lights; [`range_squared`]).
+#[inline(always)]
+pub fn range_window_lanes<R: Real>(d2: R, range2: R) -> R {
+    let q = d2 / range2;
     (R::ONE - q * q).clamp(R::ZERO, R::ONE)
 }
 

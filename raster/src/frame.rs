@@ -96,11 +96,32 @@ pub fn visibility_into(
 /// Lane width of the shading pass.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ShadePath {
-    /// 8 pixels per packet in f32x8.
+    /// 8 pixels per packet in f32x8; where the processor has AVX-512,
+    /// batches under point, spot and directional lights two lights per
+    /// register (`light_pairs`), with the same bits.
     #[default]
     Simd,
+    /// [`ShadePath::Simd`] without the light pairs: f32x8 alone, as on a
+    /// processor without AVX-512 (for checks and timing).
+    SimdAvx2,
     /// One pixel at a time in f32: the same kernels, for comparison.
     Scalar,
+}
+
+/// Whether this processor runs the light pairs of [`ShadePath::Simd`]
+/// (AVX-512F, DQ, VL and BW).
+pub fn light_pairs_available() -> bool {
+    crate::light_pairs::available()
+}
+
+/// Whether [`ShadePath::Simd`] lights `scene` two lights per AVX-512
+/// register on this processor (`light_pairs`): the packets of its
+/// physically based materials without maps, when it has two or more
+/// point, spot and directional lights, none with shadows, and no polygon
+/// light or environment map.
+pub fn shades_light_pairs(scene: &SceneData) -> bool {
+    let shadows = scene.shadows.iter().any(Option::is_some) || scene.sun_shadows.is_some();
+    crate::light_pairs::applies(&scene.lights, shadows, scene.env_map.is_some())
 }
 
 /// Resolve + shade every tile into new frame buffers holding `set`, in
@@ -182,6 +203,7 @@ fn shade_impl(
     let t = Instant::now();
     let mut ctx = ResolveContext::new(scene, &v.planes, &v.view);
     ctx.shadows = v.shadows.active();
+    ctx.pair_lights = path == ShadePath::Simd;
     let FrameBuffers {
         color,
         depth,
@@ -218,7 +240,9 @@ fn shade_impl(
             // call, and tiles are disjoint rectangles.
             unsafe {
                 match path {
-                    ShadePath::Simd => shade_tile::<f32x8>(&ctx, target, tile, ids, &out),
+                    ShadePath::Simd | ShadePath::SimdAvx2 => {
+                        shade_tile::<f32x8>(&ctx, target, tile, ids, &out)
+                    }
                     ShadePath::Scalar => shade_tile::<f32>(&ctx, target, tile, ids, &out),
                 }
             }
@@ -237,7 +261,7 @@ fn shade_impl(
                 // SAFETY: each tile index goes to one call; tiles are disjoint.
                 unsafe {
                     match path {
-                        ShadePath::Simd => {
+                        ShadePath::Simd | ShadePath::SimdAvx2 => {
                             blend::composite_tile::<f32x8>(&ctx, target, v, tile, &color)
                         }
                         ShadePath::Scalar => {

@@ -33,10 +33,14 @@ mod fixed;
 mod fragment;
 pub mod frame;
 pub mod geometry;
+#[cfg(target_arch = "x86_64")]
+mod lanes16;
+mod light_pairs;
 mod lit;
 pub mod maps;
 mod occlusion;
 pub mod post;
+mod punctual;
 pub mod resolve;
 mod scan;
 pub mod scene;

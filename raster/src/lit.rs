@@ -16,15 +16,15 @@ use crate::envmap::{disk_cos_factor, EnvMap, IblMethod};
 use crate::envmap_reference::{reference_radiance, seed_of};
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
+use crate::punctual::{punctual_part, Punctual};
 use crate::shader::{LightRefusal, PacketShader, ShadeEnv, ShadeInput};
 use crate::shadow::ShadowMaps;
 use crate::texture::Filter;
-use specula_core::light::{
-    range_window, spot_attenuation, spot_scale_offset, AreaMethod, Light, PolygonLocal,
-    MAX_POLYGON_VERTICES,
-};
+use specula_core::light::{AreaMethod, Light, PolygonLocal, MAX_POLYGON_VERTICES};
 use specula_core::ltc::reference::polygon_reference_lanes;
-use specula_core::{Brdf, BrdfVisitor, LaneParams, Mask, Model, Real, Rgb, ShadingFrame, V3};
+use specula_core::{
+    f32x8, Brdf, BrdfVisitor, LaneParams, Mask, Model, Real, Rgb, ShadingFrame, V3,
+};
 
 /// A model under the scene's lights, its parameters filled per pixel by
 /// its maps.
@@ -103,10 +103,6 @@ impl Lit {
         &self.model
     }
 }
-
-/// Squared distances below this are treated as this, so a light lying on a
-/// surface gives a large finite value instead of inf·0 = NaN.
-const MIN_DIST2: f64 = 1e-8;
 
 /// The parameters of `brdf` at a packet (its constants, then its maps;
 /// the clearcoat's normal in the packet's local `frame` where the maps
@@ -331,45 +327,6 @@ fn env_reference<B: Brdf, R: Real>(
     )
 }
 
-/// A point light, or with `cone` = (axis, scale, offset) a spot light, at
-/// `position` with intensity I and `range`: I / d² · cos θi · f, times the
-/// range window and the cone's attenuation.
-#[inline(always)]
-fn add_punctual<B: Brdf, R: Real>(
-    brdf: &B,
-    prepared: &B::Prepared<R>,
-    frag: &Fragment<R>,
-    frame: &ShadingFrame<R>,
-    (position, intensity, range): ([f32; 3], [f32; 3], f32),
-    cone: Option<([f32; 3], f32, f32)>,
-    acc: Rgb<R>,
-) -> Rgb<R> {
-    let to_light = V3::from_f32(position) - frag.p;
-    let d2 = to_light.length_squared().max(R::splat(MIN_DIST2));
-    // rsqrt + Newton: √ then ÷ was slower (two long-latency steps
-    // in a row on the chain; docs/PERFORMANCE.md).
-    let inv_d = d2.rsqrt();
-    // The light loop is bound by its dependency chains (it is not
-    // short of multipliers): the unnormalized vector goes to the
-    // local frame while its rsqrt is computed, the model folds the
-    // 1/d into its first step, and the factors of f are multiplied
-    // into I / d² · cos θi before f is ready, so f reaches the sum
-    // in one step.
-    let v = frame.to_local(to_light);
-    let mut k = (v.z * inv_d).max(R::ZERO) * (inv_d * inv_d);
-    if let Some((axis, scale, offset)) = cone {
-        // cd: the axis against the direction from the light to the point.
-        let cd = -V3::from_f32(axis).dot(to_light) * inv_d;
-        k *= spot_attenuation(cd, scale, offset);
-    }
-    if range.is_finite() {
-        k *= range_window(d2, range);
-    }
-    let radiance = V3::from_f32(intensity) * k;
-    brdf.f_local_scaled(prepared, v, inv_d)
-        .mul_elem_add(radiance, acc)
-}
-
 /// `acc` plus a point or directional light's reflected radiance (plus
 /// nothing for a polygon light, which [`lights_from_polygon`] shades).
 #[inline(always)]
@@ -381,40 +338,11 @@ fn add_delta_light<B: Brdf, R: Real>(
     light: &Light,
     acc: Rgb<R>,
 ) -> Rgb<R> {
+    if let Some(light) = Punctual::of(light) {
+        let (f, radiance) = punctual_part(brdf, prepared, frag, frame, &light);
+        return f.mul_elem_add(radiance, acc);
+    }
     match light {
-        Light::Point {
-            position,
-            intensity,
-            range,
-        } => add_punctual(
-            brdf,
-            prepared,
-            frag,
-            frame,
-            (*position, *intensity, *range),
-            None,
-            acc,
-        ),
-        Light::Spot {
-            position,
-            direction,
-            intensity,
-            cos_inner,
-            cos_outer,
-            range,
-        } => {
-            let (scale, offset) = spot_scale_offset(*cos_inner, *cos_outer);
-            let cone = Some((*direction, scale, offset));
-            add_punctual(
-                brdf,
-                prepared,
-                frag,
-                frame,
-                (*position, *intensity, *range),
-                cone,
-                acc,
-            )
-        }
         Light::Directional {
             to_light,
             irradiance,
@@ -423,7 +351,8 @@ fn add_delta_light<B: Brdf, R: Real>(
             let f_cos = brdf.f_cos_local(prepared, wi);
             f_cos.mul_elem_add(V3::from_f32(*irradiance), acc)
         }
-        Light::Polygon { .. } => acc,
+        // Point and spot lights are shaded above.
+        Light::Point { .. } | Light::Spot { .. } | Light::Polygon { .. } => acc,
     }
 }
 
@@ -621,6 +550,31 @@ impl PacketShader for Lit {
             emissive: self.emissive,
             out,
         })
+    }
+
+    /// [`PacketShader::shade_batch`], or where the frame allows it and the
+    /// lights are point, spot and directional lights without shadows
+    /// under no environment map, two lights per AVX-512 register
+    /// (light_pairs.rs: the same bits).
+    fn shade_batch_x8(
+        &self,
+        frags: &[Fragment<f32x8>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<f32x8>],
+    ) {
+        if env.pair_lights && self.maps.is_empty() && crate::light_pairs::handles(env) {
+            return crate::light_pairs::shade_batch(
+                &self.model,
+                self.emissive,
+                &self.maps,
+                frags,
+                lanes,
+                env,
+                out,
+            );
+        }
+        self.shade_batch(frags, lanes, env, out)
     }
 
     fn needs_surface(&self) -> bool {

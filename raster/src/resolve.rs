@@ -26,6 +26,8 @@ pub struct ResolveContext<'a> {
     ndc_scale: [f32; 2],
     /// The frame's shadow maps, when some light has shadows.
     pub(crate) shadows: Option<&'a crate::shadow::ShadowMaps>,
+    /// [`ShadeEnv::pair_lights`](crate::shader::ShadeEnv::pair_lights).
+    pub(crate) pair_lights: bool,
 }
 
 impl<'a> ResolveContext<'a> {
@@ -47,6 +49,7 @@ impl<'a> ResolveContext<'a> {
                 (2.0 / view.height as f64) as f32,
             ],
             shadows: None,
+            pair_lights: false,
         }
     }
 }

@@ -79,6 +79,10 @@ pub struct ShadeEnv<'a> {
     /// contribution is multiplied by its factor
     /// ([`crate::shadow::LightShadow::visibility_lanes`]).
     pub shadows: Option<&'a crate::shadow::ShadowMaps>,
+    /// Batches of packets may be shaded two lights per AVX-512 register
+    /// where the processor has it (`light_pairs`; the same bits as
+    /// f32x8): set by the frame for [`ShadePath::Simd`](crate::frame::ShadePath::Simd).
+    pub pair_lights: bool,
 }
 
 impl ShadeEnv<'_> {
@@ -137,6 +141,19 @@ pub trait PacketShader: Debug + Send + Sync + 'static {
         for (input, out) in ShadeInput::batch(frags, lanes).zip(out) {
             *out = self.shade(&input, env);
         }
+    }
+
+    /// [`PacketShader::shade_batch`] in f32x8, the entry the shading pass
+    /// calls: a shader may take a wider path there (`Lit`'s light pairs).
+    #[inline(always)]
+    fn shade_batch_x8(
+        &self,
+        frags: &[Fragment<f32x8>],
+        lanes: &[u32],
+        env: &ShadeEnv,
+        out: &mut [Rgb<f32x8>],
+    ) {
+        self.shade_batch(frags, lanes, env, out)
     }
 
     /// The shader reads [`ShadeInput::surface`] (uvs, tangents).
@@ -198,7 +215,7 @@ impl<T: PacketShader> SurfaceShader for T {
         env: &ShadeEnv,
         out: &mut [Rgb<f32x8>],
     ) {
-        self.shade_batch(frags, lanes, env, out)
+        self.shade_batch_x8(frags, lanes, env, out)
     }
     fn needs_surface(&self) -> bool {
         PacketShader::needs_surface(self)

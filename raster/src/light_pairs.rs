@@ -1,0 +1,278 @@
+//! Packets shaded two lights at a time, where the processor has AVX-512:
+//! a packet's eight lanes are copied into both halves of sixteen-lane
+//! registers ([`F32x16`](crate::lanes16::F32x16)), each half takes one
+//! light of a pair, and the halves' terms are added to the packet's sum
+//! in the lights' order, with the fused multiply-adds of the f32x8 light
+//! loop. Every lane does what the f32x8 path does, so the pixels are the
+//! same bits (`simd_paths_agree` in tests/golden.rs checks every golden
+//! scene); a light's chain of square roots and quotients runs for two
+//! lights per instruction, and on processors with full-width 512-bit
+//! units the light loop takes about half the time
+//! (docs/PERFORMANCE.md, "Light pairs").
+//!
+//! Used for batches (materials without maps) lit by two or more point,
+//! spot and directional lights without shadows, under no environment map
+//! (a uniform environment is fine); everything else takes the f32x8 path.
+
+use crate::fragment::Fragment;
+use crate::shader::ShadeEnv;
+use specula_core::light::Light;
+use specula_core::{f32x8, Model, Rgb};
+
+/// Whether [`shade_batch`] shades this frame's batches.
+pub(crate) fn handles(env: &ShadeEnv) -> bool {
+    applies(env.lights, env.shadows.is_some(), env.env_map.is_some())
+}
+
+/// Whether light pairs shade a frame with these lights, shadow maps and
+/// environment map: on a processor with AVX-512 ([`available`]), two or
+/// more point, spot and directional lights, none shadowed, no polygon
+/// light, no map.
+pub(crate) fn applies(lights: &[Light], shadows: bool, env_map: bool) -> bool {
+    available()
+        && !shadows
+        && !env_map
+        && lights.len() >= 2
+        && !lights.iter().any(|l| matches!(l, Light::Polygon { .. }))
+}
+
+/// Whether this processor runs the light pairs (AVX-512F, DQ, VL, BW).
+pub(crate) fn available() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    return crate::lanes16::available();
+    #[cfg(not(target_arch = "x86_64"))]
+    return false;
+}
+
+/// `Lit::shade_batch`'s packets (`out[i]` for `frags[i]` under
+/// `lanes[i]`) lit two lights at a time. Only where [`handles`] is true.
+pub(crate) fn shade_batch(
+    model: &Model,
+    emissive: Option<[f32; 3]>,
+    maps: &crate::maps::ParamMaps,
+    frags: &[Fragment<f32x8>],
+    lanes: &[u32],
+    env: &ShadeEnv,
+    out: &mut [Rgb<f32x8>],
+) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        model.visit(x86::Packets {
+            emissive,
+            maps,
+            frags,
+            lanes,
+            env,
+            out,
+        })
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    {
+        let _ = (model, emissive, maps, frags, lanes, env, out);
+        unreachable!("light pairs are not built for this target (`handles` is false)");
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::*;
+    use crate::lanes16::F32x16;
+    use crate::punctual::{punctual_part, Punctual};
+    use crate::shader::ShadeInput;
+    use specula_core::{Brdf, BrdfVisitor, V3};
+
+    /// A batch's packets and what lights them.
+    pub(super) struct Packets<'a> {
+        pub(super) emissive: Option<[f32; 3]>,
+        pub(super) maps: &'a crate::maps::ParamMaps,
+        pub(super) frags: &'a [Fragment<f32x8>],
+        pub(super) lanes: &'a [u32],
+        pub(super) env: &'a ShadeEnv<'a>,
+        pub(super) out: &'a mut [Rgb<f32x8>],
+    }
+
+    impl BrdfVisitor for Packets<'_> {
+        type Output = ();
+        #[inline(always)]
+        fn visit<B: Brdf>(mut self, brdf: &B) {
+            assert!(crate::lanes16::available(), "light pairs need AVX-512");
+            // SAFETY: the processor has AVX-512F/DQ/VL/BW (asserted).
+            unsafe { shade_packets(brdf, &mut self) }
+        }
+    }
+
+    /// One light, or two in the halves.
+    enum Step<'a> {
+        Pair(&'a Light, &'a Light),
+        One(&'a Light),
+    }
+
+    /// The lights in order, consecutive ones of one kind (point, spot
+    /// with or without a finite range alike, or directional) paired.
+    fn steps(lights: &[Light]) -> impl Iterator<Item = Step<'_>> {
+        let kind = |l: &Light| match l {
+            Light::Point { range, .. } => (0, range.is_finite()),
+            Light::Spot { range, .. } => (1, range.is_finite()),
+            Light::Directional { .. } => (2, false),
+            Light::Polygon { .. } => (3, false),
+        };
+        let mut i = 0;
+        std::iter::from_fn(move || {
+            let step = match lights.get(i..)? {
+                [] => return None,
+                [a, b, ..] if kind(a) == kind(b) => Step::Pair(a, b),
+                [a, ..] => Step::One(a),
+            };
+            i += match step {
+                Step::Pair(..) => 2,
+                Step::One(_) => 1,
+            };
+            Some(step)
+        })
+    }
+
+    /// `v` in both halves.
+    #[inline(always)]
+    fn both(v: &V3<f32x8>) -> V3<F32x16> {
+        V3::new(F32x16::both(v.x), F32x16::both(v.y), F32x16::both(v.z))
+    }
+
+    /// Lanes 0–7 of `v`.
+    #[inline(always)]
+    fn lo(v: &V3<F32x16>) -> V3<f32x8> {
+        V3::new(v.x.lo(), v.y.lo(), v.z.lo())
+    }
+
+    /// Lanes 8–15 of `v`.
+    #[inline(always)]
+    fn hi(v: &V3<F32x16>) -> V3<f32x8> {
+        V3::new(v.x.hi(), v.y.hi(), v.z.hi())
+    }
+
+    /// `a`'s lanes in the low half, `b`'s in the high one.
+    #[inline(always)]
+    fn halves(a: V3<f32x8>, b: V3<f32x8>) -> V3<F32x16> {
+        V3::new(
+            F32x16::from_halves(a.x, b.x),
+            F32x16::from_halves(a.y, b.y),
+            F32x16::from_halves(a.z, b.z),
+        )
+    }
+
+    /// Two point or spot lights of one kind as one [`Punctual`]: each
+    /// parameter as f32x8 broadcasts it, one light a half.
+    #[inline(always)]
+    fn punctual_pair(a: &Light, b: &Light) -> Punctual<F32x16> {
+        let (a, b) = (
+            Punctual::<f32x8>::of(a).expect("a point or spot light"),
+            Punctual::<f32x8>::of(b).expect("a point or spot light"),
+        );
+        let pair = |x: f32x8, y: f32x8| F32x16::from_halves(x, y);
+        Punctual {
+            position: halves(a.position, b.position),
+            intensity: halves(a.intensity, b.intensity),
+            cone: match (a.cone, b.cone) {
+                (Some((ax, sa, oa)), Some((bx, sb, ob))) => {
+                    Some((halves(ax, bx), pair(sa, sb), pair(oa, ob)))
+                }
+                _ => None,
+            },
+            range2: match (a.range2, b.range2) {
+                (Some(ra), Some(rb)) => Some(pair(ra, rb)),
+                _ => None,
+            },
+        }
+    }
+
+    /// The packets of `p`, as `LightLoop::shade` shades them.
+    ///
+    /// # Safety
+    /// The processor has AVX-512F, DQ, VL and BW.
+    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw")]
+    unsafe fn shade_packets<B: Brdf>(brdf: &B, p: &mut Packets) {
+        let pixel = brdf.pixel(&brdf.params::<F32x16>());
+        for ((frag8, &lanes), out) in p.frags.iter().zip(p.lanes).zip(p.out.iter_mut()) {
+            let frag = Fragment {
+                p: both(&frag8.p),
+                n: both(&frag8.n),
+                wo: both(&frag8.wo),
+                w: F32x16::both(frag8.w),
+                b1: F32x16::both(frag8.b1),
+                b2: F32x16::both(frag8.b2),
+            };
+            let input = ShadeInput {
+                frag: &frag,
+                surface: None,
+                lanes: lanes | lanes << 8,
+            };
+            let frame = p.maps.frame(&input);
+            let prepared = brdf.prepare_with(&pixel, frame.to_local(frag.wo));
+            let mut acc = Rgb::<f32x8>::zero();
+            for step in steps(p.env.lights) {
+                acc = match step {
+                    Step::Pair(a @ Light::Directional { .. }, b) => {
+                        let (
+                            Light::Directional {
+                                to_light: ta,
+                                irradiance: ea,
+                            },
+                            Light::Directional {
+                                to_light: tb,
+                                irradiance: eb,
+                            },
+                        ) = (a, b)
+                        else {
+                            unreachable!("paired lights are of one kind")
+                        };
+                        let to_light = halves(V3::from_f32(*ta), V3::from_f32(*tb));
+                        let f_cos = brdf.f_cos_local(&prepared, frame.to_local(to_light));
+                        let acc = lo(&f_cos).mul_elem_add(V3::from_f32(*ea), acc);
+                        hi(&f_cos).mul_elem_add(V3::from_f32(*eb), acc)
+                    }
+                    Step::Pair(a, b) => {
+                        let light = punctual_pair(a, b);
+                        let (f, radiance) = punctual_part(brdf, &prepared, &frag, &frame, &light);
+                        let acc = lo(&f).mul_elem_add(lo(&radiance), acc);
+                        hi(&f).mul_elem_add(hi(&radiance), acc)
+                    }
+                    Step::One(light) => one_light(brdf, &prepared, &frag, &frame, light, acc),
+                };
+            }
+            if let Some(e) = p.env.environment {
+                let e = brdf.albedo_local(&prepared).mul_elem(V3::from_f32(e));
+                acc += lo(&e);
+            }
+            if let Some(e) = p.emissive {
+                acc += Rgb::from_f32(e);
+            }
+            *out = acc;
+        }
+    }
+
+    /// `acc` plus one light's term, from the low half of a packet copied
+    /// into both.
+    #[inline(always)]
+    fn one_light<B: Brdf>(
+        brdf: &B,
+        prepared: &B::Prepared<F32x16>,
+        frag: &Fragment<F32x16>,
+        frame: &specula_core::ShadingFrame<F32x16>,
+        light: &Light,
+        acc: Rgb<f32x8>,
+    ) -> Rgb<f32x8> {
+        if let Some(light) = Punctual::of(light) {
+            let (f, radiance) = punctual_part(brdf, prepared, frag, frame, &light);
+            return lo(&f).mul_elem_add(lo(&radiance), acc);
+        }
+        match light {
+            Light::Directional {
+                to_light,
+                irradiance,
+            } => {
+                let wi = frame.to_local(V3::from_f32(*to_light));
+                lo(&brdf.f_cos_local(prepared, wi)).mul_elem_add(V3::from_f32(*irradiance), acc)
+            }
+            _ => unreachable!("`handles` admits point, spot and directional lights"),
+        }
+    }
+}
