@@ -1,7 +1,8 @@
 /* Throughput and latency of 256-bit FMAs, square roots and divisions on
- * one core: the units the light loop's multiply-adds and its correctly
- * rounded roots and quotients run on (docs/PERFORMANCE.md, "What bounds
- * the targets not met"). Throughput from twelve independent chains (more
+ * one core (512-bit ones when built with -DZMM and AVX-512): the units the
+ * light loop's multiply-adds and its correctly rounded roots and
+ * quotients run on (docs/PERFORMANCE.md, "What bounds the targets not
+ * met", "Light pairs"). Throughput from twelve independent chains (more
  * than two FMA pipes of latency 4 need), latency from one chain, each
  * loop holding nothing but its operations and its counter; in ns and in
  * cycles of the clock given as the first argument (GHz, from clk.c).
@@ -10,6 +11,16 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
+
+#ifdef ZMM
+#define VEC __m512
+#define OP(name) _mm512_##name
+#define WIDTH "zmm"
+#else
+#define VEC __m256
+#define OP(name) _mm256_##name
+#define WIDTH "ymm"
+#endif
 
 static double now(void) {
     struct timespec t;
@@ -23,12 +34,12 @@ static double now(void) {
 #define EACH(op)                                                                              \
     a = op(a), b = op(b), c = op(c), d = op(d), e = op(e), f = op(f), g = op(g), h = op(h),   \
     p = op(p), q = op(q), r = op(r), s = op(s)
-#define RECIP(x) _mm256_div_ps(one, x)
-#define STEP(x) _mm256_fmadd_ps(x, m, k)
+#define RECIP(x) OP(div_ps)(one, x)
+#define STEP(x) OP(fmadd_ps)(x, m, k)
 /* 1/x and √x keep x in [1/8.5, 8.5]; x·m + k keeps it near x. */
 #define CONSTANTS                                                                             \
-    const __m256 one = _mm256_set1_ps(1.0f), m = _mm256_set1_ps(0.999999f),                  \
-                 k = _mm256_set1_ps(1e-7f);                                                   \
+    const VEC one = OP(set1_ps)(1.0f), m = OP(set1_ps)(0.999999f),                  \
+                 k = OP(set1_ps)(1e-7f);                                                   \
     (void)one, (void)m, (void)k
 
 /* Seconds an instruction of `op` on twelve independent chains, best of 5
@@ -38,10 +49,10 @@ static double now(void) {
     static double name(long n) {                                                               \
         double best = 1e9;                                                                     \
         for (int rep = 0; rep < 5; rep++) {                                                    \
-            __m256 a = _mm256_set1_ps(1.5f), b = _mm256_set1_ps(2.5f), c = _mm256_set1_ps(3.5f), \
-                   d = _mm256_set1_ps(4.5f), e = _mm256_set1_ps(5.5f), f = _mm256_set1_ps(6.5f), \
-                   g = _mm256_set1_ps(7.5f), h = _mm256_set1_ps(8.5f), p = _mm256_set1_ps(1.25f), \
-                   q = _mm256_set1_ps(2.25f), r = _mm256_set1_ps(3.25f), s = _mm256_set1_ps(4.25f); \
+            VEC a = OP(set1_ps)(1.5f), b = OP(set1_ps)(2.5f), c = OP(set1_ps)(3.5f), \
+                   d = OP(set1_ps)(4.5f), e = OP(set1_ps)(5.5f), f = OP(set1_ps)(6.5f), \
+                   g = OP(set1_ps)(7.5f), h = OP(set1_ps)(8.5f), p = OP(set1_ps)(1.25f), \
+                   q = OP(set1_ps)(2.25f), r = OP(set1_ps)(3.25f), s = OP(set1_ps)(4.25f); \
             CONSTANTS;                                                                         \
             double t = now();                                                                  \
             for (long i = 0; i < n; i++) {                                                     \
@@ -59,7 +70,7 @@ static double now(void) {
     static double name(long n) {                                                               \
         double best = 1e9;                                                                     \
         for (int rep = 0; rep < 5; rep++) {                                                    \
-            __m256 a = _mm256_set1_ps(1.5f);                                                   \
+            VEC a = OP(set1_ps)(1.5f);                                                   \
             CONSTANTS;                                                                         \
             double t = now();                                                                  \
             for (long i = 0; i < n; i++) {                                                     \
@@ -73,10 +84,10 @@ static double now(void) {
     }
 
 THROUGHPUT(fma_throughput, STEP)
-THROUGHPUT(sqrt_throughput, _mm256_sqrt_ps)
+THROUGHPUT(sqrt_throughput, OP(sqrt_ps))
 THROUGHPUT(div_throughput, RECIP)
 LATENCY(fma_latency, STEP)
-LATENCY(sqrt_latency, _mm256_sqrt_ps)
+LATENCY(sqrt_latency, OP(sqrt_ps))
 LATENCY(div_latency, RECIP)
 
 int main(int argc, char **argv) {
@@ -86,9 +97,9 @@ int main(int argc, char **argv) {
         const char *name;
         double throughput, latency;
     } rows[] = {
-        {"vfmadd ymm", fma_throughput(4 * n), fma_latency(4 * n)},
-        {"vsqrtps ymm", sqrt_throughput(n), sqrt_latency(n)},
-        {"vdivps ymm", div_throughput(n), div_latency(n)},
+        {"vfmadd " WIDTH, fma_throughput(4 * n), fma_latency(4 * n)},
+        {"vsqrtps " WIDTH, sqrt_throughput(n), sqrt_latency(n)},
+        {"vdivps " WIDTH, div_throughput(n), div_latency(n)},
     };
     for (int i = 0; i < 3; i++) {
         printf("%-12s one every %.3f ns (%.1f FMAs' time), latency %.2f ns", rows[i].name,

@@ -4,11 +4,10 @@
 //! light of a pair, and the halves' terms are added to the packet's sum
 //! in the lights' order, with the fused multiply-adds of the f32x8 light
 //! loop. Every lane does what the f32x8 path does, so the pixels are the
-//! same bits (`simd_paths_agree` in tests/golden.rs checks every golden
-//! scene); a light's chain of square roots and quotients runs for two
-//! lights per instruction, and on processors with full-width 512-bit
-//! units the light loop takes about half the time
-//! (docs/PERFORMANCE.md, "Light pairs").
+//! same bits (tests/golden.rs renders every fixture scene that takes the
+//! pairs with f32x8 alone too); a light's chain of square roots and
+//! quotients runs for two lights per instruction, which pays where
+//! 512-bit units are full width (docs/PERFORMANCE.md, "Light pairs").
 //!
 //! Used for batches (materials without maps) lit by two or more point,
 //! spot and directional lights without shadows, under no environment map
