@@ -75,8 +75,8 @@ pub(crate) fn shade_batch(
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::*;
+    use crate::delta_light::{add_delta_light, punctual_part, Punctual};
     use crate::lanes16::F32x16;
-    use crate::punctual::{punctual_part, Punctual};
     use crate::shader::ShadeInput;
     use specula_core::{Brdf, BrdfVisitor, V3};
 
@@ -234,7 +234,12 @@ mod x86 {
                         let acc = lo(&f).mul_elem_add(lo(&radiance), acc);
                         hi(&f).mul_elem_add(hi(&radiance), acc)
                     }
-                    Step::One(light) => one_light(brdf, &prepared, &frag, &frame, light, acc),
+                    // In sixteen lanes on a sum copied into both halves:
+                    // the low half is the f32x8 light loop's sum.
+                    Step::One(light) => {
+                        let acc = both(&acc);
+                        lo(&add_delta_light(brdf, &prepared, &frag, &frame, light, acc))
+                    }
                 };
             }
             if let Some(e) = p.env.environment {
@@ -245,33 +250,6 @@ mod x86 {
                 acc += Rgb::from_f32(e);
             }
             *out = acc;
-        }
-    }
-
-    /// `acc` plus one light's term, from the low half of a packet copied
-    /// into both.
-    #[inline(always)]
-    fn one_light<B: Brdf>(
-        brdf: &B,
-        prepared: &B::Prepared<F32x16>,
-        frag: &Fragment<F32x16>,
-        frame: &specula_core::ShadingFrame<F32x16>,
-        light: &Light,
-        acc: Rgb<f32x8>,
-    ) -> Rgb<f32x8> {
-        if let Some(light) = Punctual::of(light) {
-            let (f, radiance) = punctual_part(brdf, prepared, frag, frame, &light);
-            return lo(&f).mul_elem_add(lo(&radiance), acc);
-        }
-        match light {
-            Light::Directional {
-                to_light,
-                irradiance,
-            } => {
-                let wi = frame.to_local(V3::from_f32(*to_light));
-                lo(&brdf.f_cos_local(prepared, wi)).mul_elem_add(V3::from_f32(*irradiance), acc)
-            }
-            _ => unreachable!("`handles` admits point, spot and directional lights"),
         }
     }
 }

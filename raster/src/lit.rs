@@ -12,11 +12,11 @@
 //! A normal map bends the local frame all of this is computed in
 //! ([`ParamMaps::frame`]).
 
+use crate::delta_light::add_delta_light;
 use crate::envmap::{disk_cos_factor, EnvMap, IblMethod};
 use crate::envmap_reference::{reference_radiance, seed_of};
 use crate::fragment::Fragment;
 use crate::maps::ParamMaps;
-use crate::punctual::{punctual_part, Punctual};
 use crate::shader::{LightRefusal, PacketShader, ShadeEnv, ShadeInput};
 use crate::shadow::ShadowMaps;
 use crate::texture::Filter;
@@ -327,37 +327,8 @@ fn env_reference<B: Brdf, R: Real>(
     )
 }
 
-/// `acc` plus a point or directional light's reflected radiance (plus
-/// nothing for a polygon light, which [`lights_from_polygon`] shades).
-#[inline(always)]
-fn add_delta_light<B: Brdf, R: Real>(
-    brdf: &B,
-    prepared: &B::Prepared<R>,
-    frag: &Fragment<R>,
-    frame: &ShadingFrame<R>,
-    light: &Light,
-    acc: Rgb<R>,
-) -> Rgb<R> {
-    if let Some(light) = Punctual::of(light) {
-        let (f, radiance) = punctual_part(brdf, prepared, frag, frame, &light);
-        return f.mul_elem_add(radiance, acc);
-    }
-    match light {
-        Light::Directional {
-            to_light,
-            irradiance,
-        } => {
-            let wi = frame.to_local(V3::from_f32(*to_light));
-            let f_cos = brdf.f_cos_local(prepared, wi);
-            f_cos.mul_elem_add(V3::from_f32(*irradiance), acc)
-        }
-        // Point and spot lights are shaded above.
-        Light::Point { .. } | Light::Spot { .. } | Light::Polygon { .. } => acc,
-    }
-}
-
 /// The reflected radiance of `lights`, from the scene's first polygon
-/// light on (delta lights among them through [`add_delta_light`]). Out of
+/// light on (delta lights among them through `add_delta_light`). Out of
 /// line: inlined into the light loop, its clipping and reference
 /// integration made the register allocator spill the point-light path
 /// (+10 % instructions in the shading pass of a scene without polygon

@@ -1,7 +1,7 @@
-//! A point or spot light's term in the light loop, for the f32x8 light
-//! loop of `lit.rs` (one light a packet) and the light pairs of
-//! `light_pairs.rs` (two lights, one in each half of sixteen lanes): one
-//! source, so both do the same operations per lane.
+//! A point, spot or directional light's term in the light loop, for the
+//! f32x8 light loop of `lit.rs` (one light a packet) and the light pairs
+//! of `light_pairs.rs` (two lights, one in each half of sixteen lanes):
+//! one source, so both do the same operations per lane.
 
 use crate::fragment::Fragment;
 use specula_core::light::{
@@ -96,4 +96,34 @@ pub(crate) fn punctual_part<B: Brdf, R: Real>(
     }
     let radiance = light.intensity * k;
     (brdf.f_local_scaled(prepared, v, inv_d), radiance)
+}
+
+/// `acc` plus a point or directional light's reflected radiance (plus
+/// nothing for a polygon light, which `lit.rs`'s `lights_from_polygon`
+/// shades).
+#[inline(always)]
+pub(crate) fn add_delta_light<B: Brdf, R: Real>(
+    brdf: &B,
+    prepared: &B::Prepared<R>,
+    frag: &Fragment<R>,
+    frame: &ShadingFrame<R>,
+    light: &Light,
+    acc: Rgb<R>,
+) -> Rgb<R> {
+    if let Some(light) = Punctual::of(light) {
+        let (f, radiance) = punctual_part(brdf, prepared, frag, frame, &light);
+        return f.mul_elem_add(radiance, acc);
+    }
+    match light {
+        Light::Directional {
+            to_light,
+            irradiance,
+        } => {
+            let wi = frame.to_local(V3::from_f32(*to_light));
+            let f_cos = brdf.f_cos_local(prepared, wi);
+            f_cos.mul_elem_add(V3::from_f32(*irradiance), acc)
+        }
+        // Point and spot lights are shaded above.
+        Light::Point { .. } | Light::Spot { .. } | Light::Polygon { .. } => acc,
+    }
 }

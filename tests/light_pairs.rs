@@ -1,0 +1,222 @@
+//! The AVX-512 light pairs give f32x8's bits for every kind of pair and
+//! for lights left alone: spot lights with and without cones' overlap and
+//! finite ranges, directional pairs, point lights with a range, an odd
+//! light out, under a uniform environment, over every model a scene can
+//! give a material without maps. (The golden test checks the fixture
+//! scenes the same way; their lights pair point with point only.)
+//! Skipped, with a message, where the processor has no AVX-512.
+
+use specula::render::{render_scene, RenderSettings};
+use specula::scene::load_scene_str;
+use specula_raster::frame::{light_pairs_available, shades_light_pairs, ShadePath};
+use std::path::Path;
+
+const MATERIALS: &str = r#"
+[materials.m0]
+model = "metallic_roughness"
+base_color = [0.8, 0.5, 0.3]
+roughness = 0.35
+metallic = 0.4
+emissive = [0.02, 0.01, 0.0]
+[materials.m1]
+model = "microfacet"
+ndf = "beckmann"
+alpha = 0.3
+fresnel = { type = "schlick", f0 = [0.9, 0.7, 0.5] }
+[materials.m2]
+model = "microfacet"
+ndf = "gtr"
+gamma = 1.5
+alpha = 0.25
+fresnel = { type = "schlick", f0 = [0.5, 0.6, 0.9] }
+energy_compensation = true
+[materials.m3]
+model = "disney"
+base_color = [0.3, 0.6, 0.8]
+roughness = 0.5
+clearcoat = 1.0
+sheen = 0.5
+[materials.m4]
+model = "gltf"
+base_color_factor = [0.8, 0.8, 0.7]
+roughness_factor = 0.6
+metallic_factor = 0.0
+[materials.floor]
+model = "lambert"
+base_color = [0.5, 0.5, 0.5]
+"#;
+
+/// Five spheres of the five models on a floor, under `lights`.
+fn scene(lights: &str) -> String {
+    let mut s = String::from(
+        r#"
+[camera]
+eye = [0.0, 3.0, 9.0]
+target = [0.0, 0.5, 0.0]
+up = [0.0, 1.0, 0.0]
+fov_y = 40.0
+near = 0.5
+far = 50.0
+[output]
+width = 192
+height = 108
+[environment]
+uniform = [0.05, 0.06, 0.08]
+[[mesh]]
+plane = { size = [20.0, 20.0] }
+material = "floor"
+"#,
+    );
+    for (i, x) in [-4.0, -2.0, 0.0, 2.0, 4.0].iter().enumerate() {
+        s += &format!(
+            "[[mesh]]\nsphere = {{ radius = 0.9, segments = 24, rings = 12 }}\n\
+             material = \"m{i}\"\ntranslate = [{x}, 1.0, 0.0]\n"
+        );
+    }
+    s + MATERIALS + lights
+}
+
+/// The lights of each case: every kind of pair and of light left alone.
+const CASES: [(&str, &str); 4] = [
+    (
+        "spot pairs, with and without ranges, and one spot alone",
+        r#"
+[[light]]
+type = "spot"
+position = [-3.0, 5.0, 3.0]
+direction = [0.4, -1.0, -0.4]
+intensity = [40.0, 35.0, 30.0]
+inner_cone = 10.0
+outer_cone = 35.0
+range = 9.0
+[[light]]
+type = "spot"
+position = [3.0, 5.0, 3.0]
+direction = [-0.4, -1.0, -0.4]
+intensity = [30.0, 35.0, 40.0]
+outer_cone = 50.0
+range = 7.5
+[[light]]
+type = "spot"
+position = [0.0, 6.0, 4.0]
+direction = [0.0, -1.0, -0.6]
+intensity = [25.0, 25.0, 25.0]
+inner_cone = 20.0
+outer_cone = 30.0
+[[light]]
+type = "spot"
+position = [0.0, 4.0, -4.0]
+direction = [0.0, -0.5, 1.0]
+intensity = [20.0, 20.0, 20.0]
+inner_cone = 5.0
+outer_cone = 60.0
+[[light]]
+type = "spot"
+position = [5.0, 2.0, 2.0]
+direction = [-1.0, -0.2, -0.3]
+intensity = [15.0, 10.0, 5.0]
+outer_cone = 25.0
+range = 12.0
+"#,
+    ),
+    (
+        "directional pairs and one alone",
+        r#"
+[[light]]
+type = "directional"
+direction = [0.3, -1.0, -0.4]
+irradiance = [1.0, 0.9, 0.8]
+[[light]]
+type = "directional"
+direction = [-0.5, -0.6, -0.2]
+irradiance = [0.4, 0.5, 0.7]
+[[light]]
+type = "directional"
+direction = [0.0, -0.2, -1.0]
+irradiance = [0.3, 0.3, 0.3]
+"#,
+    ),
+    (
+        "point lights with and without range, kinds mixed in turn",
+        r#"
+[[light]]
+type = "point"
+position = [-4.0, 4.0, 5.0]
+intensity = [60.0, 60.0, 60.0]
+range = 10.0
+[[light]]
+type = "point"
+position = [4.0, 4.0, 5.0]
+intensity = [60.0, 52.0, 45.0]
+range = 6.0
+[[light]]
+type = "point"
+position = [0.0, 3.0, 6.0]
+intensity = [20.0, 20.0, 30.0]
+[[light]]
+type = "directional"
+direction = [0.3, -1.0, -0.4]
+irradiance = [0.5, 0.5, 0.5]
+[[light]]
+type = "point"
+position = [0.0, 2.0, -3.0]
+intensity = [10.0, 12.0, 14.0]
+range = 4.0
+[[light]]
+type = "spot"
+position = [1.0, 5.0, 1.0]
+direction = [0.0, -1.0, 0.0]
+intensity = [30.0, 30.0, 30.0]
+outer_cone = 45.0
+"#,
+    ),
+    (
+        "a light on the surface (the distance's floor)",
+        r#"
+[[light]]
+type = "point"
+position = [0.0, 0.0, 0.0]
+intensity = [5.0, 5.0, 5.0]
+[[light]]
+type = "point"
+position = [-2.0, 1.9, 0.0]
+intensity = [5.0, 5.0, 5.0]
+"#,
+    ),
+];
+
+/// The frame's linear colour, bit for bit (finer than the 8-bit image,
+/// which would hide a term added in another order).
+fn render(text: &str, path: ShadePath) -> Vec<u32> {
+    let read = |_: &Path| -> std::io::Result<Vec<u8>> { Err(std::io::ErrorKind::NotFound.into()) };
+    let scene =
+        load_scene_str(Path::new("pairs.toml"), text, &read).unwrap_or_else(|e| panic!("{e}"));
+    assert!(
+        path != ShadePath::Simd || shades_light_pairs(&scene.data),
+        "the scene does not take the light pairs"
+    );
+    let mut s = RenderSettings::from_scene(&scene);
+    s.path = path;
+    s.keep_hdr = true;
+    let r = render_scene(&scene, &s, 0.0).unwrap_or_else(|e| panic!("{e}"));
+    r.hdr().iter().flatten().map(|c| c.to_bits()).collect()
+}
+
+#[test]
+fn every_kind_of_pair_gives_the_f32x8_bits() {
+    if !light_pairs_available() {
+        eprintln!("skipped: this processor has no AVX-512F/DQ/VL/BW");
+        return;
+    }
+    for (what, lights) in CASES {
+        let text = scene(lights);
+        let pairs = render(&text, ShadePath::Simd);
+        let alone = render(&text, ShadePath::SimdAvx2);
+        assert!(
+            pairs.iter().filter(|&&b| f32::from_bits(b) > 0.05).count() > pairs.len() / 4,
+            "{what}: the image is mostly dark, so it checks little"
+        );
+        let differ = pairs.iter().zip(&alone).filter(|(a, b)| a != b).count();
+        assert_eq!(differ, 0, "{what}: {differ} colour channels differ");
+    }
+}
