@@ -1,11 +1,16 @@
 //! The AVX-512 light pairs give f32x8's bits for every kind of pair and
 //! for lights left alone: spot lights with and without cones' overlap and
 //! finite ranges, directional pairs, point lights with a range, an odd
-//! light out, under a uniform environment, over every model a scene can
-//! give a material without maps. (The golden test checks the fixture
-//! scenes the same way; their lights pair point with point only.)
+//! light out, under a uniform environment and under the fixture maps
+//! (split sum, a sun taken out of the sky), on metallic-roughness and
+//! Lambert surfaces (the models that take the pairs) beside the other
+//! models' (which keep f32x8) in one frame. (The golden test checks the
+//! fixture scenes the same way; their lights pair point with point only.)
 //! Skipped, with a message, where the processor has no AVX-512.
 
+mod common;
+
+use common::{fixtures, temp_dir};
 use specula::render::{render_scene, RenderSettings};
 use specula::scene::load_scene_str;
 use specula_raster::frame::{light_pairs_available, shades_light_pairs, ShadePath};
@@ -46,8 +51,14 @@ model = "lambert"
 base_color = [0.5, 0.5, 0.5]
 "#;
 
-/// Five spheres of the five models on a floor, under `lights`.
+/// Five spheres of the five models on a floor, under `lights` and a
+/// uniform environment.
 fn scene(lights: &str) -> String {
+    scene_under(lights, "uniform = [0.05, 0.06, 0.08]")
+}
+
+/// [`scene`] under `environment` (the `[environment]` table's body).
+fn scene_under(lights: &str, environment: &str) -> String {
     let mut s = String::from(
         r#"
 [camera]
@@ -61,7 +72,7 @@ far = 50.0
 width = 192
 height = 108
 [environment]
-uniform = [0.05, 0.06, 0.08]
+ENVIRONMENT
 [[mesh]]
 plane = { size = [20.0, 20.0] }
 material = "floor"
@@ -73,7 +84,7 @@ material = "floor"
              material = \"m{i}\"\ntranslate = [{x}, 1.0, 0.0]\n"
         );
     }
-    s + MATERIALS + lights
+    s.replace("ENVIRONMENT", environment) + MATERIALS + lights
 }
 
 /// The lights of each case: every kind of pair and of light left alone.
@@ -188,7 +199,7 @@ intensity = [5.0, 5.0, 5.0]
 /// The frame's linear colour, bit for bit (finer than the 8-bit image,
 /// which would hide a term added in another order).
 fn render(text: &str, path: ShadePath) -> Vec<u32> {
-    let read = |_: &Path| -> std::io::Result<Vec<u8>> { Err(std::io::ErrorKind::NotFound.into()) };
+    let read = |p: &Path| std::fs::read(p);
     let scene =
         load_scene_str(Path::new("pairs.toml"), text, &read).unwrap_or_else(|e| panic!("{e}"));
     assert!(
@@ -208,8 +219,25 @@ fn every_kind_of_pair_gives_the_f32x8_bits() {
         eprintln!("skipped: this processor has no AVX-512F/DQ/VL/BW");
         return;
     }
-    for (what, lights) in CASES {
-        let text = scene(lights);
+    // Maps' derived data from this build, in a cache of this run's own
+    // (the binary's only test, so nothing else reads the variable).
+    std::env::set_var("SPECULA_CACHE_DIR", temp_dir("light-pairs-table-cache"));
+    let map = |name: &str| {
+        let path = fixtures().join("env").join(name);
+        format!("map = {:?}", path.to_str().expect("a UTF-8 path"))
+    };
+    let under_maps = [
+        (
+            "under the esplanade",
+            scene_under(CASES[2].1, &map("royal_esplanade_1k.hdr")),
+        ),
+        (
+            "under the sky and its sun",
+            scene_under(CASES[0].1, &map("sky.hdr")),
+        ),
+    ];
+    let cases = CASES.iter().map(|&(what, lights)| (what, scene(lights)));
+    for (what, text) in cases.chain(under_maps) {
         let pairs = render(&text, ShadePath::Simd);
         let alone = render(&text, ShadePath::SimdAvx2);
         assert!(

@@ -97,8 +97,9 @@ pub fn visibility_into(
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ShadePath {
     /// 8 pixels per packet in f32x8; where the processor has AVX-512,
-    /// batches under point, spot and directional lights two lights per
-    /// register (`light_pairs`), with the same bits.
+    /// metallic-roughness and Lambert batches under unshadowed point, spot
+    /// and directional lights two lights per register (`light_pairs`),
+    /// with the same bits.
     #[default]
     Simd,
     /// [`ShadePath::Simd`] without the light pairs: f32x8 alone, as on a
@@ -116,12 +117,19 @@ pub fn light_pairs_available() -> bool {
 
 /// Whether [`ShadePath::Simd`] lights `scene` two lights per AVX-512
 /// register on this processor (`light_pairs`): the packets of its
-/// physically based materials without maps, when it has two or more
-/// point, spot and directional lights, none with shadows, and no polygon
-/// light or environment map.
+/// metallic-roughness and Lambert materials without maps (when it has
+/// some), when it has two or more
+/// point, spot and directional lights, none with shadows, no polygon
+/// light, and no environment map or one lit by the split sum.
 pub fn shades_light_pairs(scene: &SceneData) -> bool {
     let shadows = scene.shadows.iter().any(Option::is_some) || scene.sun_shadows.is_some();
-    crate::light_pairs::applies(&scene.lights, shadows, scene.env_map.is_some())
+    crate::light_pairs::applies(&scene.lights, shadows, scene.env_map.as_deref())
+        && scene.materials.iter().any(|m| {
+            m.shader
+                .as_any()
+                .downcast_ref::<crate::Lit>()
+                .is_some_and(|l| l.maps().is_empty() && crate::light_pairs::pairs_model(l.model()))
+        })
 }
 
 /// Resolve + shade every tile into new frame buffers holding `set`, in

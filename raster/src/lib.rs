@@ -50,6 +50,7 @@ mod shader;
 mod shading_pass;
 pub mod shadow;
 pub mod shadow_pass;
+mod split_sum;
 mod stats;
 pub mod target;
 pub mod texture;
@@ -65,9 +66,10 @@ pub use frame::{
     visibility_into, Frame, FrameStats, PassTimes, ShadePath, Visibility,
 };
 pub use geometry::{Cull, FrameContext, GeometryPass, Project, SceneMesh, VertexStage};
-pub use lit::{env_split_sum, prefilter_direction, Lit, UnsupportedMap};
+pub use lit::{Lit, UnsupportedMap};
 pub use scene::{Material, SceneData, SceneDataError, SceneParts};
 pub use shader::{LightRefusal, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
+pub use split_sum::{env_split_sum, prefilter_direction};
 pub use target::{Target, MISS, TILE};
 pub use unlit::{Unlit, UnlitBase};
 pub use visibility::ShadowBuffers;

@@ -9,10 +9,13 @@
 //! quotients runs for two lights per instruction, which pays where
 //! 512-bit units are full width (docs/PERFORMANCE.md, "Light pairs").
 //!
-//! Used for batches (materials without maps) lit by two or more point,
-//! spot and directional lights without shadows, under no environment map
-//! (a uniform environment is fine); everything else takes the f32x8 path.
+//! Used for batches of metallic-roughness and Lambert materials without
+//! maps ([`pairs_model`]) lit by point, spot and directional lights
+//! without shadows, two of one kind in a row, under a uniform environment,
+//! none, or a map lit by the split sum (those terms made in f32x8, as
+//! there); everything else takes the f32x8 path.
 
+use crate::envmap::{EnvMap, IblMethod};
 use crate::fragment::Fragment;
 use crate::shader::ShadeEnv;
 use specula_core::light::Light;
@@ -20,19 +23,40 @@ use specula_core::{f32x8, Model, Rgb};
 
 /// Whether [`shade_batch`] shades this frame's batches.
 pub(crate) fn handles(env: &ShadeEnv) -> bool {
-    applies(env.lights, env.shadows.is_some(), env.env_map.is_some())
+    applies(env.lights, env.shadows.is_some(), env.env_map)
 }
 
 /// Whether light pairs shade a frame with these lights, shadow maps and
-/// environment map: on a processor with AVX-512 ([`available`]), two or
-/// more point, spot and directional lights, none shadowed, no polygon
-/// light, no map.
-pub(crate) fn applies(lights: &[Light], shadows: bool, env_map: bool) -> bool {
+/// environment map: on a processor with AVX-512 ([`available`]), point,
+/// spot and directional lights, two in a row of one [`kind`] (else no
+/// pair forms), none shadowed, no polygon light, and no map or one lit
+/// by the split sum.
+pub(crate) fn applies(lights: &[Light], shadows: bool, env_map: Option<&EnvMap>) -> bool {
     available()
         && !shadows
-        && !env_map
-        && lights.len() >= 2
+        && env_map.is_none_or(|m| m.method == IblMethod::SplitSum)
         && !lights.iter().any(|l| matches!(l, Light::Polygon { .. }))
+        && lights.windows(2).any(|w| kind(&w[0]) == kind(&w[1]))
+}
+
+/// A light's kind for pairing: two consecutive lights of one kind make a
+/// pair (point, spot with or without a finite range alike, directional).
+fn kind(l: &Light) -> (u8, bool) {
+    match l {
+        Light::Point { range, .. } => (0, range.is_finite()),
+        Light::Spot { range, .. } => (1, range.is_finite()),
+        Light::Directional { .. } => (2, false),
+        Light::Polygon { .. } => (3, false),
+    }
+}
+
+/// Whether `model`'s batches take the pairs: the models whose light loop
+/// compiles to sixteen-lane code. Elsewhere (the glTF, Disney and
+/// microfacet models' tables, read through closures that are not inlined
+/// into the AVX-512 function) each sixteen-lane operation became a call,
+/// and the pairs were slower than f32x8.
+pub(crate) fn pairs_model(model: &Model) -> bool {
+    matches!(model, Model::MetallicRoughness(_) | Model::Lambert(_))
 }
 
 /// Whether this processor runs the light pairs (AVX-512F, DQ, VL, BW).
@@ -78,6 +102,7 @@ mod x86 {
     use crate::delta_light::{add_delta_light, punctual_part, Punctual};
     use crate::lanes16::F32x16;
     use crate::shader::ShadeInput;
+    use crate::split_sum::env_split_sum;
     use specula_core::{Brdf, BrdfVisitor, V3};
 
     /// A batch's packets and what lights them.
@@ -106,15 +131,8 @@ mod x86 {
         One(&'a Light),
     }
 
-    /// The lights in order, consecutive ones of one kind (point, spot
-    /// with or without a finite range alike, or directional) paired.
+    /// The lights in order, consecutive ones of one [`kind`] paired.
     fn steps(lights: &[Light]) -> impl Iterator<Item = Step<'_>> {
-        let kind = |l: &Light| match l {
-            Light::Point { range, .. } => (0, range.is_finite()),
-            Light::Spot { range, .. } => (1, range.is_finite()),
-            Light::Directional { .. } => (2, false),
-            Light::Polygon { .. } => (3, false),
-        };
         let mut i = 0;
         std::iter::from_fn(move || {
             let step = match lights.get(i..)? {
@@ -190,6 +208,10 @@ mod x86 {
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw")]
     unsafe fn shade_packets<B: Brdf>(brdf: &B, p: &mut Packets) {
         let pixel = brdf.pixel(&brdf.params::<F32x16>());
+        // The environment's terms in f32x8, as the f32x8 light loop makes
+        // them (their tables' closures would not be inlined here).
+        let env8 = p.env.environment.is_some() || p.env.env_map.is_some();
+        let pixel8 = env8.then(|| brdf.pixel(&brdf.params::<f32x8>()));
         for ((frag8, &lanes), out) in p.frags.iter().zip(p.lanes).zip(p.out.iter_mut()) {
             let frag = Fragment {
                 p: both(&frag8.p),
@@ -242,9 +264,22 @@ mod x86 {
                     }
                 };
             }
-            if let Some(e) = p.env.environment {
-                let e = brdf.albedo_local(&prepared).mul_elem(V3::from_f32(e));
-                acc += lo(&e);
+            if let Some(pixel8) = &pixel8 {
+                let input = ShadeInput {
+                    frag: frag8,
+                    surface: None,
+                    lanes,
+                };
+                let frame8 = p.maps.frame(&input);
+                let prepared8 = brdf.prepare_with(pixel8, frame8.to_local(frag8.wo));
+                if let Some(e) = p.env.environment {
+                    acc += brdf.albedo_local(&prepared8).mul_elem(V3::from_f32(e));
+                }
+                if let Some(map) = p.env.env_map {
+                    // No shadows here: the sun's factor is 1, as the f32x8
+                    // loop's is without shadow maps.
+                    acc += env_split_sum(brdf, &prepared8, &frame8, frag8.wo, map, |_| f32x8::ONE);
+                }
             }
             if let Some(e) = p.emissive {
                 acc += Rgb::from_f32(e);
