@@ -1,12 +1,13 @@
 //! The AVX-512 light pairs give f32x8's bits for every kind of pair and
 //! for lights left alone: spot lights with and without cones' overlap and
 //! finite ranges, directional pairs, point lights with a range, an odd
-//! light out, under a uniform environment and under the fixture maps
-//! (split sum, a sun taken out of the sky), on metallic-roughness and
-//! Lambert surfaces (the models that take the pairs) beside the other
-//! models' (which keep f32x8) in one frame. (The golden test checks the
-//! fixture scenes the same way; their lights pair point with point only.)
-//! Skipped, with a message, where the processor has no AVX-512.
+//! light out, lights with shadow maps of every filter (which go alone)
+//! between pairs, under a uniform environment and under the fixture maps
+//! (split sum, a sun taken out of the sky, shadowed or not), on
+//! metallic-roughness and Lambert surfaces (the models that take the
+//! pairs) beside the other models' (which keep f32x8) in one frame. (The
+//! golden test checks the fixture scenes the same way.) Skipped, with a
+//! message, where the processor has no AVX-512.
 
 mod common;
 
@@ -88,7 +89,7 @@ material = "floor"
 }
 
 /// The lights of each case: every kind of pair and of light left alone.
-const CASES: [(&str, &str); 4] = [
+const CASES: [(&str, &str); 5] = [
     (
         "spot pairs, with and without ranges, and one spot alone",
         r#"
@@ -182,6 +183,52 @@ outer_cone = 45.0
 "#,
     ),
     (
+        "shadowed lights of every filter between pairs, two shadowed of a kind in a row",
+        r#"
+[[light]]
+type = "point"
+position = [-4.0, 4.0, 5.0]
+intensity = [40.0, 40.0, 40.0]
+[[light]]
+type = "point"
+position = [4.0, 4.0, 5.0]
+intensity = [40.0, 35.0, 30.0]
+[[light]]
+type = "spot"
+position = [0.0, 6.0, 4.0]
+direction = [0.0, -1.0, -0.6]
+intensity = [40.0, 40.0, 40.0]
+outer_cone = 40.0
+shadows = "pcf"
+[[light]]
+type = "spot"
+position = [-2.0, 6.0, 2.0]
+direction = [0.3, -1.0, -0.3]
+intensity = [30.0, 30.0, 30.0]
+outer_cone = 35.0
+shadows = "pcss"
+light_size = 0.5
+[[light]]
+type = "directional"
+direction = [0.3, -1.0, -0.4]
+irradiance = [0.6, 0.6, 0.6]
+shadows = "hard"
+[[light]]
+type = "directional"
+direction = [-0.5, -0.6, -0.2]
+irradiance = [0.3, 0.3, 0.4]
+[[light]]
+type = "directional"
+direction = [0.0, -0.2, -1.0]
+irradiance = [0.2, 0.2, 0.2]
+[[light]]
+type = "point"
+position = [0.0, 3.0, 6.0]
+intensity = [20.0, 20.0, 30.0]
+shadows = "pcf"
+"#,
+    ),
+    (
         "a light on the surface (the distance's floor)",
         r#"
 [[light]]
@@ -234,6 +281,13 @@ fn every_kind_of_pair_gives_the_f32x8_bits() {
         (
             "under the sky and its sun",
             scene_under(CASES[0].1, &map("sky.hdr")),
+        ),
+        (
+            "shadowed lights under the sky, its sun shadowed",
+            scene_under(
+                CASES[3].1,
+                &(map("sky.hdr") + "\n[environment.sun]\nshadows = \"pcf\""),
+            ),
         ),
     ];
     let cases = CASES.iter().map(|&(what, lights)| (what, scene(lights)));

@@ -118,12 +118,12 @@ pub fn light_pairs_available() -> bool {
 /// Whether [`ShadePath::Simd`] lights `scene` two lights per AVX-512
 /// register on this processor (`light_pairs`): the packets of its
 /// metallic-roughness and Lambert materials without maps (when it has
-/// some), when it has two or more
-/// point, spot and directional lights, none with shadows, no polygon
-/// light, and no environment map or one lit by the split sum.
+/// some), when it has two point, spot or directional lights of a kind in
+/// a row without shadow maps (others may have them), no polygon light,
+/// and no environment map or one lit by the split sum.
 pub fn shades_light_pairs(scene: &SceneData) -> bool {
-    let shadows = scene.shadows.iter().any(Option::is_some) || scene.sun_shadows.is_some();
-    crate::light_pairs::applies(&scene.lights, shadows, scene.env_map.as_deref())
+    let shadowed = |k: usize| scene.shadows.get(k).is_some_and(Option::is_some);
+    crate::light_pairs::applies(&scene.lights, shadowed, scene.env_map.as_deref())
         && scene.materials.iter().any(|m| {
             m.shader
                 .as_any()

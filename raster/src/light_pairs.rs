@@ -10,10 +10,13 @@
 //! 512-bit units are full width (docs/PERFORMANCE.md, "Light pairs").
 //!
 //! Used for batches of metallic-roughness and Lambert materials without
-//! maps ([`pairs_model`]) lit by point, spot and directional lights
-//! without shadows, two of one kind in a row, under a uniform environment,
-//! none, or a map lit by the split sum (those terms made in f32x8, as
-//! there); everything else takes the f32x8 path.
+//! maps ([`pairs_model`]) lit by point, spot and directional lights, two
+//! of one kind in a row, under a uniform environment, none, or a map lit
+//! by the split sum (those terms made in f32x8, as there); everything else
+//! takes the f32x8 path. Lights with shadow maps are not paired (their
+//! lookups, not their BRDFs, are most of their cost): each is lit alone
+//! in sixteen lanes and its shadow factor looked up in f32x8, as the f32x8
+//! loop looks it up.
 
 use crate::envmap::{EnvMap, IblMethod};
 use crate::fragment::Fragment;
@@ -23,20 +26,30 @@ use specula_core::{f32x8, Model, Rgb};
 
 /// Whether [`shade_batch`] shades this frame's batches.
 pub(crate) fn handles(env: &ShadeEnv) -> bool {
-    applies(env.lights, env.shadows.is_some(), env.env_map)
+    let shadowed = |k| env.shadows.is_some_and(|s| s.light(k).is_some());
+    applies(env.lights, shadowed, env.env_map)
 }
 
-/// Whether light pairs shade a frame with these lights, shadow maps and
-/// environment map: on a processor with AVX-512 ([`available`]), point,
-/// spot and directional lights, two in a row of one [`kind`] (else no
-/// pair forms), none shadowed, no polygon light, and no map or one lit
-/// by the split sum.
-pub(crate) fn applies(lights: &[Light], shadows: bool, env_map: Option<&EnvMap>) -> bool {
+/// Whether light pairs shade a frame with these lights (`shadowed(k)`:
+/// whether light `k` has shadow maps) and environment map: on a processor
+/// with AVX-512 ([`available`]), point, spot and directional lights, two
+/// in a row of one [`kind`] without shadow maps (else no pair forms), no
+/// polygon light, and no map or one lit by the split sum.
+pub(crate) fn applies(
+    lights: &[Light],
+    shadowed: impl Fn(usize) -> bool,
+    env_map: Option<&EnvMap>,
+) -> bool {
     available()
-        && !shadows
         && env_map.is_none_or(|m| m.method == IblMethod::SplitSum)
         && !lights.iter().any(|l| matches!(l, Light::Polygon { .. }))
-        && lights.windows(2).any(|w| kind(&w[0]) == kind(&w[1]))
+        && (1..lights.len()).any(|k| pair(lights, k - 1, &shadowed))
+}
+
+/// Whether lights `k` and `k + 1` make a pair: both of one [`kind`], and
+/// neither with shadow maps.
+fn pair(lights: &[Light], k: usize, shadowed: impl Fn(usize) -> bool) -> bool {
+    kind(&lights[k]) == kind(&lights[k + 1]) && !shadowed(k) && !shadowed(k + 1)
 }
 
 /// A light's kind for pairing: two consecutive lights of one kind make a
@@ -102,6 +115,7 @@ mod x86 {
     use crate::delta_light::{add_delta_light, punctual_part, Punctual};
     use crate::lanes16::F32x16;
     use crate::shader::ShadeInput;
+    use crate::shadow::ShadowMaps;
     use crate::split_sum::env_split_sum;
     use specula_core::{Brdf, BrdfVisitor, V3};
 
@@ -121,28 +135,37 @@ mod x86 {
         fn visit<B: Brdf>(mut self, brdf: &B) {
             assert!(crate::lanes16::available(), "light pairs need AVX-512");
             // SAFETY: the processor has AVX-512F/DQ/VL/BW (asserted).
-            unsafe { shade_packets(brdf, &mut self) }
+            unsafe {
+                match self.env.shadows {
+                    Some(shadows) => shade_packets::<B, true>(brdf, &mut self, Some(shadows)),
+                    None => shade_packets::<B, false>(brdf, &mut self, None),
+                }
+            }
         }
     }
 
     /// One light, or two in the halves.
+    /// A lone light has its index in the frame's list.
     enum Step<'a> {
         Pair(&'a Light, &'a Light),
-        One(&'a Light),
+        One(usize, &'a Light),
     }
 
-    /// The lights in order, consecutive ones of one [`kind`] paired.
-    fn steps(lights: &[Light]) -> impl Iterator<Item = Step<'_>> {
+    /// The lights in order, consecutive ones that make a [`pair`] paired.
+    fn steps<'a>(
+        lights: &'a [Light],
+        shadowed: impl Fn(usize) -> bool + 'a,
+    ) -> impl Iterator<Item = Step<'a>> {
         let mut i = 0;
         std::iter::from_fn(move || {
             let step = match lights.get(i..)? {
                 [] => return None,
-                [a, b, ..] if kind(a) == kind(b) => Step::Pair(a, b),
-                [a, ..] => Step::One(a),
+                [a, b, ..] if pair(lights, i, &shadowed) => Step::Pair(a, b),
+                [a, ..] => Step::One(i, a),
             };
             i += match step {
                 Step::Pair(..) => 2,
-                Step::One(_) => 1,
+                Step::One(..) => 1,
             };
             Some(step)
         })
@@ -201,12 +224,22 @@ mod x86 {
         }
     }
 
-    /// The packets of `p`, as `LightLoop::shade` shades them.
+    /// The packets of `p`, as `LightLoop::shade` shades them, with the
+    /// frame's `shadows` if `SHADOWS` (else there are none).
     ///
     /// # Safety
     /// The processor has AVX-512F, DQ, VL and BW.
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw")]
-    unsafe fn shade_packets<B: Brdf>(brdf: &B, p: &mut Packets) {
+    unsafe fn shade_packets<B: Brdf, const SHADOWS: bool>(
+        brdf: &B,
+        p: &mut Packets,
+        shadows: Option<&ShadowMaps>,
+    ) {
+        let shadow = |k: usize| match SHADOWS {
+            true => shadows.and_then(|s| s.light(k)),
+            false => None,
+        };
+        let steps = || steps(p.env.lights, move |k| shadow(k).is_some());
         let pixel = brdf.pixel(&brdf.params::<F32x16>());
         // The environment's terms in f32x8, as the f32x8 light loop makes
         // them (their tables' closures would not be inlined here).
@@ -229,7 +262,7 @@ mod x86 {
             let frame = p.maps.frame(&input);
             let prepared = brdf.prepare_with(&pixel, frame.to_local(frag.wo));
             let mut acc = Rgb::<f32x8>::zero();
-            for step in steps(p.env.lights) {
+            for step in steps() {
                 acc = match step {
                     Step::Pair(a @ Light::Directional { .. }, b) => {
                         let (
@@ -258,27 +291,39 @@ mod x86 {
                     }
                     // In sixteen lanes on a sum copied into both halves:
                     // the low half is the f32x8 light loop's sum.
-                    Step::One(light) => {
-                        let acc = both(&acc);
-                        lo(&add_delta_light(brdf, &prepared, &frag, &frame, light, acc))
-                    }
+                    Step::One(k, light) => match shadow(k) {
+                        None => {
+                            let acc = both(&acc);
+                            lo(&add_delta_light(brdf, &prepared, &frag, &frame, light, acc))
+                        }
+                        // `lit.rs`'s `shadowed_lights`' operations.
+                        Some(shadow) => {
+                            let zero = Rgb::zero();
+                            let part = add_delta_light(brdf, &prepared, &frag, &frame, light, zero);
+                            let part = lo(&part);
+                            let visible = shadow.visibility_where(&part, &frag8.p, &frag8.n, lanes);
+                            part.mul_elem_add(V3::splat(visible), acc)
+                        }
+                    },
                 };
             }
             if let Some(pixel8) = &pixel8 {
-                let input = ShadeInput {
+                let input8 = ShadeInput {
                     frag: frag8,
                     surface: None,
                     lanes,
                 };
-                let frame8 = p.maps.frame(&input);
+                let frame8 = p.maps.frame(&input8);
                 let prepared8 = brdf.prepare_with(pixel8, frame8.to_local(frag8.wo));
                 if let Some(e) = p.env.environment {
                     acc += brdf.albedo_local(&prepared8).mul_elem(V3::from_f32(e));
                 }
                 if let Some(map) = p.env.env_map {
-                    // No shadows here: the sun's factor is 1, as the f32x8
-                    // loop's is without shadow maps.
-                    acc += env_split_sum(brdf, &prepared8, &frame8, frag8.wo, map, |_| f32x8::ONE);
+                    let sun = |part: &Rgb<f32x8>| match SHADOWS {
+                        true => p.env.sun_visibility(&input8, part),
+                        false => f32x8::ONE,
+                    };
+                    acc += env_split_sum(brdf, &prepared8, &frame8, frag8.wo, map, sun);
                 }
             }
             if let Some(e) = p.emissive {
