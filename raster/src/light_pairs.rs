@@ -67,7 +67,8 @@ fn kind(l: &Light) -> (u8, bool) {
 /// compiles to sixteen-lane code. Elsewhere (the glTF, Disney and
 /// microfacet models' tables, read through closures that are not inlined
 /// into the AVX-512 function) each sixteen-lane operation became a call,
-/// and the pairs were slower than f32x8.
+/// and the pairs were slower than f32x8; with those reads written as
+/// loops they were no faster (docs/PERFORMANCE.md, "Tried and dropped").
 pub(crate) fn pairs_model(model: &Model) -> bool {
     matches!(model, Model::MetallicRoughness(_) | Model::Lambert(_))
 }
@@ -144,8 +145,8 @@ mod x86 {
         }
     }
 
-    /// One light, or two in the halves.
-    /// A lone light has its index in the frame's list.
+    /// One light (with its index in the frame's list), or two in the
+    /// halves.
     enum Step<'a> {
         Pair(&'a Light, &'a Light),
         One(usize, &'a Light),
