@@ -206,6 +206,12 @@ fn lerp<R: Real>(v0: R, v1: R, w: R) -> R {
     (v1 - v0).mul_add(w, v0)
 }
 
+/// The values at `r` and `r + step` of `data`, interpolated by `w`.
+#[inline(always)]
+fn lerp_at<R: Real>(data: &[f32], r: R, step: R, w: R) -> R {
+    lerp(R::gather(data, r), R::gather(data, r + step), w)
+}
+
 /// Largest table an f32 lane can index exactly (integers up to 2²⁴).
 const MAX_LEN: usize = 1 << 24;
 
@@ -247,11 +253,16 @@ impl<const C: usize> Table1<C> {
     pub fn lookup<R: Real>(&self, x: R) -> [R; C] {
         let (i, w) = self.axis.locate(x);
         let base = i * R::splat(C as f64);
-        core::array::from_fn(|c| {
+        // Loops, not closures, here and in the other lookups: a closure is
+        // a function of its own, compiled without the target features of
+        // a caller such as the AVX-512 light pairs' (raster/src/light_pairs.rs).
+        let mut out = [R::ZERO; C];
+        for (c, o) in out.iter_mut().enumerate() {
             let v0 = R::gather(&self.data, base + R::splat(c as f64));
             let v1 = R::gather(&self.data, base + R::splat((C + c) as f64));
-            lerp(v0, v1, w)
-        })
+            *o = lerp(v0, v1, w);
+        }
+        out
     }
 
     /// ∫ over [lo, hi] of lookup(x) g(x) dx, per channel, in f64: 4-point
@@ -341,14 +352,16 @@ impl<const C: usize> Table2<C> {
         let c_ = R::splat(C as f64);
         let row = R::constant(self.x.count) * c_;
         let base = j.mul_add(row, i * c_);
-        core::array::from_fn(|c| {
+        let mut out = [R::ZERO; C];
+        for (c, o) in out.iter_mut().enumerate() {
             let b = base + R::splat(c as f64);
             let v00 = R::gather(&self.data, b);
             let v10 = R::gather(&self.data, b + c_);
             let v01 = R::gather(&self.data, b + row);
             let v11 = R::gather(&self.data, b + row + c_);
-            lerp(lerp(v00, v10, wx), lerp(v01, v11, wx), wy)
-        })
+            *o = lerp(lerp(v00, v10, wx), lerp(v01, v11, wx), wy);
+        }
+        out
     }
 
     /// The 1-D table along x at a fixed y: each x node's value interpolated
@@ -484,15 +497,19 @@ impl<const C: usize> SplineY<C> {
         let b3 = w2 * w * sixth;
         let b1 = (w2 * (w - R::splat(2.0))).mul_add(R::HALF, R::splat(2.0 / 3.0));
         let b2 = R::ONE - b0 - b1 - b3;
-        core::array::from_fn(|c| {
+        let mut out = [R::ZERO; C];
+        for (c, o) in out.iter_mut().enumerate() {
             let b = base + R::splat(c as f64);
-            let at = |r: R| {
-                let v0 = R::gather(&self.data, r);
-                lerp(v0, R::gather(&self.data, r + c_), wx)
-            };
             let (r1, r2) = (b + row, b + row + row);
-            at(b).mul_add(b0, at(r1) * b1) + at(r2).mul_add(b2, at(r2 + row) * b3)
-        })
+            let (v0, v1) = (
+                lerp_at(&self.data, b, c_, wx),
+                lerp_at(&self.data, r1, c_, wx),
+            );
+            let v2 = lerp_at(&self.data, r2, c_, wx);
+            let v3 = lerp_at(&self.data, r2 + row, c_, wx);
+            *o = v0.mul_add(b0, v1 * b1) + v2.mul_add(b2, v3 * b3);
+        }
+        out
     }
 }
 

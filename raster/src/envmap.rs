@@ -420,14 +420,17 @@ impl EnvMap {
     pub fn sky_irradiance_over_pi<R: Real>(&self, n: V3<R>) -> Rgb<R> {
         let d = self.to_map(n);
         let y = sh9_basis(d);
-        let ch = |c: usize| {
+        // A loop, not a closure per channel: a closure is compiled without
+        // the AVX-512 features of the light pairs' function.
+        let mut e = [R::ZERO; 3];
+        for (c, e) in e.iter_mut().enumerate() {
             let mut s = R::ZERO;
             for (k, yk) in y.iter().enumerate() {
                 s = yk.mul_add(R::splat(self.sh[k][c] as f64), s);
             }
-            s.max(R::ZERO)
-        };
-        Rgb::new(ch(0), ch(1), ch(2))
+            *e = s.max(R::ZERO);
+        }
+        Rgb::new(e[0], e[1], e[2])
     }
 
     /// The prefiltered radiance around world direction `r` (of any

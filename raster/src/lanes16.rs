@@ -310,11 +310,17 @@ impl Real for F32x16 {
     fn gather_rgb_block(table: &[f32], index: Self, stride: usize) -> [[[Self; 3]; 2]; 2] {
         let lo = <f32x8 as Real>::gather_rgb_block(table, index.lo(), stride);
         let hi = <f32x8 as Real>::gather_rgb_block(table, index.hi(), stride);
-        core::array::from_fn(|r| {
-            core::array::from_fn(|c| {
-                core::array::from_fn(|k| F32x16::from_halves(lo[r][c][k], hi[r][c][k]))
-            })
-        })
+        // Loops, not `from_fn`'s closures: a closure is compiled without
+        // the AVX-512 features of the light pairs' function.
+        let mut out = [[[F32x16::both(f32x8::ZERO); 3]; 2]; 2];
+        for r in 0..2 {
+            for c in 0..2 {
+                for k in 0..3 {
+                    out[r][c][k] = F32x16::from_halves(lo[r][c][k], hi[r][c][k]);
+                }
+            }
+        }
+        out
     }
 }
 

@@ -12,8 +12,9 @@
 //! Used for batches of metallic-roughness and Lambert materials without
 //! maps ([`pairs_model`]) lit by point, spot and directional lights, two
 //! of one kind in a row, under a uniform environment, none, or a map lit
-//! by the split sum (those terms made in f32x8, as there); everything else
-//! takes the f32x8 path. Lights with shadow maps are not paired (their
+//! by the split sum (those terms made for two packets at a time, one a
+//! half, without shadow maps; in f32x8 with them); everything else takes
+//! the f32x8 path. Lights with shadow maps are not paired (their
 //! lookups, not their BRDFs, are most of their cost): each is lit alone
 //! in sixteen lanes and its shadow factor looked up in f32x8, as the f32x8
 //! loop looks it up.
@@ -63,12 +64,10 @@ fn kind(l: &Light) -> (u8, bool) {
     }
 }
 
-/// Whether `model`'s batches take the pairs: the models whose light loop
-/// compiles to sixteen-lane code. Elsewhere (the glTF, Disney and
-/// microfacet models' tables, read through closures that are not inlined
-/// into the AVX-512 function) each sixteen-lane operation became a call,
-/// and the pairs were slower than f32x8; with those reads written as
-/// loops they were no faster (docs/PERFORMANCE.md, "Tried and dropped").
+/// Whether `model`'s batches take the pairs: the metallic-roughness and
+/// Lambert models. The glTF, Disney and microfacet models' light loops
+/// compile to sixteen-lane code too, but lit in pairs they were no faster
+/// than f32x8 (docs/PERFORMANCE.md, "Tried and dropped").
 pub(crate) fn pairs_model(model: &Model) -> bool {
     matches!(model, Model::MetallicRoughness(_) | Model::Lambert(_))
 }
@@ -117,8 +116,8 @@ mod x86 {
     use crate::lanes16::F32x16;
     use crate::shader::ShadeInput;
     use crate::shadow::ShadowMaps;
-    use crate::split_sum::env_split_sum;
-    use specula_core::{Brdf, BrdfVisitor, V3};
+    use crate::split_sum::{env_split_sum, env_split_sum_inline};
+    use specula_core::{Brdf, BrdfVisitor, Real, V3};
 
     /// A batch's packets and what lights them.
     pub(super) struct Packets<'a> {
@@ -242,9 +241,12 @@ mod x86 {
         };
         let steps = || steps(p.env.lights, move |k| shadow(k).is_some());
         let pixel = brdf.pixel(&brdf.params::<F32x16>());
-        // The environment's terms in f32x8, as the f32x8 light loop makes
-        // them (their tables' closures would not be inlined here).
-        let env8 = p.env.environment.is_some() || p.env.env_map.is_some();
+        // The environment's terms: without shadow maps, two packets' at a
+        // time, one a half (`add_environments`); with them (the sun's
+        // factor is looked up in f32x8) in f32x8, as the f32x8 loop makes
+        // them.
+        let env = p.env.environment.is_some() || p.env.env_map.is_some();
+        let env8 = env && SHADOWS;
         let pixel8 = env8.then(|| brdf.pixel(&brdf.params::<f32x8>()));
         for ((frag8, &lanes), out) in p.frags.iter().zip(p.lanes).zip(p.out.iter_mut()) {
             let frag = Fragment {
@@ -327,10 +329,74 @@ mod x86 {
                     acc += env_split_sum(brdf, &prepared8, &frame8, frag8.wo, map, sun);
                 }
             }
+            if env && !SHADOWS {
+                // Its environment and emission follow in `add_environments`.
+                *out = acc;
+                continue;
+            }
             if let Some(e) = p.emissive {
                 acc += Rgb::from_f32(e);
             }
             *out = acc;
+        }
+        if env && !SHADOWS {
+            add_environments(brdf, p, &pixel);
+        }
+    }
+
+    /// Adds to each packet's sum in `p.out` its environment's term and
+    /// its emission, the terms of two packets made at a time in sixteen
+    /// lanes (packet i in the low half, i + 1 in the high one; an odd last
+    /// packet in both), each added in f32x8 as the f32x8 loop adds it.
+    /// Without shadow maps: the environment map's sun is unshadowed.
+    #[inline(always)]
+    fn add_environments<B: Brdf>(brdf: &B, p: &mut Packets, pixel: &B::Pixel<F32x16>) {
+        let n = p.frags.len();
+        for i in (0..n).step_by(2) {
+            let j = (i + 1).min(n - 1);
+            let (a, b) = (&p.frags[i], &p.frags[j]);
+            let frag = Fragment {
+                p: halves(a.p, b.p),
+                n: halves(a.n, b.n),
+                wo: halves(a.wo, b.wo),
+                w: F32x16::from_halves(a.w, b.w),
+                b1: F32x16::from_halves(a.b1, b.b1),
+                b2: F32x16::from_halves(a.b2, b.b2),
+            };
+            let input = ShadeInput {
+                frag: &frag,
+                surface: None,
+                lanes: p.lanes[i] | p.lanes[j] << 8,
+            };
+            let frame = p.maps.frame(&input);
+            let prepared = brdf.prepare_with(pixel, frame.to_local(frag.wo));
+            let uniform = p
+                .env
+                .environment
+                .map(|e| brdf.albedo_local(&prepared).mul_elem(V3::from_f32(e)));
+            let map = p.env.env_map.map(|map| {
+                env_split_sum_inline(brdf, &prepared, &frame, frag.wo, map, |_| {
+                    <F32x16 as Real>::ONE
+                })
+            });
+            let mut add = |k: usize, high: bool| {
+                let half = |t: &Rgb<F32x16>| if high { hi(t) } else { lo(t) };
+                let mut acc = p.out[k];
+                if let Some(t) = &uniform {
+                    acc += half(t);
+                }
+                if let Some(t) = &map {
+                    acc += half(t);
+                }
+                if let Some(e) = p.emissive {
+                    acc += Rgb::from_f32(e);
+                }
+                p.out[k] = acc;
+            };
+            add(i, false);
+            if j != i {
+                add(j, true);
+            }
         }
     }
 }

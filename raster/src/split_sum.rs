@@ -27,6 +27,21 @@ pub fn env_split_sum<B: Brdf, R: Real>(
     map: &EnvMap,
     sun_visibility: impl FnOnce(&Rgb<R>) -> R,
 ) -> Rgb<R> {
+    env_split_sum_inline(brdf, prepared, frame, wo, map, sun_visibility)
+}
+
+/// [`env_split_sum`] inline in its caller: for the light pairs'
+/// sixteen-lane code, whose operations are calls in a function compiled
+/// without AVX-512.
+#[inline(always)]
+pub(crate) fn env_split_sum_inline<B: Brdf, R: Real>(
+    brdf: &B,
+    prepared: &B::Prepared<R>,
+    frame: &ShadingFrame<R>,
+    wo: V3<R>,
+    map: &EnvMap,
+    sun_visibility: impl FnOnce(&Rgb<R>) -> R,
+) -> Rgb<R> {
     let n = frame.n;
     let lobes = brdf.env_lobes(prepared);
     let e = map.sky_irradiance_over_pi(n);
