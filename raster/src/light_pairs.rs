@@ -242,9 +242,8 @@ mod x86 {
         let steps = || steps(p.env.lights, move |k| shadow(k).is_some());
         let pixel = brdf.pixel(&brdf.params::<F32x16>());
         // The environment's terms: without shadow maps, two packets' at a
-        // time, one a half (`add_environments`); with them (the sun's
-        // factor is looked up in f32x8) in f32x8, as the f32x8 loop makes
-        // them.
+        // time, one a half (`add_environments`); with them (a sun's factor
+        // is looked up in f32x8), in f32x8 as the f32x8 loop makes them.
         let env = p.env.environment.is_some() || p.env.env_map.is_some();
         let env8 = env && SHADOWS;
         let pixel8 = env8.then(|| brdf.pixel(&brdf.params::<f32x8>()));
@@ -322,10 +321,7 @@ mod x86 {
                     acc += brdf.albedo_local(&prepared8).mul_elem(V3::from_f32(e));
                 }
                 if let Some(map) = p.env.env_map {
-                    let sun = |part: &Rgb<f32x8>| match SHADOWS {
-                        true => p.env.sun_visibility(&input8, part),
-                        false => f32x8::ONE,
-                    };
+                    let sun = |part: &Rgb<f32x8>| p.env.sun_visibility(&input8, part);
                     acc += env_split_sum(brdf, &prepared8, &frame8, frag8.wo, map, sun);
                 }
             }
