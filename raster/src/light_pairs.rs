@@ -115,7 +115,6 @@ mod x86 {
     use crate::delta_light::{add_delta_light, punctual_part, Punctual};
     use crate::lanes16::F32x16;
     use crate::shader::ShadeInput;
-    use crate::shadow::ShadowMaps;
     use crate::split_sum::{env_split_sum, env_split_sum_inline};
     use specula_core::{Brdf, BrdfVisitor, Real, V3};
 
@@ -137,8 +136,8 @@ mod x86 {
             // SAFETY: the processor has AVX-512F/DQ/VL/BW (asserted).
             unsafe {
                 match self.env.shadows {
-                    Some(shadows) => shade_packets::<B, true>(brdf, &mut self, Some(shadows)),
-                    None => shade_packets::<B, false>(brdf, &mut self, None),
+                    Some(_) => shade_packets::<B, true>(brdf, &mut self),
+                    None => shade_packets::<B, false>(brdf, &mut self),
                 }
             }
         }
@@ -224,17 +223,15 @@ mod x86 {
         }
     }
 
-    /// The packets of `p`, as `LightLoop::shade` shades them, with the
-    /// frame's `shadows` if `SHADOWS` (else there are none).
+    /// The packets of `p`, as `LightLoop::shade` shades them;
+    /// `SHADOWS` if the frame has shadow maps (`p.env.shadows`): a
+    /// constant, so that frames without them compile without lookups.
     ///
     /// # Safety
     /// The processor has AVX-512F, DQ, VL and BW.
     #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw")]
-    unsafe fn shade_packets<B: Brdf, const SHADOWS: bool>(
-        brdf: &B,
-        p: &mut Packets,
-        shadows: Option<&ShadowMaps>,
-    ) {
+    unsafe fn shade_packets<B: Brdf, const SHADOWS: bool>(brdf: &B, p: &mut Packets) {
+        let shadows = p.env.shadows;
         let shadow = |k: usize| match SHADOWS {
             true => shadows.and_then(|s| s.light(k)),
             false => None,
