@@ -196,7 +196,7 @@ struct RenderArgs {
     /// Shade one pixel at a time in f32 instead of 8 at a time in f32x8.
     #[arg(long)]
     scalar: bool,
-    /// Shade 8 pixels at a time in f32x8 alone, without the AVX-512 light
+    /// Shade 8 pixels at a time in f32x8 alone, without the AVX-512 packet
     /// pairs the processor may have (the same pixels; for timing).
     #[arg(long, conflicts_with = "scalar")]
     avx2_only: bool,

@@ -2,8 +2,8 @@
 //! (the scene's aspect ratio, its own supersampling), through the SIMD and
 //! the scalar shading paths, the 8-bit pixels checked against the SHA-256
 //! in fixtures/golden/hashes.toml. Where the processor has AVX-512, each
-//! scene whose packets the SIMD path shades two lights per register
-//! (`specula_raster::frame::shades_light_pairs`) is rendered once more
+//! scene whose packets the SIMD path shades two packets per register
+//! (`specula_raster::frame::shades_packet_pairs`) is rendered once more
 //! with f32x8 alone (`ShadePath::SimdAvx2`): the bytes must be the same.
 //!
 //! `SPECULA_BLESS=1 cargo test --test golden` rewrites the hashes and the
@@ -54,11 +54,11 @@ fn render(path: &Path, shading: ShadePath) -> (u32, u32, Vec<u8>) {
     (r.width, r.height, r.ldr)
 }
 
-/// Whether the SIMD path shades some of the scene's packets two lights
+/// Whether the SIMD path shades some of the scene's packets two at a time
 /// per AVX-512 register.
-fn pairs_lights(path: &Path) -> bool {
+fn pairs_packets(path: &Path) -> bool {
     let scene = load_scene(path).unwrap_or_else(|e| panic!("{e}"));
-    specula_raster::frame::shades_light_pairs(&scene.data)
+    specula_raster::frame::shades_packet_pairs(&scene.data)
 }
 
 /// The hash of an image: SHA-256 of its size (two little-endian u32) and
@@ -129,11 +129,11 @@ fn every_fixture_scene_renders_its_golden_pixels() {
         let name = scene.file_stem().unwrap().to_str().unwrap().to_string();
         for (label, shading) in [("simd", ShadePath::Simd), ("scalar", ShadePath::Scalar)] {
             let (w, h, rgb) = render(&scene, shading);
-            if shading == ShadePath::Simd && pairs_lights(&scene) {
+            if shading == ShadePath::Simd && pairs_packets(&scene) {
                 paired.push(name.clone());
                 if render(&scene, ShadePath::SimdAvx2) != (w, h, rgb.clone()) {
                     failures.push(format!(
-                        "{name}: the AVX-512 light pairs and f32x8 alone give different pixels"
+                        "{name}: the AVX-512 packet pairs and f32x8 alone give different pixels"
                     ));
                 }
             }
@@ -193,20 +193,20 @@ fn every_fixture_scene_renders_its_golden_pixels() {
             failures.push(msg);
         }
     }
-    if specula_raster::frame::light_pairs_available() {
+    if specula_raster::frame::packet_pairs_available() {
         eprintln!(
-            "{} scene(s) shaded with AVX-512 light pairs, the same bytes as f32x8 alone checked: {}",
+            "{} scene(s) shaded with AVX-512 packet pairs, the same bytes as f32x8 alone checked: {}",
             paired.len(),
             paired.join(", ")
         );
         if paired.len() < 3 {
             failures.push(format!(
-                "only {} fixture scene(s) take the light pairs: too few to check them",
+                "only {} fixture scene(s) take the packet pairs: too few to check them",
                 paired.len()
             ));
         }
     } else {
-        eprintln!("light pairs not checked: this processor has no AVX-512F/DQ/VL/BW");
+        eprintln!("packet pairs not checked: this processor has no AVX-512F/DQ/VL/BW");
     }
     if bless {
         write_hashes(&hash_path, &now);

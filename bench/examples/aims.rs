@@ -81,9 +81,9 @@ fn main() {
             let (lo, mid, hi) = quartiles(v);
             println!("{name:>27}: {mid:8.2} ms  (quartiles {lo:.2}, {hi:.2})");
         }
-        let pairs = specula_raster::frame::shades_light_pairs(data);
+        let pairs = specula_raster::frame::shades_packet_pairs(data);
         let simd = if pairs {
-            "scalar / SIMD (light pairs)"
+            "scalar / SIMD (packet pairs)"
         } else {
             "scalar / SIMD"
         };

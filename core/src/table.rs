@@ -255,7 +255,7 @@ impl<const C: usize> Table1<C> {
         let base = i * R::splat(C as f64);
         // Loops, not closures, here and in the other lookups: a closure is
         // a function of its own, compiled without the target features of
-        // a caller such as the AVX-512 light pairs' (raster/src/light_pairs.rs).
+        // a caller such as the AVX-512 packet pairs' (raster/src/packet_pairs.rs).
         let mut out = [R::ZERO; C];
         for (c, o) in out.iter_mut().enumerate() {
             let v0 = R::gather(&self.data, base + R::splat(c as f64));

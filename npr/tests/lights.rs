@@ -123,7 +123,7 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
                 environment: None,
                 env_map: None,
                 shadows: None,
-                pair_lights: false,
+                pair_packets: false,
             };
             let mut got = 0.0;
             let pv = V3::new(p[0], p[1], p[2]);
@@ -159,7 +159,7 @@ fn polygon_vector_irradiance_matches_the_area_integral() {
                 environment: None,
                 env_map: None,
                 shadows: None,
-                pair_lights: false,
+                pair_packets: false,
             };
             let ln = f64::sqrt(nq.iter().map(|v| v * v).sum::<f64>());
             let nb = nq.map(|v| v / ln);
@@ -200,7 +200,7 @@ fn spot_lights_give_the_extensions_falloff() {
         environment: None,
         env_map: None,
         shadows: None,
-        pair_lights: false,
+        pair_packets: false,
     };
     let scale = 1.0 / (inner.cos() - outer.cos()).max(0.001);
     for p in [

@@ -71,7 +71,7 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
         environment: scene.environment,
         env_map: scene.env_map.as_deref(),
         shadows: ctx.shadows,
-        pair_lights: ctx.pair_lights,
+        pair_packets: ctx.pair_packets,
     };
     let mut order: Vec<(f32, u32, &RasterTri)> = blended
         .iter()

@@ -1,6 +1,6 @@
 //! A point, spot or directional light's term in the light loop, for the
-//! f32x8 light loop of `lit.rs` (one light a packet) and the light pairs
-//! of `light_pairs.rs` (two lights, one in each half of sixteen lanes):
+//! f32x8 light loop of `lit.rs` (one packet) and the packet pairs of
+//! `packet_pairs.rs` (two packets, one in each half of sixteen lanes):
 //! one source, so both do the same operations per lane.
 
 use crate::fragment::Fragment;
@@ -14,21 +14,20 @@ use specula_core::{Brdf, Real, Rgb, ShadingFrame, V3};
 const MIN_DIST2: f64 = 1e-8;
 
 /// A point or spot light's parameters as lanes: one light broadcast
-/// ([`Punctual::of`]), or two lights, one in each half of a wider lane
-/// type (light_pairs.rs).
-pub(crate) struct Punctual<R: Real> {
-    pub(crate) position: V3<R>,
-    pub(crate) intensity: V3<R>,
+/// ([`Punctual::of`]).
+struct Punctual<R: Real> {
+    position: V3<R>,
+    intensity: V3<R>,
     /// A spot light's axis and [`spot_scale_offset`]'s scale and offset.
-    pub(crate) cone: Option<(V3<R>, R, R)>,
+    cone: Option<(V3<R>, R, R)>,
     /// A finite range, squared ([`range_squared`]).
-    pub(crate) range2: Option<R>,
+    range2: Option<R>,
 }
 
 impl<R: Real> Punctual<R> {
     /// `light`'s, if it is a point or spot light.
     #[inline(always)]
-    pub(crate) fn of(light: &Light) -> Option<Punctual<R>> {
+    fn of(light: &Light) -> Option<Punctual<R>> {
         let (position, intensity, range, cone) = match light {
             Light::Point {
                 position,
@@ -68,7 +67,7 @@ impl<R: Real> Punctual<R> {
 /// factor it is multiplied by (the caller adds f · factor to its sum with
 /// one fused multiply-add per channel).
 #[inline(always)]
-pub(crate) fn punctual_part<B: Brdf, R: Real>(
+fn punctual_part<B: Brdf, R: Real>(
     brdf: &B,
     prepared: &B::Prepared<R>,
     frag: &Fragment<R>,

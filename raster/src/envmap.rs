@@ -421,7 +421,7 @@ impl EnvMap {
         let d = self.to_map(n);
         let y = sh9_basis(d);
         // A loop, not a closure per channel: a closure is compiled without
-        // the AVX-512 features of the light pairs' function.
+        // the AVX-512 features of the packet pairs' function.
         let mut e = [R::ZERO; 3];
         for (c, e) in e.iter_mut().enumerate() {
             let mut s = R::ZERO;

@@ -97,38 +97,36 @@ pub fn visibility_into(
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum ShadePath {
     /// 8 pixels per packet in f32x8; where the processor has AVX-512,
-    /// metallic-roughness and Lambert batches under unshadowed point, spot
-    /// and directional lights two lights per register (`light_pairs`),
-    /// with the same bits.
+    /// batches of materials without maps (but Disney's) under point,
+    /// spot and directional lights two packets per register
+    /// (`packet_pairs`), with the same bits.
     #[default]
     Simd,
-    /// [`ShadePath::Simd`] without the light pairs: f32x8 alone, as on a
+    /// [`ShadePath::Simd`] without the packet pairs: f32x8 alone, as on a
     /// processor without AVX-512 (for checks and timing).
     SimdAvx2,
     /// One pixel at a time in f32: the same kernels, for comparison.
     Scalar,
 }
 
-/// Whether this processor runs the light pairs of [`ShadePath::Simd`]
+/// Whether this processor runs the packet pairs of [`ShadePath::Simd`]
 /// (AVX-512F, DQ, VL and BW).
-pub fn light_pairs_available() -> bool {
-    crate::light_pairs::available()
+pub fn packet_pairs_available() -> bool {
+    crate::packet_pairs::available()
 }
 
-/// Whether [`ShadePath::Simd`] lights `scene` two lights per AVX-512
-/// register on this processor (`light_pairs`): the packets of its
-/// metallic-roughness and Lambert materials without maps (when it has
-/// some), when it has two point, spot or directional lights of a kind in
-/// a row without shadow maps (others may have them), no polygon light,
-/// and no environment map or one lit by the split sum.
-pub fn shades_light_pairs(scene: &SceneData) -> bool {
-    let shadowed = |k: usize| scene.shadows.get(k).is_some_and(Option::is_some);
-    crate::light_pairs::applies(&scene.lights, shadowed, scene.env_map.as_deref())
+/// Whether [`ShadePath::Simd`] shades `scene` two packets per AVX-512
+/// register on this processor (`packet_pairs`): the batches of its
+/// materials without maps and of a model the pairs take (when it has
+/// some), when it has no polygon light and no environment map or one lit
+/// by the split sum.
+pub fn shades_packet_pairs(scene: &SceneData) -> bool {
+    crate::packet_pairs::applies(&scene.lights, scene.env_map.as_deref())
         && scene.materials.iter().any(|m| {
             m.shader
                 .as_any()
                 .downcast_ref::<crate::Lit>()
-                .is_some_and(|l| l.maps().is_empty() && crate::light_pairs::pairs_model(l.model()))
+                .is_some_and(|l| l.maps().is_empty() && crate::packet_pairs::pairs_model(l.model()))
         })
 }
 
@@ -211,7 +209,7 @@ fn shade_impl(
     let t = Instant::now();
     let mut ctx = ResolveContext::new(scene, &v.planes, &v.view);
     ctx.shadows = v.shadows.active();
-    ctx.pair_lights = path == ShadePath::Simd;
+    ctx.pair_packets = path == ShadePath::Simd;
     let FrameBuffers {
         color,
         depth,

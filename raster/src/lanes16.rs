@@ -1,5 +1,5 @@
-//! Sixteen f32 lanes in one AVX-512 register ([`F32x16`]), for the light
-//! pairs of `light_pairs`: every operation is the f32x8 one's per lane
+//! Sixteen f32 lanes in one AVX-512 register ([`F32x16`]), for the packet
+//! pairs of `packet_pairs`: every operation is the f32x8 one's per lane
 //! (the same IEEE operation, the same fused multiply-adds, the same
 //! NaN rule for `max` and `min`; the polynomial functions run on each
 //! half as f32x8), so a lane computes the same bits in either.
@@ -7,7 +7,7 @@
 //! The binary is built for x86-64-v3 (AVX2): these instructions exist
 //! only where the processor has AVX-512F, DQ, VL and BW. A value of this
 //! type is therefore made only in code that runs after [`available`]
-//! said so (`light_pairs::shade_batch`, whose callers check it, and the
+//! said so (`packet_pairs::shade_batch`, whose callers check it, and the
 //! tests below, which check it first); that is the invariant every
 //! `unsafe` block here rests on.
 
@@ -311,7 +311,7 @@ impl Real for F32x16 {
         let lo = <f32x8 as Real>::gather_rgb_block(table, index.lo(), stride);
         let hi = <f32x8 as Real>::gather_rgb_block(table, index.hi(), stride);
         // Loops, not `from_fn`'s closures: a closure is compiled without
-        // the AVX-512 features of the light pairs' function.
+        // the AVX-512 features of the packet pairs' function.
         let mut out = [[[F32x16::both(f32x8::ZERO); 3]; 2]; 2];
         for r in 0..2 {
             for c in 0..2 {

@@ -36,10 +36,10 @@ pub mod frame;
 pub mod geometry;
 #[cfg(target_arch = "x86_64")]
 mod lanes16;
-mod light_pairs;
 mod lit;
 pub mod maps;
 mod occlusion;
+mod packet_pairs;
 pub mod post;
 pub mod resolve;
 mod scan;

@@ -439,11 +439,11 @@ impl PacketShader for Lit {
         })
     }
 
-    /// [`PacketShader::shade_batch`], or where the frame allows it, the
-    /// model is one the pairs take, the lights are point, spot and
-    /// directional lights without shadows and a map, if any, is lit by
-    /// the split sum: two lights per AVX-512 register (light_pairs.rs:
-    /// the same bits).
+    /// [`PacketShader::shade_batch`], or where the frame allows it (the
+    /// material has no maps and a model the pairs take, the lights are
+    /// point, spot and directional lights and a map, if any, is lit by the
+    /// split sum): two packets per AVX-512 register (packet_pairs.rs: the
+    /// same bits).
     fn shade_batch_x8(
         &self,
         frags: &[Fragment<f32x8>],
@@ -451,12 +451,12 @@ impl PacketShader for Lit {
         env: &ShadeEnv,
         out: &mut [Rgb<f32x8>],
     ) {
-        if env.pair_lights
+        if env.pair_packets
             && self.maps.is_empty()
-            && crate::light_pairs::pairs_model(&self.model)
-            && crate::light_pairs::handles(env)
+            && crate::packet_pairs::pairs_model(&self.model)
+            && crate::packet_pairs::handles(env)
         {
-            return crate::light_pairs::shade_batch(
+            return crate::packet_pairs::shade_batch(
                 &self.model,
                 self.emissive,
                 &self.maps,

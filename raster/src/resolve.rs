@@ -26,8 +26,8 @@ pub struct ResolveContext<'a> {
     ndc_scale: [f32; 2],
     /// The frame's shadow maps, when some light has shadows.
     pub(crate) shadows: Option<&'a crate::shadow::ShadowMaps>,
-    /// [`ShadeEnv::pair_lights`](crate::shader::ShadeEnv::pair_lights).
-    pub(crate) pair_lights: bool,
+    /// [`ShadeEnv::pair_packets`](crate::shader::ShadeEnv::pair_packets).
+    pub(crate) pair_packets: bool,
 }
 
 impl<'a> ResolveContext<'a> {
@@ -49,7 +49,7 @@ impl<'a> ResolveContext<'a> {
                 (2.0 / view.height as f64) as f32,
             ],
             shadows: None,
-            pair_lights: false,
+            pair_packets: false,
         }
     }
 }

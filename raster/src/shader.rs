@@ -79,10 +79,10 @@ pub struct ShadeEnv<'a> {
     /// contribution is multiplied by its factor
     /// ([`crate::shadow::LightShadow::visibility_lanes`]).
     pub shadows: Option<&'a crate::shadow::ShadowMaps>,
-    /// Batches of packets may be shaded two lights per AVX-512 register
-    /// where the processor has it (`light_pairs`; the same bits as
+    /// Batches of packets may be shaded two packets per AVX-512 register
+    /// where the processor has it (`packet_pairs`; the same bits as
     /// f32x8): set by the frame for [`ShadePath::Simd`](crate::frame::ShadePath::Simd).
-    pub pair_lights: bool,
+    pub pair_packets: bool,
 }
 
 impl ShadeEnv<'_> {
@@ -144,7 +144,7 @@ pub trait PacketShader: Debug + Send + Sync + 'static {
     }
 
     /// [`PacketShader::shade_batch`] in f32x8, the entry the shading pass
-    /// calls: a shader may take a wider path there (`Lit`'s light pairs).
+    /// calls: a shader may take a wider path there (`Lit`'s packet pairs).
     #[inline(always)]
     fn shade_batch_x8(
         &self,

@@ -174,7 +174,7 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
         environment: scene.environment,
         env_map: scene.env_map.as_deref(),
         shadows: ctx.shadows,
-        pair_lights: ctx.pair_lights,
+        pair_packets: ctx.pair_packets,
     };
     let (tx, ty) = target.tile_origin(t);
     let background = scene.environment.unwrap_or(scene.background);

@@ -1,5 +1,5 @@
 //! The environment map's light by the split sum, for the f32x8 light loop
-//! of `lit.rs` and the light pairs of `light_pairs.rs` alike.
+//! of `lit.rs` and the packet pairs of `packet_pairs.rs` alike.
 
 use crate::envmap::{disk_cos_factor, EnvMap};
 use specula_core::{Brdf, Mask, Real, Rgb, ShadingFrame, V3};
@@ -30,7 +30,7 @@ pub fn env_split_sum<B: Brdf, R: Real>(
     env_split_sum_inline(brdf, prepared, frame, wo, map, sun_visibility)
 }
 
-/// [`env_split_sum`] inline in its caller: for the light pairs'
+/// [`env_split_sum`] inline in its caller: for the packet pairs'
 /// sixteen-lane code, whose operations are calls in a function compiled
 /// without AVX-512.
 #[inline(always)]

@@ -418,7 +418,7 @@ fn a_lambert_material_refuses_a_metallic_roughness_map() {
         environment: None,
         env_map: None,
         shadows: None,
-        pair_lights: false,
+        pair_packets: false,
     };
     let got: Rgb<f32x8> = lit.shade(&input, &env);
     let em = lit.maps().emissive.as_ref().unwrap();

@@ -1,20 +1,22 @@
-//! The AVX-512 light pairs give f32x8's bits for every kind of pair and
-//! for lights left alone: spot lights with and without cones' overlap and
-//! finite ranges, directional pairs, point lights with a range, an odd
-//! light out, lights with shadow maps of every filter (which go alone)
-//! between pairs, under a uniform environment and under the fixture maps
-//! (split sum, a sun taken out of the sky, shadowed or not), on
-//! metallic-roughness and Lambert surfaces (the models that take the
-//! pairs) beside the other models' (which keep f32x8) in one frame. (The
-//! golden test checks the fixture scenes the same way.) Skipped, with a
-//! message, where the processor has no AVX-512.
+//! The AVX-512 packet pairs give f32x8's bits for every kind of light:
+//! spot lights with and without cones' overlap and finite ranges,
+//! directional lights, point lights with a range, kinds mixed, a single
+//! light, none, lights with shadow maps of every filter among unshadowed
+//! ones and alone, under a uniform environment and under the fixture maps
+//! (split sum, a sun taken out of the sky, shadowed or not), on the
+//! models that take them beside Disney's (which keeps f32x8) in one
+//! frame, and
+//! on odd batches (a packet alone in both halves: the spheres' edges end
+//! runs of one material). (The golden test checks the fixture scenes the
+//! same way.) Skipped, with a message, where the processor has no
+//! AVX-512.
 
 mod common;
 
 use common::{fixtures, temp_dir};
 use specula::render::{render_scene, RenderSettings};
 use specula::scene::load_scene_str;
-use specula_raster::frame::{light_pairs_available, shades_light_pairs, ShadePath};
+use specula_raster::frame::{packet_pairs_available, shades_packet_pairs, ShadePath};
 use std::path::Path;
 
 const MATERIALS: &str = r#"
@@ -88,10 +90,10 @@ material = "floor"
     s.replace("ENVIRONMENT", environment) + MATERIALS + lights
 }
 
-/// The lights of each case: every kind of pair and of light left alone.
-const CASES: [(&str, &str); 5] = [
+/// The lights of each case.
+const CASES: [(&str, &str); 7] = [
     (
-        "spot pairs, with and without ranges, and one spot alone",
+        "spot lights with and without ranges",
         r#"
 [[light]]
 type = "spot"
@@ -132,7 +134,7 @@ range = 12.0
 "#,
     ),
     (
-        "directional pairs and one alone",
+        "directional lights",
         r#"
 [[light]]
 type = "directional"
@@ -183,7 +185,7 @@ outer_cone = 45.0
 "#,
     ),
     (
-        "shadowed lights of every filter between pairs, two shadowed of a kind in a row",
+        "shadowed lights of every filter among unshadowed ones, two shadowed of a kind in a row",
         r#"
 [[light]]
 type = "point"
@@ -229,6 +231,32 @@ shadows = "pcf"
 "#,
     ),
     (
+        "every light shadowed",
+        r#"
+[[light]]
+type = "point"
+position = [-4.0, 4.0, 5.0]
+intensity = [40.0, 40.0, 40.0]
+shadows = "pcf"
+[[light]]
+type = "spot"
+position = [0.0, 6.0, 4.0]
+direction = [0.0, -1.0, -0.6]
+intensity = [40.0, 40.0, 40.0]
+outer_cone = 40.0
+shadows = "hard"
+"#,
+    ),
+    (
+        "one point light",
+        r#"
+[[light]]
+type = "point"
+position = [2.0, 5.0, 4.0]
+intensity = [50.0, 45.0, 40.0]
+"#,
+    ),
+    (
         "a light on the surface (the distance's floor)",
         r#"
 [[light]]
@@ -250,8 +278,8 @@ fn render(text: &str, path: ShadePath) -> Vec<u32> {
     let scene =
         load_scene_str(Path::new("pairs.toml"), text, &read).unwrap_or_else(|e| panic!("{e}"));
     assert!(
-        path != ShadePath::Simd || shades_light_pairs(&scene.data),
-        "the scene does not take the light pairs"
+        path != ShadePath::Simd || shades_packet_pairs(&scene.data),
+        "the scene does not take the packet pairs"
     );
     let mut s = RenderSettings::from_scene(&scene);
     s.path = path;
@@ -261,14 +289,14 @@ fn render(text: &str, path: ShadePath) -> Vec<u32> {
 }
 
 #[test]
-fn every_kind_of_pair_gives_the_f32x8_bits() {
-    if !light_pairs_available() {
+fn packet_pairs_give_the_f32x8_bits() {
+    if !packet_pairs_available() {
         eprintln!("skipped: this processor has no AVX-512F/DQ/VL/BW");
         return;
     }
     // Maps' derived data from this build, in a cache of this run's own
     // (the binary's only test, so nothing else reads the variable).
-    std::env::set_var("SPECULA_CACHE_DIR", temp_dir("light-pairs-table-cache"));
+    std::env::set_var("SPECULA_CACHE_DIR", temp_dir("packet-pairs-table-cache"));
     let map = |name: &str| {
         let path = fixtures().join("env").join(name);
         format!("map = {:?}", path.to_str().expect("a UTF-8 path"))
@@ -281,6 +309,10 @@ fn every_kind_of_pair_gives_the_f32x8_bits() {
         (
             "under the sky and its sun",
             scene_under(CASES[0].1, &map("sky.hdr")),
+        ),
+        (
+            "no light under the esplanade",
+            scene_under("", &map("royal_esplanade_1k.hdr")),
         ),
         (
             "shadowed lights under the sky, its sun shadowed",
