@@ -14,10 +14,11 @@
 //! model but Disney's ([`pairs_model`]), lit by point, spot and
 //! directional lights under a uniform environment, none, or a map lit by
 //! the split sum; frames with polygon lights or the Monte Carlo reference
-//! take the f32x8 path. A light's
-//! shadow factor (and an environment map's sun's, with the map's term
-//! then made per packet) is looked up in f32x8 for each half, as the
-//! f32x8 loop looks it up.
+//! take the f32x8 path. A light's shadow factor is each half's as the
+//! f32x8 loop looks it up: on one hard or PCF map the lookup's common end
+//! runs in sixteen lanes (`LightShadow::visibility_where_pair`), the rest
+//! per half in f32x8; an environment map's sun's factor is looked up in
+//! f32x8, with the map's term then made per packet.
 
 use crate::envmap::{EnvMap, IblMethod};
 use crate::fragment::Fragment;
@@ -186,14 +187,12 @@ mod x86 {
                 acc = match shadow {
                     None => add_delta_light(brdf, &prepared, &frag, &frame, light, acc),
                     // `lit.rs`'s `shadowed_lights`' operations, each
-                    // half's factor looked up in f32x8.
+                    // half's factor as f32x8 looks it up.
                     Some(shadow) => {
                         let zero = Rgb::zero();
                         let part = add_delta_light(brdf, &prepared, &frag, &frame, light, zero);
-                        let visible = F32x16::from_halves(
-                            shadow.visibility_where(&lo(&part), &a.p, &a.n, lanes_a),
-                            shadow.visibility_where(&hi(&part), &b.p, &b.n, lanes_b),
-                        );
+                        let visible =
+                            shadow.visibility_where_pair(&part, &frag.p, &frag.n, input.lanes);
                         part.mul_elem_add(V3::splat(visible), acc)
                     }
                 };

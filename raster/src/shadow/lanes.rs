@@ -6,6 +6,8 @@ use super::settings::ShadowFilter;
 use super::{DepthWindows, Face, LightShadow, Pick};
 use glam::Vec3;
 use specula_core::{Mask, Real, V3};
+#[cfg(target_arch = "x86_64")]
+use {crate::lanes16::F32x16, specula_core::f32x8};
 
 impl LightShadow {
     /// [`LightShadow::visibility_lanes`] for a light whose part at each
@@ -18,6 +20,92 @@ impl LightShadow {
         let reached =
             part.x.abs().gt(R::ZERO) | part.y.abs().gt(R::ZERO) | part.z.abs().gt(R::ZERO);
         self.visibility_at(p, n, lanes & reached.bits())
+    }
+
+    /// [`LightShadow::visibility_where`] of two packets, one in each half
+    /// of sixteen lanes (the packet pairs'): each half's factor, the same
+    /// bits. On a single hard or PCF map the projection and the near
+    /// bounds' verdict "every lane wholly lit" run in sixteen lanes, each
+    /// half ending on it as its own lookup would, and only a half it
+    /// leaves open goes on (out of line, in f32x8). Other lights look each
+    /// half up in f32x8.
+    #[cfg(target_arch = "x86_64")]
+    #[inline(always)]
+    pub(crate) fn visibility_where_pair(
+        &self,
+        part: &V3<F32x16>,
+        p: &V3<F32x16>,
+        n: &V3<F32x16>,
+        lanes: u32,
+    ) -> F32x16 {
+        let zero = <F32x16 as Real>::ZERO;
+        let reached = part.x.abs().gt(zero) | part.y.abs().gt(zero) | part.z.abs().gt(zero);
+        let lanes = lanes & reached.bits();
+        let one = <f32x8 as Real>::ONE;
+        if lanes == 0 {
+            return F32x16::both(one);
+        }
+        let (lanes_lo, lanes_hi) = (lanes & 0xFF, lanes >> 8);
+        let Some(face) = self.packet_face() else {
+            let (p_lo, n_lo) = (
+                V3::new(p.x.lo(), p.y.lo(), p.z.lo()),
+                V3::new(n.x.lo(), n.y.lo(), n.z.lo()),
+            );
+            let (p_hi, n_hi) = (
+                V3::new(p.x.hi(), p.y.hi(), p.z.hi()),
+                V3::new(n.x.hi(), n.y.hi(), n.z.hi()),
+            );
+            return F32x16::from_halves(
+                self.visibility_at(&p_lo, &n_lo, lanes_lo),
+                self.visibility_at(&p_hi, &n_hi, lanes_hi),
+            );
+        };
+        let at = self.project(face, p, n, lanes);
+        let s = &self.settings;
+        // The lanes the near bounds show wholly lit (or not using the map).
+        let lit = match s.filter {
+            ShadowFilter::Pcf => match face.pcf_lit_lanes(&at, s.filter_radius) {
+                Some(m) => m.bits(),
+                None => 0,
+            },
+            _ => 0,
+        };
+        if lit == 0xFFFF {
+            return F32x16::both(one);
+        }
+        // Each half's point as its own projection makes it (the same
+        // operations per lane), its lanes those of `at` in the half.
+        let use_map = at.use_map.bits();
+        let lo = MapPoint {
+            u: at.u.lo(),
+            v: at.v.lo(),
+            d: at.d.lo(),
+            use_map: <f32x8 as Real>::mask_from_bits(use_map & 0xFF),
+        };
+        let hi = MapPoint {
+            u: at.u.hi(),
+            v: at.v.hi(),
+            d: at.d.hi(),
+            use_map: <f32x8 as Real>::mask_from_bits(use_map >> 8),
+        };
+        // A half ends where its own lookup would: with no lanes, or with
+        // every lane lit by the near bounds.
+        let (open_lo, open_hi) = (
+            lanes_lo != 0 && lit & 0xFF != 0xFF,
+            lanes_hi != 0 && lit >> 8 != 0xFF,
+        );
+        F32x16::from_halves(
+            if open_lo {
+                self.finish_packet(face, &lo)
+            } else {
+                one
+            },
+            if open_hi {
+                self.finish_packet(face, &hi)
+            } else {
+                one
+            },
+        )
     }
 
     /// [`LightShadow::visibility_lanes`] of the lanes in `lanes`, with the
@@ -165,7 +253,7 @@ impl LightShadow {
     #[inline(always)]
     fn project<R: Real>(&self, face: &Face, p: &V3<R>, n: &V3<R>, lanes: u32) -> MapPoint<R> {
         let s = &self.settings;
-        let k = |x: f32| R::splat(x as f64);
+        let k = splat::<R>;
         let texel = if face.perspective {
             k(face.texel) * face.depth_of_lanes(p).max(k(face.near))
         } else {
@@ -184,20 +272,18 @@ impl LightShadow {
             face.clip.z_axis,
             face.clip.w_axis,
         ];
-        let row = |a: f32, b: f32, c: f32, d: f32| k(a) * p.x + k(b) * p.y + k(c) * p.z + k(d);
-        let cx = row(c0.x, c1.x, c2.x, c3.x);
-        let cy = row(c0.y, c1.y, c2.y, c3.y);
+        let cx = row(&p, [c0.x, c1.x, c2.x, c3.x]);
+        let cy = row(&p, [c0.y, c1.y, c2.y, c3.y]);
         // An affine map's w is 0·x + 0·y + 0·z + 1 = 1 at every finite
         // point, and x / 1 = x: its division is skipped (the other lanes
         // are out of the map by their x, as above).
         let affine = [c0.w, c1.w, c2.w] == [0.0; 3] && c3.w == 1.0;
-        let inside = |x: R, y: R| x.abs().le(R::ONE) & y.abs().le(R::ONE);
         let (x, y, inside) = if affine {
-            (cx, cy, inside(cx, cy))
+            (cx, cy, inside_unit(cx, cy))
         } else {
-            let cw = row(c0.w, c1.w, c2.w, c3.w);
+            let cw = row(&p, [c0.w, c1.w, c2.w, c3.w]);
             let (x, y) = (cx / cw, cy / cw);
-            (x, y, cw.gt(R::ZERO) & inside(x, y))
+            (x, y, cw.gt(R::ZERO) & inside_unit(x, y))
         };
         let size = k(face.size as f32);
         let half = R::HALF;
@@ -208,6 +294,30 @@ impl LightShadow {
             use_map: inside & R::mask_from_bits(lanes),
         }
     }
+}
+
+// Helpers as functions, not closures: the packet pairs inline these
+// lookups into a function compiled for AVX-512, and a closure is compiled
+// without its caller's features (each sixteen-lane operation in it became
+// a call).
+
+/// `x` in every lane.
+#[inline(always)]
+fn splat<R: Real>(x: f32) -> R {
+    R::splat(x as f64)
+}
+
+/// One row of a matrix (`m`: its x, y, z and w columns' entries) times
+/// (p, 1), added column by column as glam's Mat4 × Vec4 adds.
+#[inline(always)]
+fn row<R: Real>(p: &V3<R>, [a, b, c, d]: [f32; 4]) -> R {
+    splat::<R>(a) * p.x + splat::<R>(b) * p.y + splat::<R>(c) * p.z + splat::<R>(d)
+}
+
+/// The lanes with |x| ≤ 1 and |y| ≤ 1.
+#[inline(always)]
+fn inside_unit<R: Real>(x: R, y: R) -> R::Mask {
+    x.abs().le(R::ONE) & y.abs().le(R::ONE)
 }
 
 /// A packet's lanes on one face: continuous texel coordinates (texel
@@ -281,7 +391,7 @@ impl Face {
     /// [`Face::depth_of`] per lane, with its operations in its order.
     #[inline(always)]
     fn depth_of_lanes<R: Real>(&self, p: &V3<R>) -> R {
-        let k = |x: f32| R::splat(x as f64);
+        let k = splat::<R>;
         let (o, a) = (self.origin, self.axis);
         (p.x - k(o.x)) * k(a.x) + (p.y - k(o.y)) * k(a.y) + (p.z - k(o.z)) * k(a.z)
     }
@@ -312,12 +422,18 @@ impl Face {
     /// most lookups end on (its far bounds and taps are then not read).
     #[inline(always)]
     fn pcf_all_lit<R: Real>(&self, at: &MapPoint<R>, radius: f32) -> bool {
-        let Some(b) = self.bounds.as_ref() else {
-            return false;
-        };
+        matches!(self.pcf_lit_lanes(at, radius), Some(m) if m.all())
+    }
+
+    /// The lanes [`Face::pcf_all_lit`]'s verdict holds on (wholly lit by
+    /// the near bounds, or not using the map); `None` when the face has
+    /// no bounds.
+    #[inline(always)]
+    fn pcf_lit_lanes<R: Real>(&self, at: &MapPoint<R>, radius: f32) -> Option<R::Mask> {
+        let b = self.bounds.as_ref()?;
         let (i, fits) = self.window_of(b, at.u, at.v, radius);
         let lit = fits & at.d.le(R::gather(&b.near, i));
-        (!at.use_map | lit).all()
+        Some(!at.use_map | lit)
     }
 
     /// The index of the window of `b` that holds the texels of PCF taps
@@ -330,13 +446,8 @@ impl Face {
         // highest tap's x0 + 1, computed as `pcf_lanes` computes them,
         // then clamped as `at` clamps. The window from the lowest, and
         // whether it also holds the highest.
-        let span = |t: R| {
-            let first = (t + R::splat(-radius as f64)).floor().clamp(R::ZERO, last);
-            let end = ((t + R::splat(radius as f64)).floor() + R::ONE).clamp(R::ZERO, last);
-            (first, end.le(first + reach))
-        };
-        let (x, fits_x) = span(u);
-        let (y, fits_y) = span(v);
+        let (x, fits_x) = window_span(u, radius, last, reach);
+        let (y, fits_y) = window_span(v, radius, last, reach);
         (y * R::splat(self.size as f64) + x, fits_x & fits_y)
     }
 
@@ -472,6 +583,15 @@ impl Face {
         }
         sum / R::splat(9.0)
     }
+}
+
+/// In [`Face::window_of`], along one axis: the first texel of the window
+/// (clamped to 0..=`last`) and whether its `reach` also holds the last.
+#[inline(always)]
+fn window_span<R: Real>(t: R, radius: f32, last: R, reach: R) -> (R, R::Mask) {
+    let first = (t + R::splat(-radius as f64)).floor().clamp(R::ZERO, last);
+    let end = ((t + R::splat(radius as f64)).floor() + R::ONE).clamp(R::ZERO, last);
+    (first, end.le(first + reach))
 }
 
 /// In [`Face::pcf_grid_k`] (2r = `K`, ⌊r⌋ = `M`): tap `t`'s texel
