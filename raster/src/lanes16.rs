@@ -13,7 +13,7 @@
 
 use core::arch::x86_64::*;
 use core::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Not, Sub, SubAssign};
-use specula_core::{f32x8, Constant, Mask, Real};
+use specula_core::{f32x8, Constant, Mask, Real, V3};
 
 /// Whether this processor runs [`F32x16`] (checked once).
 pub(crate) fn available() -> bool {
@@ -82,6 +82,28 @@ impl Mask for M16 {
     fn bits(self) -> u32 {
         self.0 as u32
     }
+}
+
+/// Lanes 0–7 of `v`.
+#[inline(always)]
+pub(crate) fn v3_lo(v: &V3<F32x16>) -> V3<f32x8> {
+    V3::new(v.x.lo(), v.y.lo(), v.z.lo())
+}
+
+/// Lanes 8–15 of `v`.
+#[inline(always)]
+pub(crate) fn v3_hi(v: &V3<F32x16>) -> V3<f32x8> {
+    V3::new(v.x.hi(), v.y.hi(), v.z.hi())
+}
+
+/// `a`'s lanes in the low half, `b`'s in the high one.
+#[inline(always)]
+pub(crate) fn v3_halves(a: V3<f32x8>, b: V3<f32x8>) -> V3<F32x16> {
+    V3::new(
+        F32x16::from_halves(a.x, b.x),
+        F32x16::from_halves(a.y, b.y),
+        F32x16::from_halves(a.z, b.z),
+    )
 }
 
 impl F32x16 {

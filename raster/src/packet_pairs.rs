@@ -89,7 +89,7 @@ pub(crate) fn shade_batch(
 mod x86 {
     use super::*;
     use crate::delta_light::add_delta_light;
-    use crate::lanes16::F32x16;
+    use crate::lanes16::{v3_halves as halves, v3_hi as hi, v3_lo as lo, F32x16};
     use crate::shader::ShadeInput;
     use crate::split_sum::{env_split_sum, env_split_sum_inline};
     use specula_core::{Brdf, BrdfVisitor, Real, ShadingFrame, V3};
@@ -119,28 +119,6 @@ mod x86 {
         }
     }
 
-    /// Lanes 0–7 of `v`.
-    #[inline(always)]
-    fn lo(v: &V3<F32x16>) -> V3<f32x8> {
-        V3::new(v.x.lo(), v.y.lo(), v.z.lo())
-    }
-
-    /// Lanes 8–15 of `v`.
-    #[inline(always)]
-    fn hi(v: &V3<F32x16>) -> V3<f32x8> {
-        V3::new(v.x.hi(), v.y.hi(), v.z.hi())
-    }
-
-    /// `a`'s lanes in the low half, `b`'s in the high one.
-    #[inline(always)]
-    fn halves(a: V3<f32x8>, b: V3<f32x8>) -> V3<F32x16> {
-        V3::new(
-            F32x16::from_halves(a.x, b.x),
-            F32x16::from_halves(a.y, b.y),
-            F32x16::from_halves(a.z, b.z),
-        )
-    }
-
     /// The packets of `p`, as `LightLoop::shade` shades them, two at a
     /// time: packet i in the low half of sixteen lanes, i + 1 in the high
     /// one (an odd last packet in both). `SHADOWS` if the frame has shadow
@@ -156,8 +134,8 @@ mod x86 {
         // With shadow maps an environment map's sun has a factor looked up
         // in f32x8: the map's term is then made per packet in f32x8, as
         // the f32x8 loop makes it.
-        let map8 = p.env.env_map.filter(|_| SHADOWS);
-        let pixel8 = map8.map(|_| brdf.pixel(&brdf.params::<f32x8>()));
+        let pixel8 =
+            (SHADOWS && p.env.env_map.is_some()).then(|| brdf.pixel(&brdf.params::<f32x8>()));
         let n = p.frags.len();
         for i in (0..n).step_by(2) {
             let j = (i + 1).min(n - 1);
@@ -201,8 +179,8 @@ mod x86 {
                 acc += brdf.albedo_local(&prepared).mul_elem(V3::from_f32(e));
             }
             if let Some(map) = p.env.env_map {
-                acc += match (map8, &pixel8) {
-                    (Some(_), Some(pixel8)) => {
+                acc += match &pixel8 {
+                    Some(pixel8) => {
                         let half = |frag8: &Fragment<f32x8>, lanes: u32| {
                             let input8 = ShadeInput {
                                 frag: frag8,
@@ -216,7 +194,7 @@ mod x86 {
                         };
                         halves(half(a, lanes_a), half(b, lanes_b))
                     }
-                    _ => map_term(brdf, &prepared, &frame, frag.wo, map),
+                    None => map_term(brdf, &prepared, &frame, frag.wo, map),
                 };
             }
             if let Some(e) = p.emissive {

@@ -7,7 +7,10 @@ use super::{DepthWindows, Face, LightShadow, Pick};
 use glam::Vec3;
 use specula_core::{Mask, Real, V3};
 #[cfg(target_arch = "x86_64")]
-use {crate::lanes16::F32x16, specula_core::f32x8};
+use {
+    crate::lanes16::{v3_hi, v3_lo, F32x16},
+    specula_core::f32x8,
+};
 
 impl LightShadow {
     /// [`LightShadow::visibility_lanes`] for a light whose part at each
@@ -17,9 +20,7 @@ impl LightShadow {
     /// does not reach (outside a spot's cone, facing away) cost nothing.
     #[inline(always)]
     pub fn visibility_where<R: Real>(&self, part: &V3<R>, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
-        let reached =
-            part.x.abs().gt(R::ZERO) | part.y.abs().gt(R::ZERO) | part.z.abs().gt(R::ZERO);
-        self.visibility_at(p, n, lanes & reached.bits())
+        self.visibility_at(p, n, lanes & reached(part))
     }
 
     /// [`LightShadow::visibility_where`] of two packets, one in each half
@@ -38,26 +39,16 @@ impl LightShadow {
         n: &V3<F32x16>,
         lanes: u32,
     ) -> F32x16 {
-        let zero = <F32x16 as Real>::ZERO;
-        let reached = part.x.abs().gt(zero) | part.y.abs().gt(zero) | part.z.abs().gt(zero);
-        let lanes = lanes & reached.bits();
+        let lanes = lanes & reached(part);
         let one = <f32x8 as Real>::ONE;
         if lanes == 0 {
             return F32x16::both(one);
         }
         let (lanes_lo, lanes_hi) = (lanes & 0xFF, lanes >> 8);
         let Some(face) = self.packet_face() else {
-            let (p_lo, n_lo) = (
-                V3::new(p.x.lo(), p.y.lo(), p.z.lo()),
-                V3::new(n.x.lo(), n.y.lo(), n.z.lo()),
-            );
-            let (p_hi, n_hi) = (
-                V3::new(p.x.hi(), p.y.hi(), p.z.hi()),
-                V3::new(n.x.hi(), n.y.hi(), n.z.hi()),
-            );
             return F32x16::from_halves(
-                self.visibility_at(&p_lo, &n_lo, lanes_lo),
-                self.visibility_at(&p_hi, &n_hi, lanes_hi),
+                self.visibility_at(&v3_lo(p), &v3_lo(n), lanes_lo),
+                self.visibility_at(&v3_hi(p), &v3_hi(n), lanes_hi),
             );
         };
         let at = self.project(face, p, n, lanes);
@@ -73,21 +64,7 @@ impl LightShadow {
         if lit == 0xFFFF {
             return F32x16::both(one);
         }
-        // Each half's point as its own projection makes it (the same
-        // operations per lane), its lanes those of `at` in the half.
-        let use_map = at.use_map.bits();
-        let lo = MapPoint {
-            u: at.u.lo(),
-            v: at.v.lo(),
-            d: at.d.lo(),
-            use_map: <f32x8 as Real>::mask_from_bits(use_map & 0xFF),
-        };
-        let hi = MapPoint {
-            u: at.u.hi(),
-            v: at.v.hi(),
-            d: at.d.hi(),
-            use_map: <f32x8 as Real>::mask_from_bits(use_map >> 8),
-        };
+        let [lo, hi] = at.halves();
         // A half ends where its own lookup would: with no lanes, or with
         // every lane lit by the near bounds.
         let (open_lo, open_hi) = (
@@ -296,6 +273,13 @@ impl LightShadow {
     }
 }
 
+/// The lanes where a light's `part` is not zero (its factor is read only
+/// there: [`LightShadow::visibility_where`]).
+#[inline(always)]
+fn reached<R: Real>(part: &V3<R>) -> u32 {
+    (part.x.abs().gt(R::ZERO) | part.y.abs().gt(R::ZERO) | part.z.abs().gt(R::ZERO)).bits()
+}
+
 // Helpers as functions, not closures: the packet pairs inline these
 // lookups into a function compiled for AVX-512, and a closure is compiled
 // without its caller's features (each sixteen-lane operation in it became
@@ -307,8 +291,8 @@ fn splat<R: Real>(x: f32) -> R {
     R::splat(x as f64)
 }
 
-/// One row of a matrix (`m`: its x, y, z and w columns' entries) times
-/// (p, 1), added column by column as glam's Mat4 × Vec4 adds.
+/// One row of a matrix (its x, y, z and w columns' entries) times (p, 1),
+/// added column by column as glam's Mat4 × Vec4 adds.
 #[inline(always)]
 fn row<R: Real>(p: &V3<R>, [a, b, c, d]: [f32; 4]) -> R {
     splat::<R>(a) * p.x + splat::<R>(b) * p.y + splat::<R>(c) * p.z + splat::<R>(d)
@@ -330,6 +314,30 @@ struct MapPoint<R: Real> {
     v: R,
     d: R,
     use_map: R::Mask,
+}
+
+#[cfg(target_arch = "x86_64")]
+impl MapPoint<F32x16> {
+    /// Each half's point as its own projection makes it (the same
+    /// operations per lane), its lanes those of this one in the half.
+    #[inline(always)]
+    fn halves(&self) -> [MapPoint<f32x8>; 2] {
+        let bits = self.use_map.bits();
+        [
+            MapPoint {
+                u: self.u.lo(),
+                v: self.v.lo(),
+                d: self.d.lo(),
+                use_map: <f32x8 as Real>::mask_from_bits(bits & 0xFF),
+            },
+            MapPoint {
+                u: self.u.hi(),
+                v: self.v.hi(),
+                d: self.d.hi(),
+                use_map: <f32x8 as Real>::mask_from_bits(bits >> 8),
+            },
+        ]
+    }
 }
 
 impl<R: Real> MapPoint<R> {
