@@ -110,7 +110,7 @@ pub(crate) fn for_each_light_shadowed<R: Real>(
     let mut k = 0;
     for_each_light(frag.p, env, |wi, e| {
         let e = match shadows.light(k) {
-            Some(s) => e * s.visibility_where(&e, &frag.p, &frag.n, input.lanes),
+            Some(s) => e * input.light_visibility(k, s, &e),
             None => e,
         };
         k += 1;

@@ -126,6 +126,7 @@ pub(crate) unsafe fn composite_tile<R: ShadeLanes>(
                     frag: &frag,
                     surface: surface.as_ref().filter(|_| shader_surface),
                     lanes,
+                    shadow_factors: None,
                 };
                 let c = R::shade_with(shader, &input, &env);
                 let inputs = match &surface {

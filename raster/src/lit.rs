@@ -339,11 +339,7 @@ fn shadowed_lights<B: Brdf, R: Real>(
         acc = match shadows.light(k) {
             Some(shadow) => {
                 let part = add_delta_light(brdf, prepared, frag, frame, light, Rgb::zero());
-                let n = frag.n;
-                part.mul_elem_add(
-                    V3::splat(shadow.visibility_where(&part, &frag.p, &n, input.lanes)),
-                    acc,
-                )
+                part.mul_elem_add(V3::splat(input.light_visibility(k, shadow, &part)), acc)
             }
             None => add_delta_light(brdf, prepared, frag, frame, light, acc),
         };
@@ -364,10 +360,9 @@ fn shadowed_lights<B: Brdf, R: Real>(
         }
         let part = lights_from_polygon(brdf, maps, input, std::slice::from_ref(light), false);
         acc = match shadows.light(k) {
-            Some(shadow) => part.mul_elem_add(
-                V3::splat(shadow.visibility_where(&part, &frag.p, &frag.n, input.lanes)),
-                acc,
-            ),
+            Some(shadow) => {
+                part.mul_elem_add(V3::splat(input.light_visibility(k, shadow, &part)), acc)
+            }
             None => acc + part,
         };
     }

@@ -153,6 +153,7 @@ mod x86 {
                 frag: &frag,
                 surface: None,
                 lanes: lanes_a | lanes_b << 8,
+                shadow_factors: None,
             };
             let frame = p.maps.frame(&input);
             let prepared = brdf.prepare_with(&pixel, frame.to_local(frag.wo));
@@ -186,6 +187,7 @@ mod x86 {
                                 frag: frag8,
                                 surface: None,
                                 lanes,
+                                shadow_factors: None,
                             };
                             let frame8 = p.maps.frame(&input8);
                             let prepared8 = brdf.prepare_with(pixel8, frame8.to_local(frag8.wo));

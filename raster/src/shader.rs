@@ -34,6 +34,12 @@ pub struct ShadeInput<'a, R: Real> {
     /// Bit i set: lane i shows this material (other lanes are computed and
     /// discarded, so they only need to stay finite).
     pub lanes: u32,
+    /// The packet's shadow factors, one per scene light (1 for a light
+    /// without a shadow map), looked up once for every lane a triangle
+    /// covers, when the shading pass shades the packet's materials one
+    /// after the other; `None`: each shader looks its lanes up
+    /// ([`ShadeInput::light_visibility`]).
+    pub shadow_factors: Option<&'a [R]>,
 }
 
 impl<'a, R: Real> ShadeInput<'a, R> {
@@ -51,6 +57,27 @@ impl<'a, R: Real> ShadeInput<'a, R> {
         }
     }
 
+    /// Light `k`'s shadow factor `shadow` at the lanes of this input, for
+    /// `part`, the light's part there: from
+    /// [`ShadeInput::shadow_factors`] when the packet has them, else
+    /// looked up where `part` is not zero
+    /// ([`LightShadow::visibility_where`](crate::shadow::LightShadow::visibility_where)).
+    /// Either way `part` × factor is the same bits: a lane's factor does
+    /// not depend on the other lanes looked up with it, and where `part`
+    /// is zero the factor (finite, in [0, 1]) keeps it zero.
+    #[inline(always)]
+    pub fn light_visibility(
+        &self,
+        k: usize,
+        shadow: &crate::shadow::LightShadow,
+        part: &specula_core::V3<R>,
+    ) -> R {
+        match self.shadow_factors {
+            Some(f) => f[k],
+            None => shadow.visibility_where(part, &self.frag.p, &self.frag.n, self.lanes),
+        }
+    }
+
     /// The inputs of a batch (no surface): `frags[i]` under `lanes[i]`
     /// ([`PacketShader::shade_batch`]).
     #[inline(always)]
@@ -62,6 +89,7 @@ impl<'a, R: Real> ShadeInput<'a, R> {
             frag,
             surface: None,
             lanes,
+            shadow_factors: None,
         })
     }
 }

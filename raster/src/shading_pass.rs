@@ -187,6 +187,8 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
     let mut row_rgb = [[0.0f32; TILE]; 3];
     // Empty at the start of each row (each row flushes it at its end).
     let mut batch = Batch::<R>::default();
+    // A packet's shadow factors per light, when it has several materials.
+    let mut factors: Vec<R> = Vec::new();
     for plane in out.color.iter().chain(&out.normal).chain([&out.depth]) {
         plane.prefetch_row(tx as usize, ty as usize);
     }
@@ -303,6 +305,21 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
             let needs = |g: usize| ctx.needs_surface[tris.group_material[g] as usize];
             let surface = (ctx.any_needs_surface && groups.clone().any(needs))
                 .then(|| ctx.surface(&tris, frag));
+            // A packet of several materials (most sit on silhouettes, where
+            // a lane's PCF taps straddle two depths and read them all) has
+            // its shadow factors looked up once for every covered lane,
+            // not once per material.
+            let shadow_factors = match ctx.shadows {
+                Some(maps) if tris.groups > 1 => {
+                    factors.clear();
+                    factors.extend((0..scene.lights.len()).map(|k| match maps.light(k) {
+                        Some(s) => s.visibility_lanes(&frag.p, &frag.n, tris.covered),
+                        None => R::ONE,
+                    }));
+                    Some(&factors[..])
+                }
+                _ => None,
+            };
             // Shade once per material present, under its lanes' mask.
             let mut rgb = background_rgb;
             for g in groups {
@@ -310,6 +327,7 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
                     frag,
                     surface: surface.as_ref().filter(|_| needs(g)),
                     lanes: tris.group_lanes[g],
+                    shadow_factors,
                 };
                 let shader = &*scene.materials[tris.group_material[g] as usize].shader;
                 let c = R::shade_with(shader, &input, &env);

@@ -244,6 +244,7 @@ fn normal_map_frame_matches_the_formula_and_lanes_match_the_scalar_twin() {
                 frag: &frag,
                 surface: Some(&surface),
                 lanes: 0xFF,
+                shadow_factors: None,
             };
             let got = maps.frame(&input);
             for (l, x) in lanes.iter().enumerate() {
@@ -252,6 +253,7 @@ fn normal_map_frame_matches_the_formula_and_lanes_match_the_scalar_twin() {
                     frag: &f1,
                     surface: Some(&s1),
                     lanes: 1,
+                    shadow_factors: None,
                 });
                 // The formula: texel t → m = (2t − 1)(s, s, 1), n' ∝
                 // T m.x + B m.y + N m.z with B = sign · N × T.
@@ -332,6 +334,7 @@ fn occlusion_and_metallic_roughness_lanes_match_the_scalar_twin() {
             frag: &frag,
             surface: Some(&surface),
             lanes: 0xFF,
+            shadow_factors: None,
         };
         let mut p: MetallicRoughnessLaneParams<f32x8> = model.params();
         maps.fill(&input, &mut p);
@@ -342,6 +345,7 @@ fn occlusion_and_metallic_roughness_lanes_match_the_scalar_twin() {
                 frag: &f1,
                 surface: Some(&s1),
                 lanes: 1,
+                shadow_factors: None,
             };
             let mut q: MetallicRoughnessLaneParams<f32> = model.params();
             maps.fill(&one, &mut q);
@@ -412,6 +416,7 @@ fn a_lambert_material_refuses_a_metallic_roughness_map() {
         frag: &frag,
         surface: Some(&surface),
         lanes: 0xFF,
+        shadow_factors: None,
     };
     let env = ShadeEnv {
         lights: &[] as &[Light],
