@@ -190,6 +190,17 @@ pub trait Real:
         [[at(0), at(1)], [at(stride), at(stride + 1)]]
     }
 
+    /// Per lane, the run of `N` consecutive floats of `table` from
+    /// `index`: `out[c]` is [`Real::gather`] of `index + c`, each read
+    /// clamped as that one clamps. f32x8 reads a lane's run with one load
+    /// where every lane's index is integral and its 8 floats lie in the
+    /// table (for `N` ≤ 8), transposing the runs in registers, and gathers
+    /// otherwise; the values are the same either way.
+    #[inline(always)]
+    fn gather_run<const N: usize>(table: &[f32], index: Self) -> [Self; N] {
+        core::array::from_fn(|c| Self::gather(table, index + Self::splat(c as f64)))
+    }
+
     /// Clamps to [lo, hi] (for lo ≤ hi) as `self.max(lo).min(hi)`: a NaN
     /// `self` becomes `lo`.
     #[inline(always)]
@@ -486,6 +497,21 @@ impl Real for f32x8 {
         gather_f32x8(table, i)
     }
     #[inline(always)]
+    fn gather_run<const N: usize>(table: &[f32], index: Self) -> [Self; N] {
+        // The runs are loads where each lane's index is integral (so that
+        // index + c is the float index `gather` truncates) and its 8
+        // floats are in the table; otherwise `gather`'s clamped reads.
+        let i = index.fast_trunc_int();
+        let last_start = table.len().min(i32::MAX as usize) as i32 - 8;
+        let integral = i.round_float().simd_eq(index).to_bitmask();
+        let outside = i.simd_lt(wide::i32x8::ZERO) | i.simd_gt(wide::i32x8::splat(last_start));
+        if N <= 8 && last_start >= 0 && integral == 0xFF && outside.to_bitmask() == 0 {
+            let runs = gather_runs_f32x8(table, i);
+            return core::array::from_fn(|c| runs[c]);
+        }
+        core::array::from_fn(|c| <Self as Real>::gather(table, index + f32x8::splat(c as f32)))
+    }
+    #[inline(always)]
     fn gather_rgb_block(table: &[f32], index: Self, stride: usize) -> [[[Self; 3]; 2]; 2] {
         // Clamped as `gather`, to the last block, the bound capped to
         // i32's range; a table too small for one block stops at
@@ -611,6 +637,59 @@ fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f3
             [channels(stride), channels(stride + 1)],
         ]
     }
+}
+
+/// The 8 floats of `table` from each lane's index (every one in
+/// `0..=table.len() - 8`, checked by the caller): `out[c]` holds float
+/// index + c of each lane. One 32-byte load a lane, then an 8 × 8
+/// transpose in registers.
+#[cfg(all(target_arch = "x86_64", target_feature = "avx"))]
+#[inline(always)]
+fn gather_runs_f32x8(table: &[f32], i: wide::i32x8) -> [f32x8; 8] {
+    use core::arch::x86_64::{
+        _mm256_loadu_ps, _mm256_permute2f128_ps, _mm256_shuffle_ps, _mm256_unpackhi_ps,
+        _mm256_unpacklo_ps,
+    };
+    let i = i.to_array();
+    assert!(i.iter().all(|&l| l >= 0 && l as usize + 8 <= table.len()));
+    // SAFETY: AVX is enabled (cfg); each lane's 8 floats are in the table
+    // (asserted); the loads need no alignment.
+    unsafe {
+        let r = i.map(|l| _mm256_loadu_ps(table.as_ptr().add(l as usize)));
+        // Pairs of lanes interleaved, then quadruples, then the halves.
+        let lo = |a: usize| _mm256_unpacklo_ps(r[a], r[a + 1]);
+        let hi = |a: usize| _mm256_unpackhi_ps(r[a], r[a + 1]);
+        let t = [lo(0), hi(0), lo(2), hi(2), lo(4), hi(4), lo(6), hi(6)];
+        let u = [
+            _mm256_shuffle_ps::<0b01_00_01_00>(t[0], t[2]),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t[0], t[2]),
+            _mm256_shuffle_ps::<0b01_00_01_00>(t[1], t[3]),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t[1], t[3]),
+            _mm256_shuffle_ps::<0b01_00_01_00>(t[4], t[6]),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t[4], t[6]),
+            _mm256_shuffle_ps::<0b01_00_01_00>(t[5], t[7]),
+            _mm256_shuffle_ps::<0b11_10_11_10>(t[5], t[7]),
+        ];
+        [
+            _mm256_permute2f128_ps::<0x20>(u[0], u[4]),
+            _mm256_permute2f128_ps::<0x20>(u[1], u[5]),
+            _mm256_permute2f128_ps::<0x20>(u[2], u[6]),
+            _mm256_permute2f128_ps::<0x20>(u[3], u[7]),
+            _mm256_permute2f128_ps::<0x31>(u[0], u[4]),
+            _mm256_permute2f128_ps::<0x31>(u[1], u[5]),
+            _mm256_permute2f128_ps::<0x31>(u[2], u[6]),
+            _mm256_permute2f128_ps::<0x31>(u[3], u[7]),
+        ]
+        .map(bytemuck::cast)
+    }
+}
+
+/// Per-lane fallback of [`gather_runs_f32x8`].
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx")))]
+#[inline(always)]
+fn gather_runs_f32x8(table: &[f32], i: wide::i32x8) -> [f32x8; 8] {
+    let i = i.to_array();
+    core::array::from_fn(|c| f32x8::new(core::array::from_fn(|l| table[i[l] as usize + c])))
 }
 
 /// Per-lane fallback of [`gather_rgb_block_f32x8`].

@@ -101,6 +101,50 @@ fn gather_reads_the_indexed_values_on_every_lane_type() {
     assert_eq!(g[3], table[36]);
 }
 
+/// `gather_run` against its definition, a gather of index + c per float
+/// of the run (each lane's own value, the scalar gather's): runs read by
+/// loads (every lane's 8 floats in the table, integral indices) and runs
+/// that fall back to gathers (a lane near the table's end, before its
+/// start, between two floats, NaN), for runs of 5 and 8 floats, and the
+/// sixteen floats of a table too short for one load.
+#[test]
+fn gather_run_is_a_gather_of_each_float_of_the_run() {
+    fn check<const N: usize>(table: &[f32], idx: [f32; 8]) {
+        let got = f32x8::gather_run::<N>(table, f32x8::from(idx));
+        for (c, got) in got.iter().enumerate() {
+            let got = got.to_array();
+            for l in 0..8 {
+                let want = f32x8::gather(table, f32x8::splat(idx[l] + c as f32)).to_array()[0];
+                assert_eq!(
+                    got[l].to_bits(),
+                    want.to_bits(),
+                    "lane {l} float {c} of {idx:?}"
+                );
+                if idx[l] >= 0.0 && idx[l] as usize + c < table.len() && idx[l].fract() == 0.0 {
+                    assert_eq!(want, table[idx[l] as usize + c]);
+                }
+            }
+        }
+    }
+    let table: Vec<f32> = (0..61).map(|i| (i as f32 * 0.37).sin()).collect();
+    for start in 0..60 {
+        // Every lane's run inside the table for small starts, some lanes'
+        // past its end for large ones.
+        let idx: [f32; 8] = core::array::from_fn(|l| ((start + 7 * l) % 61) as f32);
+        check::<5>(&table, idx);
+        check::<8>(&table, idx);
+    }
+    let inside: [f32; 8] = core::array::from_fn(|l| (3 * l) as f32);
+    check::<5>(&table, inside);
+    for bad in [-1.0, -0.5, 53.5, 54.0, f32::NAN, f32::INFINITY, -0.0] {
+        let mut idx = inside;
+        idx[5] = bad;
+        check::<5>(&table, idx);
+        check::<8>(&table, idx);
+    }
+    check::<5>(&table[..7], [0.0; 8]);
+}
+
 /// The micro-benchmark behind the choice in `real.rs`: hardware gather vs
 /// eight scalar loads. Run with `-- --ignored gather_speed --nocapture`.
 #[test]

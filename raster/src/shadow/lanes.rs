@@ -537,12 +537,28 @@ impl Face {
         // `at` clamps them.
         let last = R::splat((self.size - 1) as f64);
         let size = R::splat(self.size as f64);
-        let cols: [R; MAX] = std::array::from_fn(|i| (x + R::splat(i as f64)).clamp(R::ZERO, last));
         let mut lit = [[R::ZERO; MAX]; MAX];
-        for (j, row) in lit.iter_mut().enumerate().take(K + 2) {
-            let base = (y + R::splat(j as f64)).clamp(R::ZERO, last) * size;
-            for (l, &c) in row.iter_mut().zip(&cols).take(K + 2) {
-                *l = R::select(d.le(R::gather(&self.depth, base + c)), R::ONE, R::ZERO);
+        let edge = !lanes | x.ge(R::ZERO) & (x + R::splat((MAX - 1) as f64)).le(last);
+        if edge.all() {
+            // No lane's columns reach past the map's sides, where they
+            // would clamp: each row's texels are a run from its first
+            // (lanes not looked up start at column 0).
+            let x = R::select(lanes, x, R::ZERO);
+            for (j, row) in lit.iter_mut().enumerate().take(K + 2) {
+                let base = (y + R::splat(j as f64)).clamp(R::ZERO, last) * size;
+                let run = R::gather_run::<MAX>(&self.depth, base + x);
+                for (l, &t) in row.iter_mut().zip(&run).take(K + 2) {
+                    *l = R::select(d.le(t), R::ONE, R::ZERO);
+                }
+            }
+        } else {
+            let cols: [R; MAX] =
+                std::array::from_fn(|i| (x + R::splat(i as f64)).clamp(R::ZERO, last));
+            for (j, row) in lit.iter_mut().enumerate().take(K + 2) {
+                let base = (y + R::splat(j as f64)).clamp(R::ZERO, last) * size;
+                for (l, &c) in row.iter_mut().zip(&cols).take(K + 2) {
+                    *l = R::select(d.le(R::gather(&self.depth, base + c)), R::ONE, R::ZERO);
+                }
             }
         }
         // Tap row by tap row: its two texel rows picked from the grid's
@@ -616,5 +632,77 @@ fn tap_texel<R: Real, const K: usize, const M: usize>(
         0 => at(e),
         1 => R::select(mid, at(M + 1 + e), at(M + e)),
         _ => at(K + e),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The tap grid ([`Face::pcf_grid`]: each row's texels read as runs
+    /// where no lane's columns reach past the map's sides, clamped
+    /// gathers where one does) against the taps read one by one
+    /// ([`Face::pcf_lanes`]), bit for bit, at points all over a map of
+    /// random depths (some texels empty) and past its four sides, with
+    /// some lanes not looked up.
+    #[test]
+    fn the_tap_grid_reads_what_the_taps_read_up_to_the_maps_sides() {
+        let mut rng = 0x2545_f491_4f6c_dd1du64;
+        let mut next = move || {
+            rng ^= rng << 13;
+            rng ^= rng >> 7;
+            rng ^= rng << 17;
+            (rng >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let n = 24u32;
+        let depth = (0..n * n)
+            .map(|_| match next() {
+                x if x < 0.1 => f32::INFINITY,
+                x => 1.0 + 2.0 * x,
+            })
+            .collect();
+        let face = Face {
+            size: n,
+            depth,
+            ..Face::default()
+        };
+        let (mut runs, mut sides) = (0, 0);
+        for radius in [1.5f32, 1.0, 0.5] {
+            for trial in 0..3000 {
+                // Every other packet's lanes inside the map, the others
+                // anywhere from two texels before it to two past it.
+                let (lo, hi) = match trial % 2 {
+                    0 => (radius + 0.5, n as f32 - 4.5 + radius),
+                    _ => (-2.0, n as f32 + 1.0),
+                };
+                let mut at = || f32x8::from([(); 8].map(|_| lo + (hi - lo) * next()));
+                let (u, v) = (at(), at());
+                let d = f32x8::from([(); 8].map(|_| 1.0 + 2.0 * next()));
+                let lanes = (next() * 256.0) as u32 | 1;
+                let mask = <f32x8 as Real>::mask_from_bits(lanes);
+                let x = (u - f32x8::splat(radius)).floor();
+                let inside =
+                    !mask | x.ge(f32x8::ZERO) & (x + f32x8::splat(4.0)).le(f32x8::splat(23.0));
+                let Some(got) = face.pcf_grid(u, v, d, radius, mask) else {
+                    continue;
+                };
+                match inside.all() {
+                    true => runs += 1,
+                    false => sides += 1,
+                }
+                let want = face.pcf_lanes(u, v, d, radius);
+                for l in (0..8).filter(|l| lanes & (1 << l) != 0) {
+                    assert_eq!(
+                        (got.lane(l) as f32).to_bits(),
+                        (want.lane(l) as f32).to_bits(),
+                        "radius {radius}, lane {l}: u {u:?}, v {v:?}, d {d:?}"
+                    );
+                }
+            }
+        }
+        assert!(
+            runs > 1000 && sides > 1000,
+            "{runs} packets read as runs, {sides} at the sides"
+        );
     }
 }
