@@ -537,28 +537,27 @@ impl Face {
         // `at` clamps them.
         let last = R::splat((self.size - 1) as f64);
         let size = R::splat(self.size as f64);
-        let mut lit = [[R::ZERO; MAX]; MAX];
+        // Where no lane's columns reach past the map's sides (where they
+        // would clamp), each row's texels are a run from its first (lanes
+        // not looked up start at column 0); otherwise each is gathered at
+        // its clamped column.
         let edge = !lanes | x.ge(R::ZERO) & (x + R::splat((MAX - 1) as f64)).le(last);
-        if edge.all() {
-            // No lane's columns reach past the map's sides, where they
-            // would clamp: each row's texels are a run from its first
-            // (lanes not looked up start at column 0).
-            let x = R::select(lanes, x, R::ZERO);
-            for (j, row) in lit.iter_mut().enumerate().take(K + 2) {
-                let base = (y + R::splat(j as f64)).clamp(R::ZERO, last) * size;
-                let run = R::gather_run::<MAX>(&self.depth, base + x);
-                for (l, &t) in row.iter_mut().zip(&run).take(K + 2) {
-                    *l = R::select(d.le(t), R::ONE, R::ZERO);
-                }
-            }
+        let runs = edge.all();
+        let x = if runs {
+            R::select(lanes, x, R::ZERO)
         } else {
-            let cols: [R; MAX] =
-                std::array::from_fn(|i| (x + R::splat(i as f64)).clamp(R::ZERO, last));
-            for (j, row) in lit.iter_mut().enumerate().take(K + 2) {
-                let base = (y + R::splat(j as f64)).clamp(R::ZERO, last) * size;
-                for (l, &c) in row.iter_mut().zip(&cols).take(K + 2) {
-                    *l = R::select(d.le(R::gather(&self.depth, base + c)), R::ONE, R::ZERO);
-                }
+            x
+        };
+        let cols: [R; MAX] = std::array::from_fn(|i| (x + R::splat(i as f64)).clamp(R::ZERO, last));
+        let mut lit = [[R::ZERO; MAX]; MAX];
+        for (j, row) in lit.iter_mut().enumerate().take(K + 2) {
+            let base = (y + R::splat(j as f64)).clamp(R::ZERO, last) * size;
+            let texels: [R; MAX] = match runs {
+                true => R::gather_run::<MAX>(&self.depth, base + x),
+                false => std::array::from_fn(|i| R::gather(&self.depth, base + cols[i])),
+            };
+            for (l, &t) in row.iter_mut().zip(&texels).take(K + 2) {
+                *l = R::select(d.le(t), R::ONE, R::ZERO);
             }
         }
         // Tap row by tap row: its two texel rows picked from the grid's
