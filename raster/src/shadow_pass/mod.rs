@@ -19,6 +19,7 @@ use crate::stats::{ms_since, FrameStats};
 use crate::target::Target;
 use crate::visibility::{ShadowBuffers, Visibility};
 use fit::{light_faces, Bounds};
+use rayon::prelude::*;
 use specula_core::light::Light;
 use std::time::Instant;
 
@@ -48,12 +49,16 @@ pub fn render_maps(
         // too short to count.
         return;
     };
+    // Every face of every light is fitted first, then all are drawn as
+    // one parallel loop: a depth pass's own parallel steps end in joins
+    // where a thread would wait, and another face's work fills them.
+    let mut jobs = Vec::new();
     let lights = maps.lights.iter_mut().zip(&mut buffers.lights);
     for (k, (light, (slot, passes))) in scene.lights.iter().zip(lights).enumerate() {
         let map = Map { slot, passes };
         match scene.shadows.get(k).copied().flatten() {
             Some(settings) => {
-                maps.any |= render_light(map, settings, light, &bounds, view, scene, setup, stats)
+                maps.any |= fit_light(map, settings, light, &bounds, view, scene, &mut jobs)
             }
             None => map.clear(),
         }
@@ -67,11 +72,31 @@ pub fn render_maps(
     match scene.sun_shadows.zip(sun) {
         Some((settings, sun)) => {
             let light = sun.directional();
-            maps.any |= render_light(map, settings, &light, &bounds, view, scene, setup, stats);
+            maps.any |= fit_light(map, settings, &light, &bounds, view, scene, &mut jobs);
         }
         None => map.clear(),
     }
+    let counts: Vec<FrameStats> = jobs
+        .into_par_iter()
+        .map(|job| {
+            let mut own = FrameStats::default();
+            render_face(scene, job, setup, &mut own);
+            own
+        })
+        .collect();
+    for own in &counts {
+        stats.shadow_passes += own.shadow_passes;
+        stats.shadow_counts.add(&own.shadow_counts);
+    }
     stats.times.shadow += ms_since(t);
+}
+
+/// A face to draw: its map, the buffers of its depth pass, and the side
+/// of its PCF windows (none without PCF).
+struct FaceJob<'a> {
+    face: &'a mut Face,
+    pass: &'a mut Option<Visibility>,
+    window: Option<u32>,
 }
 
 /// One light's maps and the buffers of their depth passes.
@@ -88,19 +113,18 @@ impl Map<'_> {
     }
 }
 
-/// Renders the maps of `light` shadowed with `settings` into `map`
-/// (reusing the buffers it holds) when some map covers the scene;
-/// otherwise clears `map`. Whether `map` holds maps.
-#[allow(clippy::too_many_arguments)]
-fn render_light(
-    map: Map,
+/// Fits the maps of `light` shadowed with `settings` into `map` (reusing
+/// the buffers it holds) when some map covers the scene, adding their
+/// faces to `jobs` to be drawn; otherwise clears `map`. Whether `map`
+/// holds maps.
+fn fit_light<'a>(
+    map: Map<'a>,
     settings: ShadowSettings,
     light: &Light,
     bounds: &Bounds,
     view: &View,
     scene: &SceneData,
-    setup: DepthSetup,
-    stats: &mut FrameStats,
+    jobs: &mut Vec<FaceJob<'a>>,
 ) -> bool {
     let Some((faces, pick)) = light_faces(&settings, light, bounds, view, scene.camera.near) else {
         map.clear();
@@ -118,22 +142,15 @@ fn render_light(
     let window = settings.pcf_window();
     ls.faces = faces;
     map.passes.resize_with(ls.faces.len(), || None);
-    for (face, pass) in ls.faces.iter_mut().zip(map.passes.iter_mut()) {
-        render_face(scene, face, pass, window, setup, stats);
-    }
+    let faces = ls.faces.iter_mut().zip(map.passes.iter_mut());
+    jobs.extend(faces.map(|(face, pass)| FaceJob { face, pass, window }));
     true
 }
 
-/// Draws `face`'s depth pass and keeps its linear depth, row-major, and
-/// with `window` its depth bounds over windows of that side.
-fn render_face(
-    scene: &SceneData,
-    face: &mut Face,
-    pass: &mut Option<Visibility>,
-    window: Option<u32>,
-    setup: DepthSetup,
-    stats: &mut FrameStats,
-) {
+/// Draws a face's depth pass and keeps its linear depth, row-major, and
+/// with a window its depth bounds over windows of that side.
+fn render_face(scene: &SceneData, job: FaceJob, setup: DepthSetup, stats: &mut FrameStats) {
+    let FaceJob { face, pass, window } = job;
     let target = Target::new(face.size, face.size).expect("map size checked at load");
     // A perspective face's near plane: at `near` along its axis, half as
     // wide as tan_half × near (its texel is 2 tan_half / size).
