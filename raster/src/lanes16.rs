@@ -11,6 +11,7 @@
 //! tests below, which check it first); that is the invariant every
 //! `unsafe` block here rests on.
 
+use crate::fragment::Fragment;
 use core::arch::x86_64::*;
 use core::ops::{Add, AddAssign, BitAnd, BitOr, Div, Mul, MulAssign, Neg, Not, Sub, SubAssign};
 use specula_core::{f32x8, Constant, Mask, Real, V3};
@@ -96,6 +97,26 @@ pub(crate) fn v3_hi(v: &V3<F32x16>) -> V3<f32x8> {
     V3::new(v.x.hi(), v.y.hi(), v.z.hi())
 }
 
+/// Lanes 0–7 (`HI` false) or 8–15 (`HI` true) of every field of `f`.
+#[inline(always)]
+pub(crate) fn fragment_half<const HI: bool>(f: &Fragment<F32x16>) -> Fragment<f32x8> {
+    // No closures: not inlined, they would be compiled without AVX-512.
+    Fragment {
+        p: v3_half::<HI>(&f.p),
+        n: v3_half::<HI>(&f.n),
+        wo: v3_half::<HI>(&f.wo),
+        w: f.w.half::<HI>(),
+        b1: f.b1.half::<HI>(),
+        b2: f.b2.half::<HI>(),
+    }
+}
+
+/// Lanes 0–7 (`HI` false) or 8–15 (`HI` true) of `v`.
+#[inline(always)]
+fn v3_half<const HI: bool>(v: &V3<F32x16>) -> V3<f32x8> {
+    V3::new(v.x.half::<HI>(), v.y.half::<HI>(), v.z.half::<HI>())
+}
+
 /// `a`'s lanes in the low half, `b`'s in the high one.
 #[inline(always)]
 pub(crate) fn v3_halves(a: V3<f32x8>, b: V3<f32x8>) -> V3<F32x16> {
@@ -133,6 +154,16 @@ impl F32x16 {
     #[inline(always)]
     pub(crate) fn hi(self) -> f32x8 {
         bytemuck::cast(avx512!(_mm512_extractf32x8_ps::<1>(self.0)))
+    }
+
+    /// Lanes 0–7 (`HI` false) or 8–15 (`HI` true).
+    #[inline(always)]
+    pub(crate) fn half<const HI: bool>(self) -> f32x8 {
+        if HI {
+            self.hi()
+        } else {
+            self.lo()
+        }
     }
 
     /// `f` on each half.

@@ -185,6 +185,19 @@ impl PacketTris {
     }
 }
 
+/// `c` in every lane.
+#[inline(always)]
+fn splat<R: Real>(c: f32) -> R {
+    R::splat(c as f64)
+}
+
+/// The plane k (its x and y slopes and value at the origin) at offsets
+/// (`dx`, `dy`) from the origin.
+#[inline(always)]
+fn plane<R: Real>(k: [f32; 3], dx: R, dy: R) -> R {
+    splat::<R>(k[0]).mul_add(dx, splat::<R>(k[1]).mul_add(dy, splat(k[2])))
+}
+
 /// Smallest n·wo the shading normal is allowed (see `resolve`).
 const MIN_COS_VIEW: f64 = 0.02;
 
@@ -223,24 +236,21 @@ impl ResolveContext<'_> {
     /// per-lane gather through memory, 8 scalar stores then a vector load,
     /// stalls on store forwarding.) Lanes no triangle covers carry the first
     /// triangle's values, so they stay finite; callers mask them.
+    ///
+    /// No closures here or in the helpers (functions inlined always): the
+    /// sixteen-lane form ([`ResolveContext::resolve_pair`]) inlines all of
+    /// it into code compiled for AVX-512, which a closure not inlined
+    /// would leave as calls.
     #[inline(always)]
     pub fn resolve<R: Real>(&self, x: u32, y: u32, tris: &PacketTris) -> Fragment<R> {
         debug_assert!(tris.n > 0);
-        let splat = |c: f32| R::splat(c as f64);
         let px = R::splat(x as f64 + 0.5) + R::lane_index();
         let py = R::splat(y as f64 + 0.5);
         // k1, k2, Σk (= 1/w) and the facing sign of each lane's triangle.
-        let planes = |t: usize| {
-            let p = &self.planes[tris.id[t] as usize];
-            let dx = px - splat(p.origin[0]);
-            let dy = py - splat(p.origin[1]);
-            let plane = |k: [f32; 3]| splat(k[0]).mul_add(dx, splat(k[1]).mul_add(dy, splat(k[2])));
-            [plane(p.k1), plane(p.k2), plane(p.ks), splat(p.facing)]
-        };
-        let mut k = planes(0);
+        let mut k = self.tri_planes(tris.id[0], px, py);
         for t in 1..tris.n {
             let m = R::mask_from_bits(tris.lanes[t]);
-            let kt = planes(t);
+            let kt = self.tri_planes(tris.id[t], px, py);
             for (k, kt) in k.iter_mut().zip(kt) {
                 *k = R::select(m, kt, *k);
             }
@@ -256,19 +266,11 @@ impl ResolveContext<'_> {
         // test of `normalize_or` meaningful. The facing sign goes into the
         // weights: ±1, so the normal is the same bits as flipping it after.
         // (No array `map` here: its closure was not inlined.)
-        let (f0, f1, f2) = ((ks - k1 - k2) * facing, k1 * facing, k2 * facing);
-        let normal = |t: usize| {
-            let [i0, i1, i2] = self.scene.triangles[tris.tri[t] as usize];
-            let vertex = |i: u32| {
-                let n = self.scene.normals[i as usize];
-                V3::new(splat(n.x), splat(n.y), splat(n.z))
-            };
-            vertex(i2).mul_add(f2, vertex(i1).mul_add(f1, vertex(i0) * f0))
-        };
-        let mut n_interp = normal(0);
+        let f = [(ks - k1 - k2) * facing, k1 * facing, k2 * facing];
+        let mut n_interp = self.tri_normal(tris.tri[0], f);
         for t in 1..tris.n {
             let m = R::mask_from_bits(tris.lanes[t]);
-            n_interp = V3::select(m, normal(t), n_interp);
+            n_interp = V3::select(m, self.tri_normal(tris.tri[t], f), n_interp);
         }
 
         // The primary ray through the pixel centre (camera.rs); its point at
@@ -311,6 +313,67 @@ impl ResolveContext<'_> {
             b1,
             b2,
         }
+    }
+
+    /// Triangle `id`'s planes k1, k2 and Σk at pixel centres (`px`, `py`),
+    /// and its facing sign.
+    #[inline(always)]
+    fn tri_planes<R: Real>(&self, id: u32, px: R, py: R) -> [R; 4] {
+        let p = &self.planes[id as usize];
+        let dx = px - splat(p.origin[0]);
+        let dy = py - splat(p.origin[1]);
+        [
+            plane(p.k1, dx, dy),
+            plane(p.k2, dx, dy),
+            plane(p.ks, dx, dy),
+            splat(p.facing),
+        ]
+    }
+
+    /// Source triangle `tri`'s vertex normals weighted by `f` (one weight
+    /// a vertex).
+    #[inline(always)]
+    fn tri_normal<R: Real>(&self, tri: u32, [f0, f1, f2]: [R; 3]) -> V3<R> {
+        let [i0, i1, i2] = self.scene.triangles[tri as usize];
+        let n2 = self.vertex_normal::<R>(i2);
+        n2.mul_add(
+            f2,
+            self.vertex_normal(i1)
+                .mul_add(f1, self.vertex_normal(i0) * f0),
+        )
+    }
+
+    /// Vertex `i`'s normal in every lane.
+    #[inline(always)]
+    fn vertex_normal<R: Real>(&self, i: u32) -> V3<R> {
+        let n = self.scene.normals[i as usize];
+        V3::new(splat(n.x), splat(n.y), splat(n.z))
+    }
+
+    /// [`ResolveContext::resolve`] into `out` of the two packets at pixels x..x + 16
+    /// of row y as one sixteen-lane packet, where both show the one
+    /// triangle of `tris` in every lane (`tris` the first packet's
+    /// grouping). Each lane does what the eight-lane resolve does (the
+    /// second packet's pixel centres x + 8.5 + i are exact either way),
+    /// so the fragments are the same bits, made with half the
+    /// instructions.
+    ///
+    /// # Safety
+    /// The processor has AVX-512F, DQ, VL and BW
+    /// ([`crate::packet_pairs::available`]).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f,avx512dq,avx512vl,avx512bw")]
+    pub(crate) unsafe fn resolve_pair(
+        &self,
+        x: u32,
+        y: u32,
+        tris: &PacketTris,
+        out: &mut [Fragment<specula_core::f32x8>; 2],
+    ) {
+        use crate::lanes16::{fragment_half, F32x16};
+        debug_assert!(tris.n == 1 && tris.covered == 0xFF);
+        let f = self.resolve::<F32x16>(x, y, tris);
+        *out = [fragment_half::<false>(&f), fragment_half::<true>(&f)];
     }
 
     /// Interpolated uv, its analytic screen derivatives and the tangent

@@ -45,6 +45,23 @@ fn store_rgb<R: Real>(rgb: Rgb<R>, color: &mut [&mut [f32]; 3], px: Range<usize>
     store(rgb.z, &mut color[2][px]);
 }
 
+/// Every 8 pixels (each packet; every 8th pixel of the scalar twin), the
+/// first and last triangles of the 8 after those from `at` in `ids` (a
+/// new triangle in a packet is almost always at one of its ends), unless
+/// the packet before them resolves the same one (most packets show one
+/// large triangle, and the hints are not free).
+#[inline(always)]
+fn prefetch_next(ctx: &ResolveContext, ids: &[u32], at: usize) {
+    if let (Some(&a), Some(&b)) = (ids.get(at + 8), ids.get(at + 15)) {
+        if a != ids[at + 7] {
+            ctx.prefetch(a);
+        }
+        if b != a {
+            ctx.prefetch(b);
+        }
+    }
+}
+
 /// Packets the shading pass holds back for one call of their material's
 /// shader ([`ShadeLanes::shade_batch_with`]): the runs of packets of one
 /// material in a tile row (a 64-pixel row is 8 packets of 8 lanes).
@@ -98,6 +115,32 @@ impl<R: ShadeLanes> Batch<R> {
         self.n = i + 1;
         self.frags[i] = resolve();
         &self.frags[i]
+    }
+
+    /// Adds two packets of one triangle over all their lanes, at `px` and
+    /// the next `px.len()` pixels, whose fragments `resolve` writes into
+    /// their places, when it does (it says whether), and when the batch has
+    /// room for both (else the caller flushes it first).
+    #[inline(always)]
+    fn push_pair(
+        &mut self,
+        material: u32,
+        px: Range<usize>,
+        resolve: impl FnOnce(&mut [Fragment<R>; 2]) -> bool,
+    ) -> bool {
+        let i = self.n;
+        let Some(slots) = self.frags.get_mut(i..i + 2) else {
+            return false;
+        };
+        if !resolve(slots.try_into().expect("two slots")) {
+            return false;
+        }
+        self.material = material;
+        self.lanes[i..i + 2].fill((1 << R::LANES) - 1);
+        self.px[i] = px.clone();
+        self.px[i + 1] = px.end..px.end + px.len();
+        self.n = i + 2;
+        true
     }
 
     /// Shades the held packets and writes their colours (the background in
@@ -189,6 +232,9 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
     let mut batch = Batch::<R>::default();
     // A packet's shadow factors per light, when it has several materials.
     let mut factors: Vec<R> = Vec::new();
+    // Two packets of one triangle resolved as one where the processor has
+    // AVX-512 (the fragments are the same bits).
+    let pair_resolve = R::LANES == 8 && ctx.pair_packets && crate::packet_pairs::available();
     for plane in out.color.iter().chain(&out.normal).chain([&out.depth]) {
         plane.prefetch_row(tx as usize, ty as usize);
     }
@@ -226,20 +272,8 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
         while lx < tile_w {
             let at = row * TILE + lx;
             let n_px = R::LANES.min(tile_w - lx);
-            // Every 8 pixels (each packet; every 8th pixel of the scalar
-            // twin), the first and last triangles of the next 8 (a new
-            // triangle in a packet is almost always at one of its ends),
-            // unless this packet resolves the same one (most packets show
-            // one large triangle, and the hints are not free).
             if lx % 8 == 0 {
-                if let (Some(&a), Some(&b)) = (ids.get(at + 8), ids.get(at + 15)) {
-                    if a != ids[at + 7] {
-                        ctx.prefetch(a);
-                    }
-                    if b != a {
-                        ctx.prefetch(b);
-                    }
-                }
+                prefetch_next(ctx, ids, at);
             }
             // A packet showing the previous packet's one triangle in all
             // its lanes keeps that grouping instead of building it again.
@@ -271,6 +305,31 @@ pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
             let batched = R::LANES > 1 && tris.groups == 1 && !ctx.needs_surface[material as usize];
             if batched && (batch.n == BATCH || (batch.n > 0 && batch.material != material)) {
                 batch.flush(scene, &env, background_rgb, &mut color);
+            }
+            // A packet showing one triangle alone is most often followed by
+            // another showing it alone: where `pair_resolve`, the two are
+            // resolved at once and join the batch together.
+            let next = at + R::LANES..at + 2 * R::LANES;
+            if batched
+                && pair_resolve
+                && depth.is_empty()
+                && normal[0].is_empty()
+                && lx + R::LANES <= tile_w
+                && tris.is_one_triangle_of(&ids[next])
+            {
+                if batch.n + 2 > BATCH || (batch.n > 0 && batch.material != material) {
+                    batch.flush(scene, &env, background_rgb, &mut color);
+                }
+                let x = tx + px.start as u32;
+                // SAFETY: `pair_resolve` found AVX-512.
+                let resolve =
+                    |out: &mut _| unsafe { R::resolve_pair(ctx, x, y as u32, &tris, out) };
+                if batch.push_pair(material, px.clone(), resolve) {
+                    prefetch_next(ctx, ids, at + R::LANES);
+                    covered += R::LANES as u64;
+                    lx += R::LANES;
+                    continue;
+                }
             }
             let resolved;
             let frag = if batched {
