@@ -238,7 +238,7 @@ impl ResolveContext<'_> {
     /// triangle's values, so they stay finite; callers mask them.
     ///
     /// No closures here or in the helpers (functions inlined always): the
-    /// sixteen-lane form ([`ResolveContext::resolve_pair`]) inlines all of
+    /// sixteen-lane form (`ResolveContext::resolve_pair`) inlines all of
     /// it into code compiled for AVX-512, which a closure not inlined
     /// would leave as calls.
     #[inline(always)]
