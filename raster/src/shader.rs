@@ -281,42 +281,9 @@ pub(crate) trait ShadeLanes: Real {
         env: &ShadeEnv,
         out: &mut [Rgb<Self>],
     );
-
-    /// The two packets at pixels x..x + 2 · LANES of row y, both showing
-    /// the one triangle of `tris` in every lane, resolved together
-    /// ([`ResolveContext::resolve_pair`](crate::resolve::ResolveContext::resolve_pair)),
-    /// into `out`, where the lane type has such a form: whether it has.
-    ///
-    /// # Safety
-    /// The processor has AVX-512F, DQ, VL and BW
-    /// ([`crate::packet_pairs::available`]).
-    unsafe fn resolve_pair(
-        _ctx: &crate::resolve::ResolveContext,
-        _x: u32,
-        _y: u32,
-        _tris: &crate::resolve::PacketTris,
-        _out: &mut [Fragment<Self>; 2],
-    ) -> bool {
-        false
-    }
 }
 
 impl ShadeLanes for f32x8 {
-    #[inline(always)]
-    unsafe fn resolve_pair(
-        ctx: &crate::resolve::ResolveContext,
-        x: u32,
-        y: u32,
-        tris: &crate::resolve::PacketTris,
-        out: &mut [Fragment<Self>; 2],
-    ) -> bool {
-        // SAFETY: the processor has AVX-512 (this function's contract).
-        #[cfg(target_arch = "x86_64")]
-        unsafe {
-            ctx.resolve_pair(x, y, tris, out)
-        };
-        cfg!(target_arch = "x86_64")
-    }
     #[inline(always)]
     fn shade_with(s: &dyn SurfaceShader, input: &ShadeInput<Self>, env: &ShadeEnv) -> Rgb<Self> {
         s.shade_x8(input, env)

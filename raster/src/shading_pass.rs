@@ -62,6 +62,48 @@ fn prefetch_next(ctx: &ResolveContext, ids: &[u32], at: usize) {
     }
 }
 
+/// The lane types [`shade_tile`] runs, with the pair resolve where one has
+/// it (here, not in `shader.rs`, which `resolve.rs` depends on).
+pub(crate) trait TileLanes: ShadeLanes {
+    /// The two packets at pixels x..x + 2 · LANES of row y, both showing
+    /// the one triangle of `tris` in every lane, resolved together
+    /// ([`ResolveContext::resolve_pair`]) into `out`, where the lane type
+    /// has such a form: whether it has.
+    ///
+    /// # Safety
+    /// The processor has AVX-512F, DQ, VL and BW
+    /// ([`crate::packet_pairs::available`]).
+    unsafe fn resolve_pair(
+        _ctx: &ResolveContext,
+        _x: u32,
+        _y: u32,
+        _tris: &PacketTris,
+        _out: &mut [Fragment<Self>; 2],
+    ) -> bool {
+        false
+    }
+}
+
+impl TileLanes for f32 {}
+
+impl TileLanes for specula_core::f32x8 {
+    #[inline(always)]
+    unsafe fn resolve_pair(
+        ctx: &ResolveContext,
+        x: u32,
+        y: u32,
+        tris: &PacketTris,
+        out: &mut [Fragment<Self>; 2],
+    ) -> bool {
+        // SAFETY: the processor has AVX-512 (this function's contract).
+        #[cfg(target_arch = "x86_64")]
+        unsafe {
+            ctx.resolve_pair(x, y, tris, out)
+        };
+        cfg!(target_arch = "x86_64")
+    }
+}
+
 /// Packets the shading pass holds back for one call of their material's
 /// shader ([`ShadeLanes::shade_batch_with`]): the runs of packets of one
 /// material in a tile row (a 64-pixel row is 8 packets of 8 lanes).
@@ -204,7 +246,7 @@ fn env_background(
 ///
 /// # Safety
 /// The caller hands tile `t` to this call alone (see [`TileWriter`]).
-pub(crate) unsafe fn shade_tile<R: ShadeLanes>(
+pub(crate) unsafe fn shade_tile<R: TileLanes>(
     ctx: &ResolveContext,
     target: &Target,
     t: usize,
