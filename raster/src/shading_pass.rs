@@ -359,7 +359,8 @@ pub(crate) unsafe fn shade_tile<R: TileLanes>(
                 && lx + R::LANES <= tile_w
                 && tris.is_one_triangle_of(&ids[next])
             {
-                if batch.n + 2 > BATCH || (batch.n > 0 && batch.material != material) {
+                // (A batch of another material was flushed just above.)
+                if batch.n + 2 > BATCH {
                     batch.flush(scene, &env, background_rgb, &mut color);
                 }
                 let x = tx + px.start as u32;
