@@ -179,6 +179,8 @@ pub struct RunStats {
     pub blended_samples: u64,
     /// Shadow-map depth passes per frame.
     pub(crate) shadow_passes: u32,
+    /// Shadow-map faces per frame that see nothing (no depth pass).
+    pub(crate) shadow_faces_blank: u32,
     /// One entry per repeat.
     pub(crate) frame_ms: Vec<f64>,
     pub(crate) frames: Vec<FrameTimes>,
@@ -370,6 +372,7 @@ fn run_stats(
         pixels_shaded: s.pixels_shaded,
         blended_samples: s.blended_samples,
         shadow_passes: s.shadow_passes,
+        shadow_faces_blank: s.shadow_faces_blank,
         mpixels_per_s: target.pixel_count() as f64 / (median(&frame_ms) * 1e3),
         frame_ms,
         frames,
@@ -428,7 +431,11 @@ impl RunStats {
             }
             s += &format!("  {name:<11}{v:9.2}");
             if name == "shadow" {
-                s += &format!("   ({} depth passes)", self.shadow_passes);
+                s += &format!("   ({} depth passes", self.shadow_passes);
+                if self.shadow_faces_blank > 0 {
+                    s += &format!(", {} faces seeing nothing", self.shadow_faces_blank);
+                }
+                s += ")";
             }
             if name == "post" && self.post_in_shading {
                 s += "   (exposure, tone map, sRGB encode ran inside shade)";

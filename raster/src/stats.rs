@@ -30,8 +30,12 @@ pub struct FrameStats {
     /// Samples of blended (alphaMode BLEND) surfaces shaded and composited
     /// over the opaque frame: a sample under k of them counts k times.
     pub blended_samples: u64,
-    /// Shadow-map depth passes drawn (a cube map is 6).
+    /// Shadow-map depth passes drawn (a cube map is 6, less its faces
+    /// that see nothing).
     pub shadow_passes: u32,
+    /// Shadow-map faces that see nothing of the scene, given an empty map
+    /// without a depth pass.
+    pub shadow_faces_blank: u32,
     /// Setup's counts over those depth passes (not in `counts`).
     pub shadow_counts: SetupCounts,
 }

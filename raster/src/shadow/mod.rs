@@ -62,6 +62,13 @@ pub(crate) struct Face {
     /// PCF lights: the depth bounds that decide wholly lit and wholly
     /// shadowed lookups without their taps (`lanes.rs`).
     pub(crate) bounds: Option<DepthWindows>,
+    /// Nothing of the scene lies in front of the face (a point light's
+    /// face toward open sky): its depth pass would draw nothing.
+    pub(crate) sees_nothing: bool,
+    /// The size and PCF window of the map with nothing drawn (every depth
+    /// and bound infinity) that `depth` and `bounds` hold, if they hold
+    /// one: a face that sees nothing frame after frame fills it once.
+    pub(crate) blank: Option<(u32, Option<u32>)>,
 }
 
 /// A face's nearest and farthest depth over every window of `window` ×

@@ -212,6 +212,8 @@ fn directional_face(
         near,
         span,
         bounds: None,
+        sees_nothing: false,
+        blank: None,
     }
 }
 
@@ -229,6 +231,10 @@ fn perspective_face(s: &ShadowSettings, pos: Vec3, axis: Vec3, tan_half: f32, b:
         far: f32::INFINITY,
     };
     let view = camera.view(s.map_size, s.map_size);
+    // Every corner of the scene's bounds on or behind the plane through
+    // the light across the axis: each triangle lies behind the near plane
+    // (a positive distance ahead), beyond which setup rejects it whole.
+    let sees_nothing = b.corners().iter().all(|c| axis.dot(*c - pos) <= 0.0);
     Face {
         clip: view.view_proj,
         size: s.map_size,
@@ -240,5 +246,7 @@ fn perspective_face(s: &ShadowSettings, pos: Vec3, axis: Vec3, tan_half: f32, b:
         near,
         span: 0.0,
         bounds: None,
+        sees_nothing,
+        blank: None,
     }
 }

@@ -86,6 +86,7 @@ pub fn render_maps(
         .collect();
     for own in &counts {
         stats.shadow_passes += own.shadow_passes;
+        stats.shadow_faces_blank += own.shadow_faces_blank;
         stats.shadow_counts.add(&own.shadow_counts);
     }
     stats.times.shadow += ms_since(t);
@@ -138,6 +139,7 @@ fn fit_light<'a>(
     for (new, old) in faces.iter_mut().zip(ls.faces.drain(..)) {
         new.depth = old.depth;
         new.bounds = old.bounds;
+        new.blank = old.blank;
     }
     let window = settings.pcf_window();
     ls.faces = faces;
@@ -148,9 +150,19 @@ fn fit_light<'a>(
 }
 
 /// Draws a face's depth pass and keeps its linear depth, row-major, and
-/// with a window its depth bounds over windows of that side.
+/// with a window its depth bounds over windows of that side. A face that
+/// sees nothing gets the map such a pass draws, every texel infinity,
+/// without the pass (unless `setup` is the full reference).
 fn render_face(scene: &SceneData, job: FaceJob, setup: DepthSetup, stats: &mut FrameStats) {
     let FaceJob { face, pass, window } = job;
+    if face.sees_nothing && setup == DepthSetup::DepthOnly {
+        stats.shadow_faces_blank += 1;
+        if face.blank != Some((face.size, window)) {
+            fill_blank(face, window);
+        }
+        return;
+    }
+    face.blank = None;
     let target = Target::new(face.size, face.size).expect("map size checked at load");
     // A perspective face's near plane: at `near` along its axis, half as
     // wide as tan_half × near (its texel is 2 tan_half / size).
@@ -178,10 +190,26 @@ fn render_face(scene: &SceneData, job: FaceJob, setup: DepthSetup, stats: &mut F
         linear,
         stats,
     );
+    fill_bounds(face, window);
+}
+
+/// Fills `face` with the map of a depth pass that draws nothing, and its
+/// bounds over `window`.
+fn fill_blank(face: &mut Face, window: Option<u32>) {
+    let n = face.size as usize;
+    face.depth.clear();
+    face.depth.resize(n * n, f32::INFINITY);
+    fill_bounds(face, window);
+    face.blank = Some((face.size, window));
+}
+
+/// Fills `face`'s depth bounds over windows of side `window` from its
+/// depth (none without a window).
+fn fill_bounds(face: &mut Face, window: Option<u32>) {
     match window {
         Some(window) => {
             let mut bounds = face.bounds.take().unwrap_or_default();
-            bounds.fill(&face.depth, n, window);
+            bounds.fill(&face.depth, face.size as usize, window);
             face.bounds = Some(bounds);
         }
         None => face.bounds = None,
