@@ -181,6 +181,9 @@ pub struct RunStats {
     pub(crate) shadow_passes: u32,
     /// Shadow-map faces per frame that see nothing (no depth pass).
     pub(crate) shadow_faces_blank: u32,
+    /// What setup did with the triangles of a frame's depth passes, all
+    /// of them together (each pass sets up the whole scene).
+    pub(crate) shadow_triangles: ShadowTriangles,
     /// One entry per repeat.
     pub(crate) frame_ms: Vec<f64>,
     pub(crate) frames: Vec<FrameTimes>,
@@ -189,6 +192,34 @@ pub struct RunStats {
     pub(crate) load_ms: f64,
     /// Writing files (PNG/EXR/AOVs); filled in by the caller.
     pub encode_ms: f64,
+}
+
+/// Setup's counts over a frame's shadow-map depth passes.
+#[derive(Clone, Copy, Debug, Default, Serialize)]
+pub struct ShadowTriangles {
+    pub(crate) triangles_in: u64,
+    pub(crate) culled_backface: u64,
+    pub(crate) culled_outside: u64,
+    pub(crate) skipped_invalid: u64,
+    pub(crate) skipped_degenerate: u64,
+    pub(crate) clipped: u64,
+    pub(crate) drawn: u64,
+    pub(crate) no_samples: u64,
+}
+
+impl ShadowTriangles {
+    fn of(c: &specula_raster::setup::SetupCounts) -> ShadowTriangles {
+        ShadowTriangles {
+            triangles_in: c.triangles,
+            culled_backface: c.culled_backface,
+            culled_outside: c.culled_outside,
+            skipped_invalid: c.skipped_invalid,
+            skipped_degenerate: c.skipped_degenerate,
+            clipped: c.clipped,
+            drawn: c.drawn,
+            no_samples: c.no_samples,
+        }
+    }
 }
 
 pub struct Rendered {
@@ -373,6 +404,7 @@ fn run_stats(
         blended_samples: s.blended_samples,
         shadow_passes: s.shadow_passes,
         shadow_faces_blank: s.shadow_faces_blank,
+        shadow_triangles: ShadowTriangles::of(&s.shadow_counts),
         mpixels_per_s: target.pixel_count() as f64 / (median(&frame_ms) * 1e3),
         frame_ms,
         frames,
@@ -410,6 +442,20 @@ impl RunStats {
             self.raster_triangles,
             self.no_samples
         );
+        if self.shadow_passes > 0 {
+            let t = &self.shadow_triangles;
+            s += &format!(
+                "shadow triangles (all depth passes): {} in, {} back-face culled, {} outside, {} invalid, {} degenerate, {} clipped, {} drawn, {} between texel centres\n",
+                t.triangles_in,
+                t.culled_backface,
+                t.culled_outside,
+                t.skipped_invalid,
+                t.skipped_degenerate,
+                t.clipped,
+                t.drawn,
+                t.no_samples
+            );
+        }
         s += &format!("pixels shaded: {}\n", self.pixels_shaded);
         if self.blended_samples > 0 {
             s += &format!("blended samples shaded: {}\n", self.blended_samples);

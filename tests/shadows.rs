@@ -340,6 +340,60 @@ shadows = "{filter}"
     }
 }
 
+/// `--stats` counts the depth passes' triangles: every pass sets up each
+/// of the scene's 14 (a floor of 2, a box of 12), each counted once, and
+/// the box's faces turned away from the light are culled (the floor, not
+/// closed, is not).
+#[test]
+fn stats_count_each_depth_pass_triangle_once() {
+    use specula::render::{render_scene, RenderSettings};
+    let scene = floor_scene(45.0, true, "pcf");
+    let r = render_scene(&scene, &RenderSettings::from_scene(&scene), 0.0).expect("renders");
+    let report = r.stats.report();
+    let number_before = |line: &str, label: &str| -> u64 {
+        let at = line
+            .find(label)
+            .unwrap_or_else(|| panic!("{label:?} in {line}"));
+        let head = line[..at].trim_end();
+        let start = head.rfind([' ', '(']).map_or(0, |i| i + 1);
+        head[start..]
+            .parse()
+            .unwrap_or_else(|e| panic!("{label:?} in {line}: {e}"))
+    };
+    let passes = report
+        .lines()
+        .find(|l| l.starts_with("  shadow ") && l.contains(" depth passes"))
+        .map(|l| number_before(l, " depth passes"))
+        .expect("a shadow line");
+    let line = report
+        .lines()
+        .find(|l| l.starts_with("shadow triangles"))
+        .unwrap_or_else(|| panic!("no shadow triangles line in\n{report}"));
+    let n = |label: &str| number_before(line, label);
+    assert!(passes >= 1, "{report}");
+    assert_eq!(n(" in,"), 14 * passes, "{line}");
+    let parts = [
+        " back-face culled",
+        " outside",
+        " invalid",
+        " degenerate",
+        " clipped",
+        " drawn",
+        " between texel centres",
+    ];
+    // A clipped triangle is also counted by what its pieces did.
+    let accounted: u64 = parts
+        .iter()
+        .filter(|p| **p != " clipped")
+        .map(|p| n(p))
+        .sum();
+    assert_eq!(accounted, n(" in,"), "{line}");
+    // Of the box's six faces the light (down and toward −x) sees the top
+    // and +x ones; −y and −x face away (±z are edge-on).
+    assert!(n(" back-face culled") >= 4 * passes, "{line}");
+    assert!(n(" drawn") >= 2 * passes, "{line}");
+}
+
 /// Area of the intersection of two disks of radii `a` and `b` whose
 /// centres are `d` apart.
 fn disk_overlap(a: f64, b: f64, d: f64) -> f64 {
