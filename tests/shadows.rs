@@ -526,7 +526,9 @@ shadow_map_size = 2048
 /// cube faces (hard and PCF), for PCF radii that take each of its paths
 /// (depth windows, texel grid, taps), and for PCSS (lane by lane); on
 /// single maps (orthographic and perspective), in the light loop's form
-/// too; with points and normals that are now and then not finite.
+/// too (which looks a packet whose lanes all pick one face or cascade up
+/// on that face alone); with points and normals that are now and then not
+/// finite.
 #[test]
 #[allow(clippy::needless_range_loop)]
 fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
@@ -579,15 +581,25 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
                 (lo.min(*p), hi.max(*p))
             });
         let mut shadowed = 0;
-        for _ in 0..4000 {
+        for i in 0..4000 {
             // Points on and above the floor spread over the scene, normals
-            // mostly up, some lanes off.
+            // mostly up, some lanes off; every other packet's points
+            // within 0.1 of one another, as a frame's packets are (so that
+            // they mostly share a cube face or cascade, whose lookup then
+            // runs alone).
             let mut c = [[0.0f32; 8]; 6];
+            let centre = [next(), next() * 2.0, next()];
             for l in 0..8 {
                 let y = if next() < 0.7 { 0.0 } else { next() * 2.0 };
                 c[0][l] = lo.x + (hi.x - lo.x) * next();
                 c[1][l] = y;
                 c[2][l] = lo.z + (hi.z - lo.z) * next();
+                if i % 2 == 1 {
+                    let mut near = |t: f32| t + 0.1 * (next() - 0.5);
+                    c[0][l] = near(lo.x + (hi.x - lo.x) * centre[0]);
+                    c[1][l] = if y == 0.0 { 0.0 } else { near(centre[1]) };
+                    c[2][l] = near(lo.z + (hi.z - lo.z) * centre[2]);
+                }
                 let n = Vec3::new(next() - 0.5, 2.0, next() - 0.5).normalize();
                 (c[3][l], c[4][l], c[5][l]) = (n.x, n.y, n.z);
                 // Now and then a coordinate of the point or the normal

@@ -25,11 +25,12 @@ impl LightShadow {
 
     /// [`LightShadow::visibility_where`] of two packets, one in each half
     /// of sixteen lanes (the packet pairs'): each half's factor, the same
-    /// bits. On a single hard or PCF map the projection and the near
-    /// bounds' verdict "every lane wholly lit" run in sixteen lanes, each
-    /// half ending on it as its own lookup would, and only a half it
-    /// leaves open goes on (out of line, in f32x8). Other lights look each
-    /// half up in f32x8.
+    /// bits. On a single hard or PCF map, or on the one face of several
+    /// that every lane picks ([`LightShadow::one_face_of`]), the
+    /// projection and the near bounds' verdict "every lane wholly lit" run
+    /// in sixteen lanes, each half ending on it as its own lookup would,
+    /// and only a half it leaves open goes on (out of line, in f32x8).
+    /// Other packets look each half up in f32x8.
     #[cfg(target_arch = "x86_64")]
     #[inline(always)]
     pub(crate) fn visibility_where_pair(
@@ -45,7 +46,13 @@ impl LightShadow {
             return F32x16::both(one);
         }
         let (lanes_lo, lanes_hi) = (lanes & 0xFF, lanes >> 8);
-        let Some(face) = self.packet_face() else {
+        // (`match`, not `or_else`: a closure is compiled without the
+        // packet pairs' AVX-512 features.)
+        let face = match self.packet_face() {
+            Some(face) => Some(face),
+            None => self.one_face_of(p, lanes),
+        };
+        let Some(face) = face else {
             return F32x16::from_halves(
                 self.visibility_at(&v3_lo(p), &v3_lo(n), lanes_lo),
                 self.visibility_at(&v3_hi(p), &v3_hi(n), lanes_hi),
@@ -87,17 +94,38 @@ impl LightShadow {
 
     /// [`LightShadow::visibility_lanes`] of the lanes in `lanes`, with the
     /// common lookups' end inline in the caller: on a single hard or PCF
-    /// map, the projection and the near bounds' "every lane wholly lit"
-    /// verdict, the rest out of line. The same bits.
+    /// map (or one face that every lane picks), the projection and the
+    /// near bounds' "every lane wholly lit" verdict, the rest out of line.
+    /// The same bits.
     #[inline(always)]
     pub fn visibility_at<R: Real>(&self, p: &V3<R>, n: &V3<R>, lanes: u32) -> R {
         if lanes == 0 {
             return R::ONE;
         }
-        match self.packet_face() {
+        let face = match self.packet_face() {
+            Some(face) => Some(face),
+            None => self.one_face_of(p, lanes),
+        };
+        match face {
             Some(face) => self.visibility_packet_split(face, p, n, lanes),
             None => self.visibility_lanes(p, n, lanes),
         }
+    }
+
+    /// For a light of several faces whose lookups run on all lanes at once
+    /// (a cube map's, cascades), the face that every lane in `lanes` (not
+    /// none) picks, if they all pick one: most packets lie within one face.
+    /// [`LightShadow::visibility_lanes`] runs that face's lookup alone
+    /// then, under the lanes' mask, which is what the single-face path
+    /// does with it (the same bits).
+    #[inline(always)]
+    fn one_face_of<R: Real>(&self, p: &V3<R>, lanes: u32) -> Option<&Face> {
+        if self.faces.len() < 2 || !self.packet_lookups() {
+            return None;
+        }
+        let masks = self.face_masks(p, lanes);
+        let k = masks.iter().position(|&m| m == lanes)?;
+        self.faces.get(k)
     }
 
     /// The face of a light whose lookups run on all lanes at once with
@@ -174,6 +202,9 @@ impl LightShadow {
 
     /// Per face, the mask of the `lanes` whose point it sees (a lane with
     /// a non-finite point goes to face 0, whose lookup gives it 1).
+    /// Inline: the packet pairs call it on sixteen lanes, which exist only
+    /// in their AVX-512 function.
+    #[inline(always)]
     fn face_masks<R: Real>(&self, p: &V3<R>, lanes: u32) -> [u32; 6] {
         if let (Pick::Cube(c), false) = (&self.pick, R::EXACT) {
             return cube_face_masks(p, *c, lanes);
