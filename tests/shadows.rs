@@ -584,9 +584,9 @@ fn lane_lookups_match_the_scalar_one_across_cascades_and_faces() {
         for i in 0..4000 {
             // Points on and above the floor spread over the scene, normals
             // mostly up, some lanes off; every other packet's points
-            // within 0.1 of one another, as a frame's packets are (so that
-            // they mostly share a cube face or cascade, whose lookup then
-            // runs alone).
+            // within 0.1 of one another across the floor (on it, or at one
+            // height above it), as a frame's packets are, so that many
+            // share a cube face or cascade, whose lookup then runs alone.
             let mut c = [[0.0f32; 8]; 6];
             let centre = [next(), next() * 2.0, next()];
             for l in 0..8 {

@@ -15,9 +15,10 @@
 //! directional lights under a uniform environment, none, or a map lit by
 //! the split sum; frames with polygon lights or the Monte Carlo reference
 //! take the f32x8 path. A light's shadow factor is each half's as the
-//! f32x8 loop looks it up: on one hard or PCF map the lookup's common end
-//! runs in sixteen lanes (`LightShadow::visibility_where_pair`), the rest
-//! per half in f32x8; an environment map's sun's factor is looked up in
+//! f32x8 loop looks it up: on one hard or PCF map, or on the one face of a
+//! cube map or cascade that all sixteen lanes pick, the lookup's common
+//! end runs in sixteen lanes (`LightShadow::visibility_where_pair`), the
+//! rest per half in f32x8; an environment map's sun's factor is looked up in
 //! f32x8, with the map's term then made per packet.
 
 use crate::envmap::{EnvMap, IblMethod};

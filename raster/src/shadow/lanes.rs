@@ -329,6 +329,12 @@ fn row<R: Real>(p: &V3<R>, [a, b, c, d]: [f32; 4]) -> R {
     splat::<R>(a) * p.x + splat::<R>(b) * p.y + splat::<R>(c) * p.z + splat::<R>(d)
 }
 
+/// The lanes where `v` < 0.
+#[inline(always)]
+fn negative<R: Real>(v: R) -> R::Mask {
+    v.lt(R::ZERO)
+}
+
 /// The lanes with |x| ≤ 1 and |y| ≤ 1.
 #[inline(always)]
 fn inside_unit<R: Real>(x: R, y: R) -> R::Mask {
@@ -392,14 +398,14 @@ impl<R: Real> MapPoint<R> {
 /// pick's own values; not for f64 lanes, which it rounds to f32 first).
 #[inline(always)]
 fn cube_face_masks<R: Real>(p: &V3<R>, c: Vec3, lanes: u32) -> [u32; 6] {
-    let k = |x: f32| R::splat(x as f64);
+    let k = splat::<R>;
     let d = V3::new(p.x - k(c.x), p.y - k(c.y), p.z - k(c.z));
     let a = V3::new(d.x.abs(), d.y.abs(), d.z.abs());
     let finite = p.x.is_finite() & p.y.is_finite() & p.z.is_finite();
     let on_x = a.x.ge(a.y) & a.x.ge(a.z);
     let on_y = !on_x & a.y.ge(a.z);
     let on_z = !(on_x | on_y);
-    let neg = |v: R| v.lt(R::ZERO);
+    let neg = negative::<R>;
     // A lane with a non-finite point goes to face 0, as `face_masks` does.
     let bits = |m: R::Mask| m.bits() & lanes;
     let pos_x = bits(!finite | (on_x & !neg(d.x)));
