@@ -118,22 +118,31 @@ impl PacketTris {
     #[inline(always)]
     pub(crate) fn fill(&mut self, ids: &[u32], lanes: usize, ctx: Option<&ResolveContext>) {
         if lanes == 8 {
-            // One vector compare per distinct triangle. The counts live in
-            // registers until the end, and indices are masked to 0..8 (a
-            // no-op: each round clears at least one of the 8 bits of
-            // `todo`), so the loop has no bounds checks or reloads.
+            // One vector compare per run of lanes showing one triangle,
+            // taken in lane order: a run whose triangle an earlier lane
+            // shows was grouped with it. Runs are found at once (each lane
+            // against its left neighbour), so a round does not wait on the
+            // previous one's compare; the counts live in registers until
+            // the end, and indices are masked to 0..8 (a no-op), so the
+            // loop has no bounds checks or reloads.
             let ids: [u32; 8] = ids[..8].try_into().expect("8 ids");
             let v = u32x8::new(ids);
-            let mut todo = !v.simd_eq(u32x8::splat(MISS)).to_bitmask() & 0xFF;
-            self.covered = todo;
+            let covered = !v.simd_eq(u32x8::splat(MISS)).to_bitmask() & 0xFF;
+            self.covered = covered;
+            let same_as_left = v.simd_eq(left_neighbours(v)).to_bitmask();
+            let mut starts = (!same_as_left | 1) & covered;
             let mut n = 0;
-            while todo != 0 {
-                let id = ids[todo.trailing_zeros() as usize & 7];
+            while starts != 0 {
+                let i = starts.trailing_zeros() as usize & 7;
+                starts &= starts - 1;
+                let id = ids[i];
                 let lanes = v.simd_eq(u32x8::splat(id)).to_bitmask();
+                if lanes & ((1 << i) - 1) != 0 {
+                    continue;
+                }
                 self.id[n & 7] = id;
                 self.lanes[n & 7] = lanes;
                 n += 1;
-                todo &= !lanes;
             }
             self.n = n;
         } else {
@@ -183,6 +192,28 @@ impl PacketTris {
         }
         self.groups = groups;
     }
+}
+
+/// Lane i of the result is lane i − 1 of `v` (lane 0 is lane 0).
+#[cfg(all(target_arch = "x86_64", target_feature = "avx2"))]
+#[inline(always)]
+fn left_neighbours(v: u32x8) -> u32x8 {
+    use core::arch::x86_64::{_mm256_permutevar8x32_epi32, _mm256_setr_epi32};
+    // SAFETY: AVX2 is enabled (cfg); register operations only.
+    unsafe {
+        bytemuck::cast(_mm256_permutevar8x32_epi32(
+            bytemuck::cast(v),
+            _mm256_setr_epi32(0, 0, 1, 2, 3, 4, 5, 6),
+        ))
+    }
+}
+
+/// Lane i of the result is lane i − 1 of `v` (lane 0 is lane 0).
+#[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
+#[inline(always)]
+fn left_neighbours(v: u32x8) -> u32x8 {
+    let a = v.to_array();
+    u32x8::new(core::array::from_fn(|i| a[i.saturating_sub(1)]))
 }
 
 /// `c` in every lane.
@@ -513,6 +544,36 @@ mod tests {
                 .map(|i| 1 << i)
                 .sum();
             assert_eq!(p.covered, scalar_covered, "{ids:?}");
+        }
+    }
+
+    /// The 8-lane grouping against one built lane by lane here: the
+    /// distinct ids in order of first appearance, each with the lanes that
+    /// show it; on every packet of ids drawn from three triangles and
+    /// MISS, so that a triangle comes back after another or after a gap.
+    #[test]
+    fn packet_grouping_lists_triangles_in_order_of_first_appearance() {
+        let symbols = [7, 9, 11, MISS];
+        for code in 0..4u32.pow(8) {
+            let ids: [u32; 8] = core::array::from_fn(|i| symbols[(code >> (2 * i)) as usize & 3]);
+            let (mut id, mut lanes) = (Vec::new(), Vec::<u32>::new());
+            for (lane, &x) in ids.iter().enumerate() {
+                if x == MISS {
+                    continue;
+                }
+                match id.iter().position(|&y| y == x) {
+                    Some(t) => lanes[t] |= 1 << lane,
+                    None => {
+                        id.push(x);
+                        lanes.push(1 << lane);
+                    }
+                }
+            }
+            let p = PacketTris::group(&ids, 8);
+            assert_eq!(p.n, id.len(), "{ids:?}");
+            assert_eq!(&p.id[..p.n], &id[..], "{ids:?}");
+            assert_eq!(&p.lanes[..p.n], &lanes[..], "{ids:?}");
+            assert_eq!(p.covered, lanes.iter().fold(0, |a, l| a | l), "{ids:?}");
         }
     }
 
