@@ -107,22 +107,30 @@ fn for_each_triangle<P, const AHEAD: usize>(
     planes: &[P],
     mut scan: impl FnMut(&RasterTri, &P),
 ) {
-    const { assert!(AHEAD >= 2) };
-    let (tri_ahead, planes_ahead) = (AHEAD, AHEAD / 2);
-    let tris = || {
-        chunks
-            .iter()
-            .flat_map(move |c| c.tile_items(t).iter().map(move |&i| &c.tris[i as usize]))
-    };
-    let mut tris_on = tris();
-    tris_on.by_ref().take(tri_ahead).for_each(prefetch);
-    let mut planes_on = tris().skip(planes_ahead);
-    for rt in tris() {
-        if let Some(next) = tris_on.next() {
+    const { assert!(AHEAD >= 2 && AHEAD.is_power_of_two()) };
+    let mut tris = chunks
+        .iter()
+        .flat_map(move |c| c.tile_items(t).iter().map(move |&i| &c.tris[i as usize]));
+    // The next AHEAD triangles, one walk of the chunks' lists: a slot is
+    // fetched as it is filled, and the planes of the triangle AHEAD / 2
+    // places on when it is that near.
+    let mut ring: [Option<&RasterTri>; AHEAD] = [None; AHEAD];
+    for slot in ring.iter_mut() {
+        *slot = tris.next();
+        if let Some(rt) = *slot {
+            prefetch(rt);
+        }
+    }
+    let mut head = 0;
+    while let Some(rt) = ring[head] {
+        let next = tris.next();
+        if let Some(next) = next {
             prefetch(next);
         }
-        if let Some(next) = planes_on.next() {
-            prefetch(&planes[next.tri as usize]);
+        ring[head] = next;
+        head = (head + 1) & (AHEAD - 1);
+        if let Some(soon) = ring[(head + AHEAD / 2 - 1) & (AHEAD - 1)] {
+            prefetch(&planes[soon.tri as usize]);
         }
         scan(rt, &planes[rt.tri as usize]);
     }
