@@ -123,8 +123,9 @@ impl PacketTris {
             // shows was grouped with it. Runs are found at once (each lane
             // against its left neighbour), so a round does not wait on the
             // previous one's compare; the counts live in registers until
-            // the end, and indices are masked to 0..8 (a no-op), so the
-            // loop has no bounds checks or reloads.
+            // the end, and indices are masked to 0..8 (a no-op: they are
+            // bit positions of an 8-bit mask), so the loop has no bounds
+            // checks or reloads.
             let ids: [u32; 8] = ids[..8].try_into().expect("8 ids");
             let v = u32x8::new(ids);
             let covered = !v.simd_eq(u32x8::splat(MISS)).to_bitmask() & 0xFF;
@@ -208,12 +209,20 @@ fn left_neighbours(v: u32x8) -> u32x8 {
     }
 }
 
+/// [`left_neighbours`] lane by lane: the form other targets use, and
+/// what the AVX2 form is tested against.
+#[cfg(any(test, not(all(target_arch = "x86_64", target_feature = "avx2"))))]
+#[inline(always)]
+fn left_neighbours_by_lane(v: u32x8) -> u32x8 {
+    let a = v.to_array();
+    u32x8::new(core::array::from_fn(|i| a[i.saturating_sub(1)]))
+}
+
 /// Lane i of the result is lane i − 1 of `v` (lane 0 is lane 0).
 #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
 #[inline(always)]
 fn left_neighbours(v: u32x8) -> u32x8 {
-    let a = v.to_array();
-    u32x8::new(core::array::from_fn(|i| a[i.saturating_sub(1)]))
+    left_neighbours_by_lane(v)
 }
 
 /// `c` in every lane.
@@ -544,6 +553,20 @@ mod tests {
                 .map(|i| 1 << i)
                 .sum();
             assert_eq!(p.covered, scalar_covered, "{ids:?}");
+        }
+    }
+
+    #[test]
+    fn left_neighbours_shift_lanes_up_by_one() {
+        for seed in 0..64u32 {
+            let v = u32x8::new(core::array::from_fn(|i| {
+                (seed.wrapping_mul(2_654_435_761) ^ (i as u32).wrapping_mul(40_503)) % 5
+            }));
+            let got = left_neighbours(v).to_array();
+            assert_eq!(got, left_neighbours_by_lane(v).to_array(), "{v:?}");
+            let a = v.to_array();
+            assert_eq!(got[0], a[0]);
+            assert!((1..8).all(|i| got[i] == a[i - 1]), "{v:?}");
         }
     }
 

@@ -113,7 +113,9 @@ fn for_each_triangle<P, const AHEAD: usize>(
         .flat_map(move |c| c.tile_items(t).iter().map(move |&i| &c.tris[i as usize]));
     // The next AHEAD triangles, one walk of the chunks' lists: a slot is
     // fetched as it is filled, and the planes of the triangle AHEAD / 2
-    // places on when it is that near.
+    // places on when it is that near. While triangle i is scanned, slot
+    // (head + k) mod AHEAD holds triangle i + k; head has moved on by one
+    // when the planes are fetched, hence the − 1.
     let mut ring: [Option<&RasterTri>; AHEAD] = [None; AHEAD];
     for slot in ring.iter_mut() {
         *slot = tris.next();
