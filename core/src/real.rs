@@ -601,7 +601,12 @@ fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f3
     assert!(table.len().saturating_sub(1) / 3 >= stride.saturating_add(2));
     let same = i.simd_eq(wide::i32x8::splat(i.to_array()[0])).to_bitmask() == 0xFF;
     let i = i.to_array();
-    let base = table.as_ptr();
+    // Each lane's block starts at float 3 × index of the top row and of
+    // the row below it: one address a lane, the offsets constant.
+    let top = table.as_ptr();
+    // SAFETY: stride + 2 texels fit in the table (asserted), so the row
+    // below starts within it.
+    let below = unsafe { top.add(3 * stride) };
     // SAFETY: AVX is enabled (cfg); every index lane is at most
     // (table.len() - 1) / 3 - stride - 2 (clamped by the caller), so the
     // texels at offsets 0, 1, stride and stride + 1 from it start at float
@@ -611,14 +616,17 @@ fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f3
     unsafe {
         if same {
             // Neighbouring pixels reading a coarse level, mostly.
-            let texel = |offset: usize| -> [f32x8; 3] {
-                let at = base.add((i[0] as usize + offset) * 3);
+            let texel = |row: *const f32, offset: usize| -> [f32x8; 3] {
+                let at = row.add(3 * i[0] as usize + offset);
                 core::array::from_fn(|c| f32x8::splat(*at.add(c)))
             };
-            return [[texel(0), texel(1)], [texel(stride), texel(stride + 1)]];
+            return [
+                [texel(top, 0), texel(top, 3)],
+                [texel(below, 0), texel(below, 3)],
+            ];
         }
-        let channels = |offset: usize| -> [f32x8; 3] {
-            let at = |l: usize| _mm_loadu_ps(base.add((i[l] as usize + offset) * 3));
+        let channels = |row: *const f32, offset: usize| -> [f32x8; 3] {
+            let at = |l: usize| _mm_loadu_ps(row.add(3 * i[l] as usize + offset));
             let row = |l: usize| -> __m256 { _mm256_set_m128(at(l + 4), at(l)) };
             // [r0 r1 g0 g1 | r4 r5 g4 g5] and [b0 b1 · · | b4 b5 · ·] of
             // lanes 0, 1 (then 2, 3), then each channel's halves together.
@@ -633,8 +641,8 @@ fn gather_rgb_block_f32x8(table: &[f32], i: wide::i32x8, stride: usize) -> [[[f3
             .map(bytemuck::cast)
         };
         [
-            [channels(0), channels(1)],
-            [channels(stride), channels(stride + 1)],
+            [channels(top, 0), channels(top, 3)],
+            [channels(below, 0), channels(below, 3)],
         ]
     }
 }

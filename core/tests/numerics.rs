@@ -101,6 +101,76 @@ fn gather_reads_the_indexed_values_on_every_lane_type() {
     assert_eq!(g[3], table[36]);
 }
 
+/// f32x8's bilinear footprint read (loads and transposes, or a broadcast
+/// when all lanes read one block) against the scalar definition, lane by
+/// lane: blocks spread over the table, one block in every lane, blocks
+/// in the first and last rows and columns; and lanes past the last block
+/// read the last, negative, NaN or infinite ones the first.
+#[test]
+fn rgb_block_reads_the_footprint_of_each_lane() {
+    let stride = 7;
+    let texels = stride * 6;
+    let table: Vec<f32> = (0..3 * texels + 1)
+        .map(|i| (i as f32 * 0.37).cos())
+        .collect();
+    let last = texels - stride - 2;
+    let patterns: [[usize; 8]; 4] = [
+        core::array::from_fn(|l| (l * 5) % (last + 1)),
+        [9; 8],
+        [
+            0,
+            last,
+            stride - 2,
+            stride - 1,
+            stride,
+            last - 1,
+            1,
+            2 * stride - 1,
+        ],
+        [3, 3, 3, 3, 3, 3, 3, 4],
+    ];
+    for idx in patterns {
+        let got = f32x8::gather_rgb_block(&table, f32x8::from(idx.map(|i| i as f32)), stride);
+        for (l, &i) in idx.iter().enumerate() {
+            let want = f32::gather_rgb_block(&table, i as f32, stride);
+            for (r, c, k) in
+                (0..2).flat_map(|r| (0..2).flat_map(move |c| (0..3).map(move |k| (r, c, k))))
+            {
+                assert_eq!(
+                    got[r][c][k].to_array()[l].to_bits(),
+                    want[r][c][k].to_bits(),
+                    "lane {l} (block {i}), row {r}, column {c}, channel {k}"
+                );
+                assert_eq!(want[r][c][k], table[3 * (i + r * stride + c) + k]);
+            }
+        }
+    }
+    let wild = [
+        -5.0,
+        1e9,
+        f32::NAN,
+        last as f32 + 1.0,
+        -0.0,
+        f32::INFINITY,
+        2.0,
+        0.5,
+    ];
+    // Infinity converts to i32::MIN, as NaN does: block 0.
+    let clamped = [0, last, 0, last, 0, 0, 2, 0];
+    let got = f32x8::gather_rgb_block(&table, f32x8::from(wild), stride);
+    for (l, &i) in clamped.iter().enumerate() {
+        for (r, c, k) in
+            (0..2).flat_map(|r| (0..2).flat_map(move |c| (0..3).map(move |k| (r, c, k))))
+        {
+            assert_eq!(
+                got[r][c][k].to_array()[l],
+                table[3 * (i + r * stride + c) + k],
+                "clamped lane {l}"
+            );
+        }
+    }
+}
+
 /// `gather_run` against its definition, a gather of index + c per float
 /// of the run (each lane's own value, the scalar gather's): runs read by
 /// loads (every lane's 8 floats in the table, integral indices) and runs

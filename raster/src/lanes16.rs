@@ -359,22 +359,106 @@ impl Real for F32x16 {
             <f32x8 as Real>::gather(table, index.hi()),
         )
     }
+    /// f32x8's blocks on each half, read in sixteen lanes at once: the
+    /// same clamp of the indices, then one 16-byte load a texel into a
+    /// quarter of a register and one 4 × 4 transpose per 128-bit quarter
+    /// ([`rgb_channels`]), or the twelve floats broadcast when all sixteen
+    /// lanes read one block.
     #[inline(always)]
     fn gather_rgb_block(table: &[f32], index: Self, stride: usize) -> [[[Self; 3]; 2]; 2] {
-        let lo = <f32x8 as Real>::gather_rgb_block(table, index.lo(), stride);
-        let hi = <f32x8 as Real>::gather_rgb_block(table, index.hi(), stride);
-        // Loops, not `from_fn`'s closures: a closure is compiled without
-        // the AVX-512 features of the packet pairs' function.
-        let mut out = [[[F32x16::both(f32x8::ZERO); 3]; 2]; 2];
-        for r in 0..2 {
-            for c in 0..2 {
-                for k in 0..3 {
-                    out[r][c][k] = F32x16::from_halves(lo[r][c][k], hi[r][c][k]);
-                }
+        let texels = table.len().saturating_sub(1) / 3;
+        assert!(texels >= stride.saturating_add(2));
+        let last = (texels - (stride + 2)).min(i32::MAX as usize) as i32;
+        let i = avx512!(_mm512_min_epi32(
+            _mm512_max_epi32(_mm512_cvttps_epi32(index.0), _mm512_setzero_si512()),
+            _mm512_set1_epi32(last),
+        ));
+        let first = avx512!(_mm_cvtsi128_si32(_mm512_castsi512_si128(i)));
+        let same = avx512!(_mm512_cmpeq_epi32_mask(i, _mm512_set1_epi32(first))) == u16::MAX;
+        let mut lanes = [0i32; 16];
+        avx512!(_mm512_storeu_si512(lanes.as_mut_ptr().cast(), i));
+        // Each lane's block starts at float 3 × index of the top row and
+        // of the row below it.
+        let top = table.as_ptr();
+        // SAFETY: stride + 1 ≤ texels (asserted), so the row below starts
+        // within the table.
+        let below = unsafe { top.add(3 * stride) };
+        // SAFETY: every lane is at most texels − stride − 2 (clamped), so
+        // the texels at offsets 0, 1, stride and stride + 1 from it are at
+        // most texel texels − 1, which starts at float 3 texels − 3: its
+        // 16 bytes end at float 3 texels, within the table (at least
+        // 3 texels + 1 floats); the loads need no alignment. AVX-512 as
+        // `avx512!`.
+        unsafe {
+            if same {
+                // Neighbouring pixels reading a coarse level, mostly.
+                let at = first as usize * 3;
+                let (a, b) = (top.add(at), below.add(at));
+                return [
+                    [broadcast_rgb(a), broadcast_rgb(a.add(3))],
+                    [broadcast_rgb(b), broadcast_rgb(b.add(3))],
+                ];
             }
+            [
+                [rgb_channels(top, &lanes, 0), rgb_channels(top, &lanes, 3)],
+                [
+                    rgb_channels(below, &lanes, 0),
+                    rgb_channels(below, &lanes, 3),
+                ],
+            ]
         }
-        out
     }
+}
+
+/// The three floats at `at`, each in every lane.
+///
+/// # Safety
+/// `at..at + 3` is readable; AVX-512 as [`F32x16`]'s module says.
+#[inline(always)]
+unsafe fn broadcast_rgb(at: *const f32) -> [F32x16; 3] {
+    [
+        F32x16(_mm512_set1_ps(*at)),
+        F32x16(_mm512_set1_ps(*at.add(1))),
+        F32x16(_mm512_set1_ps(*at.add(2))),
+    ]
+}
+
+/// The 16 bytes at float `row + 3 × lanes[l] + offset`.
+///
+/// # Safety
+/// They are readable.
+#[inline(always)]
+unsafe fn texel(row: *const f32, lanes: &[i32; 16], l: usize, offset: usize) -> __m128 {
+    _mm_loadu_ps(row.add(3 * lanes[l] as usize + offset))
+}
+
+/// The RGB texel at float `row + 3 × lanes[l] + offset` of each lane l,
+/// as three channels. Each texel is one 16-byte load into a 128-bit
+/// quarter: quarter q of register k holds lane 4q + k, so that a 4 × 4
+/// transpose within each quarter (two unpacks, then a shuffle a channel)
+/// leaves lane l in position l.
+///
+/// # Safety
+/// Each lane's 16 bytes are readable; AVX-512 as [`F32x16`]'s module
+/// says.
+#[inline(always)]
+unsafe fn rgb_channels(row: *const f32, lanes: &[i32; 16], offset: usize) -> [F32x16; 3] {
+    let mut quarters = [_mm512_setzero_ps(); 4];
+    for (k, q) in quarters.iter_mut().enumerate() {
+        let v = _mm512_castps128_ps512(texel(row, lanes, k, offset));
+        let v = _mm512_insertf32x4::<1>(v, texel(row, lanes, k + 4, offset));
+        let v = _mm512_insertf32x4::<2>(v, texel(row, lanes, k + 8, offset));
+        *q = _mm512_insertf32x4::<3>(v, texel(row, lanes, k + 12, offset));
+    }
+    let [a, b, c, d] = quarters;
+    // Per quarter: [r_a r_b g_a g_b] and [b_a b_b · ·], and so for c, d.
+    let (ab_lo, ab_hi) = (_mm512_unpacklo_ps(a, b), _mm512_unpackhi_ps(a, b));
+    let (cd_lo, cd_hi) = (_mm512_unpacklo_ps(c, d), _mm512_unpackhi_ps(c, d));
+    [
+        F32x16(_mm512_shuffle_ps::<0b01_00_01_00>(ab_lo, cd_lo)),
+        F32x16(_mm512_shuffle_ps::<0b11_10_11_10>(ab_lo, cd_lo)),
+        F32x16(_mm512_shuffle_ps::<0b01_00_01_00>(ab_hi, cd_hi)),
+    ]
 }
 
 #[cfg(test)]
@@ -594,6 +678,43 @@ mod tests {
             (0..2).flat_map(|r| (0..2).flat_map(move |c| (0..3).map(move |k| (r, c, k))))
         {
             same(block[r][c][k], g0[r][c][k], g1[r][c][k], "gather_rgb_block");
+        }
+    }
+
+    /// The sixteen-lane block read against f32x8's on each half, bit for
+    /// bit: distinct blocks, one block in all lanes (the broadcast), one
+    /// in a half only, and indices the clamp moves (negative, NaN,
+    /// infinite, past the last block, fractional).
+    #[test]
+    fn rgb_blocks_match_f32x8_on_each_half() {
+        if !available() {
+            eprintln!("skipped: this processor has no AVX-512F/DQ/VL/BW");
+            return;
+        }
+        let stride = 9;
+        let texels = stride * (stride - 1);
+        let table: Vec<f32> = (0..3 * texels + 1)
+            .map(|i| (i as f32).sin() * 7.0)
+            .collect();
+        let last = (texels - stride - 2) as f32;
+        let patterns: [[f32; 16]; 6] = [
+            core::array::from_fn(|l| (l * 3) as f32),
+            [5.0; 16],
+            core::array::from_fn(|l| if l < 8 { 11.0 } else { l as f32 }),
+            core::array::from_fn(|l| if l < 8 { l as f32 * 2.5 } else { 0.0 }),
+            core::array::from_fn(|l| SPECIAL[l]),
+            core::array::from_fn(|l| last - 3.0 + l as f32 * 0.75),
+        ];
+        for index in patterns {
+            let (i0, i1) = halves(index);
+            let block = F32x16::gather_rgb_block(&table, x16(index), stride);
+            let g0 = <f32x8 as Real>::gather_rgb_block(&table, i0, stride);
+            let g1 = <f32x8 as Real>::gather_rgb_block(&table, i1, stride);
+            for (r, c, k) in
+                (0..2).flat_map(|r| (0..2).flat_map(move |c| (0..3).map(move |k| (r, c, k))))
+            {
+                same(block[r][c][k], g0[r][c][k], g1[r][c][k], "gather_rgb_block");
+            }
         }
     }
 }
