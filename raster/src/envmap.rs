@@ -28,7 +28,7 @@
 //!   [`crate::envmap_reference`]).
 
 use crate::envmap_sun::Sun;
-use crate::equirect::{clamp_texel, dir_to_uv, uv_to_dir, Equirect, MAX_TEXEL};
+use crate::equirect::{clamp_texel, dir_to_uv, dir_to_uv_lanes, uv_to_dir, Equirect, MAX_TEXEL};
 use specula_core::{Constant, Mask, Real, Rgb, V3};
 
 /// How a map lights surfaces.
@@ -350,11 +350,17 @@ impl EnvMap {
         [c * d[0] + s * d[2], d[1], -s * d[0] + c * d[2]]
     }
 
-    /// Radiance seen along world direction `d` (bilinear; the background).
-    pub(crate) fn radiance(&self, d: [f32; 3]) -> [f32; 3] {
-        let m = self.to_map(V3::new(d[0], d[1], d[2]));
-        let l = (m.x * m.x + m.y * m.y + m.z * m.z).sqrt().max(1e-30);
-        let (u, v) = dir_to_uv([m.x / l, m.y / l, m.z / l]);
+    /// The source's (u, v) toward world directions `d` (any nonzero
+    /// length), per lane: where [`EnvMap::radiance_at`] reads the
+    /// background.
+    #[inline(always)]
+    pub(crate) fn uv_toward<R: Real>(&self, d: V3<R>) -> (R, R) {
+        dir_to_uv_lanes(self.to_map(d))
+    }
+
+    /// The source's bilinear radiance at (u, v) ∈ [0, 1]².
+    #[inline]
+    pub(crate) fn radiance_at(&self, u: f32, v: f32) -> [f32; 3] {
         self.source.bilinear(u, v)
     }
 

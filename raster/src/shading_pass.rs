@@ -218,7 +218,8 @@ impl<R: ShadeLanes> Batch<R> {
 
 /// The map's radiance along the primary ray of every pixel of a tile row
 /// that no triangle covers (`ids` the row's, from pixel `x0` of image row
-/// `y`).
+/// `y`): each pixel's ray turned into the map's (u, v) eight at a time
+/// ([`EnvMap::uv_toward`]), then read bilinearly.
 #[cold]
 fn env_background(
     map: &crate::envmap::EnvMap,
@@ -227,16 +228,32 @@ fn env_background(
     ids: &[u32],
     color: &mut [&mut [f32]; 3],
 ) {
+    use specula_core::f32x8;
     let ny = 1.0 - (y as f32 + 0.5) * 2.0 / view.height;
-    for (i, &id) in ids.iter().enumerate() {
-        if id != crate::target::MISS {
+    let up = view.forward + view.up * (ny * view.tan_y);
+    let lane = <f32x8 as Real>::lane_index();
+    for (k, ids) in ids.chunks(8).enumerate() {
+        if ids.iter().all(|&id| id != crate::target::MISS) {
             continue;
         }
-        let nx = (x0 as f32 + i as f32 + 0.5) * 2.0 / view.width - 1.0;
-        let d = view.forward + view.right * (nx * view.tan_x) + view.up * (ny * view.tan_y);
-        let l = map.radiance(d.normalize().to_array());
-        for c in 0..3 {
-            color[c][i] = l[c];
+        let first = x0 + 8 * k;
+        let px = lane + f32x8::splat(first as f32 + 0.5);
+        let nx = px * f32x8::splat(2.0 / view.width) - f32x8::ONE;
+        let nx = nx * f32x8::splat(view.tan_x);
+        let d = V3::new(
+            nx.mul_add(f32x8::splat(view.right.x), f32x8::splat(up.x)),
+            nx.mul_add(f32x8::splat(view.right.y), f32x8::splat(up.y)),
+            nx.mul_add(f32x8::splat(view.right.z), f32x8::splat(up.z)),
+        );
+        let (u, v) = map.uv_toward(d);
+        let (u, v) = (u.to_array(), v.to_array());
+        for (l, &id) in ids.iter().enumerate() {
+            if id == crate::target::MISS {
+                let rgb = map.radiance_at(u[l], v[l]);
+                for c in 0..3 {
+                    color[c][8 * k + l] = rgb[c];
+                }
+            }
         }
     }
 }
