@@ -272,9 +272,11 @@ fn the_map_is_the_background() {
 
 /// Every background pixel is the map read bilinearly (wrapping across
 /// the seam, clamped at the poles) where its primary ray points, computed
-/// here in f64 from the camera's definition and the equirectangular
-/// convention (u = 1/2 + atan2(x, −z)/2π, v = acos(y)/π), on a map that
-/// varies in both axes: relative 1e-4.
+/// here in f64 from the camera's definition, the map's `rotate` (the map
+/// turned about +Y, so a ray reads it turned back) and the
+/// equirectangular convention (u = 1/2 + atan2(x, −z)/2π,
+/// v = acos(y)/π), on a map that varies in both axes: relative 1e-4. The
+/// image is 45 pixels wide, so a tile row ends in a part of eight.
 #[test]
 fn the_background_is_the_map_along_each_primary_ray() {
     let (w, h) = (64u32, 32u32);
@@ -284,17 +286,21 @@ fn the_background_is_the_map_along_each_primary_ray() {
     });
     let map = decode_equirect("sky.hdr", &hdr).unwrap();
     let m = "model = \"lambert\"\nbase_color = [0.5, 0.5, 0.5]";
+    let rotate = 30f64;
     let load = |env: &str| {
-        let scene = scene_with(&sphere_scene(env, m), vec![("sky.hdr", hdr.clone())]).unwrap();
+        let toml = sphere_scene(&format!("{env}\nrotate = {rotate:.1}"), m)
+            .replace("width = 48", "width = 45");
+        let scene = scene_with(&toml, vec![("sky.hdr", hdr.clone())]).unwrap();
         render_hdr(&scene)
     };
     let (shown, hidden) = (
         load("map = \"sky.hdr\""),
         load("map = \"sky.hdr\"\nvisible = false"),
     );
+    let (cos, sin) = (rotate.to_radians().cos(), rotate.to_radians().sin());
     // The scene's camera: at +4 Z looking down −Z, +Y up, 40° vertically,
-    // 48 × 32 pixels.
-    let (pw, ph) = (48usize, 32usize);
+    // 45 × 32 pixels.
+    let (pw, ph) = (45usize, 32usize);
     let tan_y = 20f64.to_radians().tan();
     let tan_x = tan_y * pw as f64 / ph as f64;
     let texel = |i: i64, j: i64| {
@@ -312,7 +318,13 @@ fn the_background_is_the_map_along_each_primary_ray() {
             background += 1;
             let nx = (x as f64 + 0.5) * 2.0 / pw as f64 - 1.0;
             let ny = 1.0 - (y as f64 + 0.5) * 2.0 / ph as f64;
-            let d = [nx * tan_x, ny * tan_y, -1.0];
+            let world = [nx * tan_x, ny * tan_y, -1.0];
+            // Turned by −rotate about +Y into the map's frame.
+            let d = [
+                cos * world[0] - sin * world[2],
+                world[1],
+                sin * world[0] + cos * world[2],
+            ];
             let len = (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
             let u = 0.5 + d[0].atan2(-d[2]) / std::f64::consts::TAU;
             let v = (d[1] / len).acos() / std::f64::consts::PI;

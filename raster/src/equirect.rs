@@ -92,8 +92,8 @@ impl Equirect {
 
 /// Map direction of any nonzero length → (u, v), per lane: u as
 /// [`dir_to_uv`]'s, v = acos(y / |d|) / π as atan2(√(x² + z²), y) / π
-/// (exact near the poles too, and no normalisation). Within 3e-7 of the
-/// definition in f64 (`lane_uv_matches_the_definition`).
+/// (accurate near the poles too, and no normalisation); checked against
+/// the definition in f64 by `lane_uv_matches_the_definition`.
 #[inline(always)]
 pub(crate) fn dir_to_uv_lanes<R: Real>(d: V3<R>) -> (R, R) {
     let u =

@@ -375,12 +375,10 @@ impl Real for F32x16 {
         ));
         let first = avx512!(_mm_cvtsi128_si32(_mm512_castsi512_si128(i)));
         let same = avx512!(_mm512_cmpeq_epi32_mask(i, _mm512_set1_epi32(first))) == u16::MAX;
-        let mut lanes = [0i32; 16];
-        avx512!(_mm512_storeu_si512(lanes.as_mut_ptr().cast(), i));
         // Each lane's block starts at float 3 × index of the top row and
         // of the row below it.
         let top = table.as_ptr();
-        // SAFETY: stride + 1 ≤ texels (asserted), so the row below starts
+        // SAFETY: texels ≥ stride + 2 (asserted), so the row below starts
         // within the table.
         let below = unsafe { top.add(3 * stride) };
         // SAFETY: every lane is at most texels − stride − 2 (clamped), so
@@ -399,6 +397,8 @@ impl Real for F32x16 {
                     [broadcast_rgb(b), broadcast_rgb(b.add(3))],
                 ];
             }
+            let mut lanes = [0i32; 16];
+            _mm512_storeu_si512(lanes.as_mut_ptr().cast(), i);
             [
                 [rgb_channels(top, &lanes, 0), rgb_channels(top, &lanes, 3)],
                 [
@@ -435,8 +435,8 @@ unsafe fn texel(row: *const f32, lanes: &[i32; 16], l: usize, offset: usize) -> 
 /// The RGB texel at float `row + 3 × lanes[l] + offset` of each lane l,
 /// as three channels. Each texel is one 16-byte load into a 128-bit
 /// quarter: quarter q of register k holds lane 4q + k, so that a 4 × 4
-/// transpose within each quarter (two unpacks, then a shuffle a channel)
-/// leaves lane l in position l.
+/// transpose within each quarter (four unpacks, then a shuffle a
+/// channel) leaves lane l in position l.
 ///
 /// # Safety
 /// Each lane's 16 bytes are readable; AVX-512 as [`F32x16`]'s module
@@ -683,8 +683,9 @@ mod tests {
 
     /// The sixteen-lane block read against f32x8's on each half, bit for
     /// bit: distinct blocks, one block in all lanes (the broadcast), one
-    /// in a half only, and indices the clamp moves (negative, NaN,
-    /// infinite, past the last block, fractional).
+    /// in a half only, one lane apart at each position, and indices the
+    /// clamp moves (negative, NaN, infinite, past the last block,
+    /// fractional), some of them into one block.
     #[test]
     fn rgb_blocks_match_f32x8_on_each_half() {
         if !available() {
@@ -697,14 +698,21 @@ mod tests {
             .map(|i| (i as f32).sin() * 7.0)
             .collect();
         let last = (texels - stride - 2) as f32;
-        let patterns: [[f32; 16]; 6] = [
+        let mut patterns: Vec<[f32; 16]> = vec![
             core::array::from_fn(|l| (l * 3) as f32),
             [5.0; 16],
             core::array::from_fn(|l| if l < 8 { 11.0 } else { l as f32 }),
             core::array::from_fn(|l| if l < 8 { l as f32 * 2.5 } else { 0.0 }),
             core::array::from_fn(|l| SPECIAL[l]),
             core::array::from_fn(|l| last - 3.0 + l as f32 * 0.75),
+            // One block only after the clamp: the broadcast.
+            core::array::from_fn(|l| [-3.0, f32::NAN, -0.5, 0.0][l % 4]),
+            core::array::from_fn(|l| last + l as f32),
         ];
+        // One lane reading another block, at each position.
+        for odd in 0..16 {
+            patterns.push(core::array::from_fn(|l| if l == odd { 20.0 } else { 7.0 }));
+        }
         for index in patterns {
             let (i0, i1) = halves(index);
             let block = F32x16::gather_rgb_block(&table, x16(index), stride);

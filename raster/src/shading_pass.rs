@@ -230,7 +230,7 @@ fn env_background(
 ) {
     use specula_core::f32x8;
     let ny = 1.0 - (y as f32 + 0.5) * 2.0 / view.height;
-    let up = view.forward + view.up * (ny * view.tan_y);
+    let row_ray = view.forward + view.up * (ny * view.tan_y);
     let lane = <f32x8 as Real>::lane_index();
     for (k, ids) in ids.chunks(8).enumerate() {
         if ids.iter().all(|&id| id != crate::target::MISS) {
@@ -241,9 +241,9 @@ fn env_background(
         let nx = px * f32x8::splat(2.0 / view.width) - f32x8::ONE;
         let nx = nx * f32x8::splat(view.tan_x);
         let d = V3::new(
-            nx.mul_add(f32x8::splat(view.right.x), f32x8::splat(up.x)),
-            nx.mul_add(f32x8::splat(view.right.y), f32x8::splat(up.y)),
-            nx.mul_add(f32x8::splat(view.right.z), f32x8::splat(up.z)),
+            nx.mul_add(f32x8::splat(view.right.x), f32x8::splat(row_ray.x)),
+            nx.mul_add(f32x8::splat(view.right.y), f32x8::splat(row_ray.y)),
+            nx.mul_add(f32x8::splat(view.right.z), f32x8::splat(row_ray.z)),
         );
         let (u, v) = map.uv_toward(d);
         let (u, v) = (u.to_array(), v.to_array());
