@@ -243,7 +243,7 @@ fn cache_key(bytes: &[u8], intensity: f32) -> String {
     h.update(intensity.to_le_bytes());
     let d = h.finalize();
     let hex: String = d[..12].iter().map(|b| format!("{b:02x}")).collect();
-    format!("envmap-v5-{hex}")
+    format!("envmap-v6-{hex}")
 }
 
 /// Layout of a cached file (f32 little-endian): the 27 SH values, a flag

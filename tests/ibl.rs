@@ -372,19 +372,35 @@ impl BrdfVisitor for Pair<'_> {
 }
 
 /// Where a variant reads the prefiltered chain for a lobe about world
-/// normal n at perceptual roughness r, seen from wo.
-type Reading = fn(V3<f64>, V3<f64>, f64) -> V3<f64>;
+/// normal n at perceptual roughness r, seen from wo: a direction and the
+/// roughness to read there.
+type Reading = fn(V3<f64>, V3<f64>, f64) -> (V3<f64>, f64);
 
 /// The mirror direction of wo about n.
-fn mirror(n: V3<f64>, wo: V3<f64>, _r: f64) -> V3<f64> {
+fn mirror_dir(n: V3<f64>, wo: V3<f64>) -> V3<f64> {
     n * (2.0 * n.dot(wo)) - wo
 }
 
-/// Filament's dominant direction: lerp(r, n, α²).
-fn filament(n: V3<f64>, wo: V3<f64>, r: f64) -> V3<f64> {
-    let m = mirror(n, wo, r);
+/// Along the mirror direction, at the lobe's roughness.
+fn mirror(n: V3<f64>, wo: V3<f64>, r: f64) -> (V3<f64>, f64) {
+    (mirror_dir(n, wo), r)
+}
+
+/// Along Filament's dominant direction lerp(r, n, α²), at the lobe's
+/// roughness.
+fn filament(n: V3<f64>, wo: V3<f64>, r: f64) -> (V3<f64>, f64) {
+    let m = mirror_dir(n, wo);
     let a2 = r.powi(4);
-    m + (n - m) * a2
+    (m + (n - m) * a2, r)
+}
+
+/// Along the dominant direction of \[Lagarde14\] (listing 22),
+/// lerp(n, r, s (√s + α)) with s = 1 − α, at the lobe's roughness.
+fn lagarde(n: V3<f64>, wo: V3<f64>, r: f64) -> (V3<f64>, f64) {
+    let m = mirror_dir(n, wo);
+    let alpha = r * r;
+    let s = (1.0 - alpha).clamp(0.0, 1.0);
+    (n + (m - n) * (s * (s.sqrt() + alpha)), r)
 }
 
 /// The split sum with the glossy lobes (the base's and a coat's, whose
@@ -401,10 +417,11 @@ fn variant(
     reading: Reading,
     base_r: f64,
 ) -> [f64; 3] {
-    let dom = |r: f64| specula_raster::prefilter_direction(n, wo, r);
+    let read = |(d, r): (V3<f64>, f64)| map.prefiltered(d, r);
+    let now = |r: f64| read(specula_raster::prefilter_reading(n, wo, r));
     let (r, rc) = (lobes.roughness, lobes.coat_roughness);
-    let ds = map.prefiltered(reading(n, wo, base_r), base_r) - map.prefiltered(dom(r), r);
-    let dc = map.prefiltered(reading(n, wo, rc), rc) - map.prefiltered(dom(rc), rc);
+    let ds = read(reading(n, wo, base_r)) - now(r);
+    let dc = read(reading(n, wo, rc)) - now(rc);
     let s = lobes.specular;
     [
         split[0] + s.x * ds.x + lobes.coat * dc.x,
@@ -478,7 +495,7 @@ fn radiance_along(source: &Equirect, frame: &ShadingFrame<f64>, l: V3<f64>) -> [
 /// What the prefiltered chain approximates at world direction `r` and
 /// GGX `alpha`, by quadrature instead of the chain's levels: the mean of
 /// `source` (a map without rotation) under the prefiltering's kernel,
-/// D(h) (n·l) with n = v = r, over a 160 × 160 midpoint grid of
+/// D(h) G1(l) with n = v = r, over a 160 × 160 midpoint grid of
 /// D(h) cos θh-distributed half vectors. Tells the chain's own error
 /// (sample count, level sizes, the source's mips, the blend of two
 /// levels) from the split sum's.
@@ -496,11 +513,12 @@ fn exact_prefiltered(source: &Equirect, r: V3<f64>, alpha: f64) -> [f64; 3] {
             if l.z <= 0.0 {
                 continue;
             }
+            let w = 1.0 / (1.0 + specula_core::masking::lambda_ggx(alpha, l.z));
             let c = radiance_along(source, &frame, l);
             for k in 0..3 {
-                sum[k] += c[k] * l.z;
+                sum[k] += c[k] * w;
             }
-            wsum += l.z;
+            wsum += w;
         }
     }
     sum.map(|x| x / wsum)
@@ -520,8 +538,9 @@ fn level_of_resultant(r_w: f64, rk: &[f64; 6]) -> f64 {
 /// spread over the sphere by a Fibonacci lattice, views at 10°–75° from
 /// them), relative error of the luminance, mean and worst. Then the mean
 /// error of variants of the split sum at the same points: the glossy
-/// lobes read along the mirror direction or along Filament's dominant
-/// direction instead of [`specula_raster::prefilter_direction`]'s, and
+/// lobes read along the mirror direction, along Filament's dominant
+/// direction or along Lagarde's, each at the lobe's roughness, instead of
+/// where and as wide as [`specula_raster::prefilter_reading`] says, and
 /// Beckmann and GTR lobes read at their own α instead of their GGX
 /// equivalent, and the base's lobe read along its mean direction at the
 /// level position of its mean's length (`lobe_mean`: exact for radiance
@@ -588,7 +607,7 @@ fn split_sum_against_reference_table() {
             // along Filament's, at the NDF's own α, along the lobe's mean,
             // the chain's kernel by quadrature, and the lobe's own mean
             // radiance.
-            let mut var_sum = [0.0f64; 6];
+            let mut var_sum = [0.0f64; 7];
             let n_points = 96;
             let mut counted = 0;
             for k in 0..n_points {
@@ -626,11 +645,14 @@ fn split_sum_against_reference_table() {
                 counted += 1;
                 let wo_world = frame.t * wo.x + frame.b * wo.y + frame.n * wo.z;
                 let rs = lobes.roughness;
-                let dominant: Reading = |n, wo, r| specula_raster::prefilter_direction(n, wo, r);
                 let readings = [
                     (mirror as Reading, rs),
                     (filament as Reading, rs),
-                    (dominant, own_alpha.map_or(rs, f64::sqrt)),
+                    (lagarde as Reading, rs),
+                    (
+                        specula_raster::prefilter_reading as Reading,
+                        own_alpha.map_or(rs, f64::sqrt),
+                    ),
                 ];
                 for (acc, (reading, base_r)) in var_sum.iter_mut().zip(readings) {
                     let v = variant(ss, &lobes, map, frame.n, wo_world, reading, base_r);
@@ -639,8 +661,8 @@ fn split_sum_against_reference_table() {
                 // The split sum's error with the base's lobe read as `p`
                 // instead of the chain's value where it reads it.
                 let alpha = (rs * rs).max(1e-3);
-                let dom = specula_raster::prefilter_direction(frame.n, wo_world, rs);
-                let at = map.prefiltered(dom, rs);
+                let (dom, read_r) = specula_raster::prefilter_reading(frame.n, wo_world, rs);
+                let at = map.prefiltered(dom, read_r);
                 let s = lobes.specular;
                 let base_read_as = |p: [f64; 3]| {
                     let v = [
@@ -656,12 +678,13 @@ fn split_sum_against_reference_table() {
                 let d = m * (1.0 / m.length());
                 let d_world = frame.t * d.x + frame.b * d.y + frame.n * d.z;
                 let p = map.prefiltered_at(d_world, level_of_resultant(m.length(), &rk));
-                var_sum[3] += base_read_as([p.x, p.y, p.z]);
-                // From the chain's kernel integrated exactly, where the
-                // chain reads it.
-                var_sum[4] += base_read_as(exact_prefiltered(chain_source, dom, alpha));
+                var_sum[4] += base_read_as([p.x, p.y, p.z]);
+                // From the chain's kernel integrated exactly, where and
+                // as wide as the chain is read.
+                let read_alpha = (read_r * read_r).max(1e-3);
+                var_sum[5] += base_read_as(exact_prefiltered(chain_source, dom, read_alpha));
                 // As the lobe's own mean radiance.
-                var_sum[5] += base_read_as(lobe_mean_radiance(chain_source, &frame, wo, alpha));
+                var_sum[6] += base_read_as(lobe_mean_radiance(chain_source, &frame, wo, alpha));
             }
             let c = counted.max(1) as f64;
             println!(
@@ -678,8 +701,8 @@ fn split_sum_against_reference_table() {
         }
     }
     println!();
-    println!("| material | map | as computed | along the mirror | Filament's lerp(r, n, α²) | at the NDF's own α | along the lobe's mean | the chain's kernel exactly | the lobe's mean radiance |");
-    println!("|---|---|---|---|---|---|---|---|---|");
+    println!("| material | map | as computed | along the mirror | Filament's lerp(r, n, α²) | Lagarde's dominant direction | at the NDF's own α | along the lobe's mean | the chain's kernel exactly | the lobe's mean radiance |");
+    println!("|---|---|---|---|---|---|---|---|---|---|");
     for v in variants {
         println!("{v}");
     }
@@ -902,11 +925,14 @@ fn clearcoat_with_its_own_normal_against_the_reference() {
         // coat's roughness; and, the former reading, on the base's lobe.
         let n = frame.n;
         let nc_world = frame.t * nc.x + frame.b * nc.y + frame.n * nc.z;
-        let dir = |n: V3<f64>, r: f64| specula_raster::prefilter_direction(n, wo_world, r);
+        let read = |n: V3<f64>, r: f64| {
+            let (d, r) = specula_raster::prefilter_reading(n, wo_world, r);
+            map.prefiltered(d, r)
+        };
         let (r, rc) = (lobes.roughness, lobes.coat_roughness);
-        let coat_part = map.prefiltered(dir(nc_world, rc), rc);
-        let base_normal = split + (map.prefiltered(dir(n, rc), rc) - coat_part) * lobes.coat;
-        let old = split + (map.prefiltered(dir(n, r), r) - coat_part) * lobes.coat;
+        let coat_part = read(nc_world, rc);
+        let base_normal = split + (read(n, rc) - coat_part) * lobes.coat;
+        let old = split + (read(n, r) - coat_part) * lobes.coat;
         let runs = 16;
         let est: Vec<f64> = (0..runs)
             .map(|r| {

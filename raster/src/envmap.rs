@@ -10,9 +10,10 @@
 //! - the source's mip chain (2×2 box), read by the prefiltering;
 //! - the prefiltered radiance chain, one level per perceptual roughness
 //!   0, 1/5, …, 1 (α = roughness²), each the GGX lobe's weighted mean of
-//!   the radiance around the mirror direction with n = v = r \[Karis13\],
-//!   importance sampled (256 samples a texel at roughness 1/5, doubled
-//!   at each coarser level; level 1 a quarter of level 0's side, then
+//!   the radiance around the mirror direction with n = v = r \[Karis13\]
+//!   (weighted by the lobe's masking G1(l), not by n·l),
+//!   importance sampled (512 samples a texel at roughness 1/5 and 2/5,
+//!   doubled at each coarser level; level 1 a quarter of level 0's side, then
 //!   halving), each sample read from the source mip whose texel matches
 //!   the sample's solid angle \[Colbert07\]; stored as octahedral maps
 //!   (RGB texels) so a packet reads a footprint's channels at once; a
@@ -29,7 +30,7 @@
 
 use crate::envmap_sun::Sun;
 use crate::equirect::{clamp_texel, dir_to_uv, dir_to_uv_lanes, uv_to_dir, Equirect, MAX_TEXEL};
-use specula_core::{Constant, Mask, Real, Rgb, V3};
+use specula_core::{f32x8, Constant, Mask, Real, Rgb, V3};
 
 /// How a map lights surfaces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -45,15 +46,19 @@ pub enum IblMethod {
 /// Perceptual roughness of the prefiltered levels: level k is at k / 5.
 pub const PREFILTER_LEVELS: usize = 6;
 
-/// GGX samples per texel of prefiltered level 1; each coarser level
-/// doubles them. A level has a quarter of the texels of the one before,
-/// so each costs half as much, and the broadest lobes, whose estimates
-/// converge slowest, get the most samples.
-const PREFILTER_SAMPLES: u32 = 256;
+/// GGX samples per texel of prefiltered levels 1 and 2; each coarser
+/// level doubles them. A level has a quarter of the texels of the one
+/// before, so each costs half as much, and the broadest lobes, whose
+/// estimates converge slowest, get the most samples. Level 1 gets as
+/// many as level 2: its lobe's far tails, which G1 weighs fully, are
+/// read from coarse source mips, and with half as many samples its
+/// estimate was the chain's largest error (docs/accuracy.md, "Samples a
+/// prefiltered texel").
+const PREFILTER_SAMPLES: u32 = 512;
 
 /// GGX samples per texel of prefiltered level `k` ≥ 1.
 fn level_samples(k: usize) -> u32 {
-    PREFILTER_SAMPLES << (k - 1)
+    PREFILTER_SAMPLES << k.saturating_sub(2)
 }
 
 /// Octahedral map of a unit direction (y folds): (x, z) / (|x|+|y|+|z|),
@@ -484,7 +489,7 @@ impl EnvMap {
 /// lobe of roughness 1/5, so the position is the mix whose spread matches
 /// the lobe's: the blend's resultant length (the mean cosine of its
 /// kernel about r) is linear in w, and the w at which it equals the
-/// roughness's own kernel's is within 0.01 of x³ (0.8 + 0.2 x), x = 5 ×
+/// roughness's own kernel's is within 0.01 of x³ (0.7 + 0.3 x), x = 5 ×
 /// roughness (`level_position_matches_the_kernels_spread` checks it
 /// against quadrature of the kernel; the split sum's error with it:
 /// docs/accuracy.md, "Near-mirror lobes").
@@ -492,12 +497,12 @@ impl EnvMap {
 pub fn level_position<R: Real>(roughness: R) -> R {
     let top = (PREFILTER_LEVELS - 1) as f64;
     let f = (roughness * R::splat(top)).clamp(R::ZERO, R::splat(top));
-    let low = f * f * f * f.mul_add(R::splat(0.2), R::splat(0.8));
+    let low = f * f * f * f.mul_add(R::splat(0.3), R::splat(0.7));
     R::select(f.lt(R::ONE), low, f)
 }
 
 /// The resultant length of a prefiltered level's kernel at GGX `alpha`:
-/// its mean cosine about r, the kernel being D(h) (n·l) over l with
+/// its mean cosine about r, the kernel being D(h) G1(l) over l with
 /// n = v = r (the prefiltering's weights), integrated over θh by the
 /// midpoint rule (dω_l = 4 cos θh dω_h; l is above the horizon for
 /// θh < 45°). What [`level_position`] matches; for checks and the
@@ -512,7 +517,8 @@ pub fn kernel_resultant(alpha: f64) -> f64 {
         let (sin, c) = th.sin_cos();
         let d = specula_core::ndf::d_ggx(alpha, c * c, sin * sin);
         let nl = (2.0 * th).cos();
-        let w = d * nl * 4.0 * c * sin;
+        let g1 = 1.0 / (1.0 + specula_core::masking::lambda_ggx(alpha, nl));
+        let w = d * g1 * 4.0 * c * sin;
         m0 += w;
         m1 += w * nl;
     }
@@ -664,10 +670,13 @@ fn radical_inverse(i: u32) -> f64 {
 }
 
 /// One sample of a level's GGX lobe about the local z axis (n = v = z):
-/// the light direction l = 2 (v·h) h − v for h drawn from D(h) cos θh
-/// (its z, n·l, is its weight), and the source mip to read it from.
+/// the light direction l = 2 (v·h) h − v for h drawn from D(h) cos θh,
+/// its weight, and the source mip to read it from.
 struct LobeSample {
     l: [f64; 3],
+    /// G1(l) = 1 / (1 + Λ(n·l)): the lobe f cos θl = D G2 / (4 cos θv)
+    /// with v = n (Λ(v) = 0) over the samples' density D(h) / 4.
+    weight: f64,
     lod: f64,
 }
 
@@ -697,15 +706,19 @@ fn ggx_samples(alpha: f64, count: u32, omega_p: f64, top: f64) -> Vec<LobeSample
                     2.0 * cos_h * (sin_h * phi.sin()),
                     nl,
                 ],
+                weight: 1.0 / (1.0 + specula_core::masking::lambda_ggx(alpha, nl)),
                 lod: (0.5 * (omega_s / omega_p).log2() + 1.0).clamp(0.0, top),
             })
         })
         .collect()
 }
 
-/// The GGX-weighted radiance around unit `r` with n = v = r: the
+/// The GGX lobe's mean radiance around unit `r` with n = v = r: the
 /// level's `samples` turned to r's frame, each read trilinearly from its
-/// mip, weighted by n·l \[Karis13\].
+/// mip, weighted by its masking G1(l) (the lobe's own weight with the
+/// view along the normal; \[Karis13\] weights by n·l instead, a
+/// narrower kernel than the lobe's, which left rough metals' split sum
+/// further from the reference: docs/accuracy.md).
 fn ggx_filtered(mips: &[Equirect], r: [f64; 3], samples: &[LobeSample]) -> [f32; 3] {
     let n = V3::new(r[0], r[1], r[2]);
     let up = if n.y.abs() < 0.999 {
@@ -717,13 +730,27 @@ fn ggx_filtered(mips: &[Equirect], r: [f64; 3], samples: &[LobeSample]) -> [f32;
     let b = n.cross(t);
     let mut sum = [0.0f64; 3];
     let mut wsum = 0.0;
-    for s in samples {
-        let l = t * s.l[0] + b * s.l[1] + n * s.l[2];
-        let c = trilinear(mips, [l.x, l.y, l.z], s.lod);
-        for k in 0..3 {
-            sum[k] += c[k] as f64 * s.l[2];
+    // Eight samples' map coordinates at a time (their atan2s were a third
+    // of the prefiltering), then each sample's trilinear read.
+    for chunk in samples.chunks(8) {
+        let mut d = [[0.0f32; 8]; 3];
+        for (i, s) in chunk.iter().enumerate() {
+            let l = t * s.l[0] + b * s.l[1] + n * s.l[2];
+            (d[0][i], d[1][i], d[2][i]) = (l.x as f32, l.y as f32, l.z as f32);
         }
-        wsum += s.l[2];
+        let (u, v) = dir_to_uv_lanes(V3::new(
+            f32x8::from(d[0]),
+            f32x8::from(d[1]),
+            f32x8::from(d[2]),
+        ));
+        let (u, v) = (u.to_array(), v.to_array());
+        for (i, s) in chunk.iter().enumerate() {
+            let c = trilinear(mips, u[i], v[i], s.lod);
+            for k in 0..3 {
+                sum[k] += c[k] as f64 * s.weight;
+            }
+            wsum += s.weight;
+        }
     }
     if wsum <= 0.0 {
         return mips[0].nearest(0.5, 0.5);
@@ -731,9 +758,8 @@ fn ggx_filtered(mips: &[Equirect], r: [f64; 3], samples: &[LobeSample]) -> [f32;
     sum.map(|s| (s / wsum) as f32)
 }
 
-/// Radiance of unit map direction `d` between mips ⌊lod⌋ and ⌈lod⌉.
-fn trilinear(mips: &[Equirect], d: [f64; 3], lod: f64) -> [f32; 3] {
-    let (u, v) = dir_to_uv(d.map(|x| x as f32));
+/// Radiance at map coordinates (u, v) between mips ⌊lod⌋ and ⌈lod⌉.
+fn trilinear(mips: &[Equirect], u: f32, v: f32, lod: f64) -> [f32; 3] {
     let k0 = lod.floor() as usize;
     let k1 = (k0 + 1).min(mips.len() - 1);
     let w = (lod - k0 as f64) as f32;

@@ -69,7 +69,7 @@ pub use geometry::{Cull, FrameContext, GeometryPass, Project, SceneMesh, VertexS
 pub use lit::{Lit, UnsupportedMap};
 pub use scene::{Material, SceneData, SceneDataError, SceneParts};
 pub use shader::{LightRefusal, PacketShader, ShadeEnv, ShadeInput, SurfaceShader};
-pub use split_sum::{env_split_sum, prefilter_direction};
+pub use split_sum::{env_split_sum, prefilter_reading};
 pub use target::{Target, MISS, TILE};
 pub use unlit::{Unlit, UnlitBase};
 pub use visibility::ShadowBuffers;
