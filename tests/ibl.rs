@@ -544,8 +544,8 @@ fn level_of_resultant(r_w: f64, rk: &[f64; 6]) -> f64 {
 /// Beckmann and GTR lobes read at their own α instead of their GGX
 /// equivalent, and the base's lobe read along its mean direction at the
 /// level position of its mean's length (`lobe_mean`: exact for radiance
-/// linear in direction), and the base's lobe where the chain reads it but
-/// from the chain's kernel integrated by quadrature at the lobe's own α
+/// linear in direction), and the base's lobe where and as wide as the
+/// chain reads it but from the chain's kernel integrated by quadrature
 /// (`exact_prefiltered`: the error left in that column is the split
 /// sum's, not the chain's), and the base's lobe read as the GGX lobe's
 /// own mean radiance (`lobe_mean_radiance`: what a reading of the chain
@@ -604,9 +604,9 @@ fn split_sum_against_reference_table() {
         for ((map_name, map), chain_source) in maps.iter().zip(&chain_sources) {
             let (mut sum, mut worst, mut noise) = (0.0f64, 0.0f64, 0.0f64);
             // Mean errors of the variants: along the mirror direction,
-            // along Filament's, at the NDF's own α, along the lobe's mean,
-            // the chain's kernel by quadrature, and the lobe's own mean
-            // radiance.
+            // along Filament's, along Lagarde's, at the NDF's own α, along
+            // the lobe's mean, the chain's kernel by quadrature, and the
+            // lobe's own mean radiance.
             let mut var_sum = [0.0f64; 7];
             let n_points = 96;
             let mut counted = 0;
@@ -875,16 +875,16 @@ fn blob_map(method: IblMethod) -> EnvMap {
 
 /// A glTF clearcoat whose normal differs from the base's (tilted 20°,
 /// as a clearcoat normal map makes it) under a smooth map: the split
-/// sum, which reads the coat's part along the mirror direction about the
-/// coat's normal at the coat's roughness, against the reference (which
+/// sum, which reads the coat's part about the coat's normal at the
+/// coat's roughness (`prefilter_reading`), against the reference (which
 /// integrates f, whose coat lobe is about N_c) at 24 shading points:
 /// each within 20 % plus 4 standard errors of 16 runs of 256 samples, and
 /// the mean within 6 % (the worst points are dark ones, and one where
 /// the coat's lobe meets the base's horizon, which cuts f but not the
 /// split sum: docs/accuracy.md). Reading the coat's part about the base's
 /// normal (at the coat's roughness) misses by twice as much or more on
-/// average, and reading it along the base's mirror direction at the
-/// base's roughness, as the split sum did before, by 2.5 times as much.
+/// average, and reading it on the base's lobe (about the base's normal
+/// at the base's roughness) by 2.5 times as much.
 #[test]
 fn clearcoat_with_its_own_normal_against_the_reference() {
     use specula_core::models::{Gltf, GltfParams};
@@ -922,7 +922,7 @@ fn clearcoat_with_its_own_normal_against_the_reference() {
         let wo_world = frame.t * wo.x + frame.b * wo.y + frame.n * wo.z;
         let split = specula_raster::env_split_sum(&gltf, &p, &frame, wo_world, &map, |_| 1.0);
         // The coat's part read elsewhere: about the base's normal at the
-        // coat's roughness; and, the former reading, on the base's lobe.
+        // coat's roughness; and on the base's lobe.
         let n = frame.n;
         let nc_world = frame.t * nc.x + frame.b * nc.y + frame.n * nc.z;
         let read = |n: V3<f64>, r: f64| {

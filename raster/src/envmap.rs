@@ -47,13 +47,13 @@ pub enum IblMethod {
 pub const PREFILTER_LEVELS: usize = 6;
 
 /// GGX samples per texel of prefiltered levels 1 and 2; each coarser
-/// level doubles them. A level has a quarter of the texels of the one
-/// before, so each costs half as much, and the broadest lobes, whose
-/// estimates converge slowest, get the most samples. Level 1 gets as
-/// many as level 2: its lobe's far tails, which G1 weighs fully, are
-/// read from coarse source mips, and with half as many samples its
-/// estimate was the chain's largest error (docs/accuracy.md, "Samples a
-/// prefiltered texel").
+/// level doubles them. From level 2 on a level has a quarter of the
+/// texels of the one before, so each costs half as much, and the
+/// broadest lobes, whose estimates converge slowest, get the most
+/// samples. Level 1 takes as many as level 2: its lobe's far tails,
+/// which G1 weighs fully, are read from coarse source mips, and half as
+/// many samples leave its estimate the chain's largest error
+/// (docs/accuracy.md, "Samples a prefiltered texel").
 const PREFILTER_SAMPLES: u32 = 512;
 
 /// GGX samples per texel of prefiltered level `k` ≥ 1.
@@ -730,8 +730,9 @@ fn ggx_filtered(mips: &[Equirect], r: [f64; 3], samples: &[LobeSample]) -> [f32;
     let b = n.cross(t);
     let mut sum = [0.0f64; 3];
     let mut wsum = 0.0;
-    // Eight samples' map coordinates at a time (their atan2s were a third
-    // of the prefiltering), then each sample's trilinear read.
+    // Eight samples' map coordinates at a time (two atan2s each, a large
+    // part of the prefiltering one by one), then each sample's trilinear
+    // read.
     for chunk in samples.chunks(8) {
         let mut d = [[0.0f32; 8]; 3];
         for (i, s) in chunk.iter().enumerate() {

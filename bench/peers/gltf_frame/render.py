@@ -258,8 +258,8 @@ class Renderer:
 
     def _prefilter(self, env, omega_texel, top_lod):
         """The chain in a cube map: level k at perceptual roughness k/5,
-        faces PREFILTER_SIZE >> k; 256 GGX samples a texel at level 1,
-        doubled at each coarser level (specula's counts)."""
+        faces PREFILTER_SIZE >> k; 512 GGX samples a texel at levels 1
+        and 2, doubled at each coarser level (specula's counts)."""
         ctx = self.ctx
         prog = program(ctx, "fullscreen.vert", "prefilter.frag")
         prog["t_env"], prog["t_samples"], prog["u_depth"] = 0, 1, 0.0
@@ -273,7 +273,8 @@ class Renderer:
                 count = 0
             else:
                 alpha = max((k / (tables.LEVELS - 1)) ** 2, 1e-3)
-                s = tables.ggx_lobe_samples(alpha, tables.SAMPLES_LEVEL1 << (k - 1), omega_texel, top_lod)
+                count = tables.SAMPLES_LEVEL1 << max(k - 2, 0)
+                s = tables.ggx_lobe_samples(alpha, count, omega_texel, top_lod)
                 samples = ctx.texture((len(s), 1), 4, s.tobytes(), dtype="f4")
                 samples.filter = (moderngl.NEAREST, moderngl.NEAREST)
                 samples.use(1)
@@ -282,6 +283,8 @@ class Renderer:
             fbo = ctx.framebuffer([target])
             fbo.use()
             prog["u_count"], prog["u_size"] = count, float(n)
+            if count:
+                prog["u_alpha"] = alpha
             for face in range(6):
                 prog["u_face"] = face
                 vao.render(moderngl.TRIANGLES, vertices=3)

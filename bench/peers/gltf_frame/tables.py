@@ -99,7 +99,7 @@ def sh9_irradiance_over_pi(img):
 # -- The prefiltered chain's samples ------------------------------------
 
 LEVELS = 6  # perceptual roughness k/5, k = 0..5
-SAMPLES_LEVEL1 = 256  # doubled at each coarser level, as specula's chain
+SAMPLES_LEVEL1 = 512  # levels 1 and 2; doubled at each coarser level, as specula's chain
 
 
 def ggx_lobe_samples(alpha, count, omega_texel, top_lod):

@@ -256,20 +256,29 @@ vec3 sh_irradiance_over_pi(vec3 n) {
 
 // The chain's level for a perceptual roughness: 5 r from level 1 up;
 // below, the blend of the mirror level and level 1 whose kernel has the
-// lobe's spread, x³ (0.8 + 0.2 x), x = 5 r (specula's level_position).
+// lobe's spread, x³ (0.7 + 0.3 x), x = 5 r (specula's level_position).
 float level_position(float roughness) {
     float f = clamp(roughness * 5.0, 0.0, 5.0);
-    return f < 1.0 ? f * f * f * (0.8 + 0.2 * f) : f;
+    return f < 1.0 ? f * f * f * (0.7 + 0.3 * f) : f;
 }
 
-// The prefiltered radiance along the lobe's dominant direction: the
-// mirror direction pulled toward n as α grows [Lagarde14, listing 22].
+// The prefiltered radiance where and as wide as specula's
+// prefilter_reading reads it: the mirror direction pulled toward n by
+// (0.1 + (1 − μo) + α) times the dominant direction's pull
+// [Lagarde14, listing 22], at α × (1 − 0.8 (1 − μo)(1 − α)), not
+// narrowed below level 1.
 vec3 prefiltered(vec3 n, vec3 v, float roughness) {
-    vec3 r = n * (2.0 * dot(n, v)) - v;
+    float mu = dot(n, v);
+    vec3 r = n * (2.0 * mu) - v;
+    float off_normal = 1.0 - clamp(mu, 0.0, 1.0);
     float alpha = roughness * roughness;
     float s = clamp(1.0 - alpha, 0.0, 1.0);
-    vec3 dir = mix(n, r, s * (sqrt(s) + alpha));
-    return textureLod(t_prefiltered, dir, level_position(roughness)).rgb;
+    float t_dom = 1.0 - s * (sqrt(s) + alpha);
+    float t = min((0.1 + off_normal + alpha) * t_dom, 1.0);
+    vec3 dir = mix(r, n, t);
+    float width = 1.0 - 0.8 * off_normal * s;
+    float read = max(roughness * sqrt(width), min(roughness, 0.2));
+    return textureLod(t_prefiltered, dir, level_position(read)).rgb;
 }
 
 // The split sum: the diffuse lobe's albedo on E(n)/π, the rest under the
