@@ -517,12 +517,18 @@ pub fn kernel_resultant(alpha: f64) -> f64 {
         let (sin, c) = th.sin_cos();
         let d = specula_core::ndf::d_ggx(alpha, c * c, sin * sin);
         let nl = (2.0 * th).cos();
-        let g1 = 1.0 / (1.0 + specula_core::masking::lambda_ggx(alpha, nl));
-        let w = d * g1 * 4.0 * c * sin;
+        let w = d * g1_normal_view(alpha, nl) * 4.0 * c * sin;
         m0 += w;
         m1 += w * nl;
     }
     m1 / m0
+}
+
+/// The prefiltering's weight of a light direction at cosine `nl` from
+/// n = v: the masking G1(l) = 1 / (1 + Λ(n·l)) of GGX `alpha`, the lobe
+/// f cos θl = D G2 / (4 cos θv) with Λ(v) = 0 over D(h) / 4.
+fn g1_normal_view(alpha: f64, nl: f64) -> f64 {
+    1.0 / (1.0 + specula_core::masking::lambda_ggx(alpha, nl))
 }
 
 /// The nine real SH basis functions at unit `d`.
@@ -674,8 +680,7 @@ fn radical_inverse(i: u32) -> f64 {
 /// its weight, and the source mip to read it from.
 struct LobeSample {
     l: [f64; 3],
-    /// G1(l) = 1 / (1 + Λ(n·l)): the lobe f cos θl = D G2 / (4 cos θv)
-    /// with v = n (Λ(v) = 0) over the samples' density D(h) / 4.
+    /// [`g1_normal_view`] of l.
     weight: f64,
     lod: f64,
 }
@@ -706,7 +711,7 @@ fn ggx_samples(alpha: f64, count: u32, omega_p: f64, top: f64) -> Vec<LobeSample
                     2.0 * cos_h * (sin_h * phi.sin()),
                     nl,
                 ],
-                weight: 1.0 / (1.0 + specula_core::masking::lambda_ggx(alpha, nl)),
+                weight: g1_normal_view(alpha, nl),
                 lod: (0.5 * (omega_s / omega_p).log2() + 1.0).clamp(0.0, top),
             })
         })

@@ -101,10 +101,8 @@ pub(crate) fn env_split_sum_inline<B: Brdf, R: Real>(
 ///
 /// The three constants were fitted, per view angle, to the split sum's
 /// error against the Monte Carlo reference under the two fixture maps,
-/// with the chain's kernel integrated exactly (fitted on either map
-/// alone each came out within 0.5 of these, and the other map's mean
-/// errors within 0.9 % of the joint fit's); docs/accuracy.md, "Split sum
-/// against reference", has the errors.
+/// with the chain's kernel integrated exactly; docs/accuracy.md, "Split
+/// sum against reference", has how they were fitted and the errors.
 #[inline(always)]
 pub fn prefilter_reading<R: Real>(n: V3<R>, wo: V3<R>, roughness: R) -> (V3<R>, R) {
     let mu = n.dot(wo);
